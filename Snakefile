@@ -1,0 +1,28 @@
+# speckle: reproduce the figures of Zaitsev et al., "A model for simulating speckle-pattern
+# evolution based on close to reality procedures used in spectral-domain OCT".
+# Thin entry point: rules live in workflow/rules/*.smk, science in the speckle package.
+from snakemake.utils import min_version, validate
+
+min_version("9.0")
+
+
+configfile: "workflow/config/config.yaml"
+
+
+validate(config, "workflow/schemas/config.schema.yaml")
+
+
+report: "workflow/report/workflow.rst"
+
+
+include: "workflow/rules/common.smk"
+include: "workflow/rules/static.smk"
+include: "workflow/rules/statistics.smk"
+include: "workflow/rules/deformation.smk"
+include: "workflow/rules/speed.smk"
+
+
+rule all:
+    input:
+        STATIC_TARGETS + STATISTICS_TARGETS + DEFORMATION_TARGETS + SPEED_TARGETS,
+    default_target: True

@@ -1,0 +1,117 @@
+"""Argument checks shared by every public function.
+
+Each helper raises ``TypeError`` for the wrong kind of value and ``ValueError`` for a value out of
+range, always naming the parameter and the allowed range, before any work starts.
+"""
+
+from __future__ import annotations
+
+import numbers
+from collections.abc import Iterable
+
+import numpy as np
+
+__all__ = [
+    "as_finite_array",
+    "check_choice",
+    "check_int",
+    "check_real",
+]
+
+
+def check_real(
+    value: object,
+    name: str,
+    *,
+    low: float | None = None,
+    high: float | None = None,
+    low_inclusive: bool = True,
+    high_inclusive: bool = True,
+) -> float:
+    """Return ``value`` as a finite float after checking it lies in the given interval.
+
+    Parameters
+    ----------
+    value : object
+        The value to check (a Python or numpy real scalar; ``bool`` is refused).
+    name : str
+        Parameter name used in the error message.
+    low, high : float, optional
+        Interval bounds; ``None`` means unbounded on that side.
+    low_inclusive, high_inclusive : bool
+        Whether each bound belongs to the allowed interval.
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not a real number.
+    ValueError
+        If ``value`` is NaN, infinite or outside the interval.
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name} must be a real number, got {type(value).__name__} {value!r}")
+    x = float(value)
+    lo = "-inf" if low is None else f"{low:g}"
+    hi = "inf" if high is None else f"{high:g}"
+    interval = f"{'[' if low_inclusive and low is not None else '('}{lo}, {hi}"
+    interval += "]" if high_inclusive and high is not None else ")"
+    if not np.isfinite(x):
+        raise ValueError(f"{name} must be finite and in {interval}, got {x!r}")
+    too_low = low is not None and (x < low or (x == low and not low_inclusive))
+    too_high = high is not None and (x > high or (x == high and not high_inclusive))
+    if too_low or too_high:
+        raise ValueError(f"{name} must be in {interval}, got {x!r}")
+    return x
+
+
+def check_int(value: object, name: str, *, low: int | None = None, high: int | None = None) -> int:
+    """Return ``value`` as an ``int`` after checking ``low <= value <= high``.
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not an integer (floats such as ``256.0`` are refused too).
+    ValueError
+        If ``value`` is out of range.
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise TypeError(f"{name} must be an integer, got {type(value).__name__} {value!r}")
+    v = int(value)
+    if (low is not None and v < low) or (high is not None and v > high):
+        lo = "-inf" if low is None else str(low)
+        hi = "inf" if high is None else str(high)
+        raise ValueError(f"{name} must be an integer in [{lo}, {hi}], got {v}")
+    return v
+
+
+def check_choice(value: object, name: str, choices: Iterable[str]) -> str:
+    """Return ``value`` after checking it is one of ``choices``."""
+    choices = tuple(choices)
+    if not isinstance(value, str) or value not in choices:
+        raise ValueError(f"{name} must be one of {', '.join(map(repr, choices))}; got {value!r}")
+    return value
+
+
+def as_finite_array(value: object, name: str, *, dtype=float) -> np.ndarray:
+    """Convert ``value`` to an array of ``dtype`` and check every element is finite.
+
+    Raises
+    ------
+    TypeError
+        If ``value`` cannot be converted to ``dtype`` (e.g. complex depths or strings).
+    ValueError
+        If any element is NaN or infinite.
+    """
+    try:
+        arr = np.asarray(value)
+        if np.iscomplexobj(arr) and not np.issubdtype(np.dtype(dtype), np.complexfloating):
+            raise TypeError
+        arr = arr.astype(dtype, copy=False)
+    except (TypeError, ValueError):
+        raise TypeError(
+            f"{name} must be an array of {np.dtype(dtype).name} values, got {type(value).__name__}"
+        ) from None
+    if not np.all(np.isfinite(arr)):
+        bad = int(np.size(arr) - np.count_nonzero(np.isfinite(arr)))
+        raise ValueError(f"{name} must be finite; it holds {bad} NaN or infinite value(s)")
+    return arr

@@ -1,0 +1,195 @@
+"""Light source: central wavenumber, spectral sampling and spectrum shape.
+
+Conventions (used everywhere in the package)
+--------------------------------------------
+* Lengths are in micrometres (µm); wavenumbers in rad/µm.
+* An A-scan of ``N`` pixels over an unambiguous depth ``H`` is formed from ``N`` spectral
+  components ``k_n = k0 + n*pi/H`` with ``n = -(N//2) ... N-1-(N//2)`` (low to high wavenumber).
+  The spacing ``dk = pi/H`` is half of the formal-Fourier spacing because light travels to the
+  scatterer and back (phase ``2 k_n z``).
+* The pixel step is ``H/N``: pixel ``q`` sits at depth ``q*H/N``. The paper writes
+  ``H/(N-1)``, which is not consistent with an ``N``-point discrete Fourier transform; with
+  ``H/N`` a scatterer at a pixel centre is imaged into exactly one pixel.
+* The spectral width is ``delta_k = N*dk = N*pi/H``, so that ``k0/delta_k = N*k0*H/(N*pi)``. The
+  coherence length is ``Lc = 2*pi/delta_k = 2*H/N`` (two pixels) and ``Lc/lambda0 = k0/delta_k``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from ._validate import as_finite_array, check_choice, check_int, check_real
+
+__all__ = [
+    "SPECTRUM_SHAPES",
+    "delta_k",
+    "k0_from_wavelength",
+    "spectral_index",
+    "spectrum",
+    "wavelength_from_k0",
+]
+
+SPECTRUM_SHAPES = ("rectangular", "gaussian", "array")
+
+
+def k0_from_wavelength(wavelength: float, refractive_index: float = 1.0) -> float:
+    """Central wavenumber in the medium, ``k0 = 2*pi*n/lambda0``.
+
+    Parameters
+    ----------
+    wavelength : float
+        Central vacuum wavelength ``lambda0`` in µm, > 0.
+    refractive_index : float
+        Group/phase refractive index ``n`` of the tissue (>= 1 is typical; must be > 0).
+
+    Returns
+    -------
+    float
+        ``k0`` in rad/µm.
+    """
+    lam = check_real(wavelength, "wavelength", low=0, low_inclusive=False)
+    n = check_real(refractive_index, "refractive_index", low=0, low_inclusive=False)
+    return 2 * np.pi * n / lam
+
+
+def wavelength_from_k0(k0: float, refractive_index: float = 1.0) -> float:
+    """Vacuum central wavelength in µm for a central wavenumber ``k0`` (rad/µm) in a medium."""
+    k = check_real(k0, "k0", low=0, low_inclusive=False)
+    n = check_real(refractive_index, "refractive_index", low=0, low_inclusive=False)
+    return 2 * np.pi * n / k
+
+
+def delta_k(n_pixels: int, depth: float) -> float:
+    """Spectral width ``N*pi/H`` in rad/µm of ``n_pixels`` components spaced ``pi/depth``."""
+    n = check_int(n_pixels, "n_pixels", low=2)
+    h = check_real(depth, "depth", low=0, low_inclusive=False)
+    return n * np.pi / h
+
+
+def spectral_index(n_pixels: int) -> np.ndarray:
+    """Spectral indices ``n = -(N//2) ... N-1-(N//2)`` (low to high wavenumber)."""
+    n = check_int(n_pixels, "n_pixels", low=2)
+    return np.arange(n) - n // 2
+
+
+def spectrum(
+    n_pixels: int,
+    depth: float,
+    *,
+    k0: float | None = None,
+    k0_dk: float | None = None,
+    wavelength: float | None = None,
+    refractive_index: float = 1.0,
+    shape: str = "rectangular",
+    fwhm: float | None = None,
+    weights: object | None = None,
+) -> xr.DataArray:
+    """Sampled source spectrum ``S(k_n)`` as a labelled DataArray.
+
+    Exactly one of ``k0``, ``k0_dk`` and ``wavelength`` sets the central wavenumber.
+
+    Parameters
+    ----------
+    n_pixels : int
+        Number of spectral components ``N`` (= pixels per A-scan), >= 2.
+    depth : float
+        Unambiguous imaging depth ``H`` in µm, > 0.
+    k0 : float, optional
+        Central wavenumber in the medium, rad/µm, >= 0. ``k0 = 0`` is the formal Fourier
+        transform of the paper's Fig. 1.
+    k0_dk : float, optional
+        Ratio ``k0/delta_k`` (= ``Lc/lambda0``), >= 0, with ``delta_k = N*pi/H``.
+    wavelength : float, optional
+        Central vacuum wavelength in µm (> 0); combined with ``refractive_index``.
+    refractive_index : float
+        Refractive index of the tissue, used with ``wavelength`` only.
+    shape : {"rectangular", "gaussian", "array"}
+        Spectrum shape. ``"gaussian"`` needs ``fwhm``; ``"array"`` needs ``weights``.
+    fwhm : float, optional
+        Full width at half maximum of the Gaussian spectrum in rad/µm (> 0).
+    weights : array_like, optional
+        ``N`` non-negative finite weights ordered low to high wavenumber, for ``shape="array"``.
+
+    Returns
+    -------
+    xarray.DataArray
+        Weights ``S(k_n)`` (dimensionless) with dim ``wavenumber`` (coordinate ``k_n`` in rad/µm)
+        and a coordinate ``n`` (spectral index). Attributes hold ``n_pixels``, ``depth``, ``k0``,
+        ``delta_k``, ``k0_dk``, ``shape`` and ``fwhm`` (NaN unless Gaussian).
+
+    Raises
+    ------
+    ValueError
+        On a missing or ambiguous ``k0`` specification, out-of-range values or a wrong
+        ``weights`` length.
+    """
+    n = check_int(n_pixels, "n_pixels", low=2)
+    h = check_real(depth, "depth", low=0, low_inclusive=False)
+    check_choice(shape, "shape", SPECTRUM_SHAPES)
+    given = [name for name, v in (("k0", k0), ("k0_dk", k0_dk), ("wavelength", wavelength))
+             if v is not None]
+    if len(given) != 1:
+        raise ValueError(
+            "give exactly one of k0 (rad/µm), k0_dk (k0/delta_k) or wavelength (µm); "
+            f"got {given or 'none'}"
+        )
+    dk_total = delta_k(n, h)
+    if k0 is not None:
+        k0v = check_real(k0, "k0", low=0)
+    elif k0_dk is not None:
+        k0v = check_real(k0_dk, "k0_dk", low=0) * dk_total
+    else:
+        k0v = k0_from_wavelength(wavelength, refractive_index)
+    idx = spectral_index(n)
+    k = k0v + idx * np.pi / h
+    fwhm_v = np.nan
+    if shape == "rectangular":
+        if weights is not None or fwhm is not None:
+            raise ValueError("shape='rectangular' takes neither fwhm nor weights")
+        s = np.ones(n)
+    elif shape == "gaussian":
+        if fwhm is None:
+            raise ValueError("shape='gaussian' needs fwhm (rad/µm, > 0)")
+        fwhm_v = check_real(fwhm, "fwhm", low=0, low_inclusive=False)
+        s = np.exp(-4 * np.log(2) * ((k - k0v) / fwhm_v) ** 2)
+    else:
+        if weights is None:
+            raise ValueError("shape='array' needs weights: N non-negative values")
+        s = check_weights(weights, n)
+    return xr.DataArray(
+        s,
+        dims=("wavenumber",),
+        coords={
+            "wavenumber": ("wavenumber", k, {"units": "rad/um", "long_name": "wavenumber k_n"}),
+            "n": ("wavenumber", idx, {"long_name": "spectral index"}),
+        },
+        name="spectrum",
+        attrs={
+            "long_name": "spectral weight S(k_n)",
+            "units": "1",
+            "n_pixels": n,
+            "depth": h,
+            "depth_units": "um",
+            "k0": k0v,
+            "k0_units": "rad/um",
+            "delta_k": dk_total,
+            "k0_dk": k0v / dk_total,
+            "shape": shape,
+            "fwhm": fwhm_v,
+        },
+    )
+
+
+def check_weights(weights: object, n_pixels: int) -> np.ndarray:
+    """Validate a user spectrum: ``n_pixels`` finite, non-negative weights, not all zero."""
+    s = as_finite_array(weights, "spectrum")
+    if s.ndim != 1 or s.size != n_pixels:
+        raise ValueError(
+            f"spectrum must hold exactly n_pixels={n_pixels} weights (1-D), got shape {s.shape}"
+        )
+    if np.any(s < 0):
+        raise ValueError("spectrum weights must be non-negative")
+    if not np.any(s > 0):
+        raise ValueError("spectrum weights must not all be zero")
+    return s

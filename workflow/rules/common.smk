@@ -1,0 +1,21 @@
+# Helpers shared by all rule files.
+import os
+
+from speckle.provenance import config_hash, module_sources
+
+RESULTS = config.get("results", "results")
+
+
+def package_code(*modules):
+    """Package source files used by a rule's script (so editing them reruns the rule).
+
+    Snakemake tracks a rule's own script but not installed package code; list the package
+    modules the script imports, e.g. package_code("speckle.figures.static"): their sources and
+    every package module they import become inputs.
+    """
+    return [os.path.relpath(p) for p in module_sources(*modules)]
+
+
+def section(*names):
+    """The config sections a rule depends on, as params (a change reruns the rule)."""
+    return {name: config[name] for name in names}
