@@ -168,9 +168,9 @@ def ascan(
     s = np.ones(n) if spectrum is None else check_weights(spectrum, n)
     batch_shape = zz.shape[:-1]
     m = zz.shape[-1]
+    if zz.size == 0:
+        return np.zeros((*batch_shape, n), dtype=np.complex128)
     z2 = np.ascontiguousarray(zz.reshape(-1, m))
     a2 = np.ascontiguousarray(aa.reshape(-1, m))
-    if z2.shape[0] == 0 or m == 0:
-        return np.zeros((*batch_shape, n), dtype=np.complex128)
     out = METHODS[method](z2, a2, n, h, k0v, s, tolv)
     return np.asarray(out, dtype=np.complex128).reshape(*batch_shape, n)

@@ -22,8 +22,9 @@ __all__ = ["NORMALISATIONS", "bscan", "expected_intensity"]
 NORMALISATIONS = ("none", "density", "expected")
 
 
-def expected_intensity(density: float, n_pixels: int, spectrum: xr.DataArray | None,
-                       mean_square_amplitude: float = 1.0) -> float:
+def expected_intensity(
+    density: float, n_pixels: int, spectrum: xr.DataArray | None, mean_square_amplitude: float = 1.0
+) -> float:
     """Expected mean pixel intensity ``<|A|^2> = rho * N * <|a|^2> * sum_n S_n^2``.
 
     Exact for uniformly distributed scatterers over the full depth ``[0, H)`` when
@@ -79,13 +80,21 @@ def bscan(
         scene.amplitude,
         input_core_dims=[["scatterer"], ["scatterer"]],
         output_core_dims=[["depth"]],
-        kwargs={"n_pixels": n, "depth": h, "k0": k0, "spectrum": source.values,
-                "method": method, "tol": tol},
+        kwargs={
+            "n_pixels": n,
+            "depth": h,
+            "k0": k0,
+            "spectrum": source.values,
+            "method": method,
+            "tol": tol,
+        },
         dask="parallelized",
         output_dtypes=[np.complex128],
         dask_gufunc_kwargs={"output_sizes": {"depth": n}},
     )
     density = float(scene.attrs.get("density", np.nan))
+    if normalise != "none" and not density > 0:
+        raise ValueError(f"normalise={normalise!r} needs a scene density > 0, got {density}")
     scale = 1.0
     if normalise == "density":
         scale = 1.0 / np.sqrt(density)
@@ -94,8 +103,6 @@ def bscan(
         if model not in AMPLITUDE_MODELS:
             raise ValueError(f"scene amplitude_model must be one of {AMPLITUDE_MODELS}")
         scale = 1.0 / np.sqrt(expected_intensity(density, n, source.values))
-    if normalise != "none" and not (np.isfinite(scale) and scale > 0):
-        raise ValueError(f"normalise={normalise!r} needs a scene density > 0, got {density}")
     field = field * scale
     dims = [d for d in field.dims if d not in ("depth", "aline")] + ["depth", "aline"]
     dims = [d for d in dims if d in field.dims]
@@ -105,26 +112,34 @@ def bscan(
             "field": field.assign_attrs(long_name="complex A-scan field A(q)", units="1"),
             "amplitude": abs(field).assign_attrs(long_name="speckle amplitude |A|", units="1"),
             "intensity": (abs(field) ** 2).assign_attrs(
-                long_name="speckle intensity |A|^2", units="1"),
+                long_name="speckle intensity |A|^2", units="1"
+            ),
         },
-        coords={"depth": ("depth", pixel_depths(n, h),
-                          {"units": "um", "long_name": "depth of pixel centre q*H/N"})},
+        coords={
+            "depth": (
+                "depth",
+                pixel_depths(n, h),
+                {"units": "um", "long_name": "depth of pixel centre q*H/N"},
+            )
+        },
     )
     ds.attrs.update({f"scene_{k}": v for k, v in scene.attrs.items()})
-    ds.attrs.update({
-        "n_pixels": n,
-        "depth_range": h,
-        "k0": k0,
-        "k0_units": "rad/um",
-        "delta_k": float(source.attrs["delta_k"]),
-        "k0_dk": float(source.attrs["k0_dk"]),
-        "spectrum_shape": source.attrs.get("shape", "array"),
-        "spectrum_fwhm": float(source.attrs.get("fwhm", np.nan)),
-        "normalisation": normalise,
-        "normalisation_factor": scale,
-        "method": method,
-        "tol": np.nan if tol is None else float(tol),
-        "pixel_step": "H/N (the paper's H/(N-1) is not DFT-consistent)",
-    })
+    ds.attrs.update(
+        {
+            "n_pixels": n,
+            "depth_range": h,
+            "k0": k0,
+            "k0_units": "rad/um",
+            "delta_k": float(source.attrs["delta_k"]),
+            "k0_dk": float(source.attrs["k0_dk"]),
+            "spectrum_shape": source.attrs.get("shape", "array"),
+            "spectrum_fwhm": float(source.attrs.get("fwhm", np.nan)),
+            "normalisation": normalise,
+            "normalisation_factor": scale,
+            "method": method,
+            "tol": np.nan if tol is None else float(tol),
+            "pixel_step": "H/N (the paper's H/(N-1) is not DFT-consistent)",
+        }
+    )
     ds.attrs.update(provenance_attrs())
     return ds

@@ -121,8 +121,10 @@ def random_scatterers(
             raise ValueError(f"z_range must be (z_min, z_max) in µm, got {z_range!r}")
         z0 = check_real(z_range[0], "z_range[0]")
         z1 = check_real(z_range[1], "z_range[1]", low=z0, low_inclusive=False)
-    pitch = h / n if aline_pitch is None else check_real(
-        aline_pitch, "aline_pitch", low=0, low_inclusive=False
+    pitch = (
+        h / n
+        if aline_pitch is None
+        else check_real(aline_pitch, "aline_pitch", low=0, low_inclusive=False)
     )
     mean_count = rho * n * (z1 - z0) / h
     rngs = [line_generator(sd, i0 + i) for i in range(nl)]

@@ -127,8 +127,11 @@ def spectrum(
     n = check_int(n_pixels, "n_pixels", low=2)
     h = check_real(depth, "depth", low=0, low_inclusive=False)
     check_choice(shape, "shape", SPECTRUM_SHAPES)
-    given = [name for name, v in (("k0", k0), ("k0_dk", k0_dk), ("wavelength", wavelength))
-             if v is not None]
+    given = [
+        name
+        for name, v in (("k0", k0), ("k0_dk", k0_dk), ("wavelength", wavelength))
+        if v is not None
+    ]
     if len(given) != 1:
         raise ValueError(
             "give exactly one of k0 (rad/µm), k0_dk (k0/delta_k) or wavelength (µm); "

@@ -26,8 +26,9 @@ SCHEDULERS = ("synchronous", "threads", "processes", "distributed")
 log = logging.getLogger(__name__)
 
 
-def _compute(tasks: list, scheduler: str, address: str | None, n_workers: int | None,
-             progress: bool) -> list:
+def _compute(
+    tasks: list, scheduler: str, address: str | None, n_workers: int | None, progress: bool
+) -> list:
     if scheduler != "distributed":
         if progress:
             from dask.diagnostics import ProgressBar
@@ -37,8 +38,13 @@ def _compute(tasks: list, scheduler: str, address: str | None, n_workers: int | 
         return list(dask.compute(*tasks, scheduler=scheduler, num_workers=n_workers))
     from dask.distributed import Client, LocalCluster, as_completed
 
-    cluster = None if address else LocalCluster(n_workers=n_workers, threads_per_worker=1,
-                                                 processes=True, dashboard_address=None)
+    cluster = (
+        None
+        if address
+        else LocalCluster(
+            n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None
+        )
+    )
     with Client(address or cluster) as client:
         futures = client.compute(tasks)
         index = {f.key: i for i, f in enumerate(futures)}
@@ -102,11 +108,12 @@ def sweep(
     points = list(itertools.product(*values))
     tasks = [dask.delayed(func)(**dict(zip(names, p, strict=True)), **fixed) for p in points]
     results = _compute(tasks, scheduler, address, n_workers, progress)
-    results = [r.to_dataset(name=r.name or "data") if isinstance(r, xr.DataArray) else r
-               for r in results]
+    results = [
+        r.to_dataset(name=r.name or "data") if isinstance(r, xr.DataArray) else r for r in results
+    ]
     nested: list = results
     for size in reversed([len(v) for v in values[1:]]):
-        nested = [nested[i:i + size] for i in range(0, len(nested), size)]
+        nested = [nested[i : i + size] for i in range(0, len(nested), size)]
     out = xr.combine_nested(nested, concat_dim=names, combine_attrs="drop_conflicts")
     out = out.assign_coords({k: (k, v) for k, v in zip(names, values, strict=True)})
     return out.transpose(*names, ...)
