@@ -123,9 +123,17 @@ def ascan(
         ``N`` non-negative weights ``S(k_n)`` ordered ``n = -(N//2) ... N-1-(N//2)``; ``None``
         means rectangular (all ones). A :func:`speckle.source.spectrum` DataArray works too.
     method : str
-        Synthesis method, one of :data:`METHODS` (``"direct"`` is the exact reference).
+        Synthesis method, one of :data:`METHODS`: ``"direct"`` (the exact float64 reference),
+        ``"nufft"`` / ``"nufft32"`` (folded type-1 NUFFT in double / single precision,
+        :mod:`speckle.nufft`), ``"finufft"`` (FINUFFT, one plan per call), ``"psf"``
+        (truncated point-spread function, :mod:`speckle.psf`) or ``"auto"`` (the fastest
+        method whose predicted error on this scene is within ``tol``,
+        :mod:`speckle.synthesis`). Approximate methods refuse (``ValueError``) a ``tol`` they
+        cannot reach.
     tol : float, optional
-        Requested relative accuracy in (0, 1) for approximate methods; ignored by ``"direct"``.
+        Requested relative accuracy in (0, 1), ``||A - A_direct||_2 / ||A_direct||_2`` over all
+        lines and pixels, for approximate methods; ignored by ``"direct"``. ``None`` means
+        ``1e-12`` for approximate methods.
 
     Returns
     -------
@@ -174,3 +182,9 @@ def ascan(
     a2 = np.ascontiguousarray(aa.reshape(-1, m))
     out = METHODS[method](z2, a2, n, h, k0v, s, tolv)
     return np.asarray(out, dtype=np.complex128).reshape(*batch_shape, n)
+
+
+# Fast methods register themselves in METHODS on import (kept last: they import this module).
+from . import nufft as _nufft  # noqa: E402, F401
+from . import psf as _psf  # noqa: E402, F401
+from . import synthesis as _synthesis  # noqa: E402, F401

@@ -1,0 +1,123 @@
+"""Figures of the speed-versus-accuracy chart and of the failure map (datasets of
+:mod:`speckle.speed`)."""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
+from matplotlib.figure import Figure
+
+from ._style import new_figure
+
+__all__ = ["failure_map_figure", "pareto_front", "speed_accuracy_figure"]
+
+#: Errors below this are drawn at it (the direct sum is exact: error 0).
+ERROR_FLOOR = 1e-16
+#: Failure-map errors below this are drawn at it (naive float32 at k0 = 0 is exact).
+MAP_FLOOR = 1e-12
+_MARKERS = {"direct": "*", "nufft": "o", "nufft32": "s", "finufft": "^", "psf": "D", "auto": "x"}
+
+
+def pareto_front(time: np.ndarray, error: np.ndarray) -> np.ndarray:
+    """Indices of the points no other point beats in both time and error, by time."""
+    ok = np.flatnonzero(np.isfinite(time) & np.isfinite(error))
+    order = ok[np.argsort(time[ok], kind="stable")]
+    front, best = [], np.inf
+    for i in order:
+        if error[i] < best:
+            front.append(i)
+            best = error[i]
+    return np.array(front, dtype=int)
+
+
+def speed_accuracy_figure(ds: xr.Dataset) -> Figure:
+    """Time versus relative error, one panel per scene size, Pareto front as a line."""
+    n_scene = ds.sizes["scene"]
+    fig, axes = new_figure(1, n_scene, width=3.4 * n_scene, height=3.4)
+    tols = ds["tol"].values
+    for i, ax in enumerate(axes[0]):
+        sc = ds.isel(scene=i)
+        all_t, all_e = [], []
+        for method in ds["method"].values:
+            t = sc["time"].sel({"method": method}).values
+            e = np.maximum(sc["error"].sel({"method": method}).values, ERROR_FLOOR)
+            if method == "direct":
+                t, e = t[:1], e[:1]
+            ax.plot(
+                t,
+                e,
+                _MARKERS.get(str(method), "."),
+                ls="-" if method != "direct" else "",
+                lw=0.8,
+                ms=5,
+                label=str(method),
+                alpha=0.85,
+            )
+            all_t.extend(t)
+            all_e.extend(e)
+        all_t, all_e = np.array(all_t), np.array(all_e)
+        front = pareto_front(all_t, all_e)
+        ax.step(
+            all_t[front],
+            all_e[front],
+            where="post",
+            color="k",
+            lw=2,
+            alpha=0.35,
+            label="Pareto front",
+        )
+        for tol in tols:
+            ax.axhline(tol, color="0.8", lw=0.5, zorder=0)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("wall time (s)")
+        ax.set_title(f"N={int(sc.n_pixels)} px, {int(sc.n_lines)} lines, {float(sc.density):g}/px")
+        if i == 0:
+            ax.set_ylabel("relative error vs direct")
+            ax.legend(fontsize=7, loc="lower left")
+    fig.suptitle(
+        f"Speed vs accuracy, knob tol = {', '.join(f'{t:g}' for t in tols)} "
+        f"(grey lines); spectrum {ds.attrs.get('spectrum_shape')}, "
+        f"k0/dk = {ds.attrs.get('k0_dk')}; pipeline timings are noisy",
+        fontsize=8,
+    )
+    return fig
+
+
+def failure_map_figure(ds: xr.Dataset) -> Figure:
+    """Measured (markers) and predicted (dashed) error of each case versus N, density, k0/dk."""
+    axes_names = [
+        ("n_pixels", "pixels N"),
+        ("density", "scatterers per pixel"),
+        ("k0_dk", "k0 / delta_k"),
+    ]
+    fig, axes = new_figure(1, 3, width=10.5, height=3.6)
+    axes = axes[0]
+    cases = ds["case"].values
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for ax, (axis, label) in zip(axes, axes_names, strict=True):
+        x = ds[axis].values.astype(float)
+        xplot = np.where(x > 0, x, np.nan) if axis != "k0_dk" else np.maximum(x, 0.1)
+        for c, case in enumerate(cases):
+            col = colors[c % len(colors)]
+            err = np.maximum(ds[f"error_vs_{axis}"].sel(case=case).values, MAP_FLOOR)
+            pred = np.maximum(ds[f"predicted_vs_{axis}"].sel(case=case).values, MAP_FLOOR)
+            ax.plot(xplot, err, "o-", color=col, lw=1, ms=4, label=str(case))
+            ax.plot(xplot, pred, "--", color=col, lw=1)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel(label + (" (0 drawn at 0.1)" if axis == "k0_dk" else ""))
+        ax.axhline(1e-6, color="0.6", lw=0.6, ls=":")
+        if axis == "n_pixels":
+            ax.set_ylabel("relative error vs direct")
+            ax.legend(fontsize=7)
+    fig.suptitle(
+        "Failure map: markers measured, dashed predicted (auto's rules; < 1e-12 drawn "
+        "at 1e-12); dotted: "
+        f"tol = 1e-6. Base N={ds.attrs.get('base_n_pixels')}, "
+        f"density={ds.attrs.get('base_density')}, k0/dk={ds.attrs.get('base_k0_dk')}, "
+        "depths over [0, 2H)",
+        fontsize=8,
+    )
+    return fig
