@@ -1,0 +1,458 @@
+"""Deformation of scatterer fields: uniaxial strain, rigid translations, arbitrary displacements.
+
+Conventions
+-----------
+* Displacements are in µm and act on material (reference) positions: a scatterer at depth ``z``
+  and lateral position ``x`` moves to ``z + u_z(z, x)``, ``x + u_x(z, x)``.
+* ``strain`` is the *compressive* uniaxial strain applied by an OCT probe pressed on the surface
+  (``z = 0`` held fixed by the probe): ``u_z = -strain * z``. Positive strain compresses
+  (scatterers move up, deeper tissue is pulled into view); negative strain stretches. Allowed
+  range ``-1 < strain < 1``. An optional lateral Poisson expansion
+  ``u_x = poisson_ratio * strain * (x - x_centre)`` moves scatterers between A-lines.
+* The tissue continues below the imaged depth ``H``: :func:`deformable_scene` populates depths
+  ``[0, H / (1 - max(strain, 0)))`` -- exactly as deep as the largest compression needs.
+* Wrap-around: the A-scan model is periodic in depth with period ``H``, so a scatterer deeper
+  than ``H`` aliases into the top of the image (a real SD-OCT effect). With ``wrap=False``
+  (default) scatterers whose displaced depth is outside ``[0, H)`` are given amplitude 0, so the
+  deep population needed for compression never aliases into the image and only the deformation
+  decorrelates it. ``wrap=True`` keeps them (aliasing on).
+
+Scenes stay labelled: :func:`uniaxial_strain` returns one dataset with a ``strain`` dim, which
+:func:`speckle.bscan.bscan` images in one call.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+
+import numpy as np
+import xarray as xr
+
+from ._validate import as_finite_array, check_real
+from .scatterers import line_generator, random_scatterers
+
+__all__ = [
+    "LATERAL_STREAM",
+    "deformable_scene",
+    "displace",
+    "pixel_displacement",
+    "required_depth",
+    "translate",
+    "uniaxial_displacement",
+    "uniaxial_pixel_displacement",
+    "uniaxial_strain",
+]
+
+#: Sub-stream of :func:`speckle.scatterers.line_generator` for lateral positions in the beam.
+LATERAL_STREAM = 1
+
+#: Dims a displacement field given as an xarray object may have (material coordinates).
+FIELD_DIMS = ("depth", "aline")
+
+Displacement = Callable[..., object] | xr.DataArray | xr.Dataset
+
+
+def check_strain(strain: object, name: str = "strain") -> np.ndarray:
+    """Strain values as a 1-D float array after checking ``-1 < strain < 1`` for each."""
+    s = as_finite_array(strain, name)
+    if s.ndim > 1:
+        raise ValueError(f"{name} must be a scalar or 1-D sequence, got shape {s.shape}")
+    bad = s[(s <= -1) | (s >= 1)]
+    if bad.size:
+        raise ValueError(
+            f"{name} must lie in the open interval (-1, 1) (compressive strain, u_z = "
+            f"-strain*z); got {bad.tolist()}"
+        )
+    return np.atleast_1d(s)
+
+
+def required_depth(depth: float, strain: object) -> float:
+    """Depth in µm to populate so that every strain in ``strain`` keeps ``[0, depth)`` full.
+
+    Compression ``s > 0`` pulls material from ``depth / (1 - s)`` up to ``depth``; stretching
+    needs nothing beyond ``depth``.
+    """
+    h = check_real(depth, "depth", low=0, low_inclusive=False)
+    s = check_strain(strain)
+    return h / (1.0 - max(0.0, float(s.max())))
+
+
+def deformable_scene(
+    n_alines: int,
+    density: float,
+    *,
+    n_pixels: int,
+    depth: float,
+    seed: int,
+    strain: object = 0.0,
+    poisson_ratio: float = 0.0,
+    amplitude: str = "equal",
+    count: str = "fixed",
+) -> xr.Dataset:
+    """Random scatterers populated as deep (and wide) as the given strains need, no further.
+
+    Parameters
+    ----------
+    n_alines, density, n_pixels, depth, seed, amplitude, count
+        As in :func:`speckle.scatterers.random_scatterers` (density per pixel, depth ``H`` µm).
+    strain : float or sequence of float
+        Compressive strains the scene will be subjected to, each in (-1, 1). Depths
+        ``[0, H/(1 - max(strain, 0)))`` are populated at the given density.
+    poisson_ratio : float
+        Lateral Poisson ratio in [0, 0.5]. With stretching (negative strain) the lateral
+        contraction pulls material in from beyond the scan, so extra A-lines are populated on
+        each side; they are dropped again by :func:`displace`.
+
+    Returns
+    -------
+    xarray.Dataset
+        As :func:`~speckle.scatterers.random_scatterers`, plus ``x`` (lateral position of each
+        scatterer in µm, uniform across the beam width ``aline_pitch`` around its A-line) and
+        attrs ``imaged_first``/``imaged_count`` (the A-lines that are imaged), ``max_strain``,
+        ``poisson_ratio``.
+    """
+    s = check_strain(strain)
+    nu = check_real(poisson_ratio, "poisson_ratio", low=0.0, high=0.5)
+    zmax = required_depth(depth, s)
+    smin = float(s.min())
+    contraction = 1.0 + nu * min(smin, 0.0)  # lateral stretch factor < 1 for tension
+    margin = 0 if contraction >= 1.0 else math.ceil(0.5 * n_alines * (1 / contraction - 1)) + 1
+    scene = random_scatterers(
+        n_alines + 2 * margin,
+        density,
+        n_pixels=n_pixels,
+        depth=depth,
+        seed=seed,
+        amplitude=amplitude,
+        count=count,
+        z_range=(0.0, zmax),
+    )
+    pitch = float(scene.attrs["aline_pitch"])
+    offsets = np.zeros(scene.z.shape)
+    for i in range(scene.sizes["aline"]):
+        rng = line_generator(seed, i, LATERAL_STREAM)
+        offsets[i] = rng.uniform(-0.5 * pitch, 0.5 * pitch, size=scene.sizes["scatterer"])
+    x = scene.aline.values[:, None] + offsets
+    scene["x"] = (("aline", "scatterer"), x, {"units": "um", "long_name": "lateral position"})
+    scene.attrs.update(
+        {
+            "imaged_first": margin,
+            "imaged_count": int(n_alines),
+            "max_strain": float(s.max()),
+            "min_strain": smin,
+            "poisson_ratio": nu,
+            "populated_depth": zmax,
+        }
+    )
+    return scene
+
+
+def uniaxial_displacement(
+    strain: float, *, poisson_ratio: float = 0.0, x_centre: float = 0.0
+) -> Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
+    """Displacement function of a probe compressing the tissue from ``z = 0``.
+
+    Returns ``f(z, x) -> (u_z, u_x)`` in µm with ``u_z = -strain*z`` and
+    ``u_x = poisson_ratio*strain*(x - x_centre)``.
+    """
+    s = float(check_strain(strain)[0])
+    nu = check_real(poisson_ratio, "poisson_ratio", low=0.0, high=0.5)
+    xc = check_real(x_centre, "x_centre")
+
+    def field(z: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return -s * np.asarray(z, float), nu * s * (np.asarray(x, float) - xc)
+
+    return field
+
+
+def _field_values(
+    displacement: Displacement, z: np.ndarray, x: np.ndarray, aline: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Evaluate a displacement (callable or xarray field) at material points (µm)."""
+    if callable(displacement) and not isinstance(displacement, xr.DataArray | xr.Dataset):
+        out = displacement(z, x)
+        uz, ux = out if isinstance(out, tuple) else (out, 0.0)
+        uz = as_finite_array(np.broadcast_to(uz, z.shape), "displacement u_z")
+        ux = as_finite_array(np.broadcast_to(ux, z.shape), "displacement u_x")
+        return uz, ux
+    if isinstance(displacement, xr.DataArray):
+        displacement = xr.Dataset({"uz": displacement})
+    if not isinstance(displacement, xr.Dataset):
+        raise TypeError(
+            "displacement must be a callable f(z, x) -> u_z or (u_z, u_x) in µm, or an xarray "
+            f"DataArray/Dataset (variables uz[, ux]); got {type(displacement).__name__}"
+        )
+    check_field(displacement)
+    aline_pos = x if aline is None else aline
+    out = []
+    for name in ("uz", "ux"):
+        if name not in displacement:
+            out.append(np.zeros(z.shape))
+            continue
+        da = displacement[name]
+        pts = {}
+        if "depth" in da.dims:
+            pts["depth"] = xr.DataArray(z.ravel(), dims="points")
+        if "aline" in da.dims:
+            pts["aline"] = xr.DataArray(np.broadcast_to(aline_pos, z.shape).ravel(), dims="points")
+        if pts:
+            vals = da.interp(pts, method="linear", kwargs={"fill_value": None})
+            vals = np.broadcast_to(vals.values.reshape(z.shape), z.shape)
+        else:
+            vals = np.full(z.shape, float(da.values))
+        out.append(as_finite_array(vals, f"displacement {name}"))
+    return out[0], out[1]
+
+
+def check_field(displacement: xr.Dataset, extra_dims: Sequence[str] = ()) -> None:
+    """Check a displacement field: variables ``uz``/``ux`` over dims ``depth``/``aline`` only.
+
+    Raises
+    ------
+    ValueError
+        On a missing ``uz``, a dim other than ``depth``/``aline`` (and ``extra_dims``), a
+        missing coordinate or NaN/infinite values.
+    """
+    if "uz" not in displacement:
+        raise ValueError("displacement field needs a variable 'uz' (axial displacement, µm)")
+    allowed = (*FIELD_DIMS, *extra_dims)
+    for name in ("uz", "ux"):
+        if name not in displacement:
+            continue
+        da = displacement[name]
+        wrong = [d for d in da.dims if d not in allowed]
+        if wrong:
+            raise ValueError(
+                f"displacement field {name!r} must have dims among {allowed} (material "
+                f"coordinates in µm); got dims {da.dims}"
+            )
+        for d in da.dims:
+            if d in FIELD_DIMS and d not in da.coords:
+                raise ValueError(f"displacement field {name!r} needs a coordinate {d!r} in µm")
+        as_finite_array(da.values, f"displacement field {name}")
+
+
+def displace(scene: xr.Dataset, displacement: Displacement, *, wrap: bool = False) -> xr.Dataset:
+    """Move every scatterer of ``scene`` by a displacement field.
+
+    Parameters
+    ----------
+    scene : xarray.Dataset
+        Scatterer field (``z``, ``amplitude``; optional ``x``) with dims ``(aline, scatterer)``,
+        e.g. from :func:`deformable_scene`.
+    displacement : callable or xarray.DataArray or xarray.Dataset
+        Either ``f(z, x) -> u_z`` or ``f(z, x) -> (u_z, u_x)`` (µm, arrays shaped like ``z``),
+        or a field on material coordinates: a DataArray of ``u_z`` or a Dataset with ``uz`` and
+        optionally ``ux``, with dims among ``depth`` and ``aline`` (coordinates in µm),
+        interpolated linearly (extrapolated linearly beyond its coordinates).
+    wrap : bool
+        Keep scatterers displaced outside ``[0, H)`` so they alias into the image (``True``),
+        or give them amplitude 0 (``False``, default; see module docstring).
+
+    Returns
+    -------
+    xarray.Dataset
+        The displaced field, restricted to the imaged A-lines. With a lateral displacement,
+        scatterers are re-assigned to the A-line whose beam (width ``aline_pitch``) holds them.
+    """
+    if not isinstance(scene, xr.Dataset) or not {"z", "amplitude"} <= set(scene.data_vars):
+        raise TypeError("scene must be an xarray.Dataset with variables 'z' and 'amplitude'")
+    if set(scene.z.dims) != {"aline", "scatterer"}:
+        raise ValueError(f"scene z must have dims (aline, scatterer), got {scene.z.dims}")
+    z = scene.z.transpose("aline", "scatterer").values
+    amp = scene.amplitude.transpose("aline", "scatterer").values
+    aline = scene.aline.values
+    x = (
+        scene.x.transpose("aline", "scatterer").values
+        if "x" in scene
+        else np.broadcast_to(aline[:, None], z.shape)
+    )
+    uz, ux = _field_values(displacement, z, x, np.broadcast_to(aline[:, None], z.shape))
+    z2, x2 = z + uz, x + ux
+    h = float(scene.attrs["depth"])
+    first = int(scene.attrs.get("imaged_first", 0))
+    count = int(scene.attrs.get("imaged_count", len(aline)))
+    amp2 = np.where(amp != 0, amp, 0)
+    if not wrap:
+        amp2 = np.where((z2 >= 0) & (z2 < h), amp2, 0)
+    if np.any(ux != 0):
+        pitch = float(
+            scene.attrs.get("aline_pitch", aline[1] - aline[0] if len(aline) > 1 else 1.0)
+        )
+        line = np.rint((x2 - aline[0]) / pitch).astype(int) - first
+        keep = (line >= 0) & (line < count) & (amp2 != 0)
+        z2, amp2, x2 = _rebin(line[keep], z2[keep], amp2[keep], x2[keep], count)
+    else:
+        sl = slice(first, first + count)
+        z2, amp2, x2 = z2[sl], amp2[sl], x2[sl]
+    out = xr.Dataset(
+        {
+            "z": (("aline", "scatterer"), z2, scene.z.attrs),
+            "amplitude": (
+                ("aline", "scatterer"),
+                amp2.astype(np.complex128),
+                scene.amplitude.attrs,
+            ),
+            "x": (("aline", "scatterer"), x2, {"units": "um", "long_name": "lateral position"}),
+        },
+        coords={"aline": ("aline", aline[first : first + count], scene.aline.attrs)},
+        attrs={**scene.attrs, "wrap": int(bool(wrap)), "imaged_first": 0, "imaged_count": count},
+    )
+    return out
+
+
+def _rebin(
+    line: np.ndarray, z: np.ndarray, amp: np.ndarray, x: np.ndarray, count: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Group scatterers by A-line index into padded (count, width) arrays."""
+    order = np.argsort(line, kind="stable")
+    line, z, amp, x = line[order], z[order], amp[order], x[order]
+    per_line = np.bincount(line, minlength=count)
+    width = int(per_line.max(initial=0))
+    start = np.concatenate([[0], np.cumsum(per_line)[:-1]])
+    col = np.arange(line.size) - start[line]
+    zz = np.zeros((count, width))
+    aa = np.zeros((count, width), dtype=np.complex128)
+    xx = np.zeros((count, width))
+    zz[line, col], aa[line, col], xx[line, col] = z, amp, x
+    return zz, aa, xx
+
+
+def _stack(scenes: list[xr.Dataset], dim: str, values: np.ndarray, attrs: dict) -> xr.Dataset:
+    """Concatenate displaced scenes along a new dim, padding the scatterer dim with zeros."""
+    width = max(s.sizes["scatterer"] for s in scenes)
+    padded = [s.pad(scatterer=(0, width - s.sizes["scatterer"]), constant_values=0) for s in scenes]
+    out = xr.concat(padded, dim=dim, combine_attrs="override")
+    return out.assign_coords({dim: (dim, values, attrs)})
+
+
+def uniaxial_strain(
+    scene: xr.Dataset,
+    strain: object,
+    *,
+    poisson_ratio: float = 0.0,
+    x_centre: float | None = None,
+    wrap: bool = False,
+) -> xr.Dataset:
+    """Compress ``scene`` uniaxially from the surface ``z = 0`` for each strain.
+
+    Parameters
+    ----------
+    scene : xarray.Dataset
+        Scatterer field, normally from :func:`deformable_scene` with the same strains (so it is
+        populated deep enough; a warning-free check raises if it is not).
+    strain : float or sequence of float
+        Compressive strains in (-1, 1): ``u_z = -strain*z`` (see module docstring).
+    poisson_ratio : float
+        Lateral expansion ``u_x = poisson_ratio*strain*(x - x_centre)``, in [0, 0.5].
+    x_centre : float, optional
+        Lateral centre of the probe in µm; default the middle of the imaged A-lines.
+    wrap : bool
+        See :func:`displace`.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dims ``(strain, aline, scatterer)``; coordinate ``strain`` (dimensionless).
+
+    Raises
+    ------
+    ValueError
+        If a strain is outside (-1, 1) or the scene is not populated deep enough for it.
+    """
+    s = check_strain(strain)
+    nu = check_real(poisson_ratio, "poisson_ratio", low=0.0, high=0.5)
+    need = required_depth(float(scene.attrs["depth"]), s)
+    have = float(scene.attrs.get("z_max", scene.attrs["depth"]))
+    if have < need * (1 - 1e-12):
+        raise ValueError(
+            f"scene is populated to {have:g} µm but strain up to {s.max():g} needs {need:g} µm; "
+            "build it with deformable_scene(..., strain=...)"
+        )
+    if x_centre is None:
+        first = int(scene.attrs.get("imaged_first", 0))
+        count = int(scene.attrs.get("imaged_count", scene.sizes["aline"]))
+        x_centre = float(scene.aline.values[first : first + count].mean())
+    scenes = [
+        displace(scene, uniaxial_displacement(si, poisson_ratio=nu, x_centre=x_centre), wrap=wrap)
+        for si in s
+    ]
+    out = _stack(scenes, "strain", s, {"units": "1", "long_name": "compressive strain"})
+    out.attrs.update({"poisson_ratio": nu, "x_centre": x_centre, "deformation": "uniaxial"})
+    return out
+
+
+def translate(scene: xr.Dataset, dz: object, dx: float = 0.0, *, wrap: bool = False) -> xr.Dataset:
+    """Rigid translation by ``dz`` µm in depth (scalar or sequence) and ``dx`` µm laterally.
+
+    Returns a dataset with a ``shift`` dim (axial shift in µm) when ``dz`` is a sequence.
+    """
+    dzs = as_finite_array(dz, "dz")
+    dxv = check_real(dx, "dx")
+    scenes = [
+        displace(scene, lambda z, x, d=d: (np.full(z.shape, d), np.full(z.shape, dxv)), wrap=wrap)
+        for d in np.atleast_1d(dzs)
+    ]
+    if dzs.ndim == 0:
+        return scenes[0]
+    return _stack(
+        scenes, "shift", np.atleast_1d(dzs), {"units": "um", "long_name": "axial translation"}
+    )
+
+
+def pixel_displacement(
+    displacement: Displacement, depth: np.ndarray, aline: np.ndarray
+) -> xr.Dataset:
+    """A displacement evaluated at pixel centres (material coordinates) of an image.
+
+    Parameters
+    ----------
+    displacement : callable or xarray object
+        As in :func:`displace`.
+    depth, aline : array_like
+        Pixel-centre depths and A-line positions in µm (the image coordinates).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``uz`` and ``ux`` in µm with dims ``(depth, aline)``.
+    """
+    d = np.asarray(depth, float)
+    a = np.asarray(aline, float)
+    zz, xx = np.meshgrid(d, a, indexing="ij")
+    uz, ux = _field_values(displacement, zz, xx, xx)
+    coords = {"depth": ("depth", d, {"units": "um"}), "aline": ("aline", a, {"units": "um"})}
+    return xr.Dataset(
+        {
+            "uz": (("depth", "aline"), uz, {"units": "um", "long_name": "axial displacement"}),
+            "ux": (("depth", "aline"), ux, {"units": "um", "long_name": "lateral displacement"}),
+        },
+        coords=coords,
+    )
+
+
+def uniaxial_pixel_displacement(
+    strain: object,
+    depth: np.ndarray,
+    aline: np.ndarray,
+    *,
+    poisson_ratio: float = 0.0,
+    x_centre: float | None = None,
+) -> xr.Dataset:
+    """Uniaxial-strain displacement at pixel centres, with a ``strain`` dim.
+
+    ``x_centre`` defaults to the middle of ``aline`` (as in :func:`uniaxial_strain`).
+    Returns ``uz``/``ux`` in µm with dims ``(strain, depth, aline)``.
+    """
+    s = check_strain(strain)
+    xc = float(np.mean(aline)) if x_centre is None else x_centre
+    fields = [
+        pixel_displacement(
+            uniaxial_displacement(si, poisson_ratio=poisson_ratio, x_centre=xc), depth, aline
+        )
+        for si in s
+    ]
+    return xr.concat(fields, dim="strain").assign_coords(
+        strain=("strain", s, {"units": "1", "long_name": "compressive strain"})
+    )
