@@ -23,6 +23,6 @@ include: "workflow/rules/speed.smk"
 
 
 rule all:
+    default_target: True
     input:
         STATIC_TARGETS + STATISTICS_TARGETS + DEFORMATION_TARGETS + SPEED_TARGETS,
-    default_target: True

@@ -6,12 +6,18 @@ spectral-domain OCT" (Laser Phys. Lett., 2014). Lengths are in micrometres, wave
 rad/µm.
 """
 
+from . import correlation, deformation, detection, measured, statistics, synthesis, tracking
 from .aline import METHODS, ascan, pixel_depths
 from .bscan import bscan, expected_intensity
+from .correlation import compensate, correlation_map, expected_correlation, pearson
+from .deformation import deformable_scene, displace, translate, uniaxial_strain
 from .io import open_dataset, to_netcdf
 from .provenance import package_version
 from .scatterers import random_scatterers
 from .source import delta_k, k0_from_wavelength, spectrum
+from .statistics import contrast_theory, fit_exponential, fit_rayleigh, speckle_contrast
+from .synthesis import choose_method
+from .tracking import track
 
 __version__ = package_version()
 
@@ -20,12 +26,33 @@ __all__ = [
     "__version__",
     "ascan",
     "bscan",
+    "choose_method",
+    "compensate",
+    "contrast_theory",
+    "correlation",
+    "correlation_map",
+    "deformable_scene",
+    "deformation",
     "delta_k",
+    "detection",
+    "displace",
+    "expected_correlation",
     "expected_intensity",
+    "fit_exponential",
+    "fit_rayleigh",
     "k0_from_wavelength",
+    "measured",
     "open_dataset",
+    "pearson",
     "pixel_depths",
     "random_scatterers",
+    "speckle_contrast",
     "spectrum",
+    "statistics",
+    "synthesis",
     "to_netcdf",
+    "track",
+    "tracking",
+    "translate",
+    "uniaxial_strain",
 ]

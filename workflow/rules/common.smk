@@ -19,3 +19,8 @@ def package_code(*modules):
 def section(*names):
     """The config sections a rule depends on, as params (a change reruns the rule)."""
     return {name: config[name] for name in names}
+
+
+def section_without(name, *keys):
+    """A config section minus the keys a rule does not read (changing them does not rerun it)."""
+    return {k: v for k, v in config[name].items() if k not in keys}

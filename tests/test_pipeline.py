@@ -1,0 +1,267 @@
+"""End-to-end tests of the Snakemake pipeline on the reduced CI configuration.
+
+The pipeline runs once (module fixture, ``--keep-going`` so that one failing rule does not hide
+the others; ``test_pipeline_run_succeeds`` reports it) in a temporary copy of the repository,
+with the copy's ``speckle`` package first on ``PYTHONPATH`` so that code tracking points at the
+copy. The other tests then ask Snakemake for a dry run (``-n``, default ``--rerun-triggers``)
+after changing a config section or editing a package module, and compare the planned jobs with
+the rules that depend on the change. Planned jobs are read from the "Job stats" table of the
+dry run.
+"""
+
+from __future__ import annotations
+
+import ast
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+import speckle
+from speckle.io import open_dataset
+from speckle.provenance import module_sources
+
+pytestmark = [pytest.mark.pipeline, pytest.mark.slow]
+
+CI_CONFIG = "workflow/config/ci.yaml"
+#: Folder holding the imported ``speckle`` package (paths in rule inputs are relative to it).
+PACKAGE_ROOT = Path(speckle.__file__).resolve().parents[1]
+IGNORE = shutil.ignore_patterns(
+    ".git",
+    ".snakemake",
+    "results",
+    "__pycache__",
+    ".pytest_cache",
+    ".hypothesis",
+    "*.egg-info",
+    ".benchmarks",
+    "report.html",
+    ".ruff_cache",
+)
+#: The static-figure rules, the section each one reads and one value to change in it.
+STATIC_CHANGES = {
+    "fig1": {"fig1": {"positions": [0.0, 1.5]}},
+    "fig2": {"fig2": {"densities": [0.5, 8.0]}},
+    "fig5": {"fig5": {"bins": 17}},
+}
+
+
+def snakemake(repo: Path, *args: str, check: bool = True) -> subprocess.CompletedProcess:
+    """Run snakemake in ``repo`` (the copy's package first on the path); output in stdout."""
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join([str(repo), *filter(None, [os.environ.get("PYTHONPATH")])]),
+    }
+    cmd = [
+        sys.executable,
+        "-m",
+        "snakemake",
+        "--directory",
+        str(repo),
+        "--snakefile",
+        str(repo / "Snakefile"),
+        *args,
+    ]
+    proc = subprocess.run(cmd, cwd=repo, env=env, capture_output=True, text=True)
+    proc.stdout = proc.stdout + proc.stderr
+    if check and proc.returncode != 0:
+        raise AssertionError(f"{' '.join(cmd)} failed ({proc.returncode}):\n{proc.stdout}")
+    return proc
+
+
+def planned_jobs(repo: Path, *configfiles: str) -> set[str]:
+    """Rules a dry run would execute (``all`` excluded), read from the "Job stats" table."""
+    out = snakemake(repo, "-n", "--configfile", CI_CONFIG, *configfiles).stdout
+    if re.search(r"Nothing to be done", out):
+        return set()
+    match = re.search(
+        r"Job stats:\s*\n\s*job\s+count\s*\n\s*-+\s+-+\s*\n(.*?)\n\s*total\s+\d+", out, re.S
+    )
+    assert match, f"no job table in the dry run:\n{out}"
+    rows = [line.split() for line in match.group(1).strip().splitlines()]
+    return {row[0] for row in rows if row and row[0] != "all"}
+
+
+def write_config(repo: Path, name: str, overrides: dict) -> str:
+    path = repo / name
+    path.write_text(yaml.safe_dump(overrides))
+    return name
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory, repo_root) -> tuple[Path, subprocess.CompletedProcess]:
+    """A repository copy in which the whole pipeline ran (``--keep-going``) on the CI config."""
+    repo = tmp_path_factory.mktemp("pipeline") / "repo"
+    shutil.copytree(repo_root, repo, ignore=IGNORE)
+    shared = repo_root.parent / "shared"
+    if shared.is_dir():  # the layout of a CI clone: ../shared beside the repository
+        (repo.parent / "shared").symlink_to(shared, target_is_directory=True)
+    proc = snakemake(repo, "--cores", "2", "--keep-going", "--configfile", CI_CONFIG, check=False)
+    return repo, proc
+
+
+@pytest.fixture(scope="module")
+def built(run) -> Path:
+    """The copy, once the static figures exist (other rules may have failed: see below)."""
+    repo, proc = run
+    for fig in ("fig1", "fig2", "fig5"):
+        assert (repo / "results" / fig / f"{fig}.nc").is_file(), proc.stdout
+    return repo
+
+
+@pytest.fixture(scope="module")
+def baseline(built) -> set[str]:
+    """Jobs a dry run plans without any change: none, unless a rule failed in the run."""
+    return planned_jobs(built)
+
+
+def test_pipeline_run_succeeds(run, baseline):
+    _, proc = run
+    assert proc.returncode == 0, proc.stdout[-5000:]
+    assert baseline == set()
+
+
+def test_outputs_exist_and_open(built):
+    results = built / "results"
+    for fig in ("fig1", "fig2", "fig5"):
+        assert (results / fig / f"{fig}.png").stat().st_size > 0
+        assert (results / fig / f"{fig}.nc").is_file()
+    for path in sorted(results.rglob("*.nc")):
+        ds = open_dataset(path)
+        assert ds.data_vars, path
+    fig2 = open_dataset(results / "fig2" / "fig2.nc")
+    ci = yaml.safe_load((built / CI_CONFIG).read_text())
+    default = yaml.safe_load((built / "workflow/config/config.yaml").read_text())
+    assert fig2.field.dtype.kind == "c"
+    assert list(fig2.density.values) == default["fig2"]["densities"]
+    assert fig2.sizes["aline"] == ci["fig2"]["n_alines"]
+    fig5 = open_dataset(results / "fig5" / "fig5.nc")
+    assert list(fig5.k0_dk.values) == default["fig5"]["k0_dk"]
+    # Fig. 5 images the same scatterers for each k0/delta_k: the k0-independent scene
+    # attributes agree, and the histograms integrate to one.
+    assert fig5.amplitude_density.sizes["bin"] == ci["fig5"]["bins"]
+    widths = (fig5.bin_upper - fig5.bin_lower).values
+    assert (fig5.amplitude_density * widths).sum("bin").values == pytest.approx(1.0, abs=1e-12)
+    fig1 = open_dataset(results / "fig1" / "fig1.nc")
+    assert fig1.ascan.dtype.kind == "c" and fig1.sizes["depth"] == ci["fig1"]["n_pixels"]
+
+
+@pytest.mark.parametrize("rule", sorted(STATIC_CHANGES))
+def test_param_change_reruns_exactly_its_figure(built, baseline, rule):
+    extra = write_config(built, f"changed_{rule}.yaml", STATIC_CHANGES[rule])
+    assert planned_jobs(built, extra) - baseline == {rule}
+
+
+@pytest.mark.parametrize(
+    ("change", "expected", "unaffected"),
+    [
+        ({"source": {"k0_dk": 3.0}}, {"fig2"}, {"fig1", "fig5"}),
+        ({"source": {"n_pixels": 128}}, {"fig2", "fig5"}, {"fig1"}),
+        ({"seed": 7}, {"fig2", "fig5"}, {"fig1"}),
+    ],
+)
+def test_shared_param_change_reruns_its_readers(built, baseline, change, expected, unaffected):
+    """Shared sections rerun the static figures that read them (others' rules may follow)."""
+    planned = planned_jobs(built, write_config(built, "changed_shared.yaml", change)) - baseline
+    assert expected <= planned
+    assert not unaffected & planned
+
+
+@pytest.fixture(scope="module")
+def rule_inputs(built) -> dict[str, set[str]]:
+    """Input files of every job of a forced dry run, by rule (rules with a script only)."""
+    out = snakemake(built, "-n", "-F", "--configfile", CI_CONFIG).stdout
+    blocks = re.findall(r"^rule (\w+):\n((?:    .*\n)+)", out, re.M)
+    assert blocks, out
+    inputs = {}
+    for rule, body in blocks:
+        found = re.search(r"^    input: (.*)$", body, re.M)
+        inputs.setdefault(rule, set()).update(found.group(1).split(", ") if found else [])
+    return inputs
+
+
+def test_package_edit_reruns_exactly_its_users(built, baseline, rule_inputs):
+    """Editing a module reruns exactly the rules that list it (the static figures among them).
+
+    Snakemake (>= 9.18) compares checksums of small inputs, so a bare ``touch`` is not an edit;
+    the test appends a comment and restores the file afterwards. That every rule lists the
+    modules its script imports is checked by the next test.
+    """
+    name = "speckle/figures/static.py"
+    users = {rule for rule, files in rule_inputs.items() if name in files}
+    assert {"fig1", "fig2", "fig5"} <= users
+    module = built / name
+    original = module.read_text()
+    try:
+        module.write_text(original + "\n# an edit\n")
+        assert planned_jobs(built) == users | baseline
+    finally:
+        module.write_text(original)
+    assert planned_jobs(built) == baseline
+
+
+def _script_modules(script: Path) -> set[str]:
+    """``speckle`` modules a pipeline script imports."""
+    names: set[str] = set()
+    for node in ast.walk(ast.parse(script.read_text())):
+        if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("speckle"):
+            names.add(node.module)
+            names.update(f"{node.module}.{a.name}" for a in node.names)
+        elif isinstance(node, ast.Import):
+            names.update(a.name for a in node.names if a.name.startswith("speckle"))
+    return names
+
+
+def test_every_imported_module_is_a_rule_input(built, rule_inputs):
+    """Each rule lists (via package_code) every package source its script imports."""
+    smk = "\n".join(p.read_text() for p in (built / "workflow" / "rules").glob("*.smk"))
+    checked = 0
+    for rule, listed in rule_inputs.items():
+        found = re.search(
+            rf"^rule {rule}:\n(?:(?!rule ).*\n)*?\s+\"\.\./scripts/(\S+)\"", smk, re.M
+        )
+        if found is None:
+            continue
+        script = built / "workflow" / "scripts" / found.group(1)
+        modules = [m for m in _script_modules(script) if _importable(m)]
+        needed = {os.path.relpath(p, PACKAGE_ROOT) for p in module_sources(*modules)}
+        assert needed <= listed, f"rule {rule} misses package inputs {sorted(needed - listed)}"
+        checked += 1
+    assert checked >= 3
+
+
+def _importable(name: str) -> bool:
+    import importlib.util
+
+    try:
+        return importlib.util.find_spec(name) is not None
+    except (ImportError, AttributeError):
+        return False
+
+
+def test_bad_config_fails_schema_validation(tmp_path, repo_root):
+    repo = tmp_path / "repo"
+    shutil.copytree(repo_root, repo, ignore=IGNORE)
+    bad = write_config(repo, "bad.yaml", {"fig2": {"densities": [0.5, -1.0]}})
+    proc = snakemake(repo, "-n", "--configfile", CI_CONFIG, bad, check=False)
+    assert proc.returncode != 0
+    assert "-1.0" in proc.stdout and "densities" in proc.stdout, proc.stdout
+    assert re.search(r"exclusiveMinimum|less than or equal to", proc.stdout), proc.stdout
+
+
+def test_ci_runs_the_readme_commands(repo_root):
+    """.ci/run runs exactly the README's quick-start test command and the reduced pipeline."""
+    readme = (repo_root / "README.md").read_text()
+    block = re.search(r"## Quick start.*?```bash\n(.*?)```", readme, re.S)
+    assert block, "README has no quick-start bash block"
+    commands = [line.split("#")[0].strip() for line in block.group(1).splitlines()]
+    test_cmd = next(c for c in commands if "pytest" in c)
+    ci = (repo_root / ".ci" / "run").read_text()
+    assert test_cmd in [line.strip() for line in ci.splitlines()]
+    assert f"--configfile {CI_CONFIG}" in ci
+    assert ci.splitlines()[0].startswith("#!") and "set -euo pipefail" in ci
