@@ -19,10 +19,15 @@ include: "workflow/rules/common.smk"
 include: "workflow/rules/static.smk"
 include: "workflow/rules/statistics.smk"
 include: "workflow/rules/deformation.smk"
+include: "workflow/rules/scan.smk"
 include: "workflow/rules/speed.smk"
 
 
 rule all:
     default_target: True
     input:
-        STATIC_TARGETS + STATISTICS_TARGETS + DEFORMATION_TARGETS + SPEED_TARGETS,
+        STATIC_TARGETS
+        + STATISTICS_TARGETS
+        + DEFORMATION_TARGETS
+        + SCAN_TARGETS
+        + SPEED_TARGETS,

@@ -74,17 +74,22 @@ def snakemake(repo: Path, *args: str, check: bool = True) -> subprocess.Complete
     return proc
 
 
-def planned_jobs(repo: Path, *configfiles: str) -> set[str]:
-    """Rules a dry run would execute (``all`` excluded), read from the "Job stats" table."""
+def job_counts(repo: Path, *configfiles: str) -> dict[str, int]:
+    """Jobs per rule a dry run would execute (``all`` excluded), from the "Job stats" table."""
     out = snakemake(repo, "-n", "--configfile", CI_CONFIG, *configfiles).stdout
     if re.search(r"Nothing to be done", out):
-        return set()
+        return {}
     match = re.search(
         r"Job stats:\s*\n\s*job\s+count\s*\n\s*-+\s+-+\s*\n(.*?)\n\s*total\s+\d+", out, re.S
     )
     assert match, f"no job table in the dry run:\n{out}"
     rows = [line.split() for line in match.group(1).strip().splitlines()]
-    return {row[0] for row in rows if row and row[0] != "all"}
+    return {row[0]: int(row[1]) for row in rows if row and row[0] != "all"}
+
+
+def planned_jobs(repo: Path, *configfiles: str) -> set[str]:
+    """Rules a dry run would execute (``all`` excluded)."""
+    return set(job_counts(repo, *configfiles))
 
 
 def write_config(repo: Path, name: str, overrides: dict) -> str:
@@ -252,6 +257,32 @@ def test_bad_config_fails_schema_validation(tmp_path, repo_root):
     assert proc.returncode != 0
     assert "-1.0" in proc.stdout and "densities" in proc.stdout, proc.stdout
     assert re.search(r"exclusiveMinimum|less than or equal to", proc.stdout), proc.stdout
+
+
+def scan_table_config(repo: Path, name: str, rows: str) -> str:
+    """A config naming a scan table made of the CI table's header and ``rows``."""
+    ci = yaml.safe_load((repo / CI_CONFIG).read_text())
+    header = (repo / ci["scan"]["table"]).read_text().splitlines()[0]
+    (repo / f"{name}.tsv").write_text(f"{header}\n{rows}")
+    return write_config(repo, f"{name}.yaml", {"scan": {"table": f"{name}.tsv"}})
+
+
+def test_new_scan_row_runs_only_that_row(built, baseline):
+    """Paramspace: a row added to the scan table is one new job plus the stacking job."""
+    ci = yaml.safe_load((built / CI_CONFIG).read_text())
+    rows = "".join(
+        line + "\n" for line in (built / ci["scan"]["table"]).read_text().splitlines()[1:]
+    )
+    more = scan_table_config(built, "scan_more", rows + "2.0\t10.0\trectangular\n")
+    planned = job_counts(built, more)
+    assert {k: v for k, v in planned.items() if k not in baseline} == {"scan_point": 1, "scan": 1}
+
+
+def test_bad_scan_row_fails_schema_validation(built):
+    bad = scan_table_config(built, "scan_bad", "-1.0\t10.0\trectangular\n")
+    proc = snakemake(built, "-n", "--configfile", CI_CONFIG, bad, check=False)
+    assert proc.returncode != 0
+    assert "-1.0" in proc.stdout and "density" in proc.stdout, proc.stdout
 
 
 def test_ci_runs_the_readme_commands(repo_root):
