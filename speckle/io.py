@@ -63,6 +63,9 @@ def to_netcdf(ds: xr.Dataset | xr.DataArray, path: str | os.PathLike) -> None:
     ds.attrs = netcdf_safe_attrs(ds.attrs)
     for name in ds.variables:
         ds[name].attrs = netcdf_safe_attrs(ds[name].attrs)
+        # Drop encodings carried over from files the data were read from: a string variable
+        # read as 8-character labels would otherwise truncate longer labels added since.
+        ds[name].encoding = {}
     encoding = {
         name: {"zlib": True, "complevel": COMPLEVEL}
         for name, var in ds.data_vars.items()

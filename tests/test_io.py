@@ -35,3 +35,19 @@ def test_dataarray_is_written_as_dataset(tmp_path):
     da = xr.DataArray(np.arange(3.0), dims="x", name="v")
     to_netcdf(da, tmp_path / "v.nc")
     np.testing.assert_array_equal(open_dataset(tmp_path / "v.nc").v, da)
+
+
+def test_labels_read_from_a_file_can_grow(tmp_path):
+    """Encodings of data read from a file do not constrain what is written next.
+
+    A string coordinate read back as 8-character labels ("gaussian") and combined with a longer
+    label ("rectangular") must not be truncated on writing.
+    """
+    short = xr.Dataset({"v": ("spectrum", [1.0])}, coords={"spectrum": ["gaussian"]})
+    to_netcdf(short, tmp_path / "short.nc")
+    long = xr.Dataset({"v": ("spectrum", [2.0])}, coords={"spectrum": ["rectangular"]})
+    both = xr.concat([open_dataset(tmp_path / "short.nc"), long], dim="spectrum")
+    to_netcdf(both, tmp_path / "both.nc")
+    back = open_dataset(tmp_path / "both.nc")
+    assert back.spectrum.values.tolist() == ["gaussian", "rectangular"]
+    assert back.v.sel(spectrum="rectangular").item() == 2.0

@@ -15,6 +15,7 @@ import pytest
 import yaml
 
 from speckle.figures.deformation import scan_combine, scan_figure, scan_point_data
+from speckle.io import open_dataset, to_netcdf
 
 SCAN = {"n_alines": 32, "strain": {"start": 0.0, "stop": 0.2, "num": 2}}
 
@@ -76,6 +77,21 @@ def test_combine_stacks_rows_and_marks_missing_combinations(points, tmp_path):
     assert ds.attrs["n_pixels"] == points[0].attrs["n_pixels"] and ds.attrs["scan_points"] == 3
     scan_figure(ds, tmp_path / "scan.png")
     assert (tmp_path / "scan.png").stat().st_size > 0
+
+
+def test_combine_after_netcdf_round_trip_keeps_labels(points, tmp_path):
+    """As in the pipeline: points written and read back, stacked, written and read again."""
+    paths = []
+    for i, p in enumerate(reversed(points)):  # "gaussian" (8 characters) first
+        paths.append(tmp_path / f"p{i}.nc")
+        to_netcdf(p, paths[-1])
+    to_netcdf(scan_combine([open_dataset(path) for path in paths]), tmp_path / "scan.nc")
+    ds = open_dataset(tmp_path / "scan.nc")
+    assert sorted(ds.spectrum.values.tolist()) == ["gaussian", "rectangular"]
+    np.testing.assert_array_equal(
+        ds.intensity_correlation.sel(density=4.0, k0_dk=10.0, spectrum="rectangular").values,
+        points[1].intensity_correlation.squeeze().values,
+    )
 
 
 def test_combine_needs_points():
