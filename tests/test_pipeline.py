@@ -152,6 +152,11 @@ def test_outputs_exist_and_open(built):
     assert fig5.amplitude_density.sizes["bin"] == ci["fig5"]["bins"]
     widths = (fig5.bin_upper - fig5.bin_lower).values
     assert (fig5.amplitude_density * widths).sum("bin").values == pytest.approx(1.0, abs=1e-12)
+    scan = open_dataset(results / "scan" / "decorrelation.nc")
+    table = (built / ci["scan"]["table"]).read_text().splitlines()[1:]
+    rows = {tuple(line.split("\t")) for line in table}
+    assert set(scan.spectrum.values.tolist()) == {r[2] for r in rows}
+    assert scan.attrs["scan_points"] == len(rows)
     fig1 = open_dataset(results / "fig1" / "fig1.nc")
     assert fig1.ascan.dtype.kind == "c" and fig1.sizes["depth"] == ci["fig1"]["n_pixels"]
 
