@@ -24,9 +24,9 @@ import time
 import finufft
 import numpy as np
 
-from speckle.aline import ascan
-from speckle.nufft import finufft_ascan
-from speckle.synthesis import choose_method, stream_ascans
+from speckle.imaging.aline import ascan
+from speckle.imaging.nufft import finufft_ascan
+from speckle.imaging.synthesis import choose_method, stream_ascans
 
 
 def scene(n_pixels, n_lines, density, seed=1):

@@ -6,18 +6,21 @@ spectral-domain OCT" (Laser Phys. Lett., 2014). Lengths are in micrometres, wave
 rad/µm.
 """
 
-from . import correlation, deformation, detection, measured, statistics, synthesis, tracking
-from .aline import METHODS, ascan, pixel_depths
-from .bscan import bscan, expected_intensity
-from .correlation import compensate, correlation_map, expected_correlation, pearson
-from .deformation import deformable_scene, displace, translate, uniaxial_strain
+from .analysis import correlation, measured, statistics, tracking
+from .analysis.correlation import compensate, correlation_map, expected_correlation, pearson
+from .analysis.statistics import contrast_theory, fit_exponential, fit_rayleigh, speckle_contrast
+from .analysis.tracking import track
+from .imaging import synthesis
+from .imaging.aline import METHODS, ascan, pixel_depths
+from .imaging.bscan import bscan, expected_intensity
+from .imaging.synthesis import choose_method
 from .io import open_dataset, to_netcdf
 from .provenance import package_version
-from .scatterers import random_scatterers
-from .source import delta_k, k0_from_wavelength, spectrum
-from .statistics import contrast_theory, fit_exponential, fit_rayleigh, speckle_contrast
-from .synthesis import choose_method
-from .tracking import track
+from .scene import deformation
+from .scene.deformation import deformable_scene, displace, translate, uniaxial_strain
+from .scene.scatterers import random_scatterers
+from .system import detection
+from .system.source import delta_k, k0_from_wavelength, spectrum
 
 __version__ = package_version()
 

@@ -5,7 +5,7 @@
 scheduler is Dask's: threads or processes on one machine, or a ``dask.distributed`` cluster
 (``address`` of a running scheduler) to scale past one machine. Results do not depend on the
 scheduler or the number of workers as long as ``func`` derives its random numbers from its
-arguments (e.g. :func:`speckle.scatterers.line_generator`), never from global state.
+arguments (e.g. :func:`speckle.scene.scatterers.line_generator`), never from global state.
 """
 
 from __future__ import annotations

@@ -8,8 +8,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import speckle
-from speckle import aline
-from speckle.aline import ascan
+from speckle.imaging import aline
+from speckle.imaging.aline import ascan
 
 N, H = 32, 256.0  # 8 µm pixels
 PIX = H / N

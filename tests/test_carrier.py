@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from speckle.carrier import carrier_and_position, naive_float32_phase_error
+from speckle.imaging.carrier import carrier_and_position, naive_float32_phase_error
 
 EPS32 = float(np.finfo(np.float32).eps)
 

@@ -1,4 +1,4 @@
-"""Tests of speckle.correlation against exact references and the theory derived in its module
+"""Tests of speckle.analysis.correlation against exact references and the theory derived in its module
 docstring (Campbell's theorem for Poisson scatterers).
 
 Statistical tolerances: the sample Pearson coefficient of ``n`` independent pairs has standard
@@ -14,8 +14,8 @@ import pytest
 import xarray as xr
 
 import speckle
-from speckle import correlation as corr
-from speckle import deformation as D
+from speckle.analysis import correlation as corr
+from speckle.scene import deformation as D
 
 N, PIXEL = 64, 8.0
 H = N * PIXEL

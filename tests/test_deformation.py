@@ -1,4 +1,4 @@
-"""Tests of speckle.deformation: strain, translations, displacement fields, depth population,
+"""Tests of speckle.scene.deformation: strain, translations, displacement fields, depth population,
 wrap-around aliasing kept out of correlations, and bad input."""
 
 import numpy as np
@@ -6,8 +6,8 @@ import pytest
 import xarray as xr
 
 import speckle
-from speckle import correlation as corr
-from speckle import deformation as D
+from speckle.analysis import correlation as corr
+from speckle.scene import deformation as D
 
 N, PIXEL = 64, 8.0
 H = N * PIXEL

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from speckle.detection import add_floor, log_compress
+from speckle.system.detection import add_floor, log_compress
 
 
 @pytest.fixture

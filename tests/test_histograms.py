@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from speckle.analysis.statistics import contrast_theory
 from speckle.figures import histograms
-from speckle.statistics import contrast_theory
 
 SCENE = {"n_alines": 8, "k0_dk": 10.0, "seed": 3, "n_pixels": 32, "pixel_size": 8.0}
 

@@ -10,8 +10,8 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from speckle.aline import ascan
-from speckle.nufft import (
+from speckle.imaging.aline import ascan
+from speckle.imaging.nufft import (
     NUFFT_TOL_FLOOR,
     es_kernel,
     float32_error_estimate,

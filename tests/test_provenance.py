@@ -17,7 +17,7 @@ def test_config_hash_ignores_key_order():
 
 
 def test_module_sources_follow_package_imports_only():
-    names = {Path(p).name for p in module_sources("speckle.bscan")}
+    names = {Path(p).name for p in module_sources("speckle.imaging.bscan")}
     assert {"bscan.py", "aline.py", "scatterers.py", "source.py", "_validate.py"} <= names
     assert "sweep.py" not in names  # __init__ re-exports are not followed
     names = {Path(p).name for p in module_sources("speckle.sweep")}

@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from speckle.aline import ascan
-from speckle.psf import half_width, psf_ascan, psf_error_estimate, tail_error
+from speckle.imaging.aline import ascan
+from speckle.imaging.psf import half_width, psf_ascan, psf_error_estimate, tail_error
 
 
 def gaussian(n, fraction):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from speckle.scatterers import amplitude_kurtosis, random_scatterers
+from speckle.scene.scatterers import amplitude_kurtosis, random_scatterers
 
 KW = {"n_pixels": 64, "depth": 512.0}
 

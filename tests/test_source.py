@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import speckle
-from speckle.source import k0_from_wavelength, spectral_index, spectrum, wavelength_from_k0
+from speckle.system.source import k0_from_wavelength, spectral_index, spectrum, wavelength_from_k0
 
 
 def test_wavenumber_grid_and_attrs():

@@ -1,4 +1,4 @@
-"""Speed/accuracy chart and failure map datasets (speckle.speed) and their figures."""
+"""Speed/accuracy chart and failure map datasets (speckle.imaging.speed) and their figures."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from speckle.figures.speed import failure_map_figure, pareto_front, speed_accuracy_figure
-from speckle.speed import FAILURE_CASES, failure_map, speed_accuracy
+from speckle.imaging.speed import FAILURE_CASES, failure_map, speed_accuracy
 
 
 @pytest.fixture(scope="module")

@@ -3,7 +3,7 @@
 Statistical tolerances are ``TOL_SE`` standard errors of the estimator. The contrast's standard
 error comes from the spread of per-A-line moments (pixels of one A-line are correlated through
 the shared scatterers and fixed count; A-lines are independent), by the delta method (see
-:func:`speckle.statistics.contrast_standard_error`). With fixed seeds the tests are
+:func:`speckle.analysis.statistics.contrast_standard_error`). With fixed seeds the tests are
 deterministic; 4 SE would be exceeded by chance with probability 6e-5 per check.
 """
 
@@ -20,7 +20,7 @@ from hypothesis.extra.numpy import arrays
 from scipy import integrate, stats
 
 import speckle
-from speckle.statistics import (
+from speckle.analysis.statistics import (
     contrast_standard_error,
     contrast_theory,
     exponential_pdf,

@@ -7,12 +7,17 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-import speckle.aline as aline
-from speckle.aline import METHODS, ascan
-from speckle.nufft import float32_error_estimate, kernel_width
-from speckle.psf import half_width
-from speckle.scatterers import random_scatterers
-from speckle.synthesis import AUTO_CANDIDATES, choose_method, method_estimates, stream_ascans
+import speckle.imaging.aline as aline
+from speckle.imaging.aline import METHODS, ascan
+from speckle.imaging.nufft import float32_error_estimate, kernel_width
+from speckle.imaging.psf import half_width
+from speckle.imaging.synthesis import (
+    AUTO_CANDIDATES,
+    choose_method,
+    method_estimates,
+    stream_ascans,
+)
+from speckle.scene.scatterers import random_scatterers
 
 
 def gaussian(n, fraction):

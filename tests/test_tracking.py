@@ -1,4 +1,4 @@
-"""Tests of speckle.tracking: sub-pixel accuracy on known rigid shifts and uniaxial strain,
+"""Tests of speckle.analysis.tracking: sub-pixel accuracy on known rigid shifts and uniaxial strain,
 failure reporting, estimated compensation, bad input.
 
 Accuracy budget: the registration grid is 1/(upsample*oversample) = 1/40 pixel, so a single
@@ -12,9 +12,9 @@ import pytest
 import xarray as xr
 
 import speckle
-from speckle import correlation as corr
-from speckle import deformation as D
-from speckle import tracking as T
+from speckle.analysis import correlation as corr
+from speckle.analysis import tracking as T
+from speckle.scene import deformation as D
 
 N, PIXEL = 128, 8.0
 H = N * PIXEL

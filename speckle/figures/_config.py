@@ -8,11 +8,10 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-import numpy as np
 import xarray as xr
 
 from .._validate import check_int, check_real
-from ..source import spectrum
+from ..system.source import spectrum
 
 __all__ = ["dask_options", "source_options", "source_spectrum"]
 
@@ -41,14 +40,8 @@ def source_spectrum(
     """
     n = check_int(n_pixels, "n_pixels", low=2)
     h = n * check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
-    fwhm = None
-    if shape == "gaussian":
-        if fwhm_fraction is None:
-            raise ValueError("shape='gaussian' needs fwhm_fraction (> 0, fraction of delta_k)")
-        fwhm = check_real(fwhm_fraction, "fwhm_fraction", low=0, low_inclusive=False) * (
-            n * np.pi / h
-        )
-    return spectrum(n, h, k0_dk=k0_dk, shape=shape, fwhm=fwhm)
+    frac = fwhm_fraction if shape == "gaussian" else None
+    return spectrum(n, h, k0_dk=k0_dk, shape=shape, fwhm_fraction=frac)
 
 
 def source_options(source: Mapping) -> dict:

@@ -16,14 +16,14 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
-from .. import correlation as corr
-from ..bscan import bscan
-from ..deformation import deformable_scene, uniaxial_pixel_displacement, uniaxial_strain
+from ..analysis import correlation as corr
+from ..analysis.tracking import interpolate_displacement, track
+from ..imaging.bscan import bscan
 from ..provenance import provenance_attrs
-from ..scatterers import amplitude_kurtosis
-from ..source import spectrum as make_spectrum
+from ..scene.deformation import deformable_scene, uniaxial_pixel_displacement, uniaxial_strain
+from ..scene.scatterers import amplitude_kurtosis
 from ..sweep import sweep
-from ..tracking import interpolate_displacement, track
+from ..system.source import spectrum as make_spectrum
 from ._style import save
 
 __all__ = [
@@ -58,13 +58,12 @@ def make_source(
     n = int(source["n_pixels"])
     h = n * float(source["pixel_size"])
     shape = spectrum or source["shape"]
-    dk = n * np.pi / h
     panel = (fig6 or {}).get("panel_c", {})
     if shape == "rectangular":
         return make_spectrum(n, h, k0_dk=k0_dk)
     if shape == "gaussian":
         frac = panel.get("gaussian_fwhm_fraction") or source.get("fwhm_fraction")
-        return make_spectrum(n, h, k0_dk=k0_dk, shape="gaussian", fwhm=float(frac) * dk)
+        return make_spectrum(n, h, k0_dk=k0_dk, shape="gaussian", fwhm_fraction=float(frac))
     if shape == "two_peak":
         tp = panel["two_peak"]
         w = corr.two_peak_weights(

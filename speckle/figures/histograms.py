@@ -3,7 +3,7 @@
 Data builders return the dataset a figure is drawn from (written to NetCDF by the pipeline);
 ``plot_*`` functions draw it. Fig. 3 sweeps the scatterer density with
 :func:`speckle.sweep.sweep`; Fig. 4 compares density-4 speckle with a measured B-scan through
-gain- and offset-free statistics of the log intensity (:mod:`speckle.measured`).
+gain- and offset-free statistics of the log intensity (:mod:`speckle.analysis.measured`).
 """
 
 from __future__ import annotations
@@ -15,11 +15,8 @@ import numpy as np
 import xarray as xr
 from scipy import stats
 
-from .. import measured as meas
-from ..bscan import bscan, expected_intensity
-from ..detection import add_floor
-from ..scatterers import random_scatterers
-from ..statistics import (
+from ..analysis import measured as meas
+from ..analysis.statistics import (
     contrast_standard_error,
     contrast_theory,
     exponential_pdf,
@@ -28,7 +25,10 @@ from ..statistics import (
     histogram,
     rayleigh_pdf,
 )
+from ..imaging.bscan import bscan, expected_intensity
+from ..scene.scatterers import random_scatterers
 from ..sweep import sweep
+from ..system.detection import add_floor
 from ._config import source_spectrum
 from ._style import new_figure
 
@@ -74,9 +74,9 @@ def simulate_speckle(
     k0_dk, n_pixels, pixel_size, shape, fwhm_fraction
         Source, as the pipeline's ``source`` config (pixel size in µm).
     method : str
-        A-scan method (:data:`speckle.aline.METHODS`).
+        A-scan method (:data:`speckle.imaging.aline.METHODS`).
     normalise : {"none", "density", "expected"}
-        See :func:`speckle.bscan`.
+        See :func:`speckle.imaging.bscan`.
     """
     src = source_spectrum(n_pixels, pixel_size, k0_dk, shape, fwhm_fraction)
     scene = random_scatterers(
@@ -198,7 +198,7 @@ def simulated_panels(
     """Fig. 4 upper row: histograms and fits of simulated speckle, ``<I> = 1`` normalisation.
 
     ``floor`` (in units of ``<I>``, off by default) adds the intensity floor that explains the
-    measured departure (:func:`speckle.detection.add_floor`). ``scene`` holds the keyword
+    measured departure (:func:`speckle.system.detection.add_floor`). ``scene`` holds the keyword
     arguments of :func:`simulate_speckle`; ``z_range`` is the standardised log-intensity axis.
     """
     ds, src = simulate_speckle(density, normalise="expected", **scene)
@@ -313,7 +313,7 @@ def fig4_dataset(sim: xr.Dataset, image: xr.DataArray | None, reason: str = "") 
 
 
 def _stairs(ax, density: xr.DataArray, **kw) -> None:
-    """Draw a histogram DataArray from :func:`speckle.statistics.histogram` as filled steps."""
+    """Draw a histogram DataArray (from ``statistics.histogram``) as filled steps."""
     (dim,) = density.dims
     lower = [c for c in density.coords if c.endswith("_lower") and density[c].dims == (dim,)]
     upper = [c for c in density.coords if c.endswith("_upper") and density[c].dims == (dim,)]

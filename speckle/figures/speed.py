@@ -1,5 +1,5 @@
 """Figures of the speed-versus-accuracy chart and of the failure map (datasets of
-:mod:`speckle.speed`)."""
+:mod:`speckle.imaging.speed`)."""
 
 from __future__ import annotations
 

@@ -23,11 +23,11 @@ import numpy as np
 import xarray as xr
 
 from .._validate import as_finite_array, check_int
-from ..aline import ascan, pixel_depths
-from ..bscan import bscan
+from ..analysis.statistics import fit_rayleigh, histogram, rayleigh_pdf
+from ..imaging.aline import ascan, pixel_depths
+from ..imaging.bscan import bscan
 from ..provenance import provenance_attrs
-from ..scatterers import random_scatterers
-from ..statistics import fit_rayleigh, histogram, rayleigh_pdf
+from ..scene.scatterers import random_scatterers
 from ..sweep import sweep
 from ._config import dask_options, source_options, source_spectrum
 from ._style import new_figure
@@ -220,12 +220,12 @@ def speckle_image(
     seed : int
         Root seed (>= 0).
     normalise : {"none", "density", "expected"}
-        Passed to :func:`speckle.bscan.bscan` (``"density"``: divide by ``sqrt(density)``).
+        Passed to :func:`speckle.bscan` (``"density"``: divide by ``sqrt(density)``).
 
     Returns
     -------
     xarray.Dataset
-        The :func:`speckle.bscan.bscan` dataset (dims ``depth, aline``).
+        The :func:`speckle.bscan` dataset (dims ``depth, aline``).
     """
     src = source_spectrum(n_pixels, pixel_size, k0_dk, shape, fwhm_fraction)
     scene = random_scatterers(
@@ -303,9 +303,9 @@ def k0_sweep(
     -------
     xarray.Dataset
         The B-scans stacked along ``k0_dk`` plus, per ``k0_dk``, the amplitude histogram of all
-        pixels (``amplitude_density``, dims ``k0_dk, bin``; :func:`speckle.statistics.histogram`
+        pixels (``amplitude_density``, dims ``k0_dk, bin``; ``statistics.histogram``
         with common bins from 0 to the largest amplitude) and the maximum-likelihood Rayleigh
-        fit (:func:`speckle.statistics.fit_rayleigh`): ``rayleigh_sigma`` and its
+        fit (:func:`speckle.analysis.statistics.fit_rayleigh`): ``rayleigh_sigma`` and its
         goodness-of-fit variables ``rayleigh_ks_statistic``, ``rayleigh_chi2``, ... (dim
         ``k0_dk``).
     """

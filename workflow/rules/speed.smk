@@ -12,7 +12,7 @@ SPEED_TARGETS = [
 rule speed_accuracy:
     input:
         code=package_code(
-            "speckle.speed",
+            "speckle.imaging.speed",
             "speckle.figures.speed",
             "speckle.figures._config",
             "speckle.io",
@@ -40,7 +40,7 @@ rule speed_accuracy:
 rule failure_map:
     input:
         code=package_code(
-            "speckle.speed",
+            "speckle.imaging.speed",
             "speckle.figures.speed",
             "speckle.figures._config",
             "speckle.io",

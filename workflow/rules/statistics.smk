@@ -49,7 +49,7 @@ rule fig4:
             "speckle.figures.histograms",
             "speckle.figures._config",
             "speckle.figures._style",
-            "speckle.measured",
+            "speckle.analysis.measured",
             "speckle.io",
             "speckle.provenance",
         ),

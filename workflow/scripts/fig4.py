@@ -2,10 +2,10 @@
 
 import logging
 
+from speckle.analysis.measured import load_measured
 from speckle.figures import _config, histograms
 from speckle.figures._style import log_to, save
 from speckle.io import to_netcdf
-from speckle.measured import load_measured
 from speckle.provenance import provenance_attrs
 
 with log_to(snakemake.log[0]):

@@ -2,9 +2,9 @@
 
 from speckle.figures._style import log_to, save
 from speckle.figures.speed import speed_accuracy_figure
+from speckle.imaging.speed import speed_accuracy
 from speckle.io import to_netcdf
 from speckle.provenance import provenance_attrs
-from speckle.speed import speed_accuracy
 
 with log_to(snakemake.log[0]):
     cfg, source, seed = (

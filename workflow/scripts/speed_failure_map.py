@@ -3,9 +3,9 @@
 from speckle.figures._config import dask_options
 from speckle.figures._style import log_to, save
 from speckle.figures.speed import failure_map_figure
+from speckle.imaging.speed import failure_map
 from speckle.io import to_netcdf
 from speckle.provenance import provenance_attrs
-from speckle.speed import failure_map
 
 with log_to(snakemake.log[0]):
     cfg, source, seed = (

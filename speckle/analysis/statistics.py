@@ -47,9 +47,9 @@ import numpy as np
 import xarray as xr
 from scipy import stats
 
-from ._validate import as_finite_array, check_choice, check_int, check_real
-from .scatterers import AMPLITUDE_MODELS, COUNT_MODELS, amplitude_kurtosis
-from .source import check_weights
+from .._validate import as_finite_array, check_choice, check_int, check_real
+from ..scene.scatterers import AMPLITUDE_MODELS, COUNT_MODELS, amplitude_kurtosis
+from ..system.source import check_weights
 
 __all__ = [
     "contrast_standard_error",

@@ -4,7 +4,7 @@
 random scenes and measures its relative error ``||A - A_direct||_2 / ||A_direct||_2`` over the
 B-scan. :func:`failure_map` measures how the error of each method (and of naive float32) grows
 with the number of pixels ``N``, the scatterer density and ``k0/delta_k``, next to the error the
-rules of :mod:`speckle.synthesis` predict.
+rules of :mod:`speckle.imaging.synthesis` predict.
 
 Timings inside a pipeline are noisy (other jobs share the cores); ``benchmarks/bench_ascan.py``
 is the reference for speed claims. Each time is the best of ``repeat`` runs, numba compilation
@@ -19,13 +19,13 @@ import time
 import numpy as np
 import xarray as xr
 
+from ..scene.scatterers import line_generator
+from ..sweep import sweep
+from ..system.source import spectrum as make_spectrum
 from .aline import ascan
 from .carrier import naive_float32_phase_error_estimate
 from .nufft import float32_error_estimate, kernel_width
 from .psf import psf_ascan, tail_error
-from .scatterers import line_generator
-from .source import spectrum as make_spectrum
-from .sweep import sweep
 from .synthesis import choose_method
 
 __all__ = ["FAILURE_CASES", "failure_map", "random_scene", "speed_accuracy"]
@@ -44,7 +44,7 @@ def random_scene(
     Gaussian amplitudes (``E|a|^2 = 1``), ``round(density*N)`` scatterers per line.
 
     Returns ``(z, a, depth)`` with ``z`` in µm, shapes (lines, M). Line ``i`` draws from
-    :func:`speckle.scatterers.line_generator` ``(seed, i, N, M)``: reproducible per line.
+    :func:`speckle.scene.scatterers.line_generator` ``(seed, i, N, M)``: reproducible per line.
     """
     depth = pixel_size * n_pixels
     m = max(1, round(density * n_pixels))
@@ -58,10 +58,8 @@ def random_scene(
 
 
 def _spectrum(n_pixels, depth, k0_dk, shape, fwhm_fraction):
-    kw = {}
-    if shape == "gaussian":
-        kw["fwhm"] = fwhm_fraction * n_pixels * np.pi / depth
-    return make_spectrum(n_pixels, depth, k0_dk=k0_dk, shape=shape, **kw)
+    frac = fwhm_fraction if shape == "gaussian" else None
+    return make_spectrum(n_pixels, depth, k0_dk=k0_dk, shape=shape, fwhm_fraction=frac)
 
 
 def _best_time(func, repeat, **kwargs):

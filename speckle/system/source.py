@@ -19,11 +19,12 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ._validate import as_finite_array, check_choice, check_int, check_real
+from .._validate import as_finite_array, check_choice, check_int, check_real
 
 __all__ = [
     "SPECTRUM_SHAPES",
     "delta_k",
+    "index_shift_phase",
     "k0_from_wavelength",
     "spectral_index",
     "spectrum",
@@ -73,6 +74,16 @@ def spectral_index(n_pixels: int) -> np.ndarray:
     return np.arange(n) - n // 2
 
 
+def index_shift_phase(n_pixels: int, q: object) -> np.ndarray:
+    """``exp(2i pi (N//2) q / N)``: converts an FFT over ``m = n + N//2`` to the sum over ``n``.
+
+    ``sum_n F_n exp(-2i pi n q/N) = exp(2i pi (N//2) q/N) sum_m F_{m - N//2} exp(-2i pi m q/N)``
+    for the spectral indices of :func:`spectral_index`; ``q`` is a pixel index or offset (any
+    real array).
+    """
+    return np.exp(2j * np.pi * (n_pixels // 2) * np.asarray(q) / n_pixels)
+
+
 def spectrum(
     n_pixels: int,
     depth: float,
@@ -83,6 +94,7 @@ def spectrum(
     refractive_index: float = 1.0,
     shape: str = "rectangular",
     fwhm: float | None = None,
+    fwhm_fraction: float | None = None,
     weights: object | None = None,
 ) -> xr.DataArray:
     """Sampled source spectrum ``S(k_n)`` as a labelled DataArray.
@@ -105,9 +117,12 @@ def spectrum(
     refractive_index : float
         Refractive index of the tissue, used with ``wavelength`` only.
     shape : {"rectangular", "gaussian", "array"}
-        Spectrum shape. ``"gaussian"`` needs ``fwhm``; ``"array"`` needs ``weights``.
+        Spectrum shape. ``"gaussian"`` needs ``fwhm`` or ``fwhm_fraction``; ``"array"`` needs
+        ``weights``.
     fwhm : float, optional
         Full width at half maximum of the Gaussian spectrum in rad/µm (> 0).
+    fwhm_fraction : float, optional
+        The same FWHM as a fraction of ``delta_k = N*pi/H`` (> 0); give ``fwhm`` or this.
     weights : array_like, optional
         ``N`` non-negative finite weights ordered low to high wavenumber, for ``shape="array"``.
 
@@ -147,18 +162,24 @@ def spectrum(
     idx = spectral_index(n)
     k = k0v + idx * np.pi / h
     fwhm_v = np.nan
+    if fwhm is not None and fwhm_fraction is not None:
+        raise ValueError("give fwhm (rad/µm) or fwhm_fraction (of delta_k), not both")
+    if fwhm_fraction is not None:
+        fwhm = check_real(fwhm_fraction, "fwhm_fraction", low=0, low_inclusive=False) * dk_total
     if shape == "rectangular":
         if weights is not None or fwhm is not None:
-            raise ValueError("shape='rectangular' takes neither fwhm nor weights")
+            raise ValueError("shape='rectangular' takes neither fwhm/fwhm_fraction nor weights")
         s = np.ones(n)
     elif shape == "gaussian":
         if fwhm is None:
-            raise ValueError("shape='gaussian' needs fwhm (rad/µm, > 0)")
+            raise ValueError(
+                "shape='gaussian' needs fwhm (rad/µm, > 0) or fwhm_fraction (of delta_k, > 0)"
+            )
         fwhm_v = check_real(fwhm, "fwhm", low=0, low_inclusive=False)
         s = np.exp(-4 * np.log(2) * ((k - k0v) / fwhm_v) ** 2)
     else:
-        if weights is None:
-            raise ValueError("shape='array' needs weights: N non-negative values")
+        if weights is None or fwhm is not None:
+            raise ValueError("shape='array' needs weights (N non-negative values) and no fwhm")
         s = check_weights(weights, n)
     return xr.DataArray(
         s,

@@ -7,7 +7,7 @@ A scatterer field is an ``xarray.Dataset`` with dims ``(aline, scatterer)`` hold
 
 and a coordinate ``aline`` with the lateral position of each A-line in µm. Ragged A-lines are
 padded with zero-amplitude scatterers at ``z = 0``. Later steps (deformation) transform ``z``
-and may add dims such as ``strain``; :func:`speckle.bscan.bscan` images any such field.
+and may add dims such as ``strain``; :func:`speckle.bscan` images any such field.
 
 Randomness
 ----------
@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ._validate import check_choice, check_int, check_real
+from .._validate import check_choice, check_int, check_real
 
 __all__ = [
     "AMPLITUDE_MODELS",

@@ -41,8 +41,9 @@ import numpy as np
 import xarray as xr
 from scipy import ndimage, special
 
-from ._validate import as_finite_array, check_choice, check_int, check_real
-from .source import spectral_index
+from .._validate import as_finite_array, check_choice, check_int, check_real
+from ..conventions import spacing
+from ..system.source import index_shift_phase, spectral_index
 
 __all__ = [
     "KINDS",
@@ -84,8 +85,7 @@ def sample_field(field: object, positions: object) -> np.ndarray:
     y = as_finite_array(positions, "positions")
     n = a.shape[-1]
     shift = n // 2
-    q = np.arange(n)
-    spec = np.fft.ifft(a * np.exp(-2j * np.pi * shift * q / n), axis=-1)  # F_n, n=-(N//2)...
+    spec = np.fft.ifft(a * index_shift_phase(n, -np.arange(n)), axis=-1)  # F_n, n=-(N//2)...
     batch = np.broadcast_shapes(a.shape[:-1], y.shape[:-1])
     spec = np.broadcast_to(spec, (*batch, n)).reshape(-1, n)
     yy = np.broadcast_to(y, (*batch, y.shape[-1])).reshape(-1, y.shape[-1])
@@ -112,7 +112,9 @@ def _horner(coef: np.ndarray, w: np.ndarray) -> np.ndarray:
 def _field_of(data: xr.Dataset | xr.DataArray) -> xr.DataArray:
     if isinstance(data, xr.Dataset):
         if "field" not in data:
-            raise TypeError("B-scan dataset must hold a complex 'field' (see speckle.bscan)")
+            raise TypeError(
+                "B-scan dataset must hold a complex 'field' (see speckle.imaging.bscan)"
+            )
         field = data["field"]
         field.attrs = {**data.attrs, **field.attrs}
         return field
@@ -132,12 +134,12 @@ def compensate(
     Parameters
     ----------
     deformed : xarray.Dataset or xarray.DataArray
-        Deformed B-scan (from :func:`speckle.bscan.bscan`) with dims ``(..., depth, aline)``;
+        Deformed B-scan (from :func:`speckle.bscan`) with dims ``(..., depth, aline)``;
         attrs ``k0`` (rad/µm), ``depth_range`` (``H`` µm) and ``n_pixels`` are used.
     displacement : xarray.Dataset
         ``uz`` (and optionally ``ux``) in µm at the reference pixel centres, dims among
         ``depth``, ``aline`` and any extra dims of ``deformed`` (e.g. ``strain``), e.g. from
-        :func:`speckle.deformation.pixel_displacement` or :func:`speckle.tracking.track`.
+        :func:`speckle.scene.deformation.pixel_displacement` or :func:`speckle.track`.
     carrier : bool
         Remove the carrier phase ``exp(2i k0 u_z)`` of moved scatterers (default). Needed for
         complex correlation; intensity and amplitude are unaffected.
@@ -149,7 +151,9 @@ def compensate(
         each pixel is taken from the A-line nearest to ``x + u_x`` (NaN beyond the scan).
     """
     field = _field_of(deformed)
-    from .deformation import check_field  # local import: deformation imports nothing from here
+    from ..scene.deformation import (
+        check_field,  # local import: deformation imports nothing from here
+    )
 
     check_field(displacement, extra_dims=[d for d in field.dims if d not in ("depth", "aline")])
     n = int(field.attrs["n_pixels"])
@@ -175,7 +179,7 @@ def compensate(
 def _lateral(field: xr.DataArray, ux: xr.DataArray) -> xr.DataArray:
     """Take each pixel from the A-line nearest to its laterally displaced material point."""
     aline = field.aline.values
-    pitch = float(aline[1] - aline[0]) if len(aline) > 1 else 1.0
+    pitch = spacing(field, "aline", default=1.0)
     f = field.transpose(..., "aline").values
     u = ux.transpose(*field.transpose(..., "aline").dims).values
     src = np.arange(len(aline)) + np.rint(u / pitch).astype(int)
@@ -373,7 +377,7 @@ def expected_correlation(
     strain : float or sequence of float
         Compressive uniaxial strain(s) in (-1, 1).
     spectrum : xarray.DataArray
-        Source spectrum from :func:`speckle.source.spectrum` (its ``k0_dk`` = ``R`` is used).
+        Source spectrum from :func:`speckle.system.source.spectrum` (its ``k0_dk`` = ``R`` is used).
     density : float
         Scatterers per pixel (> 0); sets the incoherent floor.
     kurtosis : float
@@ -472,7 +476,7 @@ def two_peak_weights(n_pixels: int, *, separation: float, fwhm: float) -> np.nda
     Returns
     -------
     numpy.ndarray
-        ``N`` weights for ``speckle.source.spectrum(..., shape="array", weights=...)``. Its
+        ``N`` weights for ``speckle.system.source.spectrum(..., shape="array", weights=...)``. Its
         autocorrelation has a side peak at lag ``separation``: after exact compensation the
         correlation revives near ``k0_dk * strain = separation``.
     """

@@ -33,7 +33,7 @@ import numpy as np
 import xarray as xr
 from scipy import integrate, optimize, special, stats
 
-from ._validate import as_finite_array, check_choice, check_int, check_real
+from .._validate import as_finite_array, check_choice, check_int, check_real
 
 __all__ = [
     "SCALES",
@@ -158,7 +158,7 @@ def log_intensity(image: xr.DataArray) -> xr.DataArray:
     refused: the log of an exact zero is undefined; crop them out with the ROI).
     """
     if not isinstance(image, xr.DataArray) or "scale" not in image.attrs:
-        raise TypeError("image must be a DataArray from speckle.measured.load_measured")
+        raise TypeError("image must be a DataArray from speckle.analysis.measured.load_measured")
     if image.attrs["scale"] == "log":
         return image
     if np.any(image.values <= 0):

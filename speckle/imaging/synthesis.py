@@ -10,21 +10,21 @@ benchmark and the failure map):
 ``direct``
     0 (float64 rounding, ~1e-15): always admissible.
 ``nufft``
-    ES kernel of width ``w`` from :func:`speckle.nufft.kernel_width` at upsampling 2: aliasing
-    error ~``10**(1-w) <= tol/2``; the worst of 300 random scenes per tolerance (1e-1 ... 1e-12)
+    ES kernel of width ``w`` from :func:`~speckle.imaging.nufft.kernel_width` at upsampling 2:
+    aliasing error ~``10**(1-w) <= tol/2``; the worst of 300 random scenes per tolerance (1e-1 ... 1e-12)
     is 0.1-0.56 ``tol``; the prediction is ``tol`` (a bound). Not admissible below ``1e-13``
     (kernel width cap 16).
 ``nufft32``
     kernel at ``tol/2`` (so <= ``tol/2``) plus float32 rounding
-    :func:`speckle.nufft.float32_error_estimate`
+    :func:`speckle.imaging.nufft.float32_error_estimate`
     (``~eps32/2 sqrt(2 + M w/(2N) + log2(2N) + log2 N)``, 3-6e-7 for 4-32 scatterers/pixel).
     The carrier phase is reduced in float64 first, so the error does not grow with
     ``2 k0 z``; a naive float32 phase would err by ~``eps32 2 k0 z``
-    (:func:`speckle.carrier.naive_float32_phase_error`), a mode this package never uses.
+    (:func:`speckle.imaging.carrier.naive_float32_phase_error`), a mode this package never uses.
     Admissible when the rounding estimate is <= ``tol/2``.
 ``psf``
     truncation (PSF tail energy beyond the half-width) plus interpolation error
-    (:func:`speckle.psf.psf_error_estimate`). On a rectangular spectrum the tail decays like
+    (:func:`speckle.imaging.psf.psf_error_estimate`). On a rectangular spectrum the tail decays like
     ``1/(pi sqrt(hw))``, so a tight ``tol`` needs the full A-line (``hw = N//2``): then ``psf``
     is exact but costs ``M N`` per line, so the cost model prefers it only for tiny lines
     (N of order 10), never a truncated one.
@@ -40,7 +40,7 @@ import math
 
 import numpy as np
 
-from ._validate import check_int
+from .._validate import check_int
 from .aline import METHODS, register_method
 from .nufft import (
     DEFAULT_TOL,
@@ -96,7 +96,7 @@ def method_estimates(
     spectrum : array_like or None
         ``N`` spectral weights (None: rectangular).
     tol : float or None
-        Requested relative accuracy (None: :data:`speckle.nufft.DEFAULT_TOL`).
+        Requested relative accuracy (None: :data:`speckle.imaging.nufft.DEFAULT_TOL`).
 
     Returns
     -------
@@ -158,7 +158,7 @@ def stream_ascans(
     """Random-scene A-scans generated and imaged ``chunk_lines`` lines at a time.
 
     Scatterers of lines ``i ... i + chunk_lines - 1`` are drawn with
-    :func:`speckle.scatterers.random_scatterers` (``first_aline=i``, so the result does not
+    :func:`speckle.random_scatterers` (``first_aline=i``, so the result does not
     depend on ``chunk_lines``) and imaged with :func:`speckle.ascan`; only one chunk of
     scatterers is alive at a time, so peak memory is the output plus one chunk whatever
     ``n_alines`` (measured in ``benchmarks/bench_ascan.py``).
@@ -166,7 +166,7 @@ def stream_ascans(
     Parameters
     ----------
     n_alines, density, n_pixels, depth, seed, amplitude, count
-        Scene of :func:`speckle.scatterers.random_scatterers` (``depth`` in µm).
+        Scene of :func:`speckle.random_scatterers` (``depth`` in µm).
     k0, spectrum, method, tol
         Imaging, as in :func:`speckle.ascan` (``k0`` in rad/µm).
     chunk_lines : int
@@ -180,8 +180,8 @@ def stream_ascans(
     numpy.ndarray
         complex128 (n_alines, n_pixels), or (len(lines), n_pixels) with ``lines``.
     """
+    from ..scene.scatterers import random_scatterers
     from .aline import ascan
-    from .scatterers import random_scatterers
 
     nl_total = check_int(n_alines, "n_alines", low=1)
     step = check_int(chunk_lines, "chunk_lines", low=1)

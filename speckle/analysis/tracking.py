@@ -3,7 +3,7 @@
 Each window of the reference image is registered to the same window of the deformed image with
 :func:`skimage.registration.phase_cross_correlation` (upsampled DFT registration, Guizar-Sicairos
 et al. 2008) -- what a user does with measured images. The estimates, interpolated to every
-pixel, feed :func:`speckle.correlation.compensate` ("estimated compensation").
+pixel, feed :func:`speckle.analysis.correlation.compensate` ("estimated compensation").
 """
 
 from __future__ import annotations
@@ -13,7 +13,8 @@ import xarray as xr
 from scipy.interpolate import RegularGridInterpolator
 from skimage.registration import phase_cross_correlation
 
-from ._validate import check_choice, check_int, check_real
+from .._validate import check_choice, check_int, check_real
+from ..conventions import spacing
 from .correlation import _field_of, _window, sample_field
 
 __all__ = ["interpolate_displacement", "track"]
@@ -45,7 +46,7 @@ def track(
         Upsampling factor of the registration (precision ``1/(upsample*oversample)`` pixel).
     oversample : int
         Depth samples per pixel of the registered images (>= 1). The complex A-scans are
-        interpolated exactly (:func:`speckle.correlation.sample_field`) before taking the
+        interpolated exactly (:func:`speckle.analysis.correlation.sample_field`) before taking the
         amplitude: ``|A|`` has twice the field's bandwidth, so at one sample per pixel
         (rectangular spectrum) it is aliased and the estimates lock to whole pixels.
     quantity : {"amplitude", "intensity"}
@@ -102,7 +103,7 @@ def track(
     pixel = float(ref.attrs["depth_range"]) / n
     depth = ref.depth.values
     aline = ref.aline.values
-    pitch = float(aline[1] - aline[0]) if len(aline) > 1 else pixel
+    pitch = spacing(ref, "aline", default=pixel)
     cz = depth[starts_z] + (wz - 1) / 2 * pixel
     cx = aline[starts_x] + (wx - 1) / 2 * pitch
     dims = ("depth", "aline")

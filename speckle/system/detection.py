@@ -1,7 +1,7 @@
 """Detection chain after image formation: an intensity floor and log compression (optional).
 
 The paper's model images ideal single-scattering speckle. A measured log-compressed B-scan of a
-PDMS phantom (see :mod:`speckle.measured`) departs from it only in the dark tail of the
+PDMS phantom (see :mod:`speckle.analysis.measured`) departs from it only in the dark tail of the
 log-intensity histogram, which a constant intensity floor ``b <I>`` added before the log explains
 (skewness matched, kurtosis predicted). This module adds that floor, and the 8-bit log
 compression of commercial engines, to simulated intensities. Both are off unless configured.
@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ._validate import check_int, check_real
+from .._validate import check_int, check_real
 
 __all__ = ["add_floor", "log_compress"]
 

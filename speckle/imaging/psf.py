@@ -10,7 +10,7 @@ The ``"psf"`` method writes each scatterer only into the ``2 hw + 1`` pixels nea
 sub-pixel offset (rows of the table share one offset, so the inner loop vectorises).
 
 Errors (relative, ``||dA||_2/||A||_2``; expectations for scatterers with independent uniform
-positions, as in :func:`speckle.scatterers.random_scatterers`, whose cross terms average out):
+positions, as in :func:`speckle.random_scatterers`, whose cross terms average out):
 
 * truncation: ``e_t^2 = < sum_{|d| > hw} |K(t - d)|^2 >_t / (N sum S^2)`` -- the PSF tail energy
   beyond the half-width over its total energy (Parseval: ``sum_d |K(t-d)|^2 = N sum S^2`` for
@@ -31,10 +31,10 @@ import math
 import numba
 import numpy as np
 
+from ..system.source import index_shift_phase, spectral_index
 from .aline import register_method
 from .carrier import PARALLEL_LOCK, carrier_and_position
 from .nufft import DEFAULT_TOL
-from .source import spectral_index
 
 __all__ = ["MAX_ROWS", "half_width", "psf_ascan", "psf_error_estimate", "tail_error"]
 
@@ -129,7 +129,7 @@ def _table(spectrum: np.ndarray, lo: int, nk: int, rows: int) -> np.ndarray:
     n = spectral_index(n_pix)
     d = np.arange(nk) - lo
     # FFT index m = n + N//2: exp(-2i pi n d/N) = exp(-2i pi m d/N) exp(2i pi (N//2) d/N)
-    shift = np.exp(2j * np.pi * (n_pix // 2) * d / n_pix)
+    shift = index_shift_phase(n_pix, d)
     out = np.empty((rows + 1, 2 * nk))
     step = max(1, (1 << 20) // n_pix)
     for r0 in range(0, rows + 1, step):

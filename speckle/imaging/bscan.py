@@ -10,10 +10,10 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ._validate import check_choice
+from .._validate import check_choice
+from ..provenance import provenance_attrs
+from ..scene.scatterers import AMPLITUDE_MODELS
 from .aline import ascan, pixel_depths
-from .provenance import provenance_attrs
-from .scatterers import AMPLITUDE_MODELS
 
 __all__ = ["NORMALISATIONS", "bscan", "expected_intensity"]
 
@@ -49,10 +49,10 @@ def bscan(
     ----------
     scene : xarray.Dataset
         Scatterer field with variables ``z`` (µm) and ``amplitude`` sharing a ``scatterer`` dim
-        (see :func:`speckle.scatterers.random_scatterers`); other dims (``aline``, ``strain``,
+        (see :func:`speckle.random_scatterers`); other dims (``aline``, ``strain``,
         ...) are carried through.
     source : xarray.DataArray
-        Spectrum from :func:`speckle.source.spectrum`; its attributes give ``n_pixels``,
+        Spectrum from :func:`speckle.system.source.spectrum`; its attributes give ``n_pixels``,
         ``depth`` and ``k0``.
     normalise : {"none", "density", "expected"}
         Explicit amplitude normalisation, recorded in the ``normalisation`` attribute.
@@ -70,7 +70,7 @@ def bscan(
     if not isinstance(scene, xr.Dataset) or not {"z", "amplitude"} <= set(scene.data_vars):
         raise TypeError("scene must be an xarray.Dataset with variables 'z' and 'amplitude'")
     if not isinstance(source, xr.DataArray) or "n_pixels" not in source.attrs:
-        raise TypeError("source must be a DataArray from speckle.source.spectrum")
+        raise TypeError("source must be a DataArray from speckle.system.source.spectrum")
     n = int(source.attrs["n_pixels"])
     h = float(source.attrs["depth"])
     k0 = float(source.attrs["k0"])

@@ -18,7 +18,7 @@ Conventions
   decorrelates it. ``wrap=True`` keeps them (aliasing on).
 
 Scenes stay labelled: :func:`uniaxial_strain` returns one dataset with a ``strain`` dim, which
-:func:`speckle.bscan.bscan` images in one call.
+:func:`speckle.bscan` images in one call.
 """
 
 from __future__ import annotations
@@ -29,7 +29,8 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import xarray as xr
 
-from ._validate import as_finite_array, check_real
+from .._validate import as_finite_array, check_real
+from ..conventions import spacing
 from .scatterers import line_generator, random_scatterers
 
 __all__ = [
@@ -44,7 +45,7 @@ __all__ = [
     "uniaxial_strain",
 ]
 
-#: Sub-stream of :func:`speckle.scatterers.line_generator` for lateral positions in the beam.
+#: Sub-stream of :func:`speckle.scene.scatterers.line_generator` for lateral positions in the beam.
 LATERAL_STREAM = 1
 
 #: Dims a displacement field given as an xarray object may have (material coordinates).
@@ -95,7 +96,7 @@ def deformable_scene(
     Parameters
     ----------
     n_alines, density, n_pixels, depth, seed, amplitude, count
-        As in :func:`speckle.scatterers.random_scatterers` (density per pixel, depth ``H`` µm).
+        As in :func:`speckle.random_scatterers` (density per pixel, depth ``H`` µm).
     strain : float or sequence of float
         Compressive strains the scene will be subjected to, each in (-1, 1). Depths
         ``[0, H/(1 - max(strain, 0)))`` are populated at the given density.
@@ -107,7 +108,7 @@ def deformable_scene(
     Returns
     -------
     xarray.Dataset
-        As :func:`~speckle.scatterers.random_scatterers`, plus ``x`` (lateral position of each
+        As :func:`~speckle.scene.scatterers.random_scatterers`, plus ``x`` (lateral position of each
         scatterer in µm, uniform across the beam width ``aline_pitch`` around its A-line) and
         attrs ``imaged_first``/``imaged_count`` (the A-lines that are imaged), ``max_strain``,
         ``poisson_ratio``.
@@ -128,7 +129,7 @@ def deformable_scene(
         count=count,
         z_range=(0.0, zmax),
     )
-    pitch = float(scene.attrs["aline_pitch"])
+    pitch = _pitch(scene)
     offsets = np.zeros(scene.z.shape)
     for i in range(scene.sizes["aline"]):
         rng = line_generator(seed, i, LATERAL_STREAM)
@@ -277,9 +278,7 @@ def displace(scene: xr.Dataset, displacement: Displacement, *, wrap: bool = Fals
     if not wrap:
         amp2 = np.where((z2 >= 0) & (z2 < h), amp2, 0)
     if np.any(ux != 0):
-        pitch = float(
-            scene.attrs.get("aline_pitch", aline[1] - aline[0] if len(aline) > 1 else 1.0)
-        )
+        pitch = _pitch(scene)
         line = np.rint((x2 - aline[0]) / pitch).astype(int) - first
         keep = (line >= 0) & (line < count) & (amp2 != 0)
         z2, amp2, x2 = _rebin(line[keep], z2[keep], amp2[keep], x2[keep], count)
@@ -456,3 +455,8 @@ def uniaxial_pixel_displacement(
     return xr.concat(fields, dim="strain").assign_coords(
         strain=("strain", s, {"units": "1", "long_name": "compressive strain"})
     )
+
+
+def _pitch(scene: xr.Dataset) -> float:
+    """A-line pitch in µm from the ``aline`` coordinate (the attribute only for a single line)."""
+    return spacing(scene, "aline", default=scene.attrs.get("aline_pitch", 1.0))

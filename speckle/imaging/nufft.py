@@ -19,7 +19,7 @@ implementations live here:
     ``log10(1/tol) + 1``) and ``beta = 2.30 w`` (FINUFFT's rule for upsampling 2, error
     ~10**(1-w)).
     ``"nufft32"`` spreads, and FFTs, in single precision after float64 reduction of the
-    carrier phase (:mod:`speckle.carrier`); its rounding floor is ~2e-7 measured, ~4e-7
+    carrier phase (:mod:`speckle.imaging.carrier`); its rounding floor is ~2e-7 measured, ~4e-7
     estimated (:func:`float32_error_estimate`).
 
 ``"finufft"`` (:func:`finufft_ascan`)
@@ -40,9 +40,9 @@ import numba
 import numpy as np
 import scipy.fft
 
+from ..system.source import index_shift_phase, spectral_index
 from .aline import register_method
 from .carrier import PARALLEL_LOCK, carrier_and_position
-from .source import spectral_index
 
 __all__ = [
     "DEFAULT_TOL",
@@ -185,8 +185,7 @@ def fine_grid_size(n_pixels: int, w: int) -> int:
 
 
 def _pixel_phase(n_pixels: int) -> np.ndarray:
-    q = np.arange(n_pixels)
-    return np.exp(2j * np.pi * (n_pixels // 2) * q / n_pixels)
+    return index_shift_phase(n_pixels, np.arange(n_pixels))
 
 
 def float32_error_estimate(n_scatterers: int, n_pixels: int, w: int) -> float:
@@ -277,7 +276,7 @@ def finufft_ascan(
 
     The carrier ``a exp(2i k0 z)`` and points ``2 pi (z mod H)/H`` are formed with numpy in
     float64, FINUFFT returns ``F_n`` (mode order ``-(N//2) ... N-1-(N//2)``, matching
-    :func:`speckle.source.spectral_index`), then ``S_n F_n`` goes to pixels by an FFT.
+    :func:`speckle.system.source.spectral_index`), then ``S_n F_n`` goes to pixels by an FFT.
     ``nthreads=1`` per line is fastest for A-line sized problems (threads cost more than they
     save at a few thousand points; measured in ``benchmarks/bench_ascan.py``).
 

@@ -3,7 +3,7 @@
     A(q) = sum_j sum_n S(k_n) a_j exp(2i k_n z_j) exp(-2i pi n q / N),   k_n = k0 + n*pi/H,
 
 with ``n = -(N//2) ... N-1-(N//2)`` and pixel ``q`` at depth ``q*H/N`` (µm). See
-:mod:`speckle.source` for the conventions and why the pixel step is ``H/N``.
+:mod:`speckle.system.source` for the conventions and why the pixel step is ``H/N``.
 
 :func:`ascan` is the stable entry point. ``method`` selects how the double sum is evaluated;
 ``"direct"`` is the exact float64 reference. Faster methods register themselves in
@@ -16,8 +16,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ._validate import as_finite_array, check_choice, check_int, check_real
-from .source import check_weights, spectral_index
+from .._validate import as_finite_array, check_choice, check_int, check_real
+from ..system.source import check_weights, index_shift_phase, spectral_index
 
 __all__ = ["METHODS", "ascan", "pixel_depths", "register_method"]
 
@@ -59,10 +59,7 @@ def spectral_field_to_pixels(field: np.ndarray, n_pixels: int) -> np.ndarray:
     ``field`` has shape (..., N) ordered ``n = -(N//2) ... N-1-(N//2)``. The sum over ``n`` is an
     exact DFT evaluated with an FFT (rounding error ~1e-16 relative).
     """
-    shift = n_pixels // 2
-    q = np.arange(n_pixels)
-    # exp(-2i pi n q/N) with n = m - shift  ->  FFT over m times exp(+2i pi shift q/N)
-    return np.fft.fft(field, axis=-1) * np.exp(2j * np.pi * shift * q / n_pixels)
+    return np.fft.fft(field, axis=-1) * index_shift_phase(n_pixels, np.arange(n_pixels))
 
 
 @register_method("direct")
@@ -121,15 +118,15 @@ def ascan(
         Central wavenumber in rad/µm (finite, >= 0; 0 gives the formal Fourier transform).
     spectrum : array_like, optional
         ``N`` non-negative weights ``S(k_n)`` ordered ``n = -(N//2) ... N-1-(N//2)``; ``None``
-        means rectangular (all ones). A :func:`speckle.source.spectrum` DataArray works too.
+        means rectangular (all ones). A :func:`speckle.system.source.spectrum` DataArray works too.
     method : str
         Synthesis method, one of :data:`METHODS`: ``"direct"`` (the exact float64 reference),
         ``"nufft"`` / ``"nufft32"`` (folded type-1 NUFFT in double / single precision,
-        :mod:`speckle.nufft`), ``"finufft"`` (FINUFFT, one plan per call), ``"psf"``
-        (truncated point-spread function, :mod:`speckle.psf`) or ``"auto"`` (the fastest
+        :mod:`speckle.imaging.nufft`), ``"finufft"`` (FINUFFT, one plan per call), ``"psf"``
+        (truncated point-spread function, :mod:`speckle.imaging.psf`) or ``"auto"`` (the fastest
         method whose predicted error on this scene is within ``tol``,
-        :mod:`speckle.synthesis`). Approximate methods refuse (``ValueError``) a ``tol`` they
-        cannot reach.
+        :mod:`speckle.imaging.synthesis`). Approximate methods refuse (``ValueError``) a
+        ``tol`` they cannot reach.
     tol : float, optional
         Requested relative accuracy in (0, 1), ``||A - A_direct||_2 / ||A_direct||_2`` over all
         lines and pixels, for approximate methods; ignored by ``"direct"``. ``None`` means

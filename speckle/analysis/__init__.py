@@ -1,0 +1,1 @@
+"""What is measured on images: statistics, correlation, tracking, strain, measured images."""

@@ -1,0 +1,1 @@
+"""What is imaged: point scatterers (per A-line or shared), regions, deformation and mechanics."""

@@ -1,0 +1,1 @@
+"""The OCT system: light source and spectrum, beam, spectrometer, noise and detection."""
