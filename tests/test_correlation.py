@@ -1,5 +1,5 @@
-"""Tests of speckle.analysis.correlation against exact references and the theory derived in its module
-docstring (Campbell's theorem for Poisson scatterers).
+"""Tests of speckle.analysis.correlation against exact references and the theory derived in its
+module docstring (Campbell's theorem for Poisson scatterers).
 
 Statistical tolerances: the sample Pearson coefficient of ``n`` independent pairs has standard
 error ``(1 - r^2)/sqrt(n)`` for Gaussian variables; speckle intensities are exponential-like,

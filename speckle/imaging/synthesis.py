@@ -11,9 +11,9 @@ benchmark and the failure map):
     0 (float64 rounding, ~1e-15): always admissible.
 ``nufft``
     ES kernel of width ``w`` from :func:`~speckle.imaging.nufft.kernel_width` at upsampling 2:
-    aliasing error ~``10**(1-w) <= tol/2``; the worst of 300 random scenes per tolerance (1e-1 ... 1e-12)
-    is 0.1-0.56 ``tol``; the prediction is ``tol`` (a bound). Not admissible below ``1e-13``
-    (kernel width cap 16).
+    aliasing error ~``10**(1-w) <= tol/2``; the worst of 300 random scenes per tolerance
+    (1e-1 ... 1e-12) is 0.1-0.56 ``tol``; the prediction is ``tol`` (a bound). Not admissible
+    below ``1e-13`` (kernel width cap 16).
 ``nufft32``
     kernel at ``tol/2`` (so <= ``tol/2``) plus float32 rounding
     :func:`speckle.imaging.nufft.float32_error_estimate`
