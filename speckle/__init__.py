@@ -12,6 +12,7 @@ from .analysis.statistics import contrast_theory, fit_exponential, fit_rayleigh,
 from .analysis.tracking import track
 from .imaging import synthesis
 from .imaging.aline import METHODS, ascan, pixel_depths
+from .imaging.beam import beam_scan
 from .imaging.bscan import bscan, expected_intensity
 from .imaging.synthesis import choose_method
 from .io import open_dataset, to_netcdf
@@ -28,6 +29,7 @@ __all__ = [
     "METHODS",
     "__version__",
     "ascan",
+    "beam_scan",
     "bscan",
     "choose_method",
     "compensate",
