@@ -14,6 +14,14 @@ from .deformation import deformable_scene, displace, translate, uniaxial_strain
 from .io import open_dataset, to_netcdf
 from .provenance import package_version
 from .scatterers import random_scatterers
+from .scene.mechanics import (
+    compress,
+    displacement_at,
+    inclusion_labels,
+    inclusion_strain,
+    layer_strains,
+    layered_labels,
+)
 from .source import delta_k, k0_from_wavelength, spectrum
 from .statistics import contrast_theory, fit_exponential, fit_rayleigh, speckle_contrast
 from .synthesis import choose_method
@@ -28,6 +36,7 @@ __all__ = [
     "bscan",
     "choose_method",
     "compensate",
+    "compress",
     "contrast_theory",
     "correlation",
     "correlation_map",
@@ -36,11 +45,16 @@ __all__ = [
     "delta_k",
     "detection",
     "displace",
+    "displacement_at",
     "expected_correlation",
     "expected_intensity",
     "fit_exponential",
     "fit_rayleigh",
+    "inclusion_labels",
+    "inclusion_strain",
     "k0_from_wavelength",
+    "layer_strains",
+    "layered_labels",
     "measured",
     "open_dataset",
     "pearson",
