@@ -343,6 +343,20 @@ def compress(
         ``nominal_strain``, ``mesh_size`` (largest element edge, µm), ``element``, ``n_dofs``,
         ``sample_depth`` (``L``), ``lateral_extent``, ``x_centre``, ``probe_force`` (kPa µm per
         unit length out of plane: the compressive force on the probe).
+
+    Examples
+    --------
+    A stiff inclusion under a sliding probe, moving an A-line scene (exact FE field)::
+
+        scene = speckle.deformable_scene(64, 4.0, n_pixels=256, depth=2048.0, seed=1, strain=0.01)
+        depth = np.arange(0.0, scene.attrs["populated_depth"] + 8.0, 8.0)
+        x = scene.aline.values  # A-line positions, µm
+        labels = speckle.inclusion_labels(depth, x, (1024.0, x.mean()), 160.0)
+        fe = speckle.compress(labels, {0: 10.0, 1: 40.0}, 0.45, strain=0.01, contact="sliding")
+        moved = speckle.displace(scene, functools.partial(speckle.displacement_at, fe))
+
+    ``fe[["uz", "ux"]].rename(x="aline")`` is also a field :func:`speckle.displace` accepts
+    (linear interpolation between pixel centres instead of the exact FE field).
     """
     lab, lateral = _checked_labels(labels)
     s = check_real(strain, "strain", low=-1.0, high=1.0, low_inclusive=False, high_inclusive=False)
