@@ -273,7 +273,12 @@ def _shear_xz(w):
 
 
 def _solver(a, b, **_):
-    """Sparse LU (SuperLU) for the symmetric positive definite stiffness matrix."""
+    """Sparse LU (SuperLU) for the symmetric positive definite stiffness matrix.
+
+    A symmetric fill-reducing ordering (2.5x faster than scipy's default COLAMD on 20k DOFs)
+    and diagonal pivots (a positive definite matrix needs no pivoting; with SuperLU's default
+    partial pivoting a 21k-DOF solve at nu = 0.499 took 219 s instead of ~3 s).
+    """
     lu = splu(
         a.tocsc(),
         permc_spec="MMD_AT_PLUS_A",
@@ -411,8 +416,6 @@ def compress(
     else:
         fixed.append(dof_x[top & (ix == np.argmin(np.abs(x_nodes - x_centre)))])
     fixed_dofs = np.concatenate(fixed)
-    # symmetric positive definite system: a symmetric fill-reducing ordering for SuperLU is
-    # ~2.5x faster than scipy's default COLAMD (measured on 20k DOFs)
     u = fem.solve(*fem.condense(stiffness, x=u, D=fixed_dofs), solver=_solver)
     reaction = stiffness @ u
 
