@@ -19,6 +19,14 @@ from .io import open_dataset, to_netcdf
 from .provenance import package_version
 from .scene import deformation
 from .scene.deformation import deformable_scene, displace, translate, uniaxial_strain
+from .scene.mechanics import (
+    compress,
+    displacement_at,
+    inclusion_labels,
+    inclusion_strain,
+    layer_strains,
+    layered_labels,
+)
 from .scene.scatterers import random_scatterers
 from .system import detection
 from .system.source import delta_k, k0_from_wavelength, spectrum
@@ -33,6 +41,7 @@ __all__ = [
     "bscan",
     "choose_method",
     "compensate",
+    "compress",
     "contrast_theory",
     "correlation",
     "correlation_map",
@@ -41,11 +50,16 @@ __all__ = [
     "delta_k",
     "detection",
     "displace",
+    "displacement_at",
     "expected_correlation",
     "expected_intensity",
     "fit_exponential",
     "fit_rayleigh",
+    "inclusion_labels",
+    "inclusion_strain",
     "k0_from_wavelength",
+    "layer_strains",
+    "layered_labels",
     "measured",
     "open_dataset",
     "pearson",
