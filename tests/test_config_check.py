@@ -133,9 +133,9 @@ def test_good_configs_pass(merged, schema, repo_root):
 def test_scan_table_checks():
     rows = [{"density": 4.0, "k0_dk": 10.0, "spectrum": "rectangular"}]
     check_scan_table(rows, 256)
-    with pytest.raises(ValueError, match="scan.table.*no rows"):
+    with pytest.raises(ValueError, match=r"scan.table.*no rows"):
         check_scan_table([], 256)
-    with pytest.raises(ValueError, match="scan.table: rows 1 and 2"):
+    with pytest.raises(ValueError, match=r"scan.table: rows 1 and 2"):
         check_scan_table(rows * 2, 256)
     with pytest.raises(ValueError, match="row 1 density"):
         check_scan_table([{**rows[0], "density": 1e-4}], 256)

@@ -115,9 +115,8 @@ def _field_of(data: xr.Dataset | xr.DataArray) -> xr.DataArray:
             raise TypeError(
                 "B-scan dataset must hold a complex 'field' (see speckle.imaging.bscan)"
             )
-        field = data["field"]
-        field.attrs = {**data.attrs, **field.attrs}
-        return field
+        field = data["field"]  # attrs merged on a copy: the caller's dataset is not modified
+        return field.assign_attrs({**data.attrs, **field.attrs})
     if not isinstance(data, xr.DataArray):
         raise TypeError(f"expected a B-scan Dataset or DataArray, got {type(data).__name__}")
     return data

@@ -171,6 +171,11 @@ def ascan(
             f"amplitude must broadcast to the shape of z {z_shape}; broadcasting gave {zz.shape}"
         )
     s = np.ones(n) if spectrum is None else check_weights(spectrum, n)
+    if zz.size and not np.isfinite(2.0 * k0v * float(np.max(np.abs(zz)))):
+        raise ValueError(
+            f"k0 = {k0v:g} rad/µm and depths z up to {float(np.max(np.abs(zz))):g} µm give an "
+            "infinite carrier phase 2 k0 z in float64; use a smaller k0 or z"
+        )
     batch_shape = zz.shape[:-1]
     m = zz.shape[-1]
     if zz.size == 0:

@@ -155,10 +155,12 @@ def float64_error_estimate(
     """
     from ..system.source import spectral_index  # local: source imports nothing from here
 
-    w = np.abs(np.asarray(amplitude)) ** 2
-    total = float(np.sum(w))
-    if total == 0.0:
+    w = np.abs(np.asarray(amplitude))
+    peak = float(np.max(w, initial=0.0))
+    if peak == 0.0:
         return 0.0
+    w = (w / peak) ** 2  # scaled: no overflow for huge amplitudes
+    total = float(np.sum(w))
     zz = np.asarray(z, dtype=float)
     if 2.0 * k0 * float(np.max(np.abs(zz))) * _INV_TWO_PI >= MAX_CARRIER_TURNS:
         return math.inf

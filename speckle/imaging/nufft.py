@@ -326,9 +326,10 @@ def check_float64_placement(z, amplitude, depth, k0, spectrum, budget, tol, meth
         zmax = float(np.max(np.abs(z)))
         raise ValueError(
             f"method={method!r} cannot reach tol={tol:g} on these depths: scatterers up to "
-            f"|z| = {zmax:.3g} µm (= {zmax / depth:.3g} H) lose ~{err:.1e} of relative accuracy "
-            "in float64 carrier/position reduction; use method='direct' or 'finufft' (exact "
-            "reduction), method='auto', or z mod H with its carrier phase"
+            f"|z| = {zmax:.3g} µm (= {zmax / depth:.3g} H; carrier phase 2 k0 |z| up to "
+            f"{2 * k0 * zmax:.3g} rad with k0 = {k0:g} rad/µm) lose ~{err:.1e} of relative "
+            "accuracy in the float64 carrier/position reduction; use method='direct' or "
+            "'finufft' (exact reduction) or method='auto'"
         )
     return err
 

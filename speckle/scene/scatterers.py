@@ -138,8 +138,9 @@ def random_scatterers(
     width_est = mean_count + (5.0 * np.sqrt(mean_count) if count == "poisson" else 0.5)
     check_memory(
         32.0 * nl * width_est,
-        "n_alines",
-        f"{nl} A-lines x {width_est:.0f} scatterers (density {rho:g} x n_pixels {n})",
+        "n_alines, density or z_range",
+        f"{nl} A-lines x {width_est:.3g} scatterers (density {rho:g} x n_pixels {n} x "
+        f"(z_max - z_min)/depth {(z1 - z0) / h:.3g})",
     )
     rngs = [line_generator(sd, i0 + i) for i in range(nl)]
     if count == "fixed":
