@@ -430,6 +430,10 @@ PARAMS = {
     "spectrum": ("n_pixels", "depth", "k0_dk"),
     "uniaxial_strain": ("strain", "poisson_ratio"),
     "correlation_map": ("window", "kind"),
+    "pearson": ("kind",),
+    "bscan": ("normalise", "method", "tol"),
+    "translate": ("dz", "dx"),
+    "track": ("window", "step", "upsample", "max_error"),
 }
 
 
@@ -451,6 +455,10 @@ def _call(name, param, value, scene, pair):
         "spectrum": dict(n_pixels=8, depth=64.0, k0_dk=3.0),
         "uniaxial_strain": dict(strain=[0.0, 0.01], poisson_ratio=0.0),
         "correlation_map": dict(window=4, kind="intensity"),
+        "pearson": dict(kind="intensity"),
+        "bscan": dict(normalise="none", method="nufft", tol=1e-6),
+        "translate": dict(dz=1.0, dx=0.0),
+        "track": dict(window=(16, 8), step=(16, 8), upsample=4, max_error=0.5),
     }[name]
     kw = {**valid, param: value}
     if name == "ascan":
@@ -461,7 +469,13 @@ def _call(name, param, value, scene, pair):
         return speckle.spectrum(kw.pop("n_pixels"), kw.pop("depth"), **kw)
     if name == "uniaxial_strain":
         return speckle.uniaxial_strain(scene, kw.pop("strain"), **kw)
-    return speckle.correlation_map(ref, dfm, **kw)
+    if name == "bscan":
+        return speckle.bscan(scene, speckle.spectrum(8, 64.0, k0_dk=3.0), **kw)
+    if name == "translate":
+        return speckle.translate(scene, kw.pop("dz"), **kw)
+    if name == "track":
+        return speckle.track(ref, dfm, **kw)
+    return getattr(speckle, name)(ref, dfm, **kw)
 
 
 def _is_valid_result(out) -> bool:
