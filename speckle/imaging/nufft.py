@@ -324,12 +324,17 @@ def check_float64_placement(z, amplitude, depth, k0, spectrum, budget, tol, meth
     err = float64_error_estimate(z, amplitude, depth, k0, spectrum)
     if err > budget:
         zmax = float(np.max(np.abs(z)))
+        loss = (
+            f"~{err:.1e} of relative accuracy"
+            if math.isfinite(err)
+            else "all accuracy (more than 2**45 turns of carrier phase)"
+        )
         raise ValueError(
             f"method={method!r} cannot reach tol={tol:g} on these depths: scatterers up to "
             f"|z| = {zmax:.3g} µm (= {zmax / depth:.3g} H; carrier phase 2 k0 |z| up to "
-            f"{2 * k0 * zmax:.3g} rad with k0 = {k0:g} rad/µm) lose ~{err:.1e} of relative "
-            "accuracy in the float64 carrier/position reduction; use method='direct' or "
-            "'finufft' (exact reduction) or method='auto'"
+            f"{2 * k0 * zmax:.3g} rad with k0 = {k0:g} rad/µm) lose {loss} in the float64 "
+            "carrier/position reduction; use method='direct' or 'finufft' (exact reduction) "
+            "or method='auto'"
         )
     return err
 
