@@ -383,6 +383,11 @@ def _cases(scene, src, img, pair):
             "n_alines, density or z_range too large.*GiB",
         ),
         (
+            lambda: speckle.ascan(np.zeros((2**20, 1)), 1.0, n_pixels=2**20, depth=H, k0=0.0),
+            ValueError,
+            "n_pixels too large.*1048576 A-scans",
+        ),
+        (
             lambda: speckle.compensate(dfm, disp.isel(depth=slice(0, 10))),
             ValueError,
             "differ along 'depth'",

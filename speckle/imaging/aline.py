@@ -16,7 +16,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .._validate import as_finite_array, check_choice, check_int, check_real
+from .._validate import as_finite_array, check_choice, check_int, check_memory, check_real
 from ..system.source import check_weights, index_shift_phase, spectral_index
 
 __all__ = ["METHODS", "ascan", "pixel_depths", "register_method"]
@@ -140,7 +140,8 @@ def ascan(
     Raises
     ------
     TypeError, ValueError
-        On invalid input, before any computation.
+        On invalid input, before any computation (including an output above
+        :data:`speckle._validate.MAX_BYTES`).
 
     Examples
     --------
@@ -178,6 +179,8 @@ def ascan(
         )
     batch_shape = zz.shape[:-1]
     m = zz.shape[-1]
+    lines = int(np.prod(batch_shape, dtype=float))
+    check_memory(16.0 * lines * n, "n_pixels", f"{lines} A-scans x {n} complex128 pixels")
     if zz.size == 0:
         return np.zeros((*batch_shape, n), dtype=np.complex128)
     z2 = np.ascontiguousarray(zz.reshape(-1, m))
