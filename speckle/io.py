@@ -70,6 +70,7 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         yield tmp_path
         with open(tmp_path, "rb+") as f:
             os.fsync(f.fileno())
+        os.chmod(tmp_path, _file_mode(target))  # mkstemp makes 0600; keep the usual mode
         os.replace(tmp_path, target)
     except BaseException:
         tmp_path.unlink(missing_ok=True)
@@ -80,6 +81,15 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
             os.fsync(dfd)
         finally:
             os.close(dfd)
+
+
+def _file_mode(target: Path) -> int:
+    """Permissions of the existing ``target``, else those of a new file (0666 minus umask)."""
+    if target.exists():
+        return target.stat().st_mode & 0o7777
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask
 
 
 def _safe_value(value: object, name: str) -> object:
@@ -127,7 +137,9 @@ def _complex_guard(ds: xr.Dataset) -> xr.Dataset:
     kinds = {v.dtype for v in ds.variables.values() if v.dtype.kind == "c"}
     if len(kinds) <= 1:
         return ds
-    return ds.map(lambda v: v.astype(np.complex128) if v.dtype.kind == "c" else v)
+    return ds.assign(
+        {name: v.astype(np.complex128) for name, v in ds.data_vars.items() if v.dtype.kind == "c"}
+    )
 
 
 def to_netcdf(ds: xr.Dataset | xr.DataArray, path: str | os.PathLike) -> None:

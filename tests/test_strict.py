@@ -65,6 +65,9 @@ def test_failed_write_keeps_the_existing_file(img, tmp_path):
         to_netcdf(img.assign(field=img.field.assign_attrs(m=np.zeros((2, 2)))), path)
     assert path.read_bytes() == before
     assert sorted(os.listdir(tmp_path)) == ["k.nc"]  # no temporary file left behind
+    umask = os.umask(0)
+    os.umask(umask)
+    assert path.stat().st_mode & 0o777 == 0o666 & ~umask  # a new file's usual mode
 
 
 def test_exception_mid_write_keeps_the_existing_file(img, tmp_path, monkeypatch):
@@ -154,6 +157,10 @@ def test_mixed_complex_precisions_round_trip(tmp_path):
     back = open_dataset(tmp_path / "c.nc")
     assert back.a.item() == 1 + 2j and back.b.item() == 3 + 4j  # was 5.12e+02+3e-05j
     assert back.b.dtype == np.complex128  # promoted (lossless), as documented
+    ds["b"].attrs["units"] = "1"
+    to_netcdf(ds.assign_attrs(title="t"), tmp_path / "c.nc")
+    back = open_dataset(tmp_path / "c.nc")
+    assert back.b.attrs["units"] == "1" and back.attrs["title"] == "t"  # attrs kept
     single = xr.Dataset({"b": ("x", np.array([3 + 4j], np.complex64))})
     to_netcdf(single, tmp_path / "s.nc")
     assert open_dataset(tmp_path / "s.nc").b.dtype == np.complex64  # one precision: kept
