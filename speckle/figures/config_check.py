@@ -20,7 +20,10 @@ these checks add
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Mapping, Sequence
+
+import numpy as np
 
 from .._validate import MAX_BYTES
 
@@ -154,10 +157,6 @@ def check_config(config: Mapping, schema: Mapping | None = None) -> None:
 
 def _measured_roi(path: str | None, roi: Mapping) -> None:
     """The fig4 region of interest must lie inside the measured image (if it is present)."""
-    import os
-
-    import numpy as np
-
     if not path or not str(path).endswith(".npy") or not os.path.isfile(path):
         return  # no file: Fig. 4 draws the simulated panels only (README)
     shape = np.load(path, mmap_mode="r").shape
