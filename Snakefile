@@ -1,7 +1,12 @@
 # speckle: reproduce the figures of Zaitsev et al., "A model for simulating speckle-pattern
 # evolution based on close to reality procedures used in spectral-domain OCT".
 # Thin entry point: rules live in workflow/rules/*.smk, science in the speckle package.
+from pathlib import Path
+
+import yaml
 from snakemake.utils import min_version, validate
+
+from speckle.figures.config_check import check_config
 
 min_version("9.0")
 
@@ -10,6 +15,13 @@ configfile: "workflow/config/config.yaml"
 
 
 validate(config, "workflow/schemas/config.schema.yaml")
+# what the schema cannot say (16.0 as integer, .inf, cross-field rules, memory): before any job
+check_config(
+    config,
+    yaml.safe_load(
+        Path(workflow.basedir, "workflow/schemas/config.schema.yaml").read_text()
+    ),
+)
 
 
 report: "workflow/report/workflow.rst"

@@ -12,11 +12,16 @@ from collections.abc import Iterable
 import numpy as np
 
 __all__ = [
+    "MAX_BYTES",
     "as_finite_array",
     "check_choice",
     "check_int",
+    "check_memory",
     "check_real",
 ]
+
+#: Largest allocation (bytes) a single call may plan; larger requests are refused up front.
+MAX_BYTES = 8 * 2**30
 
 
 def check_real(
@@ -98,12 +103,18 @@ def as_finite_array(value: object, name: str, *, dtype=float) -> np.ndarray:
     Raises
     ------
     TypeError
-        If ``value`` cannot be converted to ``dtype`` (e.g. complex depths or strings).
+        If ``value`` cannot be converted to ``dtype`` or holds booleans or strings (``"8.0"``,
+        ``True`` are refused, as by :func:`check_real`), or complex values for a real dtype.
     ValueError
         If any element is NaN or infinite.
     """
     try:
         arr = np.asarray(value)
+        if arr.dtype.kind in "bUSV" or (
+            arr.dtype.kind == "O"
+            and any(isinstance(v, str | bytes | bool | np.bool_) for v in arr.ravel())
+        ):
+            raise TypeError
         if np.iscomplexobj(arr) and not np.issubdtype(np.dtype(dtype), np.complexfloating):
             raise TypeError
         arr = arr.astype(dtype, copy=False)
@@ -115,3 +126,21 @@ def as_finite_array(value: object, name: str, *, dtype=float) -> np.ndarray:
         bad = int(np.size(arr) - np.count_nonzero(np.isfinite(arr)))
         raise ValueError(f"{name} must be finite; it holds {bad} NaN or infinite value(s)")
     return arr
+
+
+def check_memory(nbytes: float, name: str, what: str, limit: float | None = None) -> None:
+    """Refuse a request whose planned allocation ``nbytes`` exceeds ``limit`` (default
+    :data:`MAX_BYTES`), naming the parameter that sets it and the estimate, before any work.
+
+    Raises
+    ------
+    ValueError
+        If ``nbytes > limit``.
+    """
+    cap = MAX_BYTES if limit is None else limit
+    if nbytes > cap:
+        raise ValueError(
+            f"{name} too large: {what} would need ~{nbytes / 2**30:.3g} GiB, above the "
+            f"{cap / 2**30:.3g} GiB limit (speckle._validate.MAX_BYTES); reduce {name} or "
+            "process the work in parts"
+        )

@@ -7,25 +7,92 @@ compound type with members ``r`` and ``i``, the nc-complex convention). Open out
 
 or :func:`open_dataset` below. Every numeric variable is zlib-compressed. Attribute values that
 netCDF cannot store (``None``, booleans, nested mappings) are converted to strings or integers
-by :func:`netcdf_safe_attrs`, so attributes survive the round trip.
+by :func:`netcdf_safe_attrs`, so attributes survive the round trip; values it cannot convert
+(complex numbers, arrays of 2 or more dims, arbitrary objects) are refused before writing,
+naming the attribute.
+
+Nothing lost
+------------
+Every file is written atomically (:func:`atomic_path`): into a temporary file in the same
+directory, flushed to disk, then renamed over the target. A failed or killed write leaves an
+existing file byte for byte as it was (a killed process may leave its ``.*.tmp`` file behind),
+and a file at the target path is always complete.
+
+netCDF4-python's ``auto_complex`` corrupts a complex64 variable written after a complex128 one
+in the same file (two compound types ``r``/``i``; the second reads back wrong). :func:`to_netcdf`
+therefore promotes every complex variable of a dataset that mixes complex precisions to
+complex128 (lossless); a dataset with one complex precision is written as is.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
-from collections.abc import Mapping
+import tempfile
+from collections.abc import Iterator, Mapping
+from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
-__all__ = ["ENGINE", "netcdf_safe_attrs", "open_dataset", "to_netcdf"]
+__all__ = ["ENGINE", "atomic_path", "netcdf_safe_attrs", "open_dataset", "to_netcdf"]
 
 ENGINE = "netcdf4"
 COMPLEVEL = 4
 
 
-def _safe_value(value: object) -> object:
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
+    """Yield a temporary path beside ``path``; on success it replaces ``path`` atomically.
+
+    The temporary file lives in the same directory (so :func:`os.replace` is an atomic rename
+    on the same file system) and keeps the suffix of ``path`` (so writers that pick a format
+    from the suffix, e.g. matplotlib, behave the same). After the block it is flushed to disk
+    (``fsync``) and renamed over ``path``; if the block raises, it is removed and ``path`` is
+    untouched. Parent directories are created.
+
+    Raises
+    ------
+    ValueError
+        If ``path`` is an existing directory.
+    """
+    target = Path(path)
+    if target.is_dir():
+        raise ValueError(f"path must be a file path, got the directory {str(target)!r}")
+    target.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(
+        prefix=f".{target.name}.", suffix=f"{target.suffix}.tmp", dir=target.parent
+    )
+    os.close(fd)
+    tmp_path = Path(tmp)
+    try:
+        yield tmp_path
+        with open(tmp_path, "rb+") as f:
+            os.fsync(f.fileno())
+        os.chmod(tmp_path, _file_mode(target))  # mkstemp makes 0600; keep the usual mode
+        os.replace(tmp_path, target)
+    except BaseException:
+        tmp_path.unlink(missing_ok=True)
+        raise
+    with contextlib.suppress(OSError):  # persist the rename (not possible on every system)
+        dfd = os.open(target.parent, os.O_RDONLY)
+        try:
+            os.fsync(dfd)
+        finally:
+            os.close(dfd)
+
+
+def _file_mode(target: Path) -> int:
+    """Permissions of the existing ``target``, else those of a new file (0666 minus umask)."""
+    if target.exists():
+        return target.stat().st_mode & 0o7777
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask
+
+
+def _safe_value(value: object, name: str) -> object:
     if value is None:
         return "none"
     if isinstance(value, bool | np.bool_):
@@ -37,14 +104,42 @@ def _safe_value(value: object) -> object:
         if arr.dtype.kind in "iuf" and arr.ndim == 1:
             return arr
         return json.dumps(list(value), default=str)
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind in "iuf" and value.ndim <= 1:
+            return value
+        raise TypeError(
+            f"attribute {name!r} cannot be stored in netCDF: arrays must be 1-D integer or real, "
+            f"got a {value.ndim}-D {value.dtype} array; store it as a variable instead"
+        )
     if isinstance(value, np.generic):
-        return value.item()
-    return value
+        value = value.item()
+    if isinstance(value, str | int | float):
+        return value
+    raise TypeError(
+        f"attribute {name!r} cannot be stored in netCDF: allowed are str, int, float, bool, "
+        f"None, mappings, sequences and 1-D real arrays; got {type(value).__name__} {value!r}"
+    )
 
 
-def netcdf_safe_attrs(attrs: Mapping) -> dict:
-    """Return a copy of ``attrs`` whose values netCDF can store."""
-    return {str(k): _safe_value(v) for k, v in attrs.items()}
+def netcdf_safe_attrs(attrs: Mapping, where: str = "") -> dict:
+    """Return a copy of ``attrs`` whose values netCDF can store.
+
+    Raises
+    ------
+    TypeError
+        Naming the attribute (prefixed by ``where``) whose value netCDF cannot store.
+    """
+    return {str(k): _safe_value(v, f"{where}{k}") for k, v in attrs.items()}
+
+
+def _complex_guard(ds: xr.Dataset) -> xr.Dataset:
+    """Promote complex variables to complex128 when the dataset mixes complex precisions."""
+    kinds = {v.dtype for v in ds.variables.values() if v.dtype.kind == "c"}
+    if len(kinds) <= 1:
+        return ds
+    return ds.assign(
+        {name: v.astype(np.complex128) for name, v in ds.data_vars.items() if v.dtype.kind == "c"}
+    )
 
 
 def to_netcdf(ds: xr.Dataset | xr.DataArray, path: str | os.PathLike) -> None:
@@ -55,14 +150,30 @@ def to_netcdf(ds: xr.Dataset | xr.DataArray, path: str | os.PathLike) -> None:
     ds : xarray.Dataset or xarray.DataArray
         Data to write; a DataArray is written as a one-variable dataset.
     path : str or path-like
-        Output file; parent directories are created.
+        Output file; parent directories are created. Written atomically (:func:`atomic_path`):
+        an existing file is replaced only by a complete new one.
+
+    Raises
+    ------
+    TypeError
+        If ``ds`` is not an xarray object or an attribute cannot be stored (named).
+    ValueError
+        If ``path`` is a directory.
+
+    Notes
+    -----
+    Complex variables of mixed precision are all written as complex128 (module docstring).
     """
     if isinstance(ds, xr.DataArray):
         ds = ds.to_dataset(name=ds.name or "data")
-    ds = ds.copy()
+    if not isinstance(ds, xr.Dataset):
+        raise TypeError(f"ds must be an xarray Dataset or DataArray, got {type(ds).__name__}")
+    if Path(path).is_dir():
+        raise ValueError(f"path must be a file path, got the directory {str(path)!r}")
+    ds = _complex_guard(ds.copy())
     ds.attrs = netcdf_safe_attrs(ds.attrs)
     for name in ds.variables:
-        ds[name].attrs = netcdf_safe_attrs(ds[name].attrs)
+        ds[name].attrs = netcdf_safe_attrs(ds[name].attrs, f"{name}.")
         # Drop encodings carried over from files the data were read from: a string variable
         # read as 8-character labels would otherwise truncate longer labels added since.
         ds[name].encoding = {}
@@ -71,8 +182,8 @@ def to_netcdf(ds: xr.Dataset | xr.DataArray, path: str | os.PathLike) -> None:
         for name, var in ds.data_vars.items()
         if var.dtype.kind in "iufc"
     }
-    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-    ds.to_netcdf(path, engine=ENGINE, auto_complex=True, encoding=encoding)
+    with atomic_path(path) as tmp:
+        ds.to_netcdf(tmp, engine=ENGINE, auto_complex=True, encoding=encoding)
 
 
 def open_dataset(path: str | os.PathLike, *, load: bool = True) -> xr.Dataset:

@@ -115,9 +115,8 @@ def _field_of(data: xr.Dataset | xr.DataArray) -> xr.DataArray:
             raise TypeError(
                 "B-scan dataset must hold a complex 'field' (see speckle.imaging.bscan)"
             )
-        field = data["field"]
-        field.attrs = {**data.attrs, **field.attrs}
-        return field
+        field = data["field"]  # attrs merged on a copy: the caller's dataset is not modified
+        return field.assign_attrs({**data.attrs, **field.attrs})
     if not isinstance(data, xr.DataArray):
         raise TypeError(f"expected a B-scan Dataset or DataArray, got {type(data).__name__}")
     return data
@@ -139,7 +138,9 @@ def compensate(
     displacement : xarray.Dataset
         ``uz`` (and optionally ``ux``) in µm at the reference pixel centres, dims among
         ``depth``, ``aline`` and any extra dims of ``deformed`` (e.g. ``strain``), e.g. from
-        :func:`speckle.scene.deformation.pixel_displacement` or :func:`speckle.track`.
+        :func:`speckle.scene.deformation.pixel_displacement` or :func:`speckle.track`, on
+        the pixel grid of ``deformed`` (same ``depth``/``aline`` coordinates, else
+        ``ValueError``).
     carrier : bool
         Remove the carrier phase ``exp(2i k0 u_z)`` of moved scatterers (default). Needed for
         complex correlation; intensity and amplitude are unaffected.
@@ -155,7 +156,21 @@ def compensate(
         check_field,  # local import: deformation imports nothing from here
     )
 
+    if not isinstance(displacement, xr.Dataset):
+        raise TypeError(
+            "displacement must be an xarray.Dataset with 'uz' (µm), got "
+            f"{type(displacement).__name__}"
+        )
     check_field(displacement, extra_dims=[d for d in field.dims if d not in ("depth", "aline")])
+    missing = [k for k in ("n_pixels", "depth_range", "k0") if k not in field.attrs]
+    if missing:
+        raise ValueError(
+            f"deformed needs attributes {missing} (n_pixels, depth_range in µm, k0 in rad/µm), "
+            "as a B-scan from speckle.bscan has"
+        )
+    for name in ("uz", "ux"):
+        if name in displacement:
+            _same_grid(field, displacement[name], ("deformed", f"displacement {name}"))
     n = int(field.attrs["n_pixels"])
     h = float(field.attrs["depth_range"])
     k0 = float(field.attrs["k0"])
@@ -190,6 +205,41 @@ def _lateral(field: xr.DataArray, ux: xr.DataArray) -> xr.DataArray:
     return xr.DataArray(taken, dims=dims, coords=field.coords).transpose(*field.dims)
 
 
+def _same_grid(x: xr.DataArray, y: xr.DataArray, names: tuple[str, str]) -> None:
+    """``ValueError`` unless every dim ``x`` and ``y`` share has the same size and coordinates."""
+    a_name, b_name = names
+    for d in [d for d in x.dims if d in y.dims]:
+        if x.sizes[d] != y.sizes[d]:
+            raise ValueError(
+                f"{a_name} and {b_name} differ along {d!r}: {x.sizes[d]} vs {y.sizes[d]} "
+                f"values; put both on the same grid or select the same region of both "
+                f"(e.g. .isel({d}=slice(...)) on each)"
+            )
+        if d in x.coords and d in y.coords:
+            a, b = np.asarray(x[d].values), np.asarray(y[d].values)
+            if not np.array_equal(a, b):
+                i = int(np.flatnonzero(a != b)[0])
+                raise ValueError(
+                    f"{a_name} and {b_name} have different {d!r} coordinates (first difference "
+                    f"at index {i}: {a[i]!r} vs {b[i]!r}); put both on the same grid or select "
+                    "the same region of both"
+                )
+
+
+def _matched(x: xr.DataArray, y: xr.DataArray) -> tuple[xr.DataArray, xr.DataArray]:
+    """Broadcast two images after checking they cover the same pixels (else ``ValueError``).
+
+    Both must have ``depth`` and ``aline`` dims; every dim they share must have the same size
+    and the same coordinate values. Nothing is aligned, padded or cut silently.
+    """
+    for name, f in (("reference", x), ("deformed", y)):
+        missing = [d for d in ("depth", "aline") if d not in f.dims]
+        if missing:
+            raise ValueError(f"{name} must have dims 'depth' and 'aline'; got dims {f.dims}")
+    _same_grid(x, y, ("reference", "deformed"))
+    return xr.broadcast(x, y)
+
+
 def _quantity(field: xr.DataArray, kind: str) -> xr.DataArray:
     if kind == "intensity":
         return abs(field) ** 2
@@ -210,7 +260,8 @@ def pearson(
     Parameters
     ----------
     reference, deformed : xarray.Dataset or xarray.DataArray
-        Complex fields (B-scan datasets or field DataArrays); NaN pixels are left out.
+        Complex fields (B-scan datasets or field DataArrays) on the same pixel grid (shared
+        dims of equal size and coordinates, else ``ValueError``); NaN pixels are left out.
     kind : {"intensity", "amplitude", "complex"}
         Correlated quantity; ``"complex"`` returns the modulus of the complex coefficient.
     dims : tuple of str
@@ -219,7 +270,7 @@ def pearson(
     check_choice(kind, "kind", KINDS)
     x = _quantity(_field_of(reference), kind)
     y = _quantity(_field_of(deformed), kind)
-    x, y = xr.broadcast(x, y)
+    x, y = _matched(x, y)
     ok = np.isfinite(abs(x)) & np.isfinite(abs(y))
     x, y = x.where(ok), y.where(ok)
     dx = x - x.mean(dims)
@@ -231,15 +282,16 @@ def pearson(
     return r.assign_attrs(long_name=f"{kind} correlation coefficient", units="1", kind=kind)
 
 
-def _window(window: object) -> tuple[int, int]:
-    w = np.atleast_1d(np.asarray(window))
+def _window(window: object, name: str = "window", low: int = 2) -> tuple[int, int]:
+    """``(depth, aline)`` pixel counts from an int or a pair (depth >= ``low``, aline >= 1)."""
+    w = np.atleast_1d(np.asarray(window, dtype=object))
     if w.size == 1:
         w = np.repeat(w, 2)
-    if w.size != 2:
-        raise ValueError(f"window must be an int or (depth, aline) pixels, got {window!r}")
+    if w.size != 2 or w.ndim != 1:
+        raise ValueError(f"{name} must be an int or (depth, aline) pixels, got {window!r}")
     return (
-        check_int(w[0].item(), "window[depth]", low=2),
-        check_int(w[1].item(), "window[aline]", low=1),
+        check_int(w[0], f"{name}[depth]", low=low),
+        check_int(w[1], f"{name}[aline]", low=1),
     )
 
 
@@ -255,7 +307,8 @@ def correlation_map(
     Parameters
     ----------
     reference, deformed : xarray.Dataset or xarray.DataArray
-        Complex fields with dims ``(..., depth, aline)``.
+        Complex fields with dims ``(..., depth, aline)`` on the same pixel grid (shared dims of
+        equal size and coordinates, else ``ValueError``).
     window : int or (int, int)
         Window size in pixels (depth, aline); an int means square.
     kind : {"intensity", "amplitude", "complex"}
@@ -265,13 +318,14 @@ def correlation_map(
     -------
     xarray.DataArray
         Coefficient at each window centre (pixel ``c`` holds the window starting at
-        ``c - w//2``); NaN where the window does not fit in the image or holds NaN.
+        ``c - w//2``); NaN where the window does not fit in the image or holds a NaN pixel
+        (of either image), and only there.
     """
     check_choice(kind, "kind", KINDS)
     wz, wx = _window(window)
     x = _quantity(_field_of(reference), kind)
     y = _quantity(_field_of(deformed), kind)
-    x, y = xr.broadcast(x, y)
+    x, y = _matched(x, y)
     y = y.transpose(*x.dims)
     if x.sizes["depth"] < wz or x.sizes["aline"] < wx:
         raise ValueError(
@@ -280,6 +334,9 @@ def correlation_map(
     size = [1] * x.ndim
     size[x.dims.index("depth")], size[x.dims.index("aline")] = wz, wx
     xv, yv = x.values, y.values
+    bad = ~(np.isfinite(xv) & np.isfinite(yv))
+    if bad.any():  # zero them so that they do not spread through the running sums
+        xv, yv = np.where(bad, 0, xv), np.where(bad, 0, yv)
 
     def local_mean(v: np.ndarray) -> np.ndarray:
         if np.iscomplexobj(v):
@@ -297,6 +354,10 @@ def correlation_map(
     sl[x.dims.index("depth")] = slice(wz // 2, x.sizes["depth"] - (wz - 1) // 2)
     sl[x.dims.index("aline")] = slice(wx // 2, x.sizes["aline"] - (wx - 1) // 2)
     valid[tuple(sl)] = True
+    if bad.any():  # windows holding a NaN pixel: their count of NaN pixels is >= 1
+        valid &= ndimage.uniform_filter(bad.astype(float), size=size, mode="constant") < (
+            0.5 / (wz * wx)
+        )
     r = np.where(valid, r, np.nan)
     return xr.DataArray(
         r,

@@ -27,6 +27,7 @@ kurtosis, an independent check of the explanation.
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -74,7 +75,8 @@ def load_measured(
         proportional to intensity or amplitude.
     roi : dict, optional
         Region of interest ``{"depth": [start, stop], "aline": [start, stop]}`` in pixel indices
-        (half-open, either key optional, ``null`` bounds allowed).
+        (half-open, either key optional, ``null`` bounds allowed). Bounds beyond the image
+        (above its number of rows or columns) are refused, never clipped.
     pixel_size : float, optional
         Axial pixel size in µm (> 0); the ``depth`` coordinate is then in µm, else in pixels.
     aline_pitch : float, optional
@@ -103,14 +105,24 @@ def load_measured(
         raise ValueError(f"measured image must be 2-D (depth, aline), got shape {raw.shape}")
     data = as_finite_array(raw, "measured image")
     sl = {"depth": slice(None), "aline": slice(None)}
+    if roi is not None and not isinstance(roi, Mapping):
+        raise TypeError(
+            "roi must be a mapping {'depth': [start, stop], 'aline': [start, stop]} of pixel "
+            f"indices, got {type(roi).__name__} {roi!r}"
+        )
     for key, value in (roi or {}).items():
         if key not in sl:
             raise ValueError(f"roi keys must be 'depth' and/or 'aline', got {key!r}")
         if value is None:
             continue
-        if len(value) != 2:
+        if isinstance(value, str) or not hasattr(value, "__len__") or len(value) != 2:
             raise ValueError(f"roi[{key!r}] must be [start, stop], got {value!r}")
-        lo, hi = (None if v is None else check_int(v, f"roi[{key!r}]", low=0) for v in value)
+        size = data.shape[0 if key == "depth" else 1]
+        lo, hi = (
+            None if v is None else check_int(v, f"roi[{key!r}]", low=0, high=size) for v in value
+        )
+        if lo is not None and hi is not None and hi <= lo:
+            raise ValueError(f"roi[{key!r}] must have start < stop, got {value!r}")
         sl[key] = slice(lo, hi)
     rows = np.arange(data.shape[0])[sl["depth"]]
     cols = np.arange(data.shape[1])[sl["aline"]]

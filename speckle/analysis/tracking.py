@@ -13,9 +13,9 @@ import xarray as xr
 from scipy.interpolate import RegularGridInterpolator
 from skimage.registration import phase_cross_correlation
 
-from .._validate import check_choice, check_int, check_real
+from .._validate import as_finite_array, check_choice, check_int, check_real
 from ..conventions import spacing
-from .correlation import _field_of, _window, sample_field
+from .correlation import _field_of, _matched, _window, sample_field
 
 __all__ = ["interpolate_displacement", "track"]
 
@@ -37,7 +37,8 @@ def track(
     Parameters
     ----------
     reference, deformed : xarray.Dataset or xarray.DataArray
-        Complex fields with dims exactly ``(depth, aline)``.
+        Complex fields with dims exactly ``(depth, aline)``, finite, on the same pixel grid
+        (``ValueError`` otherwise).
     window : int or (int, int)
         Window size in pixels (depth, aline).
     step : int or (int, int)
@@ -66,7 +67,7 @@ def track(
     """
     check_choice(quantity, "quantity", ("amplitude", "intensity"))
     wz, wx = _window(window)
-    sz, sx = _window(step)
+    sz, sx = _window(step, "step", low=1)
     up = check_int(upsample, "upsample", low=1)
     ov = check_int(oversample, "oversample", low=1)
     tol = check_real(max_error, "max_error", low=0, low_inclusive=False)
@@ -75,6 +76,13 @@ def track(
     for name, f in (("reference", ref), ("deformed", dfm)):
         if set(f.dims) != {"depth", "aline"}:
             raise ValueError(f"{name} must have dims exactly (depth, aline), got {f.dims}")
+        as_finite_array(f.values, name, dtype=np.complex128)  # NaN/inf: cannot register
+        for key in ("n_pixels", "depth_range"):
+            if key not in f.attrs:
+                raise ValueError(
+                    f"{name} needs attribute {key!r} (a B-scan from speckle.bscan keeps it)"
+                )
+    _matched(ref, dfm)
     fine = np.arange(0, ref.sizes["depth"], 1 / ov)
     a = np.abs(sample_field(ref.transpose("aline", "depth").values, fine)).T
     b = np.abs(sample_field(dfm.transpose("aline", "depth").values, fine)).T

@@ -19,6 +19,8 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt
 
+from ..io import atomic_path
+
 __all__ = ["DPI", "STYLE", "log_to", "new_figure", "save"]
 
 DPI = 150
@@ -51,10 +53,16 @@ def new_figure(nrows: int, ncols: int, *, width: float = 7.0, height: float = 3.
 
 
 def save(fig, path: str | os.PathLike) -> None:
-    """Write ``fig`` to ``path`` (format from the suffix) and close it; creates parent dirs."""
-    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-    fig.savefig(path, dpi=DPI)
-    plt.close(fig)
+    """Write ``fig`` to ``path`` (format from the suffix) atomically and close it.
+
+    The figure goes to a temporary file beside ``path`` that replaces it only once complete
+    (:func:`speckle.io.atomic_path`); parent directories are created.
+    """
+    try:
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, dpi=DPI, format=os.path.splitext(str(path))[1][1:] or None)
+    finally:
+        plt.close(fig)
 
 
 @contextlib.contextmanager

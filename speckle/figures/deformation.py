@@ -19,7 +19,7 @@ import xarray as xr
 from ..analysis import correlation as corr
 from ..analysis.tracking import interpolate_displacement, track
 from ..imaging.bscan import bscan
-from ..provenance import provenance_attrs
+from ..provenance import config_hash, provenance_attrs
 from ..scene.deformation import deformable_scene, uniaxial_pixel_displacement, uniaxial_strain
 from ..scene.scatterers import amplitude_kurtosis
 from ..sweep import sweep
@@ -455,6 +455,9 @@ def scan_point_data(
     return ds.transpose("density", "k0_dk", "spectrum", "strain")
 
 
+SCAN_DIMS = ("density", "k0_dk", "spectrum")
+
+
 def _same(a, b) -> bool:
     return a is not None and np.array_equal(np.asarray(a), np.asarray(b))
 
@@ -462,14 +465,35 @@ def _same(a, b) -> bool:
 def scan_combine(points: list[xr.Dataset]) -> xr.Dataset:
     """Stack scan points into one dataset (``density, k0_dk, spectrum, strain``).
 
-    Combinations missing from the scan table are NaN. Attributes that differ between points
-    (density, spectrum shape, config hash) are dropped; the shared ones are kept.
+    Combinations missing from the scan table are NaN. Variable and coordinate attributes
+    (``units``, ``long_name``) are kept; dataset attributes shared by every point are kept, those
+    that differ (density, spectrum shape) are dropped. ``config_sha256`` is the hash of the
+    sorted per-point hashes (listed in ``point_config_sha256``), so it changes with any point's
+    configuration.
+
+    Raises
+    ------
+    ValueError
+        If ``points`` is empty or two points have the same (density, k0_dk, spectrum).
     """
     if not points:
         raise ValueError("points must hold at least one scan point")
-    ds = xr.combine_by_coords(points, join="outer", combine_attrs="drop")
+    keys = [tuple(p[d].values.item() for d in SCAN_DIMS) for p in points]
+    dup = sorted({k for k in keys if keys.count(k) > 1}, key=str)
+    if dup:
+        raise ValueError(
+            f"scan points must be distinct; (density, k0_dk, spectrum) {dup} appear more than "
+            "once (remove the duplicate rows of the scan table)"
+        )
+    # variable attrs (units, long_name) agree between points: keep them; dataset attrs below
+    ds = xr.combine_by_coords(points, join="outer", combine_attrs="drop_conflicts")
     first = points[0].attrs
     ds.attrs = {k: v for k, v in first.items() if all(_same(p.attrs.get(k), v) for p in points[1:])}
+    hashes = sorted(str(p.attrs["config_sha256"]) for p in points if "config_sha256" in p.attrs)
+    ds.attrs.pop("config_sha256", None)
+    if hashes:
+        ds.attrs["config_sha256"] = config_hash({"points": hashes})
+        ds.attrs["point_config_sha256"] = json.dumps(hashes)
     ds.attrs["scan_points"] = len(points)
     return ds.transpose("density", "k0_dk", "spectrum", "strain")
 

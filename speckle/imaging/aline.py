@@ -16,7 +16,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .._validate import as_finite_array, check_choice, check_int, check_real
+from .._validate import as_finite_array, check_choice, check_int, check_memory, check_real
 from ..system.source import check_weights, index_shift_phase, spectral_index
 
 __all__ = ["METHODS", "ascan", "pixel_depths", "register_method"]
@@ -140,7 +140,8 @@ def ascan(
     Raises
     ------
     TypeError, ValueError
-        On invalid input, before any computation.
+        On invalid input, before any computation (including an output above
+        :data:`speckle._validate.MAX_BYTES`).
 
     Examples
     --------
@@ -171,8 +172,15 @@ def ascan(
             f"amplitude must broadcast to the shape of z {z_shape}; broadcasting gave {zz.shape}"
         )
     s = np.ones(n) if spectrum is None else check_weights(spectrum, n)
+    if zz.size and not np.isfinite(2.0 * k0v * float(np.max(np.abs(zz)))):
+        raise ValueError(
+            f"k0 = {k0v:g} rad/µm and depths z up to {float(np.max(np.abs(zz))):g} µm give an "
+            "infinite carrier phase 2 k0 z in float64; use a smaller k0 or z"
+        )
     batch_shape = zz.shape[:-1]
     m = zz.shape[-1]
+    lines = int(np.prod(batch_shape, dtype=float))
+    check_memory(16.0 * lines * n, "n_pixels", f"{lines} A-scans x {n} complex128 pixels")
     if zz.size == 0:
         return np.zeros((*batch_shape, n), dtype=np.complex128)
     z2 = np.ascontiguousarray(zz.reshape(-1, m))

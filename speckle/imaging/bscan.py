@@ -13,7 +13,7 @@ import xarray as xr
 from .._validate import check_choice
 from ..provenance import provenance_attrs
 from ..scene.scatterers import AMPLITUDE_MODELS
-from .aline import ascan, pixel_depths
+from .aline import METHODS, _check_tol, ascan, pixel_depths
 
 __all__ = ["NORMALISATIONS", "bscan", "expected_intensity"]
 
@@ -50,14 +50,16 @@ def bscan(
     scene : xarray.Dataset
         Scatterer field with variables ``z`` (µm) and ``amplitude`` sharing a ``scatterer`` dim
         (see :func:`speckle.random_scatterers`); other dims (``aline``, ``strain``,
-        ...) are carried through.
+        ...) are carried through. Its ``n_pixels`` and ``depth`` attributes, when present,
+        must match the source's (``ValueError`` otherwise).
     source : xarray.DataArray
         Spectrum from :func:`speckle.system.source.spectrum`; its attributes give ``n_pixels``,
         ``depth`` and ``k0``.
     normalise : {"none", "density", "expected"}
         Explicit amplitude normalisation, recorded in the ``normalisation`` attribute.
     method, tol
-        Passed to :func:`speckle.ascan`.
+        Passed to :func:`speckle.ascan`; checked before any work (also for Dask-backed
+        scenes, whose imaging runs at ``.compute()``).
 
     Returns
     -------
@@ -74,6 +76,23 @@ def bscan(
     n = int(source.attrs["n_pixels"])
     h = float(source.attrs["depth"])
     k0 = float(source.attrs["k0"])
+    check_choice(method, "method", METHODS)
+    _check_tol(tol)
+    for var in ("z", "amplitude"):
+        if "scatterer" not in scene[var].dims:
+            raise ValueError(
+                f"scene variable {var!r} must have a 'scatterer' dim (see "
+                f"speckle.random_scatterers); got dims {scene[var].dims}"
+            )
+    for key, value in (("n_pixels", n), ("depth", h)):
+        if key in scene.attrs and not np.isclose(
+            float(scene.attrs[key]), value, rtol=1e-12, atol=0
+        ):
+            raise ValueError(
+                f"scene was built for {key}={scene.attrs[key]!r} but the source has "
+                f"{key}={value!r}; build the scene and the spectrum with the same n_pixels "
+                "and depth (µm)"
+            )
     field = xr.apply_ufunc(
         ascan,
         scene.z,

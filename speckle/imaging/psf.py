@@ -34,7 +34,7 @@ import numpy as np
 from ..system.source import index_shift_phase, spectral_index
 from .aline import register_method
 from .carrier import PARALLEL_LOCK, carrier_and_position
-from .nufft import DEFAULT_TOL
+from .nufft import DEFAULT_TOL, check_float64_placement
 
 __all__ = ["MAX_ROWS", "half_width", "psf_ascan", "psf_error_estimate", "tail_error"]
 
@@ -247,4 +247,5 @@ def _psf_method(z, amplitude, n_pixels, depth, k0, spectrum, tol):
             f"{err:.1e} (half-width {hw} px, {rows} interpolation rows per pixel, the cap); "
             "use a looser tol or method='nufft'"
         )
+    check_float64_placement(z, amplitude, depth, k0, spectrum, tolv - err, tolv, "psf")
     return psf_ascan(z, amplitude, n_pixels, depth, k0, spectrum, hw=hw, rows=rows)

@@ -29,6 +29,15 @@ benchmark and the failure map):
     is exact but costs ``M N`` per line, so the cost model prefers it only for tiny lines
     (N of order 10), never a truncated one.
 
+Deep scatterers: the fast methods place scatterers with ``z * (1/H)`` and reduce the carrier
+phase with a three-term ``2 pi`` in float64, which loses ~``eps |z|/H`` (position) and
+``eps |2 k0 z| 3e-4`` (carrier) of relative accuracy
+(:func:`speckle.imaging.carrier.float64_error_estimate`, ~1e-14 for depths within a few ``H``,
+1e-2 at ``|z|`` ~ 1e15 µm). ``nufft`` admits it up to ``tol/4``, ``nufft32`` within its
+``tol/2`` rounding budget and ``psf`` within ``tol`` minus its own error; beyond that they
+refuse and ``auto`` does not choose them. ``direct`` and ``finufft`` reduce ``z mod H``
+exactly and stay within ``tol``.
+
 Cost model: nanoseconds per call, fitted on the benchmark machine (Intel Xeon, 2 cores) for
 ``N = 64 ... 1024`` and 2-32 scatterers per pixel (within a factor ~1.5). It only orders methods, so
 errors in it cost speed, never accuracy.
@@ -42,8 +51,10 @@ import numpy as np
 
 from .._validate import check_int
 from .aline import METHODS, register_method
+from .carrier import float64_error_estimate
 from .nufft import (
     DEFAULT_TOL,
+    FLOAT64_SHARE,
     NUFFT_TOL_FLOOR,
     fine_grid_size,
     float32_error_estimate,
@@ -57,13 +68,19 @@ __all__ = ["AUTO_CANDIDATES", "choose_method", "method_estimates", "stream_ascan
 AUTO_CANDIDATES = ("direct", "nufft", "nufft32", "psf")
 
 
-def _estimate(method: str, n_lines: int, n_scat: int, n_pix: int, spectrum, tol: float):
-    """(predicted relative error, predicted time in ns) of one method on a scene."""
+def _estimate(
+    method: str, n_lines: int, n_scat: int, n_pix: int, spectrum, tol: float, e64: float = 0.0
+):
+    """(predicted relative error, predicted time in ns) of one method on a scene.
+
+    ``e64``: float64 carrier/position error of the fast methods on this scene's depths
+    (:func:`speckle.imaging.carrier.float64_error_estimate`; 0 for depths within a few ``H``).
+    """
     b, m, n = n_lines, n_scat, n_pix
     if method == "direct":
         return 0.0, 62.0 * b * m * n + 3000.0 * b
     if method == "nufft":
-        if tol < NUFFT_TOL_FLOOR:
+        if tol < NUFFT_TOL_FLOOR or e64 > FLOAT64_SHARE * tol:
             return math.inf, math.inf
         w = kernel_width(tol)
         nf = fine_grid_size(n, w)
@@ -71,11 +88,12 @@ def _estimate(method: str, n_lines: int, n_scat: int, n_pix: int, spectrum, tol:
     if method == "nufft32":
         w = kernel_width(0.5 * tol)
         nf = fine_grid_size(n, w)
-        rounding = float32_error_estimate(m, n, w)
+        rounding = float32_error_estimate(m, n, w) + e64
         err = 0.5 * tol + rounding if rounding <= 0.5 * tol else math.inf
         return err, b * (15000.0 + 20.0 * nf) + b * m * (18.0 + 3.5 * w)
     if method == "psf":
         err, hw, rows = psf_error_estimate(spectrum, tol)
+        err += e64
         if err > tol:
             return math.inf, math.inf
         _, nk = _slots(n, hw)
@@ -85,7 +103,13 @@ def _estimate(method: str, n_lines: int, n_scat: int, n_pix: int, spectrum, tol:
 
 
 def method_estimates(
-    n_lines: int, n_scatterers: int, n_pixels: int, spectrum: np.ndarray | None, tol: float | None
+    n_lines: int,
+    n_scatterers: int,
+    n_pixels: int,
+    spectrum: np.ndarray | None,
+    tol: float | None,
+    *,
+    float64_error: float = 0.0,
 ) -> dict[str, dict[str, float]]:
     """Predicted relative error and time (ns) of every ``auto`` candidate on a scene.
 
@@ -97,6 +121,10 @@ def method_estimates(
         ``N`` spectral weights (None: rectangular).
     tol : float or None
         Requested relative accuracy (None: :data:`speckle.imaging.nufft.DEFAULT_TOL`).
+    float64_error : float
+        :func:`speckle.imaging.carrier.float64_error_estimate` of the scene (depends on the
+        depths; 0 means depths within a few ``H``): a method whose budget it exceeds is not
+        admissible.
 
     Returns
     -------
@@ -107,7 +135,7 @@ def method_estimates(
     s = np.ones(n_pixels) if spectrum is None else np.asarray(spectrum, dtype=float)
     out = {}
     for name in AUTO_CANDIDATES:
-        err, cost = _estimate(name, n_lines, n_scatterers, n_pixels, s, tolv)
+        err, cost = _estimate(name, n_lines, n_scatterers, n_pixels, s, tolv, float64_error)
         out[name] = {"error": err, "cost_ns": cost, "admissible": bool(err <= tolv)}
     return out
 
@@ -118,7 +146,13 @@ def _psf_floor_ns(n_lines: int, n_scat: int, n_pix: int) -> float:
 
 
 def choose_method(
-    n_lines: int, n_scatterers: int, n_pixels: int, spectrum: np.ndarray | None, tol: float | None
+    n_lines: int,
+    n_scatterers: int,
+    n_pixels: int,
+    spectrum: np.ndarray | None,
+    tol: float | None,
+    *,
+    float64_error: float = 0.0,
 ) -> str:
     """Name of the fastest admissible method (see :func:`method_estimates`); never runs one."""
     tolv = DEFAULT_TOL if tol is None else float(tol)
@@ -127,7 +161,7 @@ def choose_method(
     for name in AUTO_CANDIDATES:
         if name == "psf" and _psf_floor_ns(n_lines, n_scatterers, n_pixels) >= min(ok.values()):
             continue  # cannot win whatever its half-width: no need to estimate it
-        err, cost = _estimate(name, n_lines, n_scatterers, n_pixels, s, tolv)
+        err, cost = _estimate(name, n_lines, n_scatterers, n_pixels, s, tolv, float64_error)
         if err <= tolv:
             ok[name] = cost
     return min(ok, key=ok.get)
@@ -135,7 +169,8 @@ def choose_method(
 
 @register_method("auto")
 def _auto(z, amplitude, n_pixels, depth, k0, spectrum, tol):
-    name = choose_method(z.shape[0], z.shape[1], n_pixels, spectrum, tol)
+    e64 = float64_error_estimate(z, amplitude, depth, k0, spectrum)
+    name = choose_method(z.shape[0], z.shape[1], n_pixels, spectrum, tol, float64_error=e64)
     return METHODS[name](z, amplitude, n_pixels, depth, k0, spectrum, tol)
 
 

@@ -35,6 +35,7 @@ from .scatterers import line_generator, random_scatterers
 
 __all__ = [
     "LATERAL_STREAM",
+    "check_scene",
     "deformable_scene",
     "displace",
     "pixel_displacement",
@@ -59,6 +60,8 @@ def check_strain(strain: object, name: str = "strain") -> np.ndarray:
     s = as_finite_array(strain, name)
     if s.ndim > 1:
         raise ValueError(f"{name} must be a scalar or 1-D sequence, got shape {s.shape}")
+    if s.size == 0:
+        raise ValueError(f"{name} must hold at least one value in (-1, 1), got an empty sequence")
     bad = s[(s <= -1) | (s >= 1)]
     if bad.size:
         raise ValueError(
@@ -173,10 +176,22 @@ def _field_values(
     """Evaluate a displacement (callable or xarray field) at material points (µm)."""
     if callable(displacement) and not isinstance(displacement, xr.DataArray | xr.Dataset):
         out = displacement(z, x)
+        if isinstance(out, tuple) and len(out) != 2:
+            raise ValueError(
+                f"displacement function must return u_z or (u_z, u_x); got a {len(out)}-tuple"
+            )
         uz, ux = out if isinstance(out, tuple) else (out, 0.0)
-        uz = as_finite_array(np.broadcast_to(uz, z.shape), "displacement u_z")
-        ux = as_finite_array(np.broadcast_to(ux, z.shape), "displacement u_x")
-        return uz, ux
+        vals = []
+        for label, v in (("u_z", uz), ("u_x", ux)):
+            v = as_finite_array(v, f"displacement {label}")
+            try:
+                vals.append(np.broadcast_to(v, z.shape))
+            except ValueError:
+                raise ValueError(
+                    f"displacement function returned {label} of shape {v.shape}; it must be a "
+                    f"scalar or shaped like its z, x arguments {z.shape} (µm)"
+                ) from None
+        return vals[0], vals[1]
     if isinstance(displacement, xr.DataArray):
         displacement = xr.Dataset({"uz": displacement})
     if not isinstance(displacement, xr.Dataset):
@@ -204,6 +219,31 @@ def _field_values(
             vals = np.full(z.shape, float(da.values))
         out.append(as_finite_array(vals, f"displacement {name}"))
     return out[0], out[1]
+
+
+def check_scene(scene: object, name: str = "scene") -> None:
+    """Check ``scene`` is a scatterer field: ``z``/``amplitude`` over ``(aline, scatterer)``
+    and a ``depth`` attribute (µm), as :func:`speckle.random_scatterers` makes.
+
+    Raises
+    ------
+    TypeError, ValueError
+        Naming ``name`` and what is missing (e.g. a B-scan image passed instead of a scene).
+    """
+    if not isinstance(scene, xr.Dataset) or not {"z", "amplitude"} <= set(scene.data_vars):
+        raise TypeError(
+            f"{name} must be a scatterer field (xarray.Dataset with variables 'z' and "
+            "'amplitude', from speckle.random_scatterers or deformable_scene), got "
+            + (
+                f"a Dataset with variables {list(scene.data_vars)}"
+                if isinstance(scene, xr.Dataset)
+                else type(scene).__name__
+            )
+        )
+    if set(scene.z.dims) != {"aline", "scatterer"}:
+        raise ValueError(f"{name} z must have dims (aline, scatterer), got {scene.z.dims}")
+    if "depth" not in scene.attrs:
+        raise ValueError(f"{name} needs a 'depth' attribute (imaging depth H in µm)")
 
 
 def check_field(displacement: xr.Dataset, extra_dims: Sequence[str] = ()) -> None:
@@ -257,10 +297,7 @@ def displace(scene: xr.Dataset, displacement: Displacement, *, wrap: bool = Fals
         The displaced field, restricted to the imaged A-lines. With a lateral displacement,
         scatterers are re-assigned to the A-line whose beam (width ``aline_pitch``) holds them.
     """
-    if not isinstance(scene, xr.Dataset) or not {"z", "amplitude"} <= set(scene.data_vars):
-        raise TypeError("scene must be an xarray.Dataset with variables 'z' and 'amplitude'")
-    if set(scene.z.dims) != {"aline", "scatterer"}:
-        raise ValueError(f"scene z must have dims (aline, scatterer), got {scene.z.dims}")
+    check_scene(scene)
     z = scene.z.transpose("aline", "scatterer").values
     amp = scene.amplitude.transpose("aline", "scatterer").values
     aline = scene.aline.values
@@ -360,6 +397,7 @@ def uniaxial_strain(
     ValueError
         If a strain is outside (-1, 1) or the scene is not populated deep enough for it.
     """
+    check_scene(scene)
     s = check_strain(strain)
     nu = check_real(poisson_ratio, "poisson_ratio", low=0.0, high=0.5)
     need = required_depth(float(scene.attrs["depth"]), s)
@@ -387,7 +425,10 @@ def translate(scene: xr.Dataset, dz: object, dx: float = 0.0, *, wrap: bool = Fa
 
     Returns a dataset with a ``shift`` dim (axial shift in µm) when ``dz`` is a sequence.
     """
+    check_scene(scene)
     dzs = as_finite_array(dz, "dz")
+    if dzs.ndim > 1 or dzs.size == 0:
+        raise ValueError(f"dz must be a scalar or a non-empty 1-D sequence (µm), got {dz!r}")
     dxv = check_real(dx, "dx")
     scenes = [
         displace(scene, lambda z, x, d=d: (np.full(z.shape, d), np.full(z.shape, dxv)), wrap=wrap)

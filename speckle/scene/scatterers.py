@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .._validate import check_choice, check_int, check_real
+from .._validate import check_choice, check_int, check_memory, check_real
 
 __all__ = [
     "AMPLITUDE_MODELS",
@@ -105,6 +105,12 @@ def random_scatterers(
     xarray.Dataset
         Variables ``z`` (µm) and ``amplitude`` with dims ``(aline, scatterer)``; coordinate
         ``aline`` (µm). Attributes record every parameter.
+
+    Raises
+    ------
+    TypeError, ValueError
+        On invalid input, and (``ValueError``) when the field would need more than
+        :data:`speckle._validate.MAX_BYTES` (32 B per scatterer), before drawing anything.
     """
     nl = check_int(n_alines, "n_alines", low=1)
     rho = check_real(density, "density", low=0)
@@ -117,8 +123,8 @@ def random_scatterers(
     if z_range is None:
         z0, z1 = 0.0, h
     else:
-        if len(z_range) != 2:
-            raise ValueError(f"z_range must be (z_min, z_max) in µm, got {z_range!r}")
+        if isinstance(z_range, str) or not hasattr(z_range, "__len__") or len(z_range) != 2:
+            raise TypeError(f"z_range must be a pair (z_min, z_max) in µm, got {z_range!r}")
         z0 = check_real(z_range[0], "z_range[0]")
         z1 = check_real(z_range[1], "z_range[1]", low=z0, low_inclusive=False)
     pitch = (
@@ -127,6 +133,15 @@ def random_scatterers(
         else check_real(aline_pitch, "aline_pitch", low=0, low_inclusive=False)
     )
     mean_count = rho * n * (z1 - z0) / h
+    # z (8 B), amplitude drawn (8 B) and stored complex (16 B) per scatterer slot; Poisson
+    # counts are padded to the largest line (~ mean + 5 sqrt(mean))
+    width_est = mean_count + (5.0 * np.sqrt(mean_count) if count == "poisson" else 0.5)
+    check_memory(
+        32.0 * nl * width_est,
+        "n_alines, density or z_range",
+        f"{nl} A-lines x {width_est:.3g} scatterers (density {rho:g} x n_pixels {n} x "
+        f"(z_max - z_min)/depth {(z1 - z0) / h:.3g})",
+    )
     rngs = [line_generator(sd, i0 + i) for i in range(nl)]
     if count == "fixed":
         counts = np.full(nl, round(mean_count), dtype=int)

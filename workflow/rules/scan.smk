@@ -4,8 +4,11 @@
 import pandas as pd
 from snakemake.utils import Paramspace
 
+from speckle.figures.config_check import check_scan_table
+
 SCAN_TABLE = pd.read_csv(config["scan"]["table"], sep="\t")
 validate(SCAN_TABLE, "../schemas/scan.schema.yaml")
+check_scan_table(SCAN_TABLE.to_dict("records"), config["source"]["n_pixels"])
 SCAN = Paramspace(SCAN_TABLE, filename_params="*", param_sep="~")
 SCAN_CODE = package_code("speckle.figures.deformation", "speckle.io")
 

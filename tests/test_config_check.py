@@ -1,0 +1,150 @@
+"""Bad configurations stop when the workflow loads, naming the key, before any job runs.
+
+Each case of issue 13 is a small override layered over the CI config with ``--configfile``;
+``snakemake -n`` must fail with the key path in its output and no job planned or run. The same
+checks are exercised directly on :func:`speckle.figures.config_check.check_config` (fast), and
+the schema's method enum is compared with the package's method registry.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+import speckle
+from speckle.figures.config_check import check_config, check_scan_table
+
+SCHEMA = "workflow/schemas/config.schema.yaml"
+#: key path expected in the error, override (merged over the CI config).
+BAD_CONFIGS = {
+    "fig3.method": {"fig3": {"method": "fastest"}},
+    "fig5.n_alines": {"fig5": {"n_alines": 16.0}},
+    "fig2.fragment.depth": {"fig2": {"fragment": {"depth": 1000, "aline": 0, "size": 10}}},
+    "source.fwhm_fraction": {"source": {"shape": "gaussian", "fwhm_fraction": None}},
+    "source.k0_dk": {"source": {"k0_dk": float("inf")}},
+    "fig5.density": {"fig5": {"density": float("nan")}},
+    "fig3.densities[0]": {"fig3": {"densities": [0.0001, 1.0]}},
+    "fig5.n_alines too large": {"fig5": {"n_alines": 1000000}},
+}
+#: scan tables (tab-separated) that must be refused, and the key expected in the error.
+BAD_TABLES = {
+    "empty": "density\tk0_dk\tspectrum\n",
+    "duplicate": "density\tk0_dk\tspectrum\n4.0\t10.0\trectangular\n4.0\t10.0\trectangular\n",
+}
+IGNORE = shutil.ignore_patterns(
+    ".git", ".snakemake", "results", "__pycache__", ".pytest_cache", ".hypothesis", "*.egg-info"
+)
+
+
+@pytest.fixture(scope="module")
+def repo(tmp_path_factory, repo_root) -> Path:
+    """A copy of the repository (dry runs write .snakemake metadata)."""
+    dest = tmp_path_factory.mktemp("cfg") / "repo"
+    shutil.copytree(repo_root, dest, ignore=IGNORE)
+    return dest
+
+
+@pytest.fixture(scope="module")
+def merged(repo_root) -> dict:
+    """The CI configuration as Snakemake merges it (defaults, then ci.yaml)."""
+    base = yaml.safe_load((repo_root / "workflow/config/config.yaml").read_text())
+    return _merge(base, yaml.safe_load((repo_root / "workflow/config/ci.yaml").read_text()))
+
+
+@pytest.fixture(scope="module")
+def schema(repo_root) -> dict:
+    return yaml.safe_load((repo_root / SCHEMA).read_text())
+
+
+def _merge(base: dict, over: dict) -> dict:
+    out = copy.deepcopy(base)
+    for key, value in over.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = _merge(out[key], value)
+        else:
+            out[key] = value
+    return out
+
+
+def dry_run(repo: Path, *args: str) -> subprocess.CompletedProcess:
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join([str(repo), *filter(None, [os.environ.get("PYTHONPATH")])]),
+    }
+    cmd = [sys.executable, "-m", "snakemake", "-n", "--directory", str(repo)]
+    cmd += ["--snakefile", str(repo / "Snakefile"), "--configfile", "workflow/config/ci.yaml"]
+    proc = subprocess.run([*cmd, *args], cwd=repo, env=env, capture_output=True, text=True)
+    proc.stdout += proc.stderr
+    return proc
+
+
+def _assert_refused(proc: subprocess.CompletedProcess, key: str) -> None:
+    assert proc.returncode != 0, proc.stdout[-3000:]
+    assert "Job stats" not in proc.stdout, "jobs were planned"
+    parts = key.split(" ")[0].replace("[", ".").replace("]", "").split(".")
+    if "ValidationError" in proc.stdout:  # schema error: jsonschema names the path in parts
+        assert all(p in proc.stdout for p in parts), proc.stdout[-3000:]
+    else:
+        assert key.split(" ")[0] in proc.stdout, proc.stdout[-3000:]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("key", list(BAD_CONFIGS))
+def test_bad_config_stops_before_any_job(repo, key):
+    path = repo / f"bad_{abs(hash(key))}.yaml"
+    path.write_text(yaml.safe_dump(BAD_CONFIGS[key]))
+    _assert_refused(dry_run(repo, path.name), key)
+    assert not (repo / "results").exists()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(BAD_TABLES))
+def test_bad_scan_table_stops_before_any_job(repo, name):
+    table = repo / f"scan_{name}.tsv"
+    table.write_text(BAD_TABLES[name])
+    cfg = repo / f"scan_{name}.yaml"
+    cfg.write_text(yaml.safe_dump({"scan": {"table": table.name}}))
+    _assert_refused(dry_run(repo, cfg.name), "scan.table")
+    assert not (repo / "results").exists()
+
+
+@pytest.mark.parametrize("key", [k for k in BAD_CONFIGS if k != "fig3.method"])
+def test_check_config_names_the_key(merged, schema, key):
+    """The same cases directly (``fig3.method`` is the schema's enum, tested below)."""
+    with pytest.raises(ValueError, match=key.split(" ")[0].replace("[", r"\[").replace("]", r"\]")):
+        check_config(_merge(merged, BAD_CONFIGS[key]), schema)
+
+
+def test_good_configs_pass(merged, schema, repo_root):
+    check_config(merged, schema)
+    base = yaml.safe_load((repo_root / "workflow/config/config.yaml").read_text())
+    check_config(base, schema)
+    # a Gaussian source with its width is fine; the step of 1 pixel in tracking too
+    check_config(_merge(merged, {"source": {"shape": "gaussian", "fwhm_fraction": 0.5}}), schema)
+
+
+def test_scan_table_checks():
+    rows = [{"density": 4.0, "k0_dk": 10.0, "spectrum": "rectangular"}]
+    check_scan_table(rows, 256)
+    with pytest.raises(ValueError, match=r"scan.table.*no rows"):
+        check_scan_table([], 256)
+    with pytest.raises(ValueError, match=r"scan.table: rows 1 and 2"):
+        check_scan_table(rows * 2, 256)
+    with pytest.raises(ValueError, match="row 1 density"):
+        check_scan_table([{**rows[0], "density": 1e-4}], 256)
+
+
+def test_schema_method_enum_matches_the_package(schema):
+    """The schema lists exactly the registered synthesis methods (kept in sync)."""
+    enum = schema["properties"]["fig3"]["properties"]["method"]["enum"]
+    assert sorted(enum) == sorted(speckle.METHODS)
+    for sec in ("fig4", "fig6"):
+        assert schema["properties"][sec]["properties"]["method"]["enum"] == enum
+    assert schema["properties"]["speed_accuracy"]["properties"]["methods"]["items"]["enum"] == enum
