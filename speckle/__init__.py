@@ -8,6 +8,8 @@ rad/µm.
 
 from . import correlation, deformation, detection, measured, statistics, synthesis, tracking
 from .aline import METHODS, ascan, pixel_depths
+from .analysis.phase import add_complex_noise
+from .analysis.strain import accumulate_strain, estimate_displacement, estimate_strain
 from .bscan import bscan, expected_intensity
 from .correlation import compensate, correlation_map, expected_correlation, pearson
 from .deformation import deformable_scene, displace, translate, uniaxial_strain
@@ -24,6 +26,8 @@ __version__ = package_version()
 __all__ = [
     "METHODS",
     "__version__",
+    "accumulate_strain",
+    "add_complex_noise",
     "ascan",
     "bscan",
     "choose_method",
@@ -36,6 +40,8 @@ __all__ = [
     "delta_k",
     "detection",
     "displace",
+    "estimate_displacement",
+    "estimate_strain",
     "expected_correlation",
     "expected_intensity",
     "fit_exponential",
