@@ -19,14 +19,14 @@ DK = N * np.pi / H
 FWHM = 0.5  # Gaussian FWHM / delta_k: neighbouring pixels correlated, rho(1) = 0.64
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def source(shape: str = "gaussian", k0_dk: float = R):
     if shape == "gaussian":
         return speckle.spectrum(N, H, k0_dk=k0_dk, shape="gaussian", fwhm=FWHM * DK)
     return speckle.spectrum(N, H, k0_dk=k0_dk)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def pair(strains: tuple, n_alines: int = 32, shape: str = "gaussian", seed: int = 3):
     """Reference field and deformed fields (strain, depth, aline) under uniform compression."""
     scene = speckle.deformable_scene(
@@ -276,9 +276,7 @@ def test_layered_phantom_strains_inverse_to_modulus():
         )
         third = N // 3
         margin = 20  # half window + lag
-        med = [
-            np.nanmedian(e[i * third + margin : (i + 1) * third - margin]) for i in range(3)
-        ]
+        med = [np.nanmedian(e[i * third + margin : (i + 1) * third - margin]) for i in range(3)]
         np.testing.assert_allclose(med, strain, rtol=0.04)
         assert med[0] / med[1] == pytest.approx(3.0, rel=0.05)
 

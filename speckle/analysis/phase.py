@@ -21,9 +21,15 @@ truth times ``gamma^2/(gamma^2 + rho(L)^2)`` (``gamma`` = interframe correlation
 rectangular spectrum ``rho(1) = 0`` (the Dirichlet kernel vanishes at whole pixels) and the
 adjacent pixel is unbiased; a Gaussian spectrum of FWHM ``f*delta_k`` has
 ``rho(L) = exp(-pi^2 f^2 L^2 / (8 ln 2))`` (the transform of ``S^2``): 0.64 at ``L = 1`` for
-``f = 0.5``, a 29 % low bias ``rho^2/(1 + rho^2)``, and ``rho(3)^2 = 3e-4``. :func:`choose_lag` therefore measures ``|rho(L)|`` on the reference image itself (no
-knowledge of the source needed, so it works on measured images) and returns the smallest lag
-with ``rho(L)^2 <= max_bias``.
+``f = 0.5``, a 29 % low bias ``rho^2/(1 + rho^2)``, and ``rho(3)^2 = 3e-4``. :func:`choose_lag`
+therefore measures ``|rho(L)|`` on the reference image itself (no knowledge of the source needed, so
+it works on measured images) and returns the smallest lag with ``rho(L)^2 <= max_bias``.
+
+At a finite scatterer density ``rho_d`` (per pixel) a third, single-scatterer term
+``kappa rho_d int |P(x)|^2 |P(x+L)|^2 dx`` (each scatterer in all four factors; also without
+strain phase) adds to the low bias: the lag-1 factor is ``1/(1 + rho(1)^2 + D1/(rho_d A^2))``
+with ``A = int |P|^2``, 0.685 for ``f = 0.5`` and ``rho_d = 4`` (``tests/test_strain.py``
+checks it). Both terms fall with the lag.
 """
 
 from __future__ import annotations

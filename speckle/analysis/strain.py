@@ -408,8 +408,7 @@ def _aligned(a1, a2, k0, p, opts):
     kept), so displacements beyond the speckle size no longer decorrelate the pair."""
     if not opts["align"]:
         return a2
-    track_opts = {**OPTIONS["tracking"], **(opts["align"] if isinstance(opts["align"], dict) else {})}
-    return _compensated(a1, a2, k0, p, min(8, a1.shape[1]), track_opts)[0]
+    return _compensated(a1, a2, k0, p, min(8, a1.shape[1]), OPTIONS["tracking"])[0]
 
 
 def _correlation(a1, a2, k0, p, wz, wx, opts):
