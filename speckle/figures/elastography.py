@@ -21,7 +21,7 @@ import xarray as xr
 
 import speckle
 
-from ..analysis.phase import choose_lag, noise_power
+from ..analysis.phase import choose_lag, depth_autocorrelation, noise_power
 from ..analysis.strain import predicted_strain_std
 from ..provenance import provenance_attrs
 from ._style import new_figure, save
@@ -188,10 +188,10 @@ def phantom_figure(ds: xr.Dataset, path: str) -> None:
     fig.colorbar(im, ax=axes[1, 0])
     for i, m in enumerate(methods, start=1):
         im = axes[0, i].imshow(
-            ds.strain.sel(method=m), aspect="auto", extent=extent, vmin=0, vmax=vmax
+            ds.strain.sel({"method": m}), aspect="auto", extent=extent, vmin=0, vmax=vmax
         )
         axes[0, i].set_title(f"{m}")
-        err = ds.error.sel(method=m)
+        err = ds.error.sel({"method": m})
         lim = vmax / 4
         im2 = axes[1, i].imshow(
             err, aspect="auto", extent=extent, cmap="RdBu_r", vmin=-lim, vmax=lim
@@ -226,7 +226,8 @@ def predicted_limits(cfg: Mapping) -> dict[str, float]:
     ``wrap_single_lag`` = 1/(2 R L) (vector, one lag L), ``wrap_lag1`` = 1/(2 R) (multi-lag
     vector and the per-pixel unwrapping of wls), ``decorrelation`` = strain where the theory
     complex correlation after compensation falls to 0.5, ``speckle_displacement`` = strain
-    at which the displacement at mid-depth reaches the lag (speckle size) without alignment.
+    at which the displacement at mid-depth reaches the half-width of the field's depth
+    autocorrelation (where an unaligned pair has decorrelated to 0.5 there).
     """
     src = _source(cfg)
     r = float(src.attrs["k0_dk"])
@@ -241,8 +242,18 @@ def predicted_limits(cfg: Mapping) -> dict[str, float]:
         "wrap_single_lag": 1 / (2 * r * lag),
         "wrap_lag1": 1 / (2 * r),
         "decorrelation": float(grid[below[0]]) if below.size else np.nan,
-        "speckle_displacement": lag / (n / 2),
+        "speckle_displacement": _half_width(ref) / (n / 2),
     }
+
+
+def _half_width(image: np.ndarray) -> float:
+    """Lag (pixels, linear interpolation) where the depth autocorrelation falls to 0.5."""
+    rho = depth_autocorrelation(image, min(32, image.shape[0] // 4))
+    below = np.flatnonzero(rho < 0.5)
+    if not below.size:
+        return np.nan
+    i = below[0]
+    return float(i - 1 + (rho[i - 1] - 0.5) / (rho[i - 1] - rho[i]))
 
 
 def failure_data(cfg: Mapping, seed: int) -> xr.Dataset:
@@ -322,9 +333,9 @@ def failure_figure(ds: xr.Dataset, path: str) -> None:
         )
         scale = x if name == "strain" else ds.attrs["base_strain"]
         for m in ds.method.values:
-            rel = ds[f"rms_error_{name}"].sel(method=m).values / scale
+            rel = ds[f"rms_error_{name}"].sel({"method": m}).values / scale
             axes[0, j].plot(xplot, rel, "o-", ms=3, lw=0.8, label=str(m))
-            axes[1, j].plot(xplot, ds[f"answered_{name}"].sel(method=m), "o-", ms=3, lw=0.8)
+            axes[1, j].plot(xplot, ds[f"answered_{name}"].sel({"method": m}), "o-", ms=3, lw=0.8)
         axes[0, j].set_yscale("log")
         axes[0, j].set_title(f"rms error / strain vs {name}")
         axes[1, j].set_xlabel(
@@ -388,8 +399,8 @@ def speed_figure(ds: xr.Dataset, path: str) -> None:
     fig, axes = new_figure(1, 1, width=4.5, height=3.5)
     ax = axes[0, 0]
     for m in ds.method.values:
-        t = ds.time_per_megapixel.sel(method=m).values
-        e = ds.relative_rms_error.sel(method=m).values
+        t = ds.time_per_megapixel.sel({"method": m}).values
+        e = ds.relative_rms_error.sel({"method": m}).values
         ax.plot(t, e, "o-", ms=4, lw=0.8, label=str(m))
         for w, ti, ei in zip(ds.window.values, t, e, strict=True):
             ax.annotate(str(int(w)), (ti, ei), fontsize=5)

@@ -16,7 +16,13 @@ ELASTOGRAPHY_TARGETS = [
 rule elastography_phantom:
     input:
         code=package_code(
-            "speckle.figures.elastography", "speckle.io", "speckle.provenance"
+            "speckle.figures.elastography",
+            "speckle.io",
+            "speckle.provenance",
+            "speckle.deformation",
+            "speckle.bscan",
+            "speckle.tracking",
+            "speckle.correlation",
         ),
     output:
         data=f"{RESULTS}/elastography/phantom.nc",
@@ -42,7 +48,13 @@ rule elastography_phantom:
 rule elastography_failure:
     input:
         code=package_code(
-            "speckle.figures.elastography", "speckle.io", "speckle.provenance"
+            "speckle.figures.elastography",
+            "speckle.io",
+            "speckle.provenance",
+            "speckle.deformation",
+            "speckle.bscan",
+            "speckle.tracking",
+            "speckle.correlation",
         ),
     output:
         data=f"{RESULTS}/elastography/failure_maps.nc",
@@ -66,7 +78,13 @@ rule elastography_failure:
 rule elastography_speed:
     input:
         code=package_code(
-            "speckle.figures.elastography", "speckle.io", "speckle.provenance"
+            "speckle.figures.elastography",
+            "speckle.io",
+            "speckle.provenance",
+            "speckle.deformation",
+            "speckle.bscan",
+            "speckle.tracking",
+            "speckle.correlation",
         ),
     output:
         data=f"{RESULTS}/elastography/speed_accuracy.nc",
@@ -90,7 +108,13 @@ rule elastography_speed:
 rule elastography_sequence:
     input:
         code=package_code(
-            "speckle.figures.elastography", "speckle.io", "speckle.provenance"
+            "speckle.figures.elastography",
+            "speckle.io",
+            "speckle.provenance",
+            "speckle.deformation",
+            "speckle.bscan",
+            "speckle.tracking",
+            "speckle.correlation",
         ),
     output:
         data=f"{RESULTS}/elastography/sequence.nc",
