@@ -16,6 +16,14 @@ from .deformation import deformable_scene, displace, translate, uniaxial_strain
 from .io import open_dataset, to_netcdf
 from .provenance import package_version
 from .scatterers import random_scatterers
+from .scene.mechanics import (
+    compress,
+    displacement_at,
+    inclusion_labels,
+    inclusion_strain,
+    layer_strains,
+    layered_labels,
+)
 from .source import delta_k, k0_from_wavelength, spectrum
 from .statistics import contrast_theory, fit_exponential, fit_rayleigh, speckle_contrast
 from .synthesis import choose_method
@@ -32,6 +40,7 @@ __all__ = [
     "bscan",
     "choose_method",
     "compensate",
+    "compress",
     "contrast_theory",
     "correlation",
     "correlation_map",
@@ -40,13 +49,18 @@ __all__ = [
     "delta_k",
     "detection",
     "displace",
+    "displacement_at",
     "estimate_displacement",
     "estimate_strain",
     "expected_correlation",
     "expected_intensity",
     "fit_exponential",
     "fit_rayleigh",
+    "inclusion_labels",
+    "inclusion_strain",
     "k0_from_wavelength",
+    "layer_strains",
+    "layered_labels",
     "measured",
     "open_dataset",
     "pearson",

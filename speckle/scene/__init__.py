@@ -1,0 +1,1 @@
+"""The scene: scatterers, their deformation, regions and mechanics."""
