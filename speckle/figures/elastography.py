@@ -18,6 +18,7 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 import xarray as xr
+from scipy import ndimage
 
 import speckle
 
@@ -29,6 +30,8 @@ from ._style import new_figure, save
 __all__ = [
     "failure_data",
     "failure_figure",
+    "inclusion_data",
+    "inclusion_figure",
     "phantom_data",
     "phantom_figure",
     "sequence_data",
@@ -63,13 +66,14 @@ def _images(
     k0_dk: float | None = None,
     fwhm: float | None = None,
     density: float | None = None,
+    n_alines: int | None = None,
     max_strain: float = 0.05,
 ) -> tuple[list[np.ndarray], float]:
     """Complex images (depth, aline) of one seeded scene under each displacement field."""
     src = _source(cfg, k0_dk, fwhm)
     n = int(cfg["n_pixels"])
     scene = speckle.deformable_scene(
-        int(cfg["n_alines"]),
+        int(cfg["n_alines"] if n_alines is None else n_alines),
         float(cfg["density"] if density is None else density),
         n_pixels=n,
         depth=n * float(cfg["pixel_size"]),
@@ -142,46 +146,89 @@ def layered_field(moduli: list[float], mean_strain: float, depth: float):
     return field, edges, strains
 
 
-def phantom_data(cfg: Mapping, seed: int) -> xr.Dataset:
-    """Modulus map, true strain and each method's strain and error maps for a layered phantom."""
-    ph = cfg["phantom"]
-    n = int(cfg["n_pixels"])
-    p = float(cfg["pixel_size"])
-    field, edges, strains = layered_field(ph["moduli"], float(ph["mean_strain"]), n * p)
-    (ref, dfm), k0 = _images(cfg, seed, [_uniform(0.0), field])
-    z = np.arange(n) * p
-    layer = np.clip(np.searchsorted(edges, z, side="right") - 1, 0, len(strains) - 1)
-    truth = np.repeat(strains[layer][:, None], ref.shape[1], axis=1)
-    maps = [_estimate(ref, dfm, k0, cfg, m) for m in cfg["methods"]]
+def _maps(cfg, seed, fields, modulus, truth, n_alines=None) -> xr.Dataset:
+    """Strain and error maps of every method for a reference/deformed pair."""
+    (ref, dfm), k0 = _images(cfg, seed, fields, n_alines=n_alines)
+    est = np.array([_estimate(ref, dfm, k0, cfg, m) for m in cfg["methods"]])
     dims = ("method", "depth", "aline")
-    est = np.array(maps)
+    p = float(cfg["pixel_size"])
     return xr.Dataset(
         {
-            "modulus": (
-                ("depth", "aline"),
-                np.repeat(np.asarray(ph["moduli"], float)[layer][:, None], ref.shape[1], 1),
-                {"units": "relative", "long_name": "Young's modulus"},
-            ),
+            "modulus": (("depth", "aline"), modulus, {"units": "kPa", "long_name": "modulus"}),
             "true_strain": (("depth", "aline"), truth, STRAIN),
             "strain": (dims, est, STRAIN),
             "error": (dims, est - truth, {"units": "1", "long_name": "estimate minus truth"}),
         },
         coords={
             "method": list(cfg["methods"]),
-            "depth": ("depth", z, {"units": "um"}),
+            "depth": ("depth", np.arange(ref.shape[0]) * p, {"units": "um"}),
             "aline": np.arange(ref.shape[1]),
         },
         attrs={"k0": k0, "pixel_size": p, "seed": seed, **provenance_attrs()},
     )
 
 
+def phantom_data(cfg: Mapping, seed: int) -> xr.Dataset:
+    """Layers in series (analytic displacement): modulus, true strain, strain and error maps."""
+    ph = cfg["phantom"]
+    n, lines = int(cfg["n_pixels"]), int(cfg["n_alines"])
+    p = float(cfg["pixel_size"])
+    field, edges, strains = layered_field(ph["moduli"], float(ph["mean_strain"]), n * p)
+    z = np.arange(n) * p
+    layer = np.clip(np.searchsorted(edges, z, side="right") - 1, 0, len(strains) - 1)
+    truth = np.repeat(strains[layer][:, None], lines, axis=1)
+    modulus = np.repeat(np.asarray(ph["moduli"], float)[layer][:, None], lines, axis=1)
+    return _maps(cfg, seed, [_uniform(0.0), field], modulus, truth)
+
+
+def inclusion_data(cfg: Mapping, seed: int) -> xr.Dataset:
+    """Circular inclusion compressed by a flat probe (:func:`speckle.compress`, plane-strain
+    finite elements): modulus, FE strain ``strain_zz`` as the truth, strain and error maps, and
+    the truth averaged over each method's window (what a windowed estimator can resolve)."""
+    ic = cfg["inclusion"]
+    n, lines = int(cfg["n_pixels"]), int(ic.get("n_alines", cfg["n_alines"]))
+    p = float(cfg["pixel_size"])
+    depth = np.arange(n) * p
+    x = np.arange(lines) * p  # A-line positions of speckle.deformable_scene (pitch = pixel)
+    labels = speckle.inclusion_labels(
+        depth, x, (float(ic["depth_fraction"]) * n * p, x.mean()), float(ic["radius"])
+    )
+    fe = speckle.compress(
+        labels,
+        {0: float(ic["youngs_modulus"][0]), 1: float(ic["youngs_modulus"][1])},
+        float(ic["poisson_ratio"]),
+        strain=float(ic["strain"]),
+        contact=ic["contact"],
+    )
+    disp = fe[["uz", "ux"]].rename(x="aline")
+    truth = fe["strain_zz"].values
+    ds = _maps(cfg, seed, [_uniform(0.0), disp], fe["youngs_modulus"].values, truth, lines)
+    wz, wx = _window(cfg)
+    smooth = ndimage.uniform_filter(truth, size=(wz, wx), mode="nearest")
+    ds["window_mean_strain"] = (
+        ("depth", "aline"),
+        smooth,
+        {**STRAIN, "long_name": "FE strain averaged over the estimator window"},
+    )
+    ds["label"] = (("depth", "aline"), labels.values, {"long_name": "region label"})
+    ds.attrs.update(
+        {
+            "fe_contact": ic["contact"],
+            "fe_n_dofs": int(fe.attrs.get("n_dofs", 0)),
+            "inclusion_radius_um": float(ic["radius"]),
+        }
+    )
+    return ds
+
+
 def phantom_figure(ds: xr.Dataset, path: str) -> None:
+    """Modulus and true strain (left), each method's strain map (top) and error map (bottom)."""
     methods = list(ds.method.values)
     fig, axes = new_figure(2, len(methods) + 1, width=2.0 * (len(methods) + 1), height=5.0)
     extent = [0, ds.sizes["aline"], float(ds.depth[-1]), 0]
     vmax = float(ds.true_strain.max()) * 1.3
     im = axes[0, 0].imshow(ds.modulus, aspect="auto", extent=extent, cmap="viridis")
-    axes[0, 0].set_title("modulus (relative)")
+    axes[0, 0].set_title(f"modulus ({ds.modulus.attrs.get('units', '')})")
     fig.colorbar(im, ax=axes[0, 0])
     im = axes[1, 0].imshow(ds.true_strain, aspect="auto", extent=extent, vmin=0, vmax=vmax)
     axes[1, 0].set_title("true strain")
@@ -202,6 +249,11 @@ def phantom_figure(ds: xr.Dataset, path: str) -> None:
     for ax in axes[:, 0]:
         ax.set_ylabel("depth (µm)")
     save(fig, path)
+
+
+def inclusion_figure(ds: xr.Dataset, path: str) -> None:
+    """As :func:`phantom_figure`, for the finite-element inclusion phantom."""
+    phantom_figure(ds, path)
 
 
 # --------------------------------------------------------------------------------------------

@@ -4,6 +4,8 @@
 ELASTOGRAPHY_TARGETS = [
     f"{RESULTS}/elastography/phantom.nc",
     f"{RESULTS}/elastography/phantom.png",
+    f"{RESULTS}/elastography/inclusion.nc",
+    f"{RESULTS}/elastography/inclusion.png",
     f"{RESULTS}/elastography/failure_maps.nc",
     f"{RESULTS}/elastography/failure_maps.png",
     f"{RESULTS}/elastography/speed_accuracy.nc",
@@ -43,6 +45,39 @@ rule elastography_phantom:
         **section("elastography", "seed"),
     script:
         "../scripts/elastography_phantom.py"
+
+
+rule elastography_inclusion:
+    input:
+        code=package_code(
+            "speckle.figures.elastography",
+            "speckle.io",
+            "speckle.provenance",
+            "speckle.deformation",
+            "speckle.bscan",
+            "speckle.tracking",
+            "speckle.correlation",
+            "speckle.scene.mechanics",
+        ),
+    output:
+        data=f"{RESULTS}/elastography/inclusion.nc",
+        figure=report(
+            f"{RESULTS}/elastography/inclusion.png",
+            caption="../report/elastography_inclusion.rst",
+            category="Elastography",
+            labels={
+                "figure": "FE inclusion phantom: modulus, true strain, strain and error maps"
+            },
+        ),
+    log:
+        f"{RESULTS}/logs/elastography_inclusion.log",
+    conda:
+        "../envs/speckle.yaml"
+    threads: 1
+    params:
+        **section("elastography", "seed"),
+    script:
+        "../scripts/elastography_inclusion.py"
 
 
 rule elastography_failure:
