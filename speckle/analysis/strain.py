@@ -39,10 +39,22 @@ Methods (``method=``)
     the spectrum measured from the reference image is inverted: returns the strain *magnitude*.
     Quality = the local correlation; NaN where it is below the theory's range.
 
+Alignment (``align=``, vector and wls)
+-------------------------------------
+The phase methods compare pixel ``z`` of both images; once the displacement ``|u|`` reaches a
+fair fraction of the speckle size the pair decorrelates there (at 1 % strain and 256 pixels,
+half of the depth is lost without alignment). ``align=True`` first resamples the deformed image
+at the tracked displacement (:func:`speckle.track`, :func:`speckle.compensate` without carrier
+removal, so the strain phase ``2 k0 u`` is kept); ``"auto"`` (default) does this only when the
+displacement integrated from an unaligned first estimate exceeds :data:`AUTO_ALIGN_PIXELS`
+(0.5 px) somewhere (or most of the image has no answer). Alignment costs ~40x the vector sum.
+
 Every method returns NaN where its window does not fit in the image or it has no answer.
 """
 
 from __future__ import annotations
+
+import warnings
 
 import numpy as np
 import xarray as xr
@@ -52,7 +64,7 @@ from scipy.interpolate import RegularGridInterpolator
 import speckle
 
 from .._validate import check_choice, check_int, check_real
-from .phase import DEFAULT_MAX_BIAS, choose_lag
+from .phase import DEFAULT_MAX_BIAS, choose_lag, depth_autocorrelation
 
 __all__ = [
     "DEFAULT_METHOD",
@@ -70,8 +82,8 @@ DISPLACEMENT_METHODS = ("phase", "tracking")
 DEFAULT_METHOD = "vector"
 #: Default window (depth, aline) in pixels of each method.
 DEFAULT_WINDOWS = {
-    "vector": (32, 1),
-    "wls": (32, 1),
+    "vector": (32, 4),
+    "wls": (32, 4),
     "tracking": (64, 8),
     "correlation": (32, 8),
 }
@@ -82,9 +94,9 @@ OPTIONS = {
         "max_bias": DEFAULT_MAX_BIAS,
         "min_quality": 0.5,
         "wrap_check": True,
-        "align": False,
+        "align": "auto",
     },
-    "wls": {"lag": None, "max_bias": DEFAULT_MAX_BIAS, "min_quality": 0.5, "align": False},
+    "wls": {"lag": None, "max_bias": DEFAULT_MAX_BIAS, "min_quality": 0.5, "align": "auto"},
     "tracking": {"track_window": 32, "step": 4, "upsample": 20, "oversample": 2},
     "correlation": {"track_window": 32, "step": 4, "upsample": 20, "oversample": 2},
 }
@@ -246,10 +258,12 @@ def _vector(a1, a2, k0, p, wz, wx, opts):
     with np.errstate(invalid="ignore", divide="ignore"):
         quality = np.abs(s["C"]) / s["absC"]
     if opts["wrap_check"] and lag > 1:
-        # lag-1 phase with the Gaussian cross term removed: unbiased in expectation, wraps only
-        # at 1/(2R); it picks the 2 pi branch of the lag-L phase (multi-lag unwrapping)
-        s1, count = _four_product_sums(a1, a2, 1, wz, wx)
-        predictor = lag * np.angle(s1["C"] - s1["R1"] * np.conj(s1["R2"]) / count)
+        # the lag-1 phase wraps only at 1/(2R); scaled by L and by its known low bias
+        # 1 + rho(1)^2 (image autocorrelation) it picks the 2 pi branch of the lag-L phase
+        # (multi-lag unwrapping); a branch error needs a predictor error > pi
+        s1, _ = _four_product_sums(a1, a2, 1, wz, wx)
+        rho1 = depth_autocorrelation(a1, 1)[1]
+        predictor = lag * np.angle(s1["C"]) * (1 + rho1**2)
         phase = phase + 2 * np.pi * np.round((predictor - phase) / (2 * np.pi))
     strain = -phase / (2 * k0 * lag * p)
     strain = np.where(quality >= opts["min_quality"], strain, np.nan)
@@ -411,6 +425,31 @@ def _aligned(a1, a2, k0, p, opts):
     return _compensated(a1, a2, k0, p, min(8, a1.shape[1]), OPTIONS["tracking"])[0]
 
 
+#: ``align="auto"`` aligns when the displacement implied by a first, unaligned estimate exceeds
+#: this many pixels (the field correlation of a Gaussian-spectrum pair falls to ~0.9 at 0.5 px).
+AUTO_ALIGN_PIXELS = 0.5
+
+
+def _auto_aligned(method, a1, a2, k0, p, wz, wx, opts):
+    """Unaligned estimate; if its integrated displacement ``u(z) = -int s dz`` (row medians,
+    from the probe at the top) reaches :data:`AUTO_ALIGN_PIXELS`, re-estimate aligned."""
+    first = _METHOD_FUNCS[method](a1, a2, k0, p, wz, wx, {**opts, "align": False})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN rows (edges) stay NaN
+        rows = np.nanmedian(first[0], axis=1) if np.isfinite(first[0]).any() else None
+    if rows is not None and np.isfinite(rows).any():
+        q = np.arange(rows.size)
+        ok = np.isfinite(rows)
+        u_pixels = np.abs(np.cumsum(np.interp(q, q[ok], rows[ok])))
+        need = bool(u_pixels.max() > AUTO_ALIGN_PIXELS) or ok.mean() < 0.5
+    else:
+        need = True
+    if not need:
+        return first[0], first[1], {**first[2], "aligned": 0}
+    out = _METHOD_FUNCS[method](a1, a2, k0, p, wz, wx, {**opts, "align": True})
+    return out[0], out[1], {**out[2], "aligned": 1}
+
+
 def _correlation(a1, a2, k0, p, wz, wx, opts):
     comp, covered = _compensated(a1, a2, k0, p, wx, opts)
     ref = _image(a1, k0, p)
@@ -472,9 +511,9 @@ def estimate_strain(
         Also return the quality map (correlation or phase coherence, 0-1).
     **options
         Method options (:data:`OPTIONS`): ``lag`` (pixels; default from the image's
-        autocorrelation), ``max_bias``, ``min_quality`` (NaN below it), ``wrap_check``
-        (vector); ``track_window``, ``step``, ``upsample``, ``oversample`` (tracking,
-        correlation).
+        autocorrelation), ``max_bias``, ``min_quality`` (NaN below it), ``align`` (True, False
+        or "auto", default), ``wrap_check`` (vector: multi-lag unwrapping); ``track_window``,
+        ``step``, ``upsample``, ``oversample`` (tracking, correlation).
 
     Returns
     -------
@@ -498,7 +537,12 @@ def estimate_strain(
     check_choice(method, "method", METHODS)
     wz, wx = _check_window(window, DEFAULT_WINDOWS[method], a1.shape)
     opts = _options(method, options)
-    strain, quality, info = _METHOD_FUNCS[method](a1, a2, k, p, wz, wx, opts)
+    if "align" in opts and opts["align"] not in (True, False, "auto"):
+        raise ValueError(f"align must be True, False or 'auto', got {opts['align']!r}")
+    if opts.get("align") == "auto":
+        strain, quality, info = _auto_aligned(method, a1, a2, k, p, wz, wx, opts)
+    else:
+        strain, quality, info = _METHOD_FUNCS[method](a1, a2, k, p, wz, wx, opts)
     attrs = {
         "long_name": "axial strain (compression > 0)"
         if method != "correlation"

@@ -7,8 +7,8 @@ Images are made with the package API (:func:`speckle.deformable_scene`,
 runs through :func:`speckle.estimate_strain`.
 
 Method labels: ``vector``, ``wls``, ``tracking``, ``correlation`` are the estimators with their
-defaults; ``vector_aligned`` / ``wls_aligned`` first align the pair by tracking
-(``align=True``).
+defaults (``align="auto"`` for the phase methods); ``*_aligned`` / ``*_unaligned`` force
+``align=True`` / ``align=False``.
 """
 
 from __future__ import annotations
@@ -45,6 +45,8 @@ STRAIN = {"units": "1", "long_name": "axial strain (compression > 0)"}
 
 def _method(label: str) -> tuple[str, dict]:
     """Estimator name and options of a pipeline method label."""
+    if label.endswith("_unaligned"):
+        return label.removesuffix("_unaligned"), {"align": False}
     if label.endswith("_aligned"):
         return label.removesuffix("_aligned"), {"align": True}
     return label, {}
