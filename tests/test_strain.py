@@ -334,6 +334,12 @@ def test_bad_inputs_get_clear_errors():
         speckle.estimate_strain(ref, dfm[0], align="sometimes", **kw)
     with pytest.raises(TypeError, match="complex"):
         speckle.add_complex_noise(np.abs(ref), 20.0, seed=1)
+    with pytest.raises(ValueError, match="method"):
+        speckle.estimate_displacement(ref, dfm[0], method="vector", **kw)
+    with pytest.raises(ValueError, match="k0"):
+        speckle.estimate_displacement(ref, dfm[0], k0=-1.0, pixel_size=PIXEL)
+    with pytest.raises(ValueError, match="frame"):
+        speckle.accumulate_strain(ref[None], **kw)
 
 
 def test_fe_inclusion_contrast_matches_window_averaged_truth():
