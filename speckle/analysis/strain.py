@@ -19,15 +19,20 @@ Methods (``method=``)
     image's depth autocorrelation (:func:`speckle.analysis.phase.choose_lag`: the smallest lag
     whose correlation ``rho(L)^2`` is below 0.5 %, so the low bias
     ``rho^2/(gamma^2 + rho^2)`` of correlated neighbours is below 0.5 %). It wraps when
-    ``|2 k0 s L p| > pi``, i.e. ``|s| > 1/(2 R L)`` with ``R = k0 p / pi = k0/delta_k``; a lag-1
-    estimate with the Gaussian cross term removed (unbiased in expectation, wraps only at
-    ``1/(2R)``) flags wrapped windows as NaN. Quality: ``|sum C| / sum |C|``.
+    ``|2 k0 s L p| > pi``, i.e. ``|s| > 1/(2 R L)`` with ``R = k0 p / pi = k0/delta_k``; the
+    lag-1 phase (wraps only at ``1/(2R)``), times ``L`` and its known low-bias factor
+    ``1 + rho(1)^2``, picks the ``2 pi`` branch (multi-lag unwrapping, ``wrap_check``), so the
+    range extends to ``1/(2R)``. Quality: ``|sum C| / sum |C|``; NaN below ``min_quality``
+    (0.5; decorrelated windows).
 ``"wls"``
     Weighted least-squares gradient of the unwrapped interframe phase: ``A2 A1*`` is summed
     over ``L`` depth pixels (the speckle size), unwrapped along depth, and a line
     ``dphi = a_line + b z`` (one intercept per A-line, one slope per window) is fitted with
     weights ``I1 I2 / (I1 + I2)`` (the inverse phase-noise variance at high SNR, up to the
-    noise power). ``s = -b / (2 k0 p)``. Unwrapping needs ``2 pi R |s| < pi`` per pixel.
+    noise power). ``s = -b / (2 k0 p)``. Unwrapping needs ``2 pi R |s| < pi`` per pixel plus
+    the speckle phase noise; NaN where the fitted step disagrees by more than ``pi/4`` with the
+    complex-averaged lag-1 step (Gaussian cross term removed) or the phasors do not follow the
+    fitted line (quality = their coherence, below ``min_quality``).
 ``"tracking"``
     :func:`speckle.track` (sub-pixel amplitude registration) in windows stepped by a few pixels,
     interpolated to every pixel, then a least-squares gradient over the window. Serves
