@@ -33,6 +33,7 @@ include: "workflow/rules/statistics.smk"
 include: "workflow/rules/deformation.smk"
 include: "workflow/rules/scan.smk"
 include: "workflow/rules/speed.smk"
+include: "workflow/rules/elastography.smk"
 
 
 rule all:
@@ -42,4 +43,5 @@ rule all:
         + STATISTICS_TARGETS
         + DEFORMATION_TARGETS
         + SCAN_TARGETS
-        + SPEED_TARGETS,
+        + SPEED_TARGETS
+        + ELASTOGRAPHY_TARGETS,

@@ -8,7 +8,9 @@ rad/µm.
 
 from .analysis import correlation, measured, statistics, tracking
 from .analysis.correlation import compensate, correlation_map, expected_correlation, pearson
+from .analysis.phase import add_complex_noise
 from .analysis.statistics import contrast_theory, fit_exponential, fit_rayleigh, speckle_contrast
+from .analysis.strain import accumulate_strain, estimate_displacement, estimate_strain
 from .analysis.tracking import track
 from .imaging import synthesis
 from .imaging.aline import METHODS, ascan, pixel_depths
@@ -36,6 +38,8 @@ __version__ = package_version()
 __all__ = [
     "METHODS",
     "__version__",
+    "accumulate_strain",
+    "add_complex_noise",
     "ascan",
     "beam_scan",
     "bscan",
@@ -51,6 +55,8 @@ __all__ = [
     "detection",
     "displace",
     "displacement_at",
+    "estimate_displacement",
+    "estimate_strain",
     "expected_correlation",
     "expected_intensity",
     "fit_exponential",

@@ -1,0 +1,761 @@
+"""Axial strain and displacement from a pair of complex OCT images, behind one API.
+
+Conventions
+-----------
+Images are complex fields over ``(depth, aline)`` (axis 0 = depth). A scatterer at depth ``z``
+contributes ``exp(2i k0 z)`` (``k0`` = central wavenumber in the medium, rad/µm), so a
+displacement ``u`` (µm, positive = deeper, as in :mod:`speckle.scene.deformation`) turns the
+phase of the interframe product ``A2 A1*`` by ``dphi = 2 k0 u``. Under compression ``s`` by a probe at
+``z = 0`` a scatterer moves to ``z (1 - s)``: ``u = -s z``, ``dphi = -2 k0 s z`` and
+
+    s = -du/dz = -(1 / (2 k0)) d(dphi)/dz        (positive for compression).
+
+Methods (``method=``)
+---------------------
+``"vector"`` (default)
+    Phase-sensitive vector method: window sums of ``C = A1(z) A2*(z) A1*(z+L) A2(z+L)``; the
+    phase of the sum is ``2 k0 (u(z+L) - u(z)) = -2 k0 s L p`` (``p`` = pixel size), so
+    ``s = -arg(sum C) / (2 k0 L p)``. No unwrapping. The lag ``L`` is chosen from the reference
+    image's depth autocorrelation (:func:`speckle.analysis.phase.choose_lag`: the smallest lag
+    whose correlation ``rho(L)^2`` is below 0.5 %, so the low bias
+    ``rho^2/(gamma^2 + rho^2)`` of correlated neighbours is below 0.5 %). It wraps when
+    ``|2 k0 s L p| > pi``, i.e. ``|s| > 1/(2 R L)`` with ``R = k0 p / pi = k0/delta_k``; the
+    lag-1 phase (wraps only at ``1/(2R)``), times ``L`` and its known low-bias factor
+    ``1 + rho(1)^2``, picks the ``2 pi`` branch (multi-lag unwrapping, ``wrap_check``), so the
+    range extends to ``1/(2R)``. Quality: ``|sum C| / sum |C|``; NaN below ``min_quality``
+    (0.5; decorrelated windows).
+``"wls"``
+    Weighted least-squares gradient of the unwrapped interframe phase: ``A2 A1*`` is summed
+    over ``L`` depth pixels (the speckle size), unwrapped along depth, and a line
+    ``dphi = a_line + b z`` (one intercept per A-line, one slope per window) is fitted with
+    weights ``I1 I2 / (I1 + I2)`` (the inverse phase-noise variance at high SNR, up to the
+    noise power). ``s = -b / (2 k0 p)``. Unwrapping needs ``2 pi R |s| < pi`` per pixel plus
+    the speckle phase noise; NaN where the fitted step disagrees by more than ``pi/4`` with the
+    complex-averaged lag-1 step (Gaussian cross term removed) or the phasors do not follow the
+    fitted line (quality = their coherence, below ``min_quality``).
+``"tracking"``
+    :func:`speckle.track` (sub-pixel amplitude registration) in windows stepped by a few pixels,
+    interpolated to every pixel, then a least-squares gradient over the window. Serves
+    supra-pixel displacements; its noise floor is set by the registration error.
+``"correlation"``
+    Correlation stability: the deformed image is compensated with the tracked displacement
+    (:func:`speckle.compensate`, no carrier), the local amplitude correlation is measured
+    (:func:`speckle.correlation_map`) and the theory :func:`speckle.expected_correlation` for
+    the spectrum measured from the reference image is inverted: returns the strain *magnitude*.
+    Quality = the local correlation; NaN where it is below the theory's range.
+
+Alignment (``align=``, vector and wls)
+-------------------------------------
+The phase methods compare pixel ``z`` of both images; once the displacement ``|u|`` reaches a
+fair fraction of the speckle size the pair decorrelates there (at 1 % strain and 256 pixels,
+half of the depth is lost without alignment). ``align=True`` first resamples the deformed image
+at the tracked displacement (:func:`speckle.track`, :func:`speckle.compensate` without carrier
+removal, so the strain phase ``2 k0 u`` is kept); ``"auto"`` (default) does this only when the
+displacement integrated from an unaligned first estimate exceeds :data:`AUTO_ALIGN_PIXELS`
+(0.5 px) somewhere (or most of the image has no answer). Alignment costs ~40x the vector sum.
+
+Every method returns NaN where its window does not fit in the image or it has no answer.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import xarray as xr
+from scipy import ndimage
+from scipy.interpolate import RegularGridInterpolator
+
+from .._validate import check_choice, check_int, check_real
+from ..system.source import spectrum
+from .correlation import compensate, correlation_map, expected_correlation
+from .phase import DEFAULT_MAX_BIAS, choose_lag, depth_autocorrelation
+from .tracking import track
+
+__all__ = [
+    "DEFAULT_METHOD",
+    "DEFAULT_WINDOWS",
+    "DISPLACEMENT_METHODS",
+    "METHODS",
+    "accumulate_strain",
+    "estimate_displacement",
+    "estimate_strain",
+    "predicted_strain_std",
+]
+
+METHODS = ("vector", "wls", "tracking", "correlation")
+DISPLACEMENT_METHODS = ("phase", "tracking")
+DEFAULT_METHOD = "vector"
+#: Default window (depth, aline) in pixels of each method.
+DEFAULT_WINDOWS = {
+    "vector": (32, 4),
+    "wls": (32, 4),
+    "tracking": (64, 8),
+    "correlation": (32, 8),
+}
+#: Options each method accepts (besides k0, pixel_size, method, window, return_quality).
+OPTIONS = {
+    "vector": {
+        "lag": None,
+        "max_bias": DEFAULT_MAX_BIAS,
+        "min_quality": 0.5,
+        "wrap_check": True,
+        "align": "auto",
+    },
+    "wls": {"lag": None, "max_bias": DEFAULT_MAX_BIAS, "min_quality": 0.5, "align": "auto"},
+    "tracking": {"track_window": 32, "step": 4, "upsample": 20, "oversample": 2},
+    "correlation": {"track_window": 32, "step": 4, "upsample": 20, "oversample": 2},
+}
+
+
+# --------------------------------------------------------------------------------------------
+# Input checks
+# --------------------------------------------------------------------------------------------
+
+
+def _as_images(reference: object, deformed: object) -> tuple[np.ndarray, np.ndarray, object]:
+    """Both images as complex (depth, aline) arrays, plus the DataArray template (or None)."""
+    arrays, template = [], None
+    kinds = {type(reference) is xr.DataArray, type(deformed) is xr.DataArray}
+    if kinds == {True, False}:
+        raise TypeError("reference and deformed must both be numpy arrays or both DataArrays")
+    for name, img in (("reference", reference), ("deformed", deformed)):
+        if isinstance(img, xr.DataArray):
+            if set(img.dims) != {"depth", "aline"}:
+                raise ValueError(f"{name} must have dims (depth, aline), got {img.dims}")
+            img = img.transpose("depth", "aline")
+            template = img if template is None else template
+            values = img.values
+        elif isinstance(img, np.ndarray):
+            values = img
+        else:
+            raise TypeError(
+                f"{name} must be a complex numpy array or xarray.DataArray (depth, aline), got "
+                f"{type(img).__name__}"
+            )
+        if not np.iscomplexobj(values):
+            raise TypeError(
+                f"{name} must be a complex image (the phase carries the strain), got dtype "
+                f"{values.dtype}"
+            )
+        if values.ndim != 2:
+            raise ValueError(f"{name} must be 2-D (depth, aline), got shape {values.shape}")
+        if not np.all(np.isfinite(values)):
+            raise ValueError(f"{name} holds NaN or infinite values")
+        arrays.append(values.astype(np.complex128, copy=False))
+    if arrays[0].shape != arrays[1].shape:
+        raise ValueError(
+            f"reference and deformed must have the same shape, got {arrays[0].shape} and "
+            f"{arrays[1].shape}"
+        )
+    if template is not None:
+        d = deformed.transpose("depth", "aline")
+        for dim in ("depth", "aline"):
+            if dim in template.coords or dim in d.coords:
+                if not np.array_equal(template[dim].values, d[dim].values):
+                    raise ValueError(f"reference and deformed have different {dim} coordinates")
+    return arrays[0], arrays[1], template
+
+
+def _check_window(window: object, default: tuple[int, int], shape: tuple[int, int]):
+    """(depth, aline) window in pixels, checked against the image size."""
+    if window is None:
+        window = default
+    w = np.atleast_1d(np.asarray(window, dtype=object))
+    if w.size == 1:
+        w = np.array([w[0], 1], dtype=object)
+    if w.size != 2:
+        raise ValueError(f"window must be an int or (depth, aline) pixels, got {window!r}")
+    wz = check_int(w[0], "window[depth]", low=2)
+    wx = check_int(w[1], "window[aline]", low=1)
+    if wz > shape[0] or wx > shape[1]:
+        raise ValueError(
+            f"window {(wz, wx)} (depth, aline) is larger than the image {shape}; window must "
+            f"be at most {shape} pixels"
+        )
+    return wz, wx
+
+
+def _options(method: str, options: dict) -> dict:
+    allowed = OPTIONS[method]
+    unknown = set(options) - set(allowed)
+    if unknown:
+        raise TypeError(
+            f"method {method!r} takes options {sorted(allowed)}; got unknown {sorted(unknown)}"
+        )
+    return {**allowed, **options}
+
+
+# --------------------------------------------------------------------------------------------
+# Window sums and least-squares slopes
+# --------------------------------------------------------------------------------------------
+
+
+def _box(x: np.ndarray, wz: int, wx: int) -> np.ndarray:
+    """Sum over the (wz, wx) window starting at ``c - w//2``; NaN where it leaves the image."""
+    if np.iscomplexobj(x):
+        return _box(x.real, wz, wx) + 1j * _box(x.imag, wz, wx)
+    s = ndimage.uniform_filter(x, size=(wz, wx), mode="constant") * (wz * wx)
+    valid = np.zeros(x.shape, bool)
+    valid[wz // 2 : x.shape[0] - (wz - 1) // 2, wx // 2 : x.shape[1] - (wx - 1) // 2] = True
+    return np.where(valid, s, np.nan)
+
+
+def _place(values: np.ndarray, offset: int, n: int) -> np.ndarray:
+    """Rows ``values[i]`` at output row ``i + offset`` of an ``n``-row array (NaN elsewhere)."""
+    out = np.full((n, values.shape[1]), np.nan, dtype=values.dtype)
+    out[offset : offset + values.shape[0]] = values
+    return out
+
+
+def _pooled_slope(y: np.ndarray, w: np.ndarray, wz: int, wx: int) -> np.ndarray:
+    """Weighted least-squares slope of ``y`` against depth index in each (wz, wx) window.
+
+    One intercept per A-line, one slope per window: minimises
+    ``sum_lines sum_depth w (y - a_line - b q)^2``. NaN where the window leaves the image or
+    holds NaN.
+    """
+    q = np.arange(y.shape[0], dtype=float)[:, None] - 0.5 * y.shape[0]
+    bad = ~np.isfinite(y) | ~np.isfinite(w)
+    w = np.where(bad, 0.0, w)
+    y = np.where(bad, 0.0, y)
+    s0, s1, s2 = (_box(w * q**k, wz, 1) for k in range(3))
+    t0, t1 = _box(w * y, wz, 1), _box(w * q * y, wz, 1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        num = t1 - s1 * t0 / s0
+        den = s2 - s1**2 / s0
+    num = np.where(s0 > 0, num, np.nan)
+    slope = _box(num, 1, wx) / _box(den, 1, wx)
+    nbad = _box(bad.astype(float), wz, wx)
+    return np.where(nbad == 0, slope, np.nan)
+
+
+# --------------------------------------------------------------------------------------------
+# Methods
+# --------------------------------------------------------------------------------------------
+
+
+def _lag(a1: np.ndarray, opts: dict) -> int:
+    if opts["lag"] is None:
+        return choose_lag(a1, max_bias=opts["max_bias"])
+    return check_int(opts["lag"], "lag", low=1, high=a1.shape[0] - 2)
+
+
+def _four_product_sums(a1, a2, lag, wz, wx):
+    """Window sums of ``C_L``, ``|C_L|`` and the two autocorrelation terms, at row centres."""
+    n = a1.shape[0]
+    x1, y1, x2, y2 = a1[:-lag], a1[lag:], a2[:-lag], a2[lag:]
+    c = x1 * np.conj(x2) * np.conj(y1) * y2
+    sums = {
+        "C": _box(c, wz, wx),
+        "absC": _box(np.abs(c), wz, wx),
+        "R1": _box(x1 * np.conj(y1), wz, wx),
+        "R2": _box(x2 * np.conj(y2), wz, wx),
+    }
+    count = wz * wx
+    return {k: _place(v, lag // 2, n) for k, v in sums.items()}, count
+
+
+def _vector(a1, a2, k0, p, wz, wx, opts):
+    lag = _lag(a1, opts)
+    a2 = _aligned(a1, a2, k0, p, opts)
+    s, _ = _four_product_sums(a1, a2, lag, wz, wx)
+    phase = np.angle(s["C"])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        quality = np.abs(s["C"]) / s["absC"]
+    if opts["wrap_check"] and lag > 1:
+        # the lag-1 phase wraps only at 1/(2R); scaled by L and by its known low bias
+        # 1 + rho(1)^2 (image autocorrelation) it picks the 2 pi branch of the lag-L phase
+        # (multi-lag unwrapping); a branch error needs a predictor error > pi
+        s1, _ = _four_product_sums(a1, a2, 1, wz, wx)
+        rho1 = depth_autocorrelation(a1, 1)[1]
+        predictor = lag * np.angle(s1["C"]) * (1 + rho1**2)
+        phase = phase + 2 * np.pi * np.round((predictor - phase) / (2 * np.pi))
+    strain = -phase / (2 * k0 * lag * p)
+    strain = np.where(quality >= opts["min_quality"], strain, np.nan)
+    return strain, quality, {"lag": lag}
+
+
+def _smoothed_phasor(a1, a2, lag):
+    """``A2 A1*`` summed over ``lag`` depth pixels (centred), and SNR weights summed alike."""
+    c = a2 * np.conj(a1)
+    i1, i2 = np.abs(a1) ** 2, np.abs(a2) ** 2
+    with np.errstate(invalid="ignore", divide="ignore"):
+        w = np.where(i1 + i2 > 0, i1 * i2 / (i1 + i2), 0.0)
+
+    def smooth(v):
+        if np.iscomplexobj(v):
+            return smooth(v.real) + 1j * smooth(v.imag)
+        return ndimage.uniform_filter1d(v, lag, axis=0, mode="nearest") * lag
+
+    return smooth(c), smooth(np.abs(c)), smooth(w)
+
+
+def _unwrapped_phase(a1, a2, lag):
+    cs, cabs, w = _smoothed_phasor(a1, a2, lag)
+    phase = np.unwrap(np.angle(cs), axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        coherence = np.abs(cs) / cabs
+    return phase, coherence, w
+
+
+def _fit_coherence(phase, w, slope, wz, wx):
+    """``|sum w exp(i(phase - slope q))| / sum w`` per A-line, averaged over ``wx`` lines.
+
+    1 when the (wrapped) phasors follow the fitted line; an unwrapping error inside the
+    window gives a wrong slope and a low value.
+    """
+    n = phase.shape[0]
+    acc = np.zeros(phase.shape, complex)
+    norm = np.zeros(phase.shape)
+    q = np.arange(n, dtype=float)[:, None]
+    z = np.exp(1j * phase)
+    for k in range(wz):
+        shift = k - wz // 2
+        idx = np.clip(np.arange(n) + shift, 0, n - 1)
+        acc += w[idx] * z[idx] * np.exp(-1j * slope * (q[idx] - q))
+        norm += w[idx]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        per_line = np.abs(acc) / norm
+    return _box(per_line, 1, wx) / wx
+
+
+def _wls(a1, a2, k0, p, wz, wx, opts):
+    lag = _lag(a1, opts)
+    a2 = _aligned(a1, a2, k0, p, opts)
+    phase, _, w = _unwrapped_phase(a1, a2, lag)
+    slope = _pooled_slope(phase, w, wz, wx)
+    strain = -slope / (2 * k0 * p)
+    quality = _fit_coherence(phase, w, np.nan_to_num(slope), wz, wx)
+    quality = np.where(np.isfinite(slope), quality, np.nan)
+    # unwrapping guard: the fitted phase step per pixel must agree (within pi/4) with the
+    # complex-averaged lag-1 step (Gaussian cross term removed), which needs no unwrapping
+    s1, count = _four_product_sums(a1, a2, 1, wz, wx)
+    step = np.angle(s1["C"] - s1["R1"] * np.conj(s1["R2"]) / count)
+    unwrap_failed = np.abs(np.angle(np.exp(1j * (step - slope)))) > np.pi / 4
+    strain = np.where((quality >= opts["min_quality"]) & ~unwrap_failed, strain, np.nan)
+    return strain, quality, {"lag": lag}
+
+
+def _image(a: np.ndarray, k0: float, p: float) -> xr.DataArray:
+    """A (depth, aline) array as the labelled field speckle.track / compensate expect."""
+    n = a.shape[0]
+    return xr.DataArray(
+        a,
+        dims=("depth", "aline"),
+        coords={"depth": np.arange(n) * p, "aline": np.arange(a.shape[1], dtype=float)},
+        attrs={"n_pixels": n, "depth_range": n * p, "k0": k0},
+    )
+
+
+def _tracked(a1, a2, k0, p, wx, opts):
+    """Tracked axial displacement (µm) and 1 - registration error at every pixel (NaN outside)."""
+    tw = check_int(opts["track_window"], "track_window", low=4, high=a1.shape[0])
+    step = check_int(opts["step"], "step", low=1, high=tw)
+    tr = track(
+        _image(a1, k0, p),
+        _image(a2, k0, p),
+        window=(tw, wx),
+        step=(step, 1),
+        upsample=check_int(opts["upsample"], "upsample", low=1),
+        oversample=check_int(opts["oversample"], "oversample", low=1),
+    )
+    zc = tr.depth.values / p
+    xc = tr.aline.values
+    qz, qx = np.arange(a1.shape[0], dtype=float), np.arange(a1.shape[1], dtype=float)
+    out = []
+    for values in (tr["uz"].values, 1.0 - tr["registration_error"].values):
+        if len(xc) == 1:
+            xs, vals = np.array([xc[0] - 0.5, xc[0] + 0.5]), np.repeat(values, 2, axis=1)
+        else:
+            xs, vals = xc, values
+        f = RegularGridInterpolator((zc, xs), vals, bounds_error=False, fill_value=np.nan)
+        pts = np.stack(np.meshgrid(qz, qx, indexing="ij"), axis=-1)
+        out.append(f(pts))
+    return out[0], out[1], tw
+
+
+def _tracking(a1, a2, k0, p, wz, wx, opts):
+    uz, quality, tw = _tracked(a1, a2, k0, p, wx, opts)
+    strain = -_pooled_slope(uz, np.ones_like(uz), wz, 1) / p
+    return strain, quality, {"track_window": tw}
+
+
+def _measured_spectrum(a1: np.ndarray, k0: float, p: float) -> xr.DataArray:
+    """Source spectrum S(k_n) estimated as sqrt(mean |F_n|^2) of the reference A-lines."""
+    n = a1.shape[0]
+    shift = n // 2
+    q = np.arange(n)
+    spec = np.fft.ifft(a1 * np.exp(-2j * np.pi * shift * q / n)[:, None], axis=0)
+    weights = np.sqrt(np.mean(np.abs(spec) ** 2, axis=1))
+    return spectrum(n, n * p, k0=k0, shape="array", weights=weights / weights.max())
+
+
+def correlation_theory(spectrum: xr.DataArray, num: int = 81) -> xr.DataArray:
+    """Amplitude correlation after exact compensation versus strain, up to its first minimum.
+
+    :func:`speckle.expected_correlation` (Gaussian-speckle amplitude correlation, independent
+    of density) on strains ``0 ... 1.5/R`` (``R = k0/delta_k``), cut at the first minimum so
+    that it is monotonic and can be inverted.
+    """
+    r = max(float(spectrum.attrs["k0_dk"]), 1.0)
+    grid = np.linspace(0.0, min(0.9, 1.5 / r), num)
+    th = expected_correlation(grid, spectrum=spectrum, density=1.0)["amplitude"]
+    vals = th.values
+    rising = np.flatnonzero(np.diff(vals) >= 0)
+    stop = rising[0] + 1 if rising.size else len(vals)
+    return th.isel(strain=slice(0, stop))
+
+
+def _compensated(a1, a2, k0, p, wx, opts):
+    """Deformed image resampled at the tracked displacement (carrier kept), and coverage."""
+    uz, _, _ = _tracked(a1, a2, k0, p, wx, opts)
+    covered = np.isfinite(uz)
+    filled = np.where(covered, uz, 0.0)
+    for j in range(uz.shape[1]):  # constant extrapolation, only for the compensation
+        col = uz[:, j]
+        ok = np.flatnonzero(np.isfinite(col))
+        if ok.size:
+            filled[:, j] = np.interp(np.arange(col.size), ok, col[ok])
+    ref, dfm = _image(a1, k0, p), _image(a2, k0, p)
+    disp = xr.Dataset({"uz": (("depth", "aline"), filled)}, coords=ref.coords)
+    return compensate(dfm, disp, carrier=False).values, covered
+
+
+def _aligned(a1, a2, k0, p, opts):
+    """With ``align``: the deformed image resampled where the tracked displacement moved each
+    reference pixel (envelope only; the carrier ``exp(2i k0 u)`` and so the strain phase are
+    kept), so displacements beyond the speckle size no longer decorrelate the pair."""
+    if not opts["align"]:
+        return a2
+    return _compensated(a1, a2, k0, p, min(8, a1.shape[1]), OPTIONS["tracking"])[0]
+
+
+#: ``align="auto"`` aligns when the displacement implied by a first, unaligned estimate exceeds
+#: this many pixels (the field correlation of a Gaussian-spectrum pair falls to ~0.9 at 0.5 px).
+AUTO_ALIGN_PIXELS = 0.5
+
+
+def _auto_aligned(method, a1, a2, k0, p, wz, wx, opts):
+    """Unaligned estimate; if its integrated displacement ``u(z) = -int s dz`` (row medians,
+    from the probe at the top) reaches :data:`AUTO_ALIGN_PIXELS`, re-estimate aligned."""
+    first = _METHOD_FUNCS[method](a1, a2, k0, p, wz, wx, {**opts, "align": False})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN rows (edges) stay NaN
+        rows = np.nanmedian(first[0], axis=1) if np.isfinite(first[0]).any() else None
+    if rows is not None and np.isfinite(rows).any():
+        q = np.arange(rows.size)
+        ok = np.isfinite(rows)
+        u_pixels = np.abs(np.cumsum(np.interp(q, q[ok], rows[ok])))
+        need = bool(u_pixels.max() > AUTO_ALIGN_PIXELS) or ok.mean() < 0.5
+    else:
+        need = True
+    if not need:
+        return first[0], first[1], {**first[2], "aligned": 0}
+    out = _METHOD_FUNCS[method](a1, a2, k0, p, wz, wx, {**opts, "align": True})
+    return out[0], out[1], {**out[2], "aligned": 1}
+
+
+def _correlation(a1, a2, k0, p, wz, wx, opts):
+    comp, covered = _compensated(a1, a2, k0, p, wx, opts)
+    ref = _image(a1, k0, p)
+    r = correlation_map(ref, _image(comp, k0, p), window=(wz, wx), kind="amplitude").values
+    th = correlation_theory(_measured_spectrum(a1, k0, p))
+    tv, ts = th.values[::-1], th.strain.values[::-1]
+    strain = np.interp(r, tv, ts, left=np.nan, right=0.0)
+    strain = np.where(covered & np.isfinite(r), strain, np.nan)
+    return strain, r, {"theory_min_correlation": float(tv[0])}
+
+
+_METHOD_FUNCS = {
+    "vector": _vector,
+    "wls": _wls,
+    "tracking": _tracking,
+    "correlation": _correlation,
+}
+
+
+# --------------------------------------------------------------------------------------------
+# Public API
+# --------------------------------------------------------------------------------------------
+
+
+def _wrap(values: np.ndarray, template, name: str, attrs: dict) -> object:
+    if template is None:
+        return values
+    return xr.DataArray(values, dims=("depth", "aline"), coords=template.coords, attrs=attrs)
+
+
+def estimate_strain(
+    reference: np.ndarray | xr.DataArray,
+    deformed: np.ndarray | xr.DataArray,
+    *,
+    k0: float,
+    pixel_size: float,
+    method: str = DEFAULT_METHOD,
+    window: int | tuple[int, int] | None = None,
+    return_quality: bool = False,
+    **options,
+):
+    """Axial strain between two complex OCT images (positive for compression).
+
+    Parameters
+    ----------
+    reference, deformed : numpy.ndarray or xarray.DataArray
+        Complex images ``(depth, aline)`` of the same shape (DataArrays: dims ``depth`` and
+        ``aline``, identical coordinates). Axis 0 is depth with pixel size ``pixel_size``.
+    k0 : float
+        Central wavenumber in the medium, rad/µm (> 0), as in :func:`speckle.ascan`.
+    pixel_size : float
+        Axial pixel size in the medium, µm (> 0); ``H/N`` for the model's images.
+    method : {"vector", "wls", "tracking", "correlation"}
+        Estimator (see the module docstring); default ``"vector"``.
+    window : int or (int, int), optional
+        Window (depth, aline) in pixels over which each estimate is taken; default
+        :data:`DEFAULT_WINDOWS` of the method. An int means (int, 1).
+    return_quality : bool
+        Also return the quality map (correlation or phase coherence, 0-1).
+    **options
+        Method options (:data:`OPTIONS`): ``lag`` (pixels; default from the image's
+        autocorrelation), ``max_bias``, ``min_quality`` (NaN below it), ``align`` (True, False
+        or "auto", default), ``wrap_check`` (vector: multi-lag unwrapping); ``track_window``,
+        ``step``, ``upsample``, ``oversample`` (tracking, correlation).
+
+    Returns
+    -------
+    numpy.ndarray or xarray.DataArray
+        Strain (dimensionless) with the input's shape (DataArray: same coords, attrs give the
+        method, window and chosen lag; a ``quality`` coordinate holds the quality map).
+        ``"correlation"`` gives the magnitude. NaN where the method has no answer. With
+        ``return_quality``, a tuple ``(strain, quality)``.
+
+    Raises
+    ------
+    TypeError
+        Real instead of complex images, mixed or unknown input types, unknown options.
+    ValueError
+        Shapes or coordinates that differ, non-positive ``k0`` or ``pixel_size``, a window
+        larger than the image, an unknown method.
+    """
+    a1, a2, template = _as_images(reference, deformed)
+    k = check_real(k0, "k0", low=0, low_inclusive=False)
+    p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
+    check_choice(method, "method", METHODS)
+    wz, wx = _check_window(window, DEFAULT_WINDOWS[method], a1.shape)
+    opts = _options(method, options)
+    if "align" in opts and opts["align"] not in (True, False, "auto"):
+        raise ValueError(f"align must be True, False or 'auto', got {opts['align']!r}")
+    if opts.get("align") == "auto":
+        strain, quality, info = _auto_aligned(method, a1, a2, k, p, wz, wx, opts)
+    else:
+        strain, quality, info = _METHOD_FUNCS[method](a1, a2, k, p, wz, wx, opts)
+    attrs = {
+        "long_name": "axial strain (compression > 0)"
+        if method != "correlation"
+        else "axial strain magnitude",
+        "units": "1",
+        "method": method,
+        "window_depth_pixels": wz,
+        "window_aline_pixels": wx,
+        **{k_: v for k_, v in info.items()},
+    }
+    out = _wrap(strain, template, "strain", attrs)
+    if template is not None:
+        out = out.assign_coords(
+            quality=(("depth", "aline"), quality, {"units": "1", "long_name": "quality"})
+        )
+    if return_quality:
+        return out, _wrap(quality, template, "quality", {"units": "1", "long_name": "quality"})
+    return out
+
+
+def estimate_displacement(
+    reference: np.ndarray | xr.DataArray,
+    deformed: np.ndarray | xr.DataArray,
+    *,
+    k0: float,
+    pixel_size: float,
+    method: str = "tracking",
+    window: int | tuple[int, int] | None = None,
+    **options,
+):
+    """Axial displacement (µm, positive = deeper) of every pixel's material between two images.
+
+    Parameters
+    ----------
+    reference, deformed, k0, pixel_size
+        As in :func:`estimate_strain`.
+    method : {"tracking", "phase"}
+        ``"tracking"``: :func:`speckle.track` in ``(track_window, window[aline])`` windows
+        stepped by ``step`` pixels, interpolated linearly (NaN beyond the outer window
+        centres). ``"phase"``: the interframe phase ``A2 A1*`` summed over ``lag`` pixels,
+        unwrapped along depth from the top pixel and divided by ``2 k0``; exact up to a
+        multiple of ``pi/k0`` (half a wavelength) set by the top pixel (zero for a probe at
+        ``z = 0``), and only while the phase changes by less than ``pi`` per pixel.
+    window : int or (int, int), optional
+        Only the aline size is used (default 1): A-lines per tracking window.
+    **options
+        ``track_window``, ``step``, ``upsample``, ``oversample`` (tracking); ``lag``,
+        ``max_bias`` (phase).
+
+    Returns
+    -------
+    numpy.ndarray or xarray.DataArray
+        Displacement in µm, the input's shape.
+    """
+    a1, a2, template = _as_images(reference, deformed)
+    k = check_real(k0, "k0", low=0, low_inclusive=False)
+    p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
+    check_choice(method, "method", DISPLACEMENT_METHODS)
+    _, wx = _check_window(window, (2, 1), a1.shape)
+    if method == "tracking":
+        opts = _options("tracking", options)
+        uz, _, _ = _tracked(a1, a2, k, p, wx, opts)
+    else:
+        allowed = {"lag": None, "max_bias": DEFAULT_MAX_BIAS}
+        unknown = set(options) - set(allowed)
+        if unknown:
+            raise TypeError(f"method 'phase' takes options {sorted(allowed)}; got {unknown}")
+        opts = {**allowed, **options}
+        phase, _, _ = _unwrapped_phase(a1, a2, _lag(a1, opts))
+        uz = phase / (2 * k)
+    attrs = {"units": "um", "long_name": "axial displacement (+z deeper)", "method": method}
+    return _wrap(uz, template, "uz", attrs)
+
+
+def predicted_strain_std(
+    reference: np.ndarray,
+    deformed: np.ndarray,
+    *,
+    noise_power: float,
+    k0: float,
+    pixel_size: float,
+    window: int | tuple[int, int] | None = None,
+    lag: int | None = None,
+) -> np.ndarray:
+    """Strain noise of the vector method predicted from additive phase noise, per window.
+
+    At high SNR a pixel of intensity ``I`` carries phase noise of variance ``sigma^2/(2 I)``
+    (``sigma^2`` = noise power), so the interframe phase ``arg A1 A2*`` at pixel ``q`` has
+    variance ``v_q = sigma^2/2 (1/I1 + 1/I2)``, independent between pixels. The phase of
+    ``sum_i w_i exp(i(theta + e_{i+L} - e_i))`` (``w_i = |C_i|``) errs by
+    ``sum_q (w_{q-L} - w_q) e_q / sum_i w_i`` (``w`` = 0 outside the window), so
+
+        var(strain) = sum_q (w_{q-L} - w_q)^2 v_q / (sum_i w_i)^2 / (2 k0 L p)^2,
+
+    conditioned on the intensities of the given (noise-free) images.
+
+    Returns
+    -------
+    numpy.ndarray
+        Predicted standard deviation of the strain at each pixel (NaN where the window does not
+        fit), same shape and placement as :func:`estimate_strain` with ``method="vector"``.
+    """
+    a1, a2, _ = _as_images(reference, deformed)
+    k = check_real(k0, "k0", low=0, low_inclusive=False)
+    p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
+    sigma2 = check_real(noise_power, "noise_power", low=0)
+    wz, wx = _check_window(window, DEFAULT_WINDOWS["vector"], a1.shape)
+    big_l = _lag(a1, {"lag": lag, "max_bias": DEFAULT_MAX_BIAS})
+    n = a1.shape[0]
+    i1, i2 = np.abs(a1) ** 2, np.abs(a2) ** 2
+    with np.errstate(divide="ignore"):
+        v = 0.5 * sigma2 * (1 / i1 + 1 / i2)
+    w = np.sqrt(i1[:-big_l] * i2[:-big_l] * i1[big_l:] * i2[big_l:])  # |C_i|, i = 0..n-L-1
+    # window of C rows [i0, i0 + wz) touches phase pixels [i0, i0 + wz + L)
+    zero = np.zeros((big_l, w.shape[1]))
+    wl = np.vstack([zero, w])  # w_{q-L}, q = 0 .. n-1
+    wq = np.vstack([w, zero])  # w_q
+    inner = (wl - wq) ** 2 * v  # both terms present
+    head = wq**2 * v  # q in [i0, i0+L): only -w_q
+    tail = wl**2 * v  # q in [i0+wz, i0+wz+L): only w_{q-L}
+
+    def csum(x):
+        return np.vstack([np.zeros((1, x.shape[1])), np.cumsum(x, axis=0)])
+
+    ci, ch, ct, cw = csum(inner), csum(head), csum(tail), csum(w)
+    i0 = np.arange(n - big_l - wz + 1)
+    var_num = (
+        ci[i0 + wz] - ci[i0 + big_l] + ch[i0 + big_l] - ch[i0] + ct[i0 + wz + big_l] - ct[i0 + wz]
+    )
+    wsum = cw[i0 + wz] - cw[i0]
+    num = ndimage.uniform_filter1d(var_num, wx, axis=1, mode="constant") * wx
+    den = ndimage.uniform_filter1d(wsum, wx, axis=1, mode="constant") * wx
+    std = np.sqrt(num) / den / (2 * k * big_l * p)
+    valid = np.zeros(std.shape, bool)
+    valid[:, wx // 2 : std.shape[1] - (wx - 1) // 2] = True
+    std = np.where(valid, std, np.nan)
+    # row i0 of the C-window sums sits at C row i0 + wz//2, placed at pixel + L//2
+    return _place(std, wz // 2 + big_l // 2, n)
+
+
+def accumulate_strain(
+    frames: np.ndarray | xr.DataArray,
+    *,
+    k0: float,
+    pixel_size: float,
+    method: str = DEFAULT_METHOD,
+    window: int | tuple[int, int] | None = None,
+    **options,
+) -> xr.Dataset:
+    """Cumulative strain over a compression sequence, following the material with tracking.
+
+    Frame ``i+1`` is compared with frame ``i`` (interframe strain ``s_i`` with
+    :func:`estimate_strain`, displacement ``u_i`` with :func:`estimate_displacement`,
+    ``method="tracking"``). A material point starting at pixel ``q`` of frame 0 sits at
+    ``y_i`` in frame ``i`` (``y_{i+1} = y_i + u_i(y_i)/p``), and its total strain relative to
+    frame 0 is ``1 - prod_i (1 - s_i(y_i))`` (compressions compose multiplicatively).
+
+    Parameters
+    ----------
+    frames : numpy.ndarray or xarray.DataArray
+        Complex images ``(frame, depth, aline)``, at least two frames.
+    k0, pixel_size, method, window, **options
+        As in :func:`estimate_strain` (``options`` go to the strain estimator).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``interframe`` (``frame`` = pair index, depth, aline; on each earlier frame's grid),
+        ``cumulative`` (strain of frame ``i+1`` relative to frame 0 on frame 0's pixels) and
+        ``position`` (pixel ``y_{i+1}`` of each frame-0 pixel in frame ``i+1``).
+    """
+    if isinstance(frames, xr.DataArray):
+        if set(frames.dims) != {"frame", "depth", "aline"}:
+            raise ValueError(f"frames must have dims (frame, depth, aline), got {frames.dims}")
+        f = frames.transpose("frame", "depth", "aline").values
+    elif isinstance(frames, np.ndarray):
+        f = frames
+    else:
+        raise TypeError(f"frames must be a numpy array or DataArray, got {type(frames).__name__}")
+    if f.ndim != 3 or f.shape[0] < 2:
+        raise ValueError(f"frames must be (frame >= 2, depth, aline), got shape {f.shape}")
+    p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
+    n, m = f.shape[1:]
+    q = np.arange(n, dtype=float)
+    y = np.repeat(q[:, None], m, axis=1)
+    keep = np.ones((n, m))
+    inter, cum, pos = [], [], []
+    for i in range(f.shape[0] - 1):
+        s = estimate_strain(
+            f[i], f[i + 1], k0=k0, pixel_size=p, method=method, window=window, **options
+        )
+        u = estimate_displacement(f[i], f[i + 1], k0=k0, pixel_size=p, method="tracking")
+        s_at = np.column_stack([np.interp(y[:, j], q, s[:, j]) for j in range(m)])
+        u_at = np.column_stack([np.interp(y[:, j], q, u[:, j]) for j in range(m)])
+        keep = keep * (1 - s_at)
+        y = y + u_at / p
+        inter.append(s)
+        cum.append(1 - keep)
+        pos.append(y.copy())
+    dims = ("frame", "depth", "aline")
+    coords = {"frame": np.arange(1, f.shape[0]), "depth": q * p}
+    return xr.Dataset(
+        {
+            "interframe": (dims, np.array(inter), {"units": "1", "long_name": "interframe"}),
+            "cumulative": (dims, np.array(cum), {"units": "1", "long_name": "strain to frame 0"}),
+            "position": (dims, np.array(pos), {"units": "pixel"}),
+        },
+        coords=coords,
+        attrs={"method": method, "k0": float(k0), "pixel_size": p},
+    )

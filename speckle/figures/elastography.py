@@ -1,0 +1,514 @@
+"""Elastography on simulated phantoms: strain maps, failure maps, speed-accuracy chart, sequence.
+
+Each ``*_data`` function takes the pipeline's ``elastography`` config section and the seed and
+returns the dataset its ``*_figure`` function draws (every figure is drawn from a NetCDF file).
+Images are made with the package API (:func:`speckle.deformable_scene`,
+:func:`speckle.displace`, :func:`speckle.bscan`) on a Gaussian spectrum, and every estimator
+runs through :func:`speckle.estimate_strain`.
+
+Method labels: ``vector``, ``wls``, ``tracking``, ``correlation`` are the estimators with their
+defaults (``align="auto"`` for the phase methods); ``*_aligned`` / ``*_unaligned`` force
+``align=True`` / ``align=False``.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping
+
+import numpy as np
+import xarray as xr
+from scipy import ndimage
+
+from ..analysis.correlation import expected_correlation
+from ..analysis.phase import add_complex_noise, choose_lag, depth_autocorrelation, noise_power
+from ..analysis.strain import accumulate_strain, estimate_strain, predicted_strain_std
+from ..imaging.bscan import bscan
+from ..provenance import provenance_attrs
+from ..scene.deformation import deformable_scene, displace
+from ..scene.mechanics import compress, inclusion_labels
+from ..system.source import spectrum
+from ._style import new_figure, save
+
+__all__ = [
+    "failure_data",
+    "failure_figure",
+    "inclusion_data",
+    "inclusion_figure",
+    "phantom_data",
+    "phantom_figure",
+    "sequence_data",
+    "sequence_figure",
+    "speed_data",
+    "speed_figure",
+]
+
+STRAIN = {"units": "1", "long_name": "axial strain (compression > 0)"}
+
+
+def _method(label: str) -> tuple[str, dict]:
+    """Estimator name and options of a pipeline method label."""
+    if label.endswith("_unaligned"):
+        return label.removesuffix("_unaligned"), {"align": False}
+    if label.endswith("_aligned"):
+        return label.removesuffix("_aligned"), {"align": True}
+    return label, {}
+
+
+def _source(cfg: Mapping, k0_dk: float | None = None, fwhm: float | None = None):
+    n = int(cfg["n_pixels"])
+    h = n * float(cfg["pixel_size"])
+    frac = float(cfg["fwhm_fraction"] if fwhm is None else fwhm)
+    r = float(cfg["k0_dk"] if k0_dk is None else k0_dk)
+    return spectrum(n, h, k0_dk=r, shape="gaussian", fwhm=frac * n * np.pi / h)
+
+
+def _images(
+    cfg: Mapping,
+    seed: int,
+    fields: list[Callable],
+    *,
+    k0_dk: float | None = None,
+    fwhm: float | None = None,
+    density: float | None = None,
+    n_alines: int | None = None,
+    max_strain: float = 0.05,
+) -> tuple[list[np.ndarray], float]:
+    """Complex images (depth, aline) of one seeded scene under each displacement field."""
+    src = _source(cfg, k0_dk, fwhm)
+    n = int(cfg["n_pixels"])
+    scene = deformable_scene(
+        int(cfg["n_alines"] if n_alines is None else n_alines),
+        float(cfg["density"] if density is None else density),
+        n_pixels=n,
+        depth=n * float(cfg["pixel_size"]),
+        seed=seed,
+        strain=max_strain,
+    )
+    out = []
+    for f in fields:
+        img = bscan(displace(scene, f), src, method=cfg["method"], tol=cfg["tol"])
+        out.append(img.field.transpose("depth", "aline").values)
+    return out, float(src.attrs["k0"])
+
+
+def _uniform(s: float) -> Callable:
+    return lambda z, x: -s * z
+
+
+def _noisy(a: np.ndarray, snr_db: float | None, seed: int) -> np.ndarray:
+    return a if snr_db is None else add_complex_noise(a, float(snr_db), seed=seed)
+
+
+def _window(cfg: Mapping, depth: int | None = None) -> tuple[int, int]:
+    w = cfg["window"]
+    return (int(w[0] if depth is None else depth), int(w[1]))
+
+
+def _scores(est: np.ndarray, truth: np.ndarray) -> tuple[float, float, float]:
+    """Median error, rms error and the fraction of pixels with an answer."""
+    ok = np.isfinite(est)
+    if not ok.any():
+        return np.nan, np.nan, 0.0
+    err = est[ok] - np.broadcast_to(truth, est.shape)[ok]
+    return float(np.median(err)), float(np.sqrt(np.mean(err**2))), float(ok.mean())
+
+
+def _estimate(a1, a2, k0, cfg, label, window=None):
+    method, opts = _method(label)
+    return estimate_strain(
+        a1,
+        a2,
+        k0=k0,
+        pixel_size=float(cfg["pixel_size"]),
+        method=method,
+        window=window or _window(cfg),
+        **opts,
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# Phantom: layers in series under a flat probe
+# --------------------------------------------------------------------------------------------
+
+
+def layered_field(moduli: list[float], mean_strain: float, depth: float):
+    """Axial displacement of equal-thickness layers in series compressed from ``z = 0``.
+
+    Equal stress in every layer: strain ``s_i = s_mean * E_h / E_i`` (``E_h`` = harmonic mean
+    of the moduli, so the layers shorten the stack by ``s_mean * depth``). Below the imaged
+    depth the last layer continues. Returns ``(f(z, x) -> u_z, edges, strains)``.
+    """
+    e = np.asarray(moduli, float)
+    strains = mean_strain * (len(e) / np.sum(1 / e)) / e
+    edges = np.linspace(0.0, depth, len(e) + 1)
+    offsets = np.concatenate([[0.0], np.cumsum(strains * np.diff(edges))])[:-1]
+
+    def field(z, x):
+        i = np.clip(np.searchsorted(edges, z, side="right") - 1, 0, len(e) - 1)
+        return -(offsets[i] + strains[i] * (z - edges[i]))
+
+    return field, edges, strains
+
+
+def _maps(cfg, seed, fields, modulus, truth, n_alines=None) -> xr.Dataset:
+    """Strain and error maps of every method for a reference/deformed pair."""
+    (ref, dfm), k0 = _images(cfg, seed, fields, n_alines=n_alines)
+    est = np.array([_estimate(ref, dfm, k0, cfg, m) for m in cfg["methods"]])
+    dims = ("method", "depth", "aline")
+    p = float(cfg["pixel_size"])
+    return xr.Dataset(
+        {
+            "modulus": (("depth", "aline"), modulus, {"units": "kPa", "long_name": "modulus"}),
+            "true_strain": (("depth", "aline"), truth, STRAIN),
+            "strain": (dims, est, STRAIN),
+            "error": (dims, est - truth, {"units": "1", "long_name": "estimate minus truth"}),
+        },
+        coords={
+            "method": list(cfg["methods"]),
+            "depth": ("depth", np.arange(ref.shape[0]) * p, {"units": "um"}),
+            "aline": np.arange(ref.shape[1]),
+        },
+        attrs={"k0": k0, "pixel_size": p, "seed": seed, **provenance_attrs()},
+    )
+
+
+def phantom_data(cfg: Mapping, seed: int) -> xr.Dataset:
+    """Layers in series (analytic displacement): modulus, true strain, strain and error maps."""
+    ph = cfg["phantom"]
+    n, lines = int(cfg["n_pixels"]), int(cfg["n_alines"])
+    p = float(cfg["pixel_size"])
+    field, edges, strains = layered_field(ph["moduli"], float(ph["mean_strain"]), n * p)
+    z = np.arange(n) * p
+    layer = np.clip(np.searchsorted(edges, z, side="right") - 1, 0, len(strains) - 1)
+    truth = np.repeat(strains[layer][:, None], lines, axis=1)
+    modulus = np.repeat(np.asarray(ph["moduli"], float)[layer][:, None], lines, axis=1)
+    return _maps(cfg, seed, [_uniform(0.0), field], modulus, truth)
+
+
+def inclusion_data(cfg: Mapping, seed: int) -> xr.Dataset:
+    """Circular inclusion compressed by a flat probe (:func:`speckle.compress`, plane-strain
+    finite elements): modulus, FE strain ``strain_zz`` as the truth, strain and error maps, and
+    the truth averaged over each method's window (what a windowed estimator can resolve)."""
+    ic = cfg["inclusion"]
+    n, lines = int(cfg["n_pixels"]), int(ic.get("n_alines", cfg["n_alines"]))
+    p = float(cfg["pixel_size"])
+    depth = np.arange(n) * p
+    x = np.arange(lines) * p  # A-line positions of speckle.deformable_scene (pitch = pixel)
+    labels = inclusion_labels(
+        depth, x, (float(ic["depth_fraction"]) * n * p, x.mean()), float(ic["radius"])
+    )
+    fe = compress(
+        labels,
+        {0: float(ic["youngs_modulus"][0]), 1: float(ic["youngs_modulus"][1])},
+        float(ic["poisson_ratio"]),
+        strain=float(ic["strain"]),
+        contact=ic["contact"],
+    )
+    disp = fe[["uz", "ux"]].rename(x="aline")
+    truth = fe["strain_zz"].values
+    ds = _maps(cfg, seed, [_uniform(0.0), disp], fe["youngs_modulus"].values, truth, lines)
+    wz, wx = _window(cfg)
+    smooth = ndimage.uniform_filter(truth, size=(wz, wx), mode="nearest")
+    ds["window_mean_strain"] = (
+        ("depth", "aline"),
+        smooth,
+        {**STRAIN, "long_name": "FE strain averaged over the estimator window"},
+    )
+    ds["label"] = (("depth", "aline"), labels.values, {"long_name": "region label"})
+    ds.attrs.update(
+        {
+            "fe_contact": ic["contact"],
+            "fe_n_dofs": int(fe.attrs.get("n_dofs", 0)),
+            "inclusion_radius_um": float(ic["radius"]),
+        }
+    )
+    return ds
+
+
+def phantom_figure(ds: xr.Dataset, path: str) -> None:
+    """Modulus and true strain (left), each method's strain map (top) and error map (bottom)."""
+    methods = list(ds.method.values)
+    fig, axes = new_figure(2, len(methods) + 1, width=2.0 * (len(methods) + 1), height=5.0)
+    extent = [0, ds.sizes["aline"], float(ds.depth[-1]), 0]
+    vmax = float(ds.true_strain.max()) * 1.3
+    im = axes[0, 0].imshow(ds.modulus, aspect="auto", extent=extent, cmap="viridis")
+    axes[0, 0].set_title(f"modulus ({ds.modulus.attrs.get('units', '')})")
+    fig.colorbar(im, ax=axes[0, 0])
+    im = axes[1, 0].imshow(ds.true_strain, aspect="auto", extent=extent, vmin=0, vmax=vmax)
+    axes[1, 0].set_title("true strain")
+    fig.colorbar(im, ax=axes[1, 0])
+    for i, m in enumerate(methods, start=1):
+        im = axes[0, i].imshow(
+            ds.strain.sel({"method": m}), aspect="auto", extent=extent, vmin=0, vmax=vmax
+        )
+        axes[0, i].set_title(f"{m}")
+        err = ds.error.sel({"method": m})
+        lim = vmax / 4
+        im2 = axes[1, i].imshow(
+            err, aspect="auto", extent=extent, cmap="RdBu_r", vmin=-lim, vmax=lim
+        )
+        axes[1, i].set_title(f"error, rms {float(np.sqrt((err**2).mean())):.1e}")
+    fig.colorbar(im, ax=axes[0, -1])
+    fig.colorbar(im2, ax=axes[1, -1])
+    for ax in axes[:, 0]:
+        ax.set_ylabel("depth (µm)")
+    save(fig, path)
+
+
+def inclusion_figure(ds: xr.Dataset, path: str) -> None:
+    """As :func:`phantom_figure`, for the finite-element inclusion phantom."""
+    phantom_figure(ds, path)
+
+
+# --------------------------------------------------------------------------------------------
+# Failure maps
+# --------------------------------------------------------------------------------------------
+
+
+def _failure_point(cfg, seed, methods, *, strain, snr_db=None, window=None, **scene_kw):
+    (ref, dfm), k0 = _images(cfg, seed, [_uniform(0.0), _uniform(strain)], **scene_kw)
+    a1, a2 = _noisy(ref, snr_db, seed + 1), _noisy(dfm, snr_db, seed + 2)
+    out = []
+    for m in methods:
+        est = _estimate(a1, a2, k0, cfg, m, window)
+        truth = abs(strain) if _method(m)[0] == "correlation" else strain
+        out.append(_scores(est, truth))
+    return np.array(out)  # (method, 3)
+
+
+def predicted_limits(cfg: Mapping) -> dict[str, float]:
+    """Where theory puts each limit at the base parameters (strain values).
+
+    ``wrap_single_lag`` = 1/(2 R L) (vector, one lag L), ``wrap_lag1`` = 1/(2 R) (multi-lag
+    vector and the per-pixel unwrapping of wls), ``decorrelation`` = strain where the theory
+    complex correlation after compensation falls to 0.5, ``speckle_displacement`` = strain
+    at which the displacement at mid-depth reaches the half-width of the field's depth
+    autocorrelation (where an unaligned pair has decorrelated to 0.5 there).
+    """
+    src = _source(cfg)
+    r = float(src.attrs["k0_dk"])
+    n = int(cfg["n_pixels"])
+    (ref,), _ = _images(cfg, 0, [_uniform(0.0)])
+    lag = choose_lag(ref)
+    grid = np.geomspace(1e-4, 0.5, 200)
+    gamma = expected_correlation(grid, spectrum=src, density=float(cfg["density"]))
+    below = np.flatnonzero(gamma["complex"].values < 0.5)
+    return {
+        "lag": lag,
+        "wrap_single_lag": 1 / (2 * r * lag),
+        "wrap_lag1": 1 / (2 * r),
+        "decorrelation": float(grid[below[0]]) if below.size else np.nan,
+        "speckle_displacement": _half_width(ref) / (n / 2),
+    }
+
+
+def _half_width(image: np.ndarray) -> float:
+    """Lag (pixels, linear interpolation) where the depth autocorrelation falls to 0.5."""
+    rho = depth_autocorrelation(image, min(32, image.shape[0] // 4))
+    below = np.flatnonzero(rho < 0.5)
+    if not below.size:
+        return np.nan
+    i = below[0]
+    return float(i - 1 + (rho[i - 1] - 0.5) / (rho[i - 1] - rho[i]))
+
+
+def failure_data(cfg: Mapping, seed: int) -> xr.Dataset:
+    """Median error, rms error and answered fraction of every method along one-parameter sweeps.
+
+    Sweeps (others at the base): interframe strain, SNR (null = noise-free), depth window,
+    k0/delta_k, spectrum FWHM (fraction of delta_k) and scatterer density; plus the predicted
+    limits and the predicted noise floor (vector method) at each SNR.
+    """
+    fc = cfg["failure"]
+    methods = list(cfg["methods"])
+    base = {"strain": float(fc["base_strain"]), "snr_db": fc.get("base_snr_db")}
+    sweeps = {
+        "strain": [{"strain": float(s)} for s in fc["strain"]],
+        "snr_db": [{"snr_db": s} for s in fc["snr_db"]],
+        "window": [{"window": _window(cfg, w)} for w in fc["windows"]],
+        "k0_dk": [{"k0_dk": float(v)} for v in fc["k0_dk"]],
+        "fwhm_fraction": [{"fwhm": float(v)} for v in fc["fwhm_fraction"]],
+        "density": [{"density": float(v)} for v in fc["density"]],
+    }
+    coords = {
+        "strain": fc["strain"],
+        "snr_db": [np.inf if s is None else float(s) for s in fc["snr_db"]],
+        "window": fc["windows"],
+        "k0_dk": fc["k0_dk"],
+        "fwhm_fraction": fc["fwhm_fraction"],
+        "density": fc["density"],
+    }
+    data = {}
+    for name, points in sweeps.items():
+        res = np.array([_failure_point(cfg, seed, methods, **{**base, **pt}) for pt in points])
+        dims = (name, "method")
+        data[f"median_error_{name}"] = (dims, res[..., 0], {"units": "1"})
+        data[f"rms_error_{name}"] = (dims, res[..., 1], {"units": "1"})
+        data[f"answered_{name}"] = (dims, res[..., 2], {"units": "1"})
+    # predicted strain noise of the vector method at each SNR (noise-free images, base strain)
+    (ref, dfm), k0 = _images(cfg, seed, [_uniform(0.0), _uniform(base["strain"])])
+    pred = []
+    for s in coords["snr_db"]:
+        if np.isinf(s):
+            pred.append(np.nan)
+            continue
+        std = predicted_strain_std(
+            ref,
+            dfm,
+            noise_power=noise_power(ref, s),
+            k0=k0,
+            pixel_size=float(cfg["pixel_size"]),
+            window=_window(cfg),
+        )
+        pred.append(float(np.sqrt(np.nanmean(std**2))))
+    data["predicted_noise_snr_db"] = (
+        ("snr_db",),
+        np.array(pred),
+        {"units": "1", "long_name": "predicted rms strain noise, vector method"},
+    )
+    limits = predicted_limits(cfg)
+    return xr.Dataset(
+        data,
+        coords={"method": methods, **{k: (k, np.asarray(v, float)) for k, v in coords.items()}},
+        attrs={
+            **{f"limit_{k}": v for k, v in limits.items()},
+            "base_strain": base["strain"],
+            "seed": seed,
+            **provenance_attrs(),
+        },
+    )
+
+
+def failure_figure(ds: xr.Dataset, path: str) -> None:
+    sweeps = ["strain", "snr_db", "window", "k0_dk", "fwhm_fraction", "density"]
+    fig, axes = new_figure(2, len(sweeps), width=2.4 * len(sweeps), height=5.0)
+    for j, name in enumerate(sweeps):
+        x = ds[name].values.astype(float)
+        xplot = (
+            np.where(np.isinf(x), np.nanmax(x[np.isfinite(x)]) + 10, x) if name == "snr_db" else x
+        )
+        scale = x if name == "strain" else ds.attrs["base_strain"]
+        for m in ds.method.values:
+            rel = ds[f"rms_error_{name}"].sel({"method": m}).values / scale
+            axes[0, j].plot(xplot, rel, "o-", ms=3, lw=0.8, label=str(m))
+            axes[1, j].plot(xplot, ds[f"answered_{name}"].sel({"method": m}), "o-", ms=3, lw=0.8)
+        axes[0, j].set_yscale("log")
+        axes[0, j].set_title(f"rms error / strain vs {name}")
+        axes[1, j].set_xlabel(
+            name + (" (inf = noise-free, drawn right)" if name == "snr_db" else "")
+        )
+        if name in ("strain", "density"):
+            axes[0, j].set_xscale("log")
+            axes[1, j].set_xscale("log")
+        if name == "strain":
+            for key, ls in (
+                ("wrap_single_lag", ":"),
+                ("wrap_lag1", "--"),
+                ("decorrelation", "-."),
+                ("speckle_displacement", "-"),
+            ):
+                v = ds.attrs[f"limit_{key}"]
+                if np.isfinite(v):
+                    axes[0, j].axvline(v, color="k", ls=ls, lw=0.7, label=f"predicted {key}")
+        if name == "snr_db":
+            pred = ds["predicted_noise_snr_db"].values / ds.attrs["base_strain"]
+            axes[0, j].plot(xplot, pred, "k--", lw=0.8, label="predicted noise (vector)")
+    axes[0, 0].legend(fontsize=5)
+    axes[0, 1].legend(fontsize=5)
+    axes[1, 0].set_ylabel("fraction of pixels answered")
+    save(fig, path)
+
+
+# --------------------------------------------------------------------------------------------
+# Speed versus accuracy
+# --------------------------------------------------------------------------------------------
+
+
+def speed_data(cfg: Mapping, seed: int) -> xr.Dataset:
+    """rms strain error against time per megapixel, for every method and depth window."""
+    sc = cfg["speed"]
+    s = float(sc["strain"])
+    (ref, dfm), k0 = _images(cfg, seed, [_uniform(0.0), _uniform(s)])
+    methods, windows = list(cfg["methods"]), list(sc["windows"])
+    times = np.full((len(methods), len(windows)), np.nan)
+    errors = np.full_like(times, np.nan)
+    for i, m in enumerate(methods):
+        for j, w in enumerate(windows):
+            best = np.inf
+            for _ in range(int(sc["repeat"])):
+                t0 = time.perf_counter()
+                est = _estimate(ref, dfm, k0, cfg, m, _window(cfg, w))
+                best = min(best, time.perf_counter() - t0)
+            times[i, j] = best / (ref.size / 1e6)
+            errors[i, j] = _scores(est, s)[1] / s
+    return xr.Dataset(
+        {
+            "time_per_megapixel": (("method", "window"), times, {"units": "s"}),
+            "relative_rms_error": (("method", "window"), errors, {"units": "1"}),
+        },
+        coords={"method": methods, "window": windows},
+        attrs={"strain": s, "image_pixels": ref.size, "seed": seed, **provenance_attrs()},
+    )
+
+
+def speed_figure(ds: xr.Dataset, path: str) -> None:
+    fig, axes = new_figure(1, 1, width=4.5, height=3.5)
+    ax = axes[0, 0]
+    for m in ds.method.values:
+        t = ds.time_per_megapixel.sel({"method": m}).values
+        e = ds.relative_rms_error.sel({"method": m}).values
+        ax.plot(t, e, "o-", ms=4, lw=0.8, label=str(m))
+        for w, ti, ei in zip(ds.window.values, t, e, strict=True):
+            ax.annotate(str(int(w)), (ti, ei), fontsize=5)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("time per megapixel (s)")
+    ax.set_ylabel(f"rms error / strain (strain {ds.attrs['strain']:g})")
+    ax.legend()
+    save(fig, path)
+
+
+# --------------------------------------------------------------------------------------------
+# Compression sequence
+# --------------------------------------------------------------------------------------------
+
+
+def sequence_data(cfg: Mapping, seed: int) -> xr.Dataset:
+    """Cumulative strain of a compression sequence against the truth ``1 - (1 - s)^k``."""
+    sq = cfg["sequence"]
+    s, n_frames = float(sq["strain"]), int(sq["n_frames"])
+    totals = [1 - (1 - s) ** k for k in range(n_frames)]
+    frames, k0 = _images(cfg, seed, [_uniform(t) for t in totals], max_strain=max(totals))
+    out = accumulate_strain(
+        np.array(frames),
+        k0=k0,
+        pixel_size=float(cfg["pixel_size"]),
+        method=sq.get("method", "vector"),
+        window=_window(cfg),
+    )
+    truth = np.array(totals[1:])
+    cum = out["cumulative"].values
+    med = np.array([np.nanmedian(c) for c in cum])
+    rms = np.array([np.sqrt(np.nanmean((c - t) ** 2)) for c, t in zip(cum, truth, strict=True)])
+    out["true_cumulative"] = ("frame", truth, STRAIN)
+    out["median_cumulative"] = ("frame", med, STRAIN)
+    out["rms_error_cumulative"] = ("frame", rms, {"units": "1"})
+    out.attrs.update({"interframe_strain": s, "seed": seed, **provenance_attrs()})
+    return out
+
+
+def sequence_figure(ds: xr.Dataset, path: str) -> None:
+    fig, axes = new_figure(1, 2, width=7.0, height=3.0)
+    f = ds.frame.values
+    axes[0, 0].plot(f, ds.true_cumulative, "k-", label="truth 1 - (1 - s)^k")
+    axes[0, 0].plot(f, ds.median_cumulative, "o", label="accumulated (median)")
+    axes[0, 0].set_xlabel("frame")
+    axes[0, 0].set_ylabel("cumulative strain")
+    axes[0, 0].legend()
+    rel = (ds.median_cumulative - ds.true_cumulative) / ds.true_cumulative
+    axes[0, 1].plot(f, rel, "o-", label="median error / truth")
+    axes[0, 1].plot(f, ds.rms_error_cumulative / ds.true_cumulative, "s-", label="rms / truth")
+    axes[0, 1].set_xlabel("frame")
+    axes[0, 1].legend()
+    save(fig, path)
