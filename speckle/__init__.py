@@ -17,12 +17,16 @@ from .scatterers import random_scatterers
 from .source import delta_k, k0_from_wavelength, spectrum
 from .statistics import contrast_theory, fit_exponential, fit_rayleigh, speckle_contrast
 from .synthesis import choose_method
+from .system.datasheet import EXAMPLE_SYSTEMS, System, datasheet, example_system
+from .system.spectrometer import interferogram, process, system_ascan
 from .tracking import track
 
 __version__ = package_version()
 
 __all__ = [
+    "EXAMPLE_SYSTEMS",
     "METHODS",
+    "System",
     "__version__",
     "ascan",
     "bscan",
@@ -31,25 +35,30 @@ __all__ = [
     "contrast_theory",
     "correlation",
     "correlation_map",
+    "datasheet",
     "deformable_scene",
     "deformation",
     "delta_k",
     "detection",
     "displace",
+    "example_system",
     "expected_correlation",
     "expected_intensity",
     "fit_exponential",
     "fit_rayleigh",
+    "interferogram",
     "k0_from_wavelength",
     "measured",
     "open_dataset",
     "pearson",
     "pixel_depths",
+    "process",
     "random_scatterers",
     "speckle_contrast",
     "spectrum",
     "statistics",
     "synthesis",
+    "system_ascan",
     "to_netcdf",
     "track",
     "tracking",

@@ -1,0 +1,1 @@
+"""The imaging system: light source, spectrometer, detection and processing chain."""
