@@ -177,7 +177,8 @@ def axial_intensity_correlation(
     ``P(x) = sum_n u_n exp(2i pi n x/N)`` (x in pixels), ``C(l) = int_0^N P(x) P^*(x + l) dx =
     N sum_n |u_n|^2 exp(-2i pi n l/N)`` (the PSF autocorrelation: Siegert's term) and
     ``D(l) = int_0^N |P(x)|^2 |P(x + l)|^2 dx = N sum_m |c_m|^2 exp(2i pi m l/N)``,
-    ``c_m = sum_n u_{n+m} u_n^*`` (the overlap of single-scatterer intensities). As ``density -> inf`` it tends to Siegert's ``|gamma|^2``.
+    ``c_m = sum_n u_{n+m} u_n^*`` (the overlap of single-scatterer intensities). As
+    ``density -> inf`` it tends to Siegert's ``|gamma|^2``.
 
     Parameters
     ----------
