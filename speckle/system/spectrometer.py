@@ -50,6 +50,7 @@ __all__ = [
     "WINDOWS",
     "axial_intensity_correlation",
     "camera_sampling",
+    "camera_signal",
     "carrier_response",
     "check_dispersion",
     "dispersion_phase",
@@ -535,7 +536,7 @@ def source_weights(system, wavenumber: object) -> np.ndarray:
     return np.exp(-4 * np.log(2) * ((k - system.source_wavenumber) / system.fwhm_k) ** 2)
 
 
-def system_ascan(
+def camera_signal(
     system,
     z: object,
     amplitude: object,
@@ -548,28 +549,18 @@ def system_ascan(
     autocorrelation: bool = False,
     reference_power: float = 1.0,
     dispersion: Mapping | None = None,
-    background: object | str | None = None,
-    resample: str = "cubic",
-    compensate: Mapping | None = None,
-    window: str = "none",
-    window_fwhm_fraction: float = 0.5,
-) -> np.ndarray:
-    """A-scans of a scene through a system's camera and processing chain.
+    on_grid: bool = False,
+) -> tuple[np.ndarray, np.ndarray]:
+    """A system's camera signal for a scene: ``(signal (..., K), pixel wavenumbers (K,))``.
 
-    ``resample="exact"`` evaluates the camera model directly on the processing grid (each
-    virtual pixel with the width and line of a camera pixel at that wavelength): the error-free
-    reference for the linear and cubic resampling. ``compensate`` is the dispersion the
-    processing removes (pass the same mapping as ``dispersion`` for perfect compensation).
-    Other parameters: :func:`camera_sampling`, :func:`interferogram`, :func:`process`.
-
-    Returns
-    -------
-    numpy.ndarray
-        Complex A-scans (..., N), pixel ``q`` at ``q H/N``.
+    Pixels in increasing ``k``. ``on_grid=True`` evaluates the camera model on the processing
+    grid instead (each virtual pixel with the width and line of a camera pixel at that
+    wavelength): the error-free reference for k-linearisation. ``pixel_width`` /
+    ``resolution`` switch the pixel integration and the spectrometer line on or off. Other
+    parameters: :func:`camera_sampling`, :func:`interferogram`.
     """
-    check_choice(resample, "resample", RESAMPLING)
     grid = grid_wavenumbers(system)
-    cam = camera_sampling(system, sampling, at=grid if resample == "exact" else None)
+    cam = camera_sampling(system, sampling, at=grid if on_grid else None)
     sig = interferogram(
         z,
         amplitude,
@@ -584,14 +575,46 @@ def system_ascan(
         autocorrelation=autocorrelation,
         reference_power=reference_power,
     )
-    on_grid = resample in ("none", "exact")
+    return sig, cam["wavenumber"]
+
+
+def system_ascan(
+    system,
+    z: object,
+    amplitude: object,
+    *,
+    background: object | str | None = None,
+    resample: str = "cubic",
+    compensate: Mapping | None = None,
+    window: str = "none",
+    window_fwhm_fraction: float = 0.5,
+    **camera,
+) -> np.ndarray:
+    """A-scans of a scene through a system's camera (:func:`camera_signal`) and processing.
+
+    ``resample="exact"`` evaluates the camera model directly on the processing grid, the
+    error-free reference for ``"linear"`` and ``"cubic"``; ``"none"`` takes the camera pixels
+    as if they were linear in ``k``. ``compensate`` is the dispersion the processing removes
+    (the same mapping as ``dispersion`` for perfect compensation). ``camera``: keyword
+    arguments of :func:`camera_signal` (``sampling``, ``pixel_width``, ``resolution``,
+    ``detection``, ``dc``, ``autocorrelation``, ``reference_power``, ``dispersion``). Other
+    parameters: :func:`process`.
+
+    Returns
+    -------
+    numpy.ndarray
+        Complex A-scans (..., N), pixel ``q`` at ``q H/N``.
+    """
+    check_choice(resample, "resample", RESAMPLING)
+    sig, k = camera_signal(system, z, amplitude, on_grid=resample == "exact", **camera)
+    interpolate = resample in ("linear", "cubic")
     return process(
         sig,
-        grid=grid,
+        grid=grid_wavenumbers(system),
         k0=system.k0,
-        wavenumber=None if on_grid else cam["wavenumber"],
+        wavenumber=k if interpolate else None,
         background=background,
-        resample="none" if on_grid else resample,
+        resample=resample if interpolate else "none",
         dispersion=compensate,
         window=window,
         window_fwhm_fraction=window_fwhm_fraction,
