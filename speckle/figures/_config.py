@@ -14,7 +14,13 @@ import xarray as xr
 from .._validate import check_int, check_real
 from ..source import spectrum
 
-__all__ = ["dask_options", "source_options", "source_spectrum"]
+__all__ = [
+    "dask_options",
+    "resolve_source",
+    "source_options",
+    "source_spectrum",
+    "system_from_config",
+]
 
 
 def source_spectrum(
@@ -61,6 +67,42 @@ def source_options(source: Mapping) -> dict:
         "pixel_size": source["pixel_size"],
         "shape": source.get("shape", "rectangular"),
         "fwhm_fraction": source.get("fwhm_fraction"),
+    }
+
+
+def system_from_config(sheet: Mapping):
+    """:func:`speckle.datasheet` from a config mapping (``camera_range_nm`` as a list; null
+    values are left out)."""
+    from ..system.datasheet import datasheet
+
+    args = {k: v for k, v in sheet.items() if v is not None}
+    if args.get("camera_range_nm") is not None:
+        args["camera_range_nm"] = tuple(args["camera_range_nm"])
+    return datasheet(**args)
+
+
+def resolve_source(source: Mapping) -> dict:
+    """The pipeline's ``source`` section in its model form (``n_pixels``, ``pixel_size``, ...).
+
+    The section either gives the model parameters (``n_pixels``, ``pixel_size``, ``k0_dk``,
+    ``shape``, ``fwhm_fraction``; returned unchanged) or names a system by its datasheet,
+    ``{datasheet: {wavelength_nm, bandwidth_nm, camera_pixels, camera_range_nm |
+    imaging_depth, refractive_index, ...}}`` (:func:`speckle.datasheet`). The model form is
+    then derived: ``N`` = camera pixels, pixel size ``H/N``, ``k0/delta_k``, a Gaussian
+    spectrum with the datasheet FWHM. The figures centre it on the grid's ``k0``; the datasheet
+    source is centred on ``2 pi n/lambda0`` (:attr:`System.source_wavenumber`), a few per cent
+    of ``delta_k`` away, which only matters through the spectrum's asymmetry on the grid.
+    """
+    if "datasheet" not in source:
+        return dict(source)
+    system = system_from_config(source["datasheet"])
+    return {
+        "datasheet": dict(source["datasheet"]),
+        "n_pixels": system.n_pixels,
+        "pixel_size": system.pixel_size,
+        "k0_dk": system.k0_dk,
+        "shape": "gaussian",
+        "fwhm_fraction": system.fwhm_fraction,
     }
 
 

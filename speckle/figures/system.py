@@ -20,7 +20,8 @@ import numpy as np
 import xarray as xr
 
 from ..system import spectrometer as sp
-from ..system.datasheet import System, datasheet
+from ..system.datasheet import System
+from ._config import system_from_config
 from ._style import new_figure
 
 __all__ = [
@@ -35,14 +36,6 @@ __all__ = [
 ]
 
 DB_FLOOR = 1e-12  # amplitude floor before the log (relative)
-
-
-def system_from_config(sheet: Mapping) -> System:
-    """:func:`speckle.datasheet` from a config mapping (``camera_range_nm`` as a list)."""
-    args = dict(sheet)
-    if args.get("camera_range_nm") is not None:
-        args["camera_range_nm"] = tuple(args["camera_range_nm"])
-    return datasheet(**args)
 
 
 def dispersion_from_config(cfg: Mapping | None) -> dict[int, float]:
@@ -159,9 +152,10 @@ def layered_scene(
     """Depths and amplitudes (lines, M) of a layered sample.
 
     Interfaces ``{depth: µm below the surface, amplitude}`` plus random-phase scatterers of
-    amplitude ``scatterer_amplitude`` (``density`` per pixel) between the surface and the deepest interface. The
-    surface of line ``i`` sits at ``surface + i*tilt`` µm from the zero delay (negative: zero
-    delay inside the sample). Line ``i`` draws from ``SeedSequence(seed, spawn_key=(i,))``.
+    amplitude ``scatterer_amplitude`` (``density`` per pixel) between the surface and the
+    deepest interface. The surface of line ``i`` sits at ``surface + i*tilt`` µm from the zero
+    delay (negative: zero delay inside the sample). Line ``i`` draws from
+    ``SeedSequence(seed, spawn_key=(i,))``.
     """
     bottom = max(float(f["depth"]) for f in interfaces)
     m = round(density * bottom / pixel_size)
