@@ -228,8 +228,12 @@ class System:
             ("A-line pitch", "-" if self.aline_pitch is None else f"{self.aline_pitch:g} µm"),
             (
                 "roll-off at z_max",
-                f"{float(self.rolloff_db(self.imaging_depth)):.2f} dB; -6 dB at "
-                f"{self.rolloff_6db_depth:.0f} µm",
+                f"{float(self.rolloff_db(self.imaging_depth)):.2f} dB; -6 dB "
+                + (
+                    f"at {self.rolloff_6db_depth:.0f} µm"
+                    if np.isfinite(self.rolloff_6db_depth)
+                    else "not reached within z_max"
+                ),
             ),
         ]
         return rows
