@@ -366,7 +366,7 @@ def linearize(signal: object, wavenumber: object, grid: object, method: str = "c
         Pixel wavenumbers (strictly monotonic), rad/µm.
     grid : array_like, shape (N,)
         Target wavenumbers, rad/µm; must lie within the range of ``wavenumber`` (no
-        extrapolation).
+        extrapolation beyond rounding, 1e-9 of the range).
     method : {"linear", "cubic"}
         Piecewise-linear or not-a-knot cubic spline (:class:`scipy.interpolate.CubicSpline`).
     """
@@ -383,7 +383,8 @@ def linearize(signal: object, wavenumber: object, grid: object, method: str = "c
         raise ValueError("wavenumber must be strictly monotonic")
     if dk[0] < 0:
         k, y = k[::-1], y[..., ::-1]
-    if g.min() < k[0] or g.max() > k[-1]:
+    slack = 1e-9 * (k[-1] - k[0])  # grid and pixel edges may differ by rounding
+    if g.min() < k[0] - slack or g.max() > k[-1] + slack:
         raise ValueError(
             f"grid [{g.min():.6g}, {g.max():.6g}] rad/µm must lie within the camera's "
             f"[{k[0]:.6g}, {k[-1]:.6g}] rad/µm (no extrapolation)"
