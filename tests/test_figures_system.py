@@ -49,10 +49,18 @@ def test_schema_accepts_either_source_form():
     validate(copy.deepcopy(cfg), SCHEMA)
     cfg["source"] = {"datasheet": {k: v for k, v in SHEET.items() if v is not None}}
     validate(copy.deepcopy(cfg), SCHEMA)
-    mixed = config()
-    mixed["source"]["datasheet"] = SHEET
+    layered = config()  # a --configfile naming a datasheet over the default model keys
+    layered["source"]["datasheet"] = {k: v for k, v in SHEET.items() if v is not None}
+    validate(copy.deepcopy(layered), SCHEMA)
+    assert _config.resolve_source(layered["source"])["n_pixels"] == 256  # the datasheet wins
+    missing = config()
+    del missing["source"]["pixel_size"]
     with pytest.raises(WorkflowError):
-        validate(mixed, SCHEMA)
+        validate(missing, SCHEMA)
+    bad_sheet = config()
+    bad_sheet["source"]["datasheet"] = {"wavelength_nm": 840.0}
+    with pytest.raises(WorkflowError):
+        validate(bad_sheet, SCHEMA)
     bad = config()
     bad["system"]["bscan"]["window"] = "hamming"
     with pytest.raises(WorkflowError):

@@ -84,16 +84,17 @@ def system_from_config(sheet: Mapping):
 def resolve_source(source: Mapping) -> dict:
     """The pipeline's ``source`` section in its model form (``n_pixels``, ``pixel_size``, ...).
 
-    The section either gives the model parameters (``n_pixels``, ``pixel_size``, ``k0_dk``,
-    ``shape``, ``fwhm_fraction``; returned unchanged) or names a system by its datasheet,
-    ``{datasheet: {wavelength_nm, bandwidth_nm, camera_pixels, camera_range_nm |
-    imaging_depth, refractive_index, ...}}`` (:func:`speckle.datasheet`). The model form is
-    then derived: ``N`` = camera pixels, pixel size ``H/N``, ``k0/delta_k``, a Gaussian
-    spectrum with the datasheet FWHM. The figures centre it on the grid's ``k0``; the datasheet
-    source is centred on ``2 pi n/lambda0`` (:attr:`System.source_wavenumber`), a few per cent
-    of ``delta_k`` away, which only matters through the spectrum's asymmetry on the grid.
+    The section gives the model parameters (``n_pixels``, ``pixel_size``, ``k0_dk``,
+    ``shape``, ``fwhm_fraction``; returned unchanged while ``datasheet`` is absent or null), or
+    names a system by its datasheet, ``datasheet: {wavelength_nm, bandwidth_nm, camera_pixels,
+    camera_range_nm | imaging_depth, refractive_index, ...}`` (:func:`speckle.datasheet`). A
+    datasheet defines the source: ``N`` = camera pixels, pixel size ``H/N``, ``k0/delta_k`` and
+    a Gaussian spectrum with the datasheet FWHM replace any model values in the section (so a
+    ``--configfile`` layered over the defaults can switch to a datasheet). The figures centre
+    the Gaussian on the grid's ``k0``; the datasheet source is centred on ``2 pi n/lambda0``
+    (:attr:`System.source_wavenumber`), a few per cent of ``delta_k`` away.
     """
-    if "datasheet" not in source:
+    if source.get("datasheet") is None:
         return dict(source)
     system = system_from_config(source["datasheet"])
     return {
