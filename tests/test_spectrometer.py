@@ -301,8 +301,10 @@ def test_bad_inputs():
         sp.process(np.ones(16), grid=k, k0=k0, resample="cubic")
     with pytest.raises(ValueError, match="background must have shape"):
         sp.process(np.ones((2, 16)), grid=k, k0=k0, background=np.ones(8))
-    with pytest.raises(ValueError, match="several A-lines"):
+    with pytest.raises(ValueError, match="at least 2 A-lines"):
         sp.process(np.ones(16), grid=k, k0=k0, background="mean")
+    with pytest.raises(ValueError, match="at least 2 A-lines"):
+        sp.process(np.ones((1, 16)), grid=k, k0=k0, background="mean")
     with pytest.raises(TypeError, match="dispersion must be a mapping"):
         sp.dispersion_phase(k, k0, [0.0, 0.0, 1.0])
     with pytest.raises(ValueError, match="sampling must be one of"):

@@ -460,9 +460,13 @@ def process(
     if background is not None:
         if isinstance(background, str):
             check_choice(background, "background", ("mean",))
-            if y.ndim < 2:
-                raise ValueError("background='mean' needs several A-lines (signal of ndim >= 2)")
-            bg = y.reshape(-1, y.shape[-1]).mean(axis=0)
+            lines = y.reshape(-1, y.shape[-1])
+            if y.ndim < 2 or lines.shape[0] < 2:
+                raise ValueError(
+                    "background='mean' needs at least 2 A-lines (leading dims of signal); "
+                    f"got signal of shape {y.shape}"
+                )
+            bg = lines.mean(axis=0)
         else:
             bg = as_finite_array(background, "background", dtype=y.dtype)
             if bg.shape != y.shape[-1:]:
