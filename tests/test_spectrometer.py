@@ -309,3 +309,31 @@ def test_bad_inputs():
         sp.dispersion_phase(k, k0, [0.0, 0.0, 1.0])
     with pytest.raises(ValueError, match="sampling must be one of"):
         sp.camera_sampling(speckle.example_system("840nm"), "time")
+
+
+@pytest.mark.parametrize("tol", [1e-4, 1e-8, 1e-12])
+def test_finufft_camera_within_tol(tol):
+    """Type-3 FINUFFT camera (uniform pixel response) vs the direct sum: error <= tol."""
+    rng = np.random.default_rng(int(-np.log10(tol)))
+    for _ in range(4):
+        n, h = int(rng.integers(8, 300)), float(rng.uniform(50, 3000))
+        w = rng.uniform(0, 1, n)
+        src = speckle.spectrum(n, h, k0_dk=float(rng.uniform(0, 20)), shape="array", weights=w)
+        k = src.wavenumber.values
+        z = rng.uniform(-h, 3 * h, (3, int(rng.integers(1, 400))))
+        a = rng.normal(size=z.shape) + 1j * rng.normal(size=z.shape)
+        resp = dict(pixel_width=float(rng.uniform(0, np.pi / h)),
+                    resolution=float(rng.uniform(0, np.pi / h)))  # fmt: skip
+        direct = sp.interferogram(z, a, k, src.values, **resp)
+        fast = sp.interferogram(z, a, k, src.values, method="finufft", tol=tol, **resp)
+        assert np.linalg.norm(fast - direct) <= tol * np.linalg.norm(direct)
+
+
+def test_finufft_camera_needs_uniform_response():
+    s = speckle.example_system("840nm", camera_pixels=64)
+    with pytest.raises(ValueError, match="uniform pixel response"):
+        sp.camera_signal(s, np.zeros((1, 1)), np.ones((1, 1)), method="finufft")
+    sig, _ = sp.camera_signal(s, np.full((1, 1), 100.0), np.ones((1, 1)), method="finufft",
+                              sampling="wavenumber", tol=1e-10)  # fmt: skip
+    ref, _ = sp.camera_signal(s, np.full((1, 1), 100.0), np.ones((1, 1)), sampling="wavenumber")
+    assert np.linalg.norm(sig - ref) <= 1e-10 * np.linalg.norm(ref)
