@@ -351,15 +351,17 @@ def interferogram(
 def _carrier_sum(z, a, k, w, r):
     """``sum_j a_j exp(2i k_i z_j) g_i(z_j)`` for lines (B, M) -> (B, K), chunked."""
     b, m = z.shape
-    out = np.empty((b, k.size), dtype=np.complex128)
+    out = np.zeros((b, k.size), dtype=np.complex128)
     ideal = not (np.any(w) or np.any(r))
-    step = max(1, CHUNK_ELEMENTS // max(1, m * k.size))
+    mstep = max(1, min(m, CHUNK_ELEMENTS // k.size))  # scatterers per chunk
+    step = max(1, CHUNK_ELEMENTS // (mstep * k.size))  # lines per chunk
     for b0 in range(0, b, step):
-        zc = z[b0 : b0 + step, :, None]
-        terms = a[b0 : b0 + step, :, None] * np.exp(2j * k * zc)
-        if not ideal:
-            terms = terms * carrier_response(zc, w, r)
-        out[b0 : b0 + step] = terms.sum(axis=1)
+        for m0 in range(0, m, mstep):
+            zc = z[b0 : b0 + step, m0 : m0 + mstep, None]
+            terms = a[b0 : b0 + step, m0 : m0 + mstep, None] * np.exp(2j * k * zc)
+            if not ideal:
+                terms = terms * carrier_response(zc, w, r)
+            out[b0 : b0 + step] += terms.sum(axis=1)
     return out
 
 
