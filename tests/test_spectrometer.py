@@ -329,14 +329,34 @@ def test_finufft_camera_within_tol(tol):
         assert np.linalg.norm(fast - direct) <= tol * np.linalg.norm(direct)
 
 
-def test_finufft_camera_needs_uniform_response():
-    s = speckle.example_system("840nm", camera_pixels=64)
-    with pytest.raises(ValueError, match="uniform pixel response"):
-        sp.camera_signal(s, np.zeros((1, 1)), np.ones((1, 1)), method="finufft")
-    sig, _ = sp.camera_signal(s, np.full((1, 1), 100.0), np.ones((1, 1)), method="finufft",
-                              sampling="wavenumber", tol=1e-10)  # fmt: skip
-    ref, _ = sp.camera_signal(s, np.full((1, 1), 100.0), np.ones((1, 1)), sampling="wavenumber")
-    assert np.linalg.norm(sig - ref) <= 1e-10 * np.linalg.norm(ref)
+@pytest.mark.parametrize("tol", [1e-4, 1e-8, 1e-10])
+def test_finufft_wavelength_camera_within_tol(tol):
+    """Wavelength-linear camera (pixel width and line vary with k): the Chebyshev expansion of
+    the response plus batched FINUFFT type 3 stays within tol of the direct sum."""
+    s = speckle.example_system("840nm", camera_pixels=512)
+    cam = sp.camera_sampling(s, "wavelength")
+    weights = sp.source_weights(s, cam["wavenumber"])
+    rng = np.random.default_rng(int(-np.log10(tol)))
+    z = rng.uniform(-s.depth, 3 * s.depth, (3, 300))
+    a = rng.normal(size=z.shape) + 1j * rng.normal(size=z.shape)
+    kw = dict(pixel_width=cam["pixel_width"], resolution=cam["resolution"], k0=s.k0,
+              dispersion={2: 20.0})  # fmt: skip
+    direct = sp.interferogram(z, a, cam["wavenumber"], weights, **kw)
+    fast = sp.interferogram(z, a, cam["wavenumber"], weights, method="finufft", tol=tol, **kw)
+    assert np.linalg.norm(fast - direct) <= tol * np.linalg.norm(direct)
+    img = speckle.system_ascan(s, z, a, method="finufft", tol=tol)
+    ref = speckle.system_ascan(s, z, a)
+    assert np.linalg.norm(img - ref) <= tol * np.linalg.norm(ref)
+
+
+def test_finufft_camera_refuses_rough_response():
+    k = np.linspace(9.0, 10.0, 64)
+    rough = np.random.default_rng(0).uniform(0.001, 0.002, 64)
+    with pytest.raises(ValueError, match="not a smooth function of k"):
+        sp.interferogram(np.ones((1, 3)), np.ones((1, 3)), k, np.ones(64), pixel_width=rough,
+                         method="finufft", tol=1e-8)  # fmt: skip
+    with pytest.raises(ValueError, match="method must be one of"):
+        sp.interferogram(np.ones((1, 3)), np.ones((1, 3)), k, np.ones(64), method="nufft")
 
 
 def test_chunking_does_not_change_the_signal(monkeypatch):

@@ -292,10 +292,11 @@ def interferogram(
         Reference-arm power ``P_r`` (> 0) relative to unit scatterer amplitude.
     method : {"direct", "finufft"}
         ``"direct"``: exact float64 sum over scatterers and pixels (``O(M K)`` per line).
-        ``"finufft"``: one FINUFFT type-3 transform per line (sources ``2 z_j``, targets
-        ``k_i``), for a uniform pixel response only (``pixel_width`` and ``resolution`` the same
-        for all pixels, e.g. a k-linear camera or delta pixels); the response ``g(z_j)`` then
-        moves onto the scatterers. The autocorrelation pair sum of finite pixels stays direct.
+        ``"finufft"``: FINUFFT type-3 transforms per line (sources ``2 z_j``, targets ``k_i``).
+        A uniform pixel response (e.g. a k-linear camera, or delta pixels) moves onto the
+        scatterers (one transform); one varying smoothly with ``k`` (a wavelength-linear
+        camera) is expanded in Chebyshev polynomials of ``k`` (one batched transform of a few
+        tens of terms). The autocorrelation pair sum of finite pixels stays direct.
     tol : float, optional
         Requested relative accuracy in (0, 1) of the cross term for ``"finufft"`` (FINUFFT runs
         at ``tol/20``); default 1e-12.
@@ -320,11 +321,7 @@ def interferogram(
     check_choice(method, "method", ("direct", "finufft"))
     eps = 1e-12 if tol is None else check_real(tol, "tol", low=0, high=1, low_inclusive=False,
                                                 high_inclusive=False)  # fmt: skip
-    if method == "finufft" and (np.ptp(w) > 0 or np.ptp(r) > 0):
-        raise ValueError(
-            "method='finufft' needs a uniform pixel response (one pixel_width and one "
-            "resolution for all pixels, e.g. a k-linear camera); use method='direct'"
-        )
+
     phase = np.exp(1j * dispersion_phase(k, k0, dispersion))
     zz = as_finite_array(z, "z")
     aa = as_finite_array(amplitude, "amplitude", dtype=np.complex128)
@@ -334,9 +331,12 @@ def interferogram(
         )
     batch = zz.shape[:-1]
     z2, a2 = zz.reshape(-1, zz.shape[-1]), aa.reshape(-1, zz.shape[-1])
-    carrier = _carrier_nufft(z2, a2, k, w[0], r[0], eps) if method == "finufft" else None
-    if carrier is None:
+    if method == "direct":
         carrier = _carrier_sum(z2, a2, k, w, r)
+    elif np.ptp(w) == 0 and np.ptp(r) == 0:
+        carrier = _carrier_nufft(z2, a2, k, w[0], r[0], eps)
+    else:
+        carrier = _carrier_chebyshev(z2, a2, k, w, r, eps)
     cross = np.sqrt(pr) * s * phase * carrier
     out = cross if detection == "complex" else 2 * cross.real
     if dc:
@@ -378,6 +378,69 @@ def _carrier_nufft(z, a, k, w, r, tol):
     for b in range(z.shape[0]):
         plan.setpts(x[b], s=kk)
         out[b] = plan.execute(c[b])
+    return out
+
+
+def _chebyshev_fit(values: np.ndarray, u: np.ndarray, zmax: float, tol: float, name: str):
+    """Chebyshev series (in ``u``) of per-pixel ``values`` (rad/µm) close enough for ``tol``.
+
+    ``|dg/dw|`` and ``|dg/dr|`` are at most ``|z|``, so a fit residual ``e`` changes the
+    response by at most ``zmax e``; the degree grows until that is below ``tol/10``.
+    """
+    from numpy.polynomial import chebyshev as C
+
+    best = np.inf
+    for deg in (2, 4, 8, 16, 32):
+        coef = C.chebfit(u, values, min(deg, u.size - 1))
+        best = min(best, np.max(np.abs(C.chebval(u, coef) - values)) * zmax)
+        if best <= tol / 10:
+            return coef
+    raise ValueError(
+        f"method='finufft': {name} is not a smooth function of k to the accuracy tol={tol:g} "
+        f"asks (reachable: tol >= {10 * best:.1e}); use a larger tol or method='direct'"
+    )
+
+
+def _carrier_chebyshev(z, a, k, w, r, tol):
+    """:func:`_carrier_sum` for a pixel response varying smoothly with ``k`` by FINUFFT.
+
+    With ``u`` the pixel wavenumber mapped to [-1, 1], ``g(z, u) = sum_p c_p(z) T_p(u)``
+    (Chebyshev interpolation in ``u`` for each scatterer, the degree doubled until the series
+    tail is below ``tol/10`` of ``max |g|``), so the sum is ``sum_p T_p(u_i) F_p(k_i)`` with
+    ``F_p`` one FINUFFT type-3 transform of the strengths ``a_j c_p(z_j)`` (all ``p`` in one
+    batched plan).
+    """
+    import finufft
+    from numpy.polynomial import chebyshev as C
+
+    lo, hi = k.min(), k.max()
+    u = (2 * k - (lo + hi)) / (hi - lo)
+    zmax = float(np.abs(z).max())
+    cw = _chebyshev_fit(w, u, zmax, tol, "pixel_width")
+    cr = _chebyshev_fit(r, u, zmax, tol, "resolution")
+    for n_nodes in (16, 32, 64, 128, 256):
+        nodes = np.cos(np.pi * (np.arange(n_nodes) + 0.5) / n_nodes)  # Chebyshev points
+        g = carrier_response(z[..., None], C.chebval(nodes, cw), C.chebval(nodes, cr))
+        # coefficients by the discrete cosine transform at the Chebyshev points
+        cos = np.cos(np.pi * np.outer(np.arange(n_nodes), np.arange(n_nodes) + 0.5) / n_nodes)
+        coef = (2.0 / n_nodes) * (g @ cos.T)
+        coef[..., 0] /= 2
+        tail = np.abs(coef[..., -2:]).max()
+        if tail <= tol / 10 * max(np.abs(g).max(), np.finfo(float).tiny):
+            break
+    else:
+        raise ValueError("method='finufft': the pixel response is not resolved by 256 "
+                         "Chebyshev terms; use method='direct'")  # fmt: skip
+    keep = n_nodes - 2  # the last two terms are below the tolerance
+    basis = C.chebvander(u, keep - 1).T  # (P, K)
+    out = np.empty((z.shape[0], k.size), dtype=np.complex128)
+    kk = np.ascontiguousarray(k, dtype=np.float64)
+    plan = finufft.Plan(3, 1, n_trans=keep, eps=tol / 20 / np.sqrt(keep), isign=1,
+                        dtype="complex128", nthreads=1)  # fmt: skip
+    for b in range(z.shape[0]):
+        plan.setpts(np.ascontiguousarray(2 * z[b], dtype=np.float64), s=kk)
+        strengths = np.ascontiguousarray((a[b][:, None] * coef[b, :, :keep]).T)  # (P, M)
+        out[b] = np.einsum("pk,pk->k", plan.execute(strengths), basis)
     return out
 
 
@@ -566,7 +629,8 @@ def camera_sampling(system, sampling: str = "wavelength", at: object | None = No
     half = system.fill_factor * system.sampling_interval / 2
     return {
         "wavenumber": 2 * np.pi * n / lam,
-        "pixel_width": 2 * np.pi * n * (1 / (lam - half) - 1 / (lam + half)),
+        # 2 pi n (1/(lam - half) - 1/(lam + half)) without the cancellation
+        "pixel_width": 2 * np.pi * n * 2 * half / ((lam - half) * (lam + half)),
         "resolution": 2 * np.pi * n * system.spectral_resolution / lam**2,
     }
 
