@@ -91,6 +91,12 @@ def main(argv=None):
                                  detection="real", dc=True, dispersion={2: 20.0}),
         t_direct,
     )  # fmt: skip
+    add("camera: wavelength-linear, pixel width + line, real, FINUFFT + Chebyshev (tol 1e-8)",
+        lambda: sp.interferogram(z, a, cam["wavenumber"], s_cam, k0=system.k0,
+                                 pixel_width=cam["pixel_width"], resolution=cam["resolution"],
+                                 detection="real", dc=True, dispersion={2: 20.0},
+                                 method="finufft", tol=1e-8),
+        t_direct)  # fmt: skip
     t_fft, _ = add("processing: FFT only", lambda: sp.to_pixels(sig.astype(complex)), t_direct)
     full = dict(grid=grid, k0=system.k0, wavenumber=cam["wavenumber"],
                 background=s_cam, dispersion={2: 20.0}, window="hann")  # fmt: skip
