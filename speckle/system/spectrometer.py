@@ -296,7 +296,8 @@ def interferogram(
         A uniform pixel response (e.g. a k-linear camera, or delta pixels) moves onto the
         scatterers (one transform); one varying smoothly with ``k`` (a wavelength-linear
         camera) is expanded in Chebyshev polynomials of ``k`` (one batched transform of a few
-        tens of terms). The autocorrelation pair sum of finite pixels stays direct.
+        tens of terms). The autocorrelation of finite pixels, a sum over scatterer pairs,
+        uses the pairs' path differences as sources.
     tol : float, optional
         Requested relative accuracy in (0, 1) of the cross term for ``"finufft"`` (FINUFFT runs
         at ``tol/20``); default 1e-12.
@@ -331,21 +332,25 @@ def interferogram(
         )
     batch = zz.shape[:-1]
     z2, a2 = zz.reshape(-1, zz.shape[-1]), aa.reshape(-1, zz.shape[-1])
-    if method == "direct":
-        carrier = _carrier_sum(z2, a2, k, w, r)
-    elif np.ptp(w) == 0 and np.ptp(r) == 0:
-        carrier = _carrier_nufft(z2, a2, k, w[0], r[0], eps)
-    else:
-        carrier = _carrier_chebyshev(z2, a2, k, w, r, eps)
+    carrier = _carrier(z2, a2, k, w, r, method, eps)
     cross = np.sqrt(pr) * s * phase * carrier
     out = cross if detection == "complex" else 2 * cross.real
     if dc:
         out = out + pr * s
     if autocorrelation:
         ideal = not (np.any(w) or np.any(r))
-        auto = np.abs(carrier) ** 2 if ideal else _autocorrelation(z2, a2, k, w, r)
+        auto = np.abs(carrier) ** 2 if ideal else _autocorrelation(z2, a2, k, w, r, method, eps)
         out = out + s * auto
     return out.reshape(*batch, k.size)
+
+
+def _carrier(z, a, k, w, r, method, tol):
+    """``sum_j a_j exp(2i k_i z_j) g_i(z_j)`` for lines (B, M) -> (B, K) by ``method``."""
+    if method == "direct":
+        return _carrier_sum(z, a, k, w, r)
+    if np.ptp(w) == 0 and np.ptp(r) == 0:
+        return _carrier_nufft(z, a, k, w[0], r[0], tol)
+    return _carrier_chebyshev(z, a, k, w, r, tol)
 
 
 def _carrier_sum(z, a, k, w, r):
@@ -444,16 +449,17 @@ def _carrier_chebyshev(z, a, k, w, r, tol):
     return out
 
 
-def _autocorrelation(z, a, k, w, r):
+def _autocorrelation(z, a, k, w, r, method="direct", tol=1e-12):
     """``sum_jl a_j a_l^* exp(2i k (z_j - z_l)) g(z_j - z_l)`` per line (real, (B, K)); the
-    pair sum of finite pixels (delta pixels use ``|sum_j a_j exp(2i k z_j)|^2`` instead)."""
+    pair sum of finite pixels (delta pixels use ``|sum_j a_j exp(2i k z_j)|^2`` instead), the
+    pairs ``j < l`` being the sources of :func:`_carrier` (``method``)."""
     b, m = z.shape
     j, l_ = np.triu_indices(m, k=1)
     out = np.empty((b, k.size))
     for i in range(b):
         self_terms = np.sum(np.abs(a[i]) ** 2)
         d, prod = (z[i, j] - z[i, l_])[None], (a[i, j] * np.conj(a[i, l_]))[None]
-        pair = _carrier_sum(d, prod, k, w, r)
+        pair = _carrier(d, prod, k, w, r, method, tol)
         out[i] = self_terms + 2 * pair[0].real
     return out
 
