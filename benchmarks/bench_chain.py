@@ -112,6 +112,10 @@ def main(argv=None):
     add("camera, 64 scatterers/line, with autocorrelation (pair sum)",
         lambda: sp.interferogram(*few, cam["wavenumber"], s_cam, pixel_width=cam["pixel_width"],
                                  detection="real", autocorrelation=True), t_direct)  # fmt: skip
+    add("camera, 64 scatterers/line, with autocorrelation, FINUFFT (tol 1e-8)",
+        lambda: sp.interferogram(*few, cam["wavenumber"], s_cam, pixel_width=cam["pixel_width"],
+                                 detection="real", autocorrelation=True, method="finufft",
+                                 tol=1e-8), t_direct)  # fmt: skip
 
     print(f"scene: {n_pixels} px x {n_lines} lines x {density:g} scatterers/px "
           f"(M = {m}/line), best of {args.repeat}")  # fmt: skip
