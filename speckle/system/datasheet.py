@@ -41,6 +41,8 @@ import xarray as xr
 from speckle import spectrum as _spectrum
 from speckle._validate import check_choice, check_int, check_real
 
+from .rolloff import rolloff
+
 __all__ = ["EXAMPLE_SYSTEMS", "System", "datasheet", "example_system"]
 
 FWHM_TO_WAIST = 1.0 / np.sqrt(2.0 * np.log(2.0))
@@ -164,8 +166,6 @@ class System:
         depth : array_like
             Depths ``z`` in µm (medium) from the zero delay.
         """
-        from .spectrometer import rolloff
-
         return rolloff(depth, self.pixel_width_k, self.resolution_k)
 
     def rolloff_db(self, depth: object) -> np.ndarray:
