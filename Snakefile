@@ -34,6 +34,7 @@ include: "workflow/rules/deformation.smk"
 include: "workflow/rules/scan.smk"
 include: "workflow/rules/speed.smk"
 include: "workflow/rules/elastography.smk"
+include: "workflow/rules/system.smk"
 
 
 rule all:
@@ -44,4 +45,5 @@ rule all:
         + DEFORMATION_TARGETS
         + SCAN_TARGETS
         + SPEED_TARGETS
-        + ELASTOGRAPHY_TARGETS,
+        + ELASTOGRAPHY_TARGETS
+        + SYSTEM_TARGETS,

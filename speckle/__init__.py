@@ -31,12 +31,16 @@ from .scene.mechanics import (
 )
 from .scene.scatterers import random_scatterers
 from .system import detection
+from .system.datasheet import EXAMPLE_SYSTEMS, System, datasheet, example_system
 from .system.source import delta_k, k0_from_wavelength, spectrum
+from .system.spectrometer import interferogram, process, system_ascan
 
 __version__ = package_version()
 
 __all__ = [
+    "EXAMPLE_SYSTEMS",
     "METHODS",
+    "System",
     "__version__",
     "accumulate_strain",
     "add_complex_noise",
@@ -49,6 +53,7 @@ __all__ = [
     "contrast_theory",
     "correlation",
     "correlation_map",
+    "datasheet",
     "deformable_scene",
     "deformation",
     "delta_k",
@@ -57,12 +62,14 @@ __all__ = [
     "displacement_at",
     "estimate_displacement",
     "estimate_strain",
+    "example_system",
     "expected_correlation",
     "expected_intensity",
     "fit_exponential",
     "fit_rayleigh",
     "inclusion_labels",
     "inclusion_strain",
+    "interferogram",
     "k0_from_wavelength",
     "layer_strains",
     "layered_labels",
@@ -70,11 +77,13 @@ __all__ = [
     "open_dataset",
     "pearson",
     "pixel_depths",
+    "process",
     "random_scatterers",
     "speckle_contrast",
     "spectrum",
     "statistics",
     "synthesis",
+    "system_ascan",
     "to_netcdf",
     "track",
     "tracking",

@@ -22,7 +22,7 @@ RANK = {"scene": 1, "system": 1, "imaging": 2, "analysis": 3, "figures": 4}
 ALLOWED = {
     None: {"numpy", "xarray", "dask", "netCDF4", "yaml"},  # infrastructure: arrays, I/O, sweeps
     "scene": {"numpy", "xarray", "dask", "scipy", "skfem"},  # geometry, FEM mechanics
-    "system": {"numpy", "xarray", "scipy"},  # spectra, noise, detection
+    "system": {"numpy", "xarray", "scipy", "finufft"},  # spectra, noise, fast camera model
     "imaging": {"numpy", "xarray", "dask", "scipy", "numba", "finufft"},  # fast synthesis
     # statistics, registration (skimage), reading PNG measured images (matplotlib.image)
     "analysis": {"numpy", "xarray", "scipy", "skimage", "matplotlib"},

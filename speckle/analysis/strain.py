@@ -5,8 +5,8 @@ Conventions
 Images are complex fields over ``(depth, aline)`` (axis 0 = depth). A scatterer at depth ``z``
 contributes ``exp(2i k0 z)`` (``k0`` = central wavenumber in the medium, rad/µm), so a
 displacement ``u`` (µm, positive = deeper, as in :mod:`speckle.scene.deformation`) turns the
-phase of the interframe product ``A2 A1*`` by ``dphi = 2 k0 u``. Under compression ``s`` by a probe at
-``z = 0`` a scatterer moves to ``z (1 - s)``: ``u = -s z``, ``dphi = -2 k0 s z`` and
+phase of the interframe product ``A2 A1*`` by ``dphi = 2 k0 u``. Under compression ``s`` by a
+probe at ``z = 0`` a scatterer moves to ``z (1 - s)``: ``u = -s z``, ``dphi = -2 k0 s z`` and
 
     s = -du/dz = -(1 / (2 k0)) d(dphi)/dz        (positive for compression).
 

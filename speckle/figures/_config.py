@@ -13,7 +13,13 @@ import xarray as xr
 from .._validate import check_int, check_real
 from ..system.source import spectrum
 
-__all__ = ["dask_options", "source_options", "source_spectrum"]
+__all__ = [
+    "dask_options",
+    "resolve_source",
+    "source_options",
+    "source_spectrum",
+    "system_from_config",
+]
 
 
 def source_spectrum(
@@ -54,6 +60,43 @@ def source_options(source: Mapping) -> dict:
         "pixel_size": source["pixel_size"],
         "shape": source.get("shape", "rectangular"),
         "fwhm_fraction": source.get("fwhm_fraction"),
+    }
+
+
+def system_from_config(sheet: Mapping):
+    """:func:`speckle.datasheet` from a config mapping (``camera_range_nm`` as a list; null
+    values are left out)."""
+    from ..system.datasheet import datasheet
+
+    args = {k: v for k, v in sheet.items() if v is not None}
+    if args.get("camera_range_nm") is not None:
+        args["camera_range_nm"] = tuple(args["camera_range_nm"])
+    return datasheet(**args)
+
+
+def resolve_source(source: Mapping) -> dict:
+    """The pipeline's ``source`` section in its model form (``n_pixels``, ``pixel_size``, ...).
+
+    The section gives the model parameters (``n_pixels``, ``pixel_size``, ``k0_dk``,
+    ``shape``, ``fwhm_fraction``; returned unchanged while ``datasheet`` is absent or null), or
+    names a system by its datasheet, ``datasheet: {wavelength_nm, bandwidth_nm, camera_pixels,
+    camera_range_nm | imaging_depth, refractive_index, ...}`` (:func:`speckle.datasheet`). A
+    datasheet defines the source: ``N`` = camera pixels, pixel size ``H/N``, ``k0/delta_k`` and
+    a Gaussian spectrum with the datasheet FWHM replace any model values in the section (so a
+    ``--configfile`` layered over the defaults can switch to a datasheet). The figures centre
+    the Gaussian on the grid's ``k0``; the datasheet source is centred on ``2 pi n/lambda0``
+    (:attr:`System.source_wavenumber`), a few per cent of ``delta_k`` away.
+    """
+    if source.get("datasheet") is None:
+        return dict(source)
+    system = system_from_config(source["datasheet"])
+    return {
+        "datasheet": dict(source["datasheet"]),
+        "n_pixels": system.n_pixels,
+        "pixel_size": system.pixel_size,
+        "k0_dk": system.k0_dk,
+        "shape": "gaussian",
+        "fwhm_fraction": system.fwhm_fraction,
     }
 
 

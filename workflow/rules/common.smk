@@ -1,9 +1,12 @@
 # Helpers shared by all rule files.
 import os
 
+from speckle.figures._config import resolve_source
 from speckle.provenance import config_hash, module_sources
 
 RESULTS = config.get("results", "results")
+# A source named by its datasheet gets its model parameters (n_pixels, pixel_size, k0_dk, ...).
+config["source"] = resolve_source(config["source"])
 
 
 def package_code(*modules):
