@@ -43,7 +43,6 @@ from __future__ import annotations
 import cmath
 import contextlib
 import math
-import os
 from typing import NamedTuple
 
 import finufft
@@ -443,7 +442,7 @@ def _slp_vectorize():
 
 
 def _n_threads() -> int:
-    return max(1, min(numba.get_num_threads(), len(os.sched_getaffinity(0))))
+    return numba.get_num_threads()
 
 
 def beam_nufft_scan(
