@@ -24,6 +24,7 @@ upsampling factors 2 and 1.25; the fastest of these is the baseline of the ratio
 from __future__ import annotations
 
 import argparse
+import functools
 import platform
 import subprocess
 import time
@@ -111,9 +112,8 @@ def main():
     ways = {}
     for threads in (1, 2):
         for up in (2.0, 1.25):
-            ways[f"FINUFFT 2-D, {threads} thr, upsamp {up}"] = lambda threads=threads, up=up: (
-                finufft_beam_scan(sc, beam, grid, tol=tol, eps=tol, nthreads=threads,
-                                  upsampfac=up)  # fmt: skip
+            ways[f"FINUFFT 2-D, {threads} thr, upsamp {up}"] = functools.partial(
+                finufft_beam_scan, sc, beam, grid, tol=tol, eps=tol, nthreads=threads, upsampfac=up
             )
     print(
         f"\n  {'method':<34s} {'wall':>11s} {'ratio':>7s} {'CPU':>11s} {'ratio':>7s} "
