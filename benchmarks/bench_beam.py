@@ -81,8 +81,14 @@ def main():
     p.add_argument("--repeat", type=int, default=3)
     p.add_argument("--tol", type=float, default=1e-6)
     p.add_argument("--ref-lines", type=int, default=6)
+    p.add_argument(
+        "--tile", type=int, default=0, help="also time one 3-D tile of T x T lines (C-scan)"
+    )
     args = p.parse_args()
     tol = args.tol
+    if args.tile:
+        tile_3d(args.tile, tol, args.repeat)
+        return
     n_pix, n_lines, rho, pitch = (128, 128, 4, 4.0) if args.quick else (512, 512, 4, 4.0)
     w0 = 2 * pitch
     z, x, a, depth, k0 = scene(n_pix, n_lines, rho, pitch)
@@ -140,6 +146,44 @@ def main():
             row(label, t, c, rel_err(out[ref_idx], ref), n_scat, base, base_cpu, extra)
     numba.set_num_threads(threads)
     print("  * fastest FINUFFT call (wall): the baseline of both ratio columns")
+
+
+def tile_3d(n_tile, tol, repeat, n_pix=512, pitch=4.0):
+    """One tile of a 3-D volume: T x T lines over a scene of 1 scatterer per voxel (pixel x
+    pitch x pitch) covering the tile plus the beam reach on every side, as a streamed volume
+    computes it tile by tile."""
+    w0 = 2 * pitch
+    depth = 8.0 * n_pix
+    k0 = 10.0 * n_pix * np.pi / depth
+    halo = 3 * w0  # beyond the reach of the weight cut at tol = 1e-6 (2.7 w0)
+    span = n_tile * pitch + 2 * halo
+    m = round(n_pix * (span / pitch) ** 2)
+    rng = np.random.default_rng(3)
+    x = rng.uniform(-halo, n_tile * pitch + halo, m)
+    y = rng.uniform(-halo, n_tile * pitch + halo, m)
+    z = rng.uniform(0.0, depth, m)
+    a = (rng.normal(size=m) + 1j * rng.normal(size=m)) / np.sqrt(2)
+    gx, gy = np.meshgrid(np.arange(n_tile) * pitch, np.arange(n_tile) * pitch)
+    lines = np.stack([gx.ravel(), gy.ravel()], 1)
+    kw = dict(y=y, lines=lines, waist=w0, n_pixels=n_pix, depth=depth, k0=k0)
+    sl = slice(0, 64)
+    speckle.beam_scan(z[sl], x[sl], a[sl], **{**kw, "y": y[sl]}, method="nufft32", tol=1e-3)
+    ref_lines = lines[[0, n_tile * n_tile // 2 + n_tile // 2]]
+    ref = speckle.beam_scan(z, x, a, **{**kw, "lines": ref_lines})
+    print(
+        f"3-D tile: {n_tile} x {n_tile} lines x {n_pix} px, {m} scatterers (1 per voxel, tile "
+        f"+ {halo} µm halo), pitch {pitch} µm, w0 = {w0} µm, tol = {tol:g}"
+    )
+    for name in ("nufft", "nufft32"):
+        t, c, out = best_time(
+            lambda name=name: speckle.beam_scan(z, x, a, method=name, tol=tol, **kw), repeat
+        )
+        pick = [0, n_tile * n_tile // 2 + n_tile // 2]
+        err = rel_err(out[pick], ref)
+        print(
+            f"  {name:<8s} wall {t:6.2f} s, CPU {c:6.2f} s, rel. error {err:.1e} (2 lines), "
+            f"{m / t / 1e6:.2f} M scatterers/s"
+        )
 
 
 def _cpu_model():
