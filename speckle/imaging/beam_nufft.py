@@ -82,6 +82,8 @@ SERIAL_BELOW = 200_000
 _DEPTH_BINS = 32
 #: Vector length of the spreading loops (kernel values padded with zeros to a multiple).
 _LANES = 8
+#: Scatterers per chunk of the vectorised Horner evaluation of the depth kernel.
+_HORNER_CHUNK = 256
 #: Gaussian weights are re-anchored by a direct exponential every this many lines.
 _ANCHOR = 16
 
@@ -338,15 +340,18 @@ def _spread_beam(
             x0 = u[t] - half
             xk[t] = 2.0 * (math.ceil(x0) - x0) - 1.0
         ker = np.empty((w, m), dtype=coef.dtype)
-        for i in range(w):
-            kr = ker[i]
-            c = coef[deg1 - 1, i]
-            for t in range(m):
-                kr[t] = c
-            for k in range(deg1 - 2, -1, -1):
-                c = coef[k, i]
-                for t in range(m):
-                    kr[t] = kr[t] * xk[t] + c
+        for t0 in range(0, m, _HORNER_CHUNK):  # chunks stay in L1 across the degree loop
+            t1 = min(m, t0 + _HORNER_CHUNK)
+            xs = xk[t0:t1]
+            for i in range(w):
+                kr = ker[i, t0:t1]  # views indexed from 0: no wrap-around checks, vectorised
+                c = coef[deg1 - 1, i]
+                for t in range(t1 - t0):
+                    kr[t] = c
+                for k in range(deg1 - 2, -1, -1):
+                    c = coef[k, i]
+                    for t in range(t1 - t0):
+                        kr[t] = kr[t] * xs[t] + c
         gi = np.ones(kmax_i, dtype=np.complex128)
         kv = np.zeros(wp, dtype=coef.dtype)
         wr = np.empty(kmax_o, dtype=coef.dtype)
