@@ -231,11 +231,13 @@ def beam_scan(
         As in :func:`speckle.ascan` (pixels, unambiguous depth ``H`` in µm, central wavenumber
         in the medium in rad/µm, spectral weights); same grid, wrap-around and pixel
         conventions.
-    method : {"direct", "nufft", "nufft32", "auto"}
+    method : {"direct", "nufft", "nufft32", "auto", "finufft"}
         ``"direct"``: the exact float64 reference. ``"nufft"`` / ``"nufft32"``: ES-kernel
         spreading in depth and exact Gaussian weights on the neighbouring lines, in double /
         single precision (:mod:`speckle.imaging.beam_nufft`). ``"auto"``: the fastest method
-        whose predicted error is within ``tol`` (rules, nothing is run to decide).
+        whose predicted error is within ``tol`` (rules, nothing is run to decide; ``"direct"``
+        for irregular lines). ``"finufft"``: one FINUFFT 2-D transform with the beam applied
+        in lateral Fourier space (reference; 2-D scenes without focus only).
     tol : float, optional
         Requested relative accuracy in (0, 1), ``||A - A_direct||_2 / ||A_direct||_2`` over all
         lines and pixels, for approximate methods (``None``: 1e-12).

@@ -420,11 +420,6 @@ def _spread_beam(
 # --- the method --------------------------------------------------------------------------
 
 
-def _lateral(scene: BeamScene, grid: LineGrid, axis: int) -> np.ndarray:
-    coord = scene.x if axis == 0 else scene.y
-    return (coord - grid.origin[axis]) / grid.pitch[axis]
-
-
 @contextlib.contextmanager
 def _slp_vectorize():
     """Enable LLVM's SLP vectoriser while numba compiles (numba turns it off by default).
