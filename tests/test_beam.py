@@ -306,6 +306,7 @@ GOOD = dict(lines=[0.0, 1.0], waist=2.0, n_pixels=N, depth=H, k0=K0)
         (dict(rayleigh_range=5.0), "needs focus"),
         (dict(focus=10.0, rayleigh_range=0.0), "rayleigh_range"),
         (dict(method="fast"), "method"),
+        (dict(method="finufft", tol=1e-6, focus=10.0), "without focus"),
         (dict(tol=0.0), "tol"),
         (dict(n_pixels=1), "n_pixels"),
     ],
