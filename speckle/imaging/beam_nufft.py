@@ -76,6 +76,8 @@ __all__ = [
 BEAM_AUTO_CANDIDATES = ("direct", "nufft", "nufft32")
 #: Largest fine-grid rows over scanned lines (grid with gaps) relative to distinct lines.
 MAX_GRID_FILL = 4
+#: Outer lines per parallel block (at least twice the halo of the beam reach).
+_BLOCK = 64
 #: Scatterer-line weights below which a scan runs on one thread.
 SERIAL_BELOW = 200_000
 #: Depth bins per line bucket in 2-D (cache locality of the spreading).
@@ -152,65 +154,83 @@ def line_grid(lines: np.ndarray, waist: float) -> LineGrid | None:
 
 
 @numba.njit(cache=True)
+def _bucket(x, y, z, j, three_d, o_ax, xo, po, r_o, n_outer, halo, yo, pi_, r_i, n_inner, bli,
+            depth, nbi):  # fmt: skip
+    """Bucket of scatterer ``j`` (see :func:`_sort_scene`), or -1 beyond the reach of the grid."""
+    so = ((x[j] if o_ax == 0 else y[j]) - xo) / po
+    if so < -r_o or so > n_outer - 1 + r_o:
+        return -1
+    ko = min(max(np.int64(math.floor(so)) + halo, 0), n_outer + 2 * halo - 1)
+    if three_d:
+        si = ((y[j] if o_ax == 0 else x[j]) - yo) / pi_
+        if si < -r_i or si > n_inner - 1 + r_i:
+            return -1
+        ki = min(max(np.int64(math.floor(si)) + bli, 0), nbi - 1)
+    else:
+        f = z[j] / depth
+        ki = min(max(np.int64((f - math.floor(f)) * nbi), 0), nbi - 1)
+    return ko * nbi + ki
+
+
+@numba.njit(parallel=True, cache=True)
 def _sort_scene(
     x, y, z, a, gam, three_d, o_ax, xo, po, r_o, n_outer, halo, yo, pi_, r_i, n_inner, bli,
     depth, nbi,
 ):  # fmt: skip
-    """Scatterers within reach of the grid, in bucket order, by a counting sort.
+    """Scatterers within reach of the grid, in bucket order, by a parallel counting sort.
 
     Lateral coordinates in pitches ``so = (x - X_0)/p`` along the outer axis (and ``si`` along
     the inner one in 3-D, ``y`` of size 1 in 2-D); bucket ``(floor(so) + halo) * nbi + sub``
     with ``sub`` the inner-axis bucket (3-D) or one of ``nbi`` depth bins (2-D, cache
-    locality). Both passes read the inputs in order (random writes only). Returns
-    ``(z, a, so, si, gam, starts)`` sorted (``si``/``gam`` of size 1 when not per scatterer).
+    locality). Each chunk of the input counts its buckets, then writes its scatterers at its
+    own offsets (inputs read in order, random writes only; the order within a bucket is the
+    input order whatever the number of threads). Returns ``(z, a, so, si, gam, starts)``
+    sorted (``si``/``gam`` of size 1 when not per scatterer).
     """
     m = z.size
-    nbo = n_outer + 2 * halo
-    starts = np.zeros(nbo * nbi + 1, dtype=np.int64)
+    nb = (n_outer + 2 * halo) * nbi
+    n_chunks = max(1, min(16, m // 32768))
+    size = (m + n_chunks - 1) // n_chunks
     key = np.empty(m, dtype=np.int64)
-    for j in range(m):
-        xa = x[j] if o_ax == 0 else y[j]
-        so = (xa - xo) / po
-        key[j] = -1
-        if so < -r_o or so > n_outer - 1 + r_o:
-            continue
-        ko = min(max(np.int64(math.floor(so)) + halo, 0), nbo - 1)
-        if three_d:
-            xb = y[j] if o_ax == 0 else x[j]
-            si = (xb - yo) / pi_
-            if si < -r_i or si > n_inner - 1 + r_i:
-                continue
-            ki = min(max(np.int64(math.floor(si)) + bli, 0), nbi - 1)
-        else:
-            f = z[j] / depth
-            ki = min(max(np.int64((f - math.floor(f)) * nbi), 0), nbi - 1)
-        k = ko * nbi + ki
-        key[j] = k
-        starts[k + 1] += 1
-    for k in range(nbo * nbi):
-        starts[k + 1] += starts[k]
-    kept = starts[nbo * nbi]
-    zs = np.empty(kept)
-    as_ = np.empty(kept, dtype=np.complex128)
-    sos = np.empty(kept)
-    sis = np.empty(kept if three_d else 1)
-    gams = np.empty(kept if gam.size > 1 else 1, dtype=np.complex128)
+    counts = np.zeros((n_chunks, nb), dtype=np.int64)
+    for c in numba.prange(n_chunks):
+        for j in range(c * size, min(m, (c + 1) * size)):
+            k = _bucket(x, y, z, j, three_d, o_ax, xo, po, r_o, n_outer, halo, yo, pi_, r_i,
+                        n_inner, bli, depth, nbi)  # fmt: skip
+            key[j] = k
+            if k >= 0:
+                counts[c, k] += 1
+    starts = np.zeros(nb + 1, dtype=np.int64)
+    offset = np.empty((n_chunks, nb), dtype=np.int64)
+    total = 0
+    for k in range(nb):
+        starts[k] = total
+        for c in range(n_chunks):
+            offset[c, k] = total
+            total += counts[c, k]
+    starts[nb] = total
+    zs = np.empty(total)
+    as_ = np.empty(total, dtype=np.complex128)
+    sos = np.empty(total)
+    sis = np.empty(total if three_d else 1)
+    gams = np.empty(total if gam.size > 1 else 1, dtype=np.complex128)
     if gam.size == 1:
         gams[0] = gam[0]
-    pos = starts[:-1].copy()
-    for j in range(m):
-        k = key[j]
-        if k < 0:
-            continue
-        t = pos[k]
-        pos[k] += 1
-        zs[t] = z[j]
-        as_[t] = a[j]
-        sos[t] = ((x[j] if o_ax == 0 else y[j]) - xo) / po
-        if three_d:
-            sis[t] = ((y[j] if o_ax == 0 else x[j]) - yo) / pi_
-        if gam.size > 1:
-            gams[t] = gam[j]
+    for c in numba.prange(n_chunks):
+        pos = offset[c]
+        for j in range(c * size, min(m, (c + 1) * size)):
+            k = key[j]
+            if k < 0:
+                continue
+            t = pos[k]
+            pos[k] += 1
+            zs[t] = z[j]
+            as_[t] = a[j]
+            sos[t] = ((x[j] if o_ax == 0 else y[j]) - xo) / po
+            if three_d:
+                sis[t] = ((y[j] if o_ax == 0 else x[j]) - yo) / pi_
+            if gam.size > 1:
+                gams[t] = gam[j]
     return zs, as_, sos, sis, gams, starts
 
 
@@ -436,10 +456,6 @@ def _slp_vectorize():
         numba.config.SLP_VECTORIZE = old
 
 
-def _n_threads() -> int:
-    return numba.get_num_threads()
-
-
 def beam_nufft_scan(
     scene: BeamScene, beam: Beam, grid: LineGrid, *, tol: float, precision: str = "double"
 ) -> np.ndarray:
@@ -471,20 +487,22 @@ def beam_nufft_scan(
     bli = math.ceil(r_i) + 1
     nbi = n_inner + 2 * bli if three_d else _DEPTH_BINS
     y = scene.y if three_d else np.zeros(1)
-    z, a, so, si, gam, starts = _sort_scene(
-        scene.x, y, scene.z, scene.amplitude, gam, three_d, o_ax, grid.origin[o_ax], p_o, r_o,
-        n_outer, halo, grid.origin[i_ax], p_i, r_i, n_inner, bli, scene.depth, nbi,
-    )  # fmt: skip
-    block = max(1, min(n_outer, math.ceil(n_outer / (4 * _n_threads())), 128))
-    block = max(block, min(n_outer, 2 * halo))
+    # blocks of outer lines: independent of the thread count, so results are bitwise the same
+    # on any number of threads (the vectorised loops would round differently per blocking)
+    block = min(n_outer, max(_BLOCK, 2 * halo))
     kmax_i = int(2 * r_i) + 2 if three_d else 1
     g = np.zeros((n_outer * n_inner, plan.nf), dtype=plan.cplx)
     # small scans run on one thread: waking the pool costs more than it saves
     threads = numba.get_num_threads()
-    small = z.size * (2 * r_o + 1) * ((2 * r_i + 1) if three_d else 1) < SERIAL_BELOW
+    small = scene.z.size * (2 * r_o + 1) * ((2 * r_i + 1) if three_d else 1) < SERIAL_BELOW
     with PARALLEL_LOCK, _slp_vectorize():
         numba.set_num_threads(1 if small else threads)
         try:
+            z, a, so, si, gam, starts = _sort_scene(
+                scene.x, y, scene.z, scene.amplitude, gam, three_d, o_ax, grid.origin[o_ax],
+                p_o, r_o, n_outer, halo, grid.origin[i_ax], p_i, r_i, n_inner, bli, scene.depth,
+                nbi,
+            )  # fmt: skip
             _spread_beam(
                 z, a, scene.k0, scene.depth, so, si, gam, 2.0 * p_o**2 / w0**2,
                 2.0 * p_i**2 / w0**2, ln_cut, starts, nbi, n_outer, n_inner, three_d, block, halo,
@@ -545,13 +563,13 @@ def _estimate(method: str, scene: BeamScene, beam: Beam, tol: float, setup: _Set
         return tol, 8e5 + setup.n_rows * 40.0 * nf + m * 60.0 + slots * 1.2 * w
     if method == "nufft32":
         # float32 conversions cost per scatterer, narrower stores save per weight written
-        # (measured: as fast as "nufft" in 2-D at w0 = 2 pitches, 1.6x faster in 3-D)
+        # (measured: 10 % slower than "nufft" in 2-D at w0 = 2 pitches, 1.5x faster in 3-D)
         w = kernel_width(0.25 * tol)
         rounding = float32_error_estimate(int(setup.weighted_terms), n, w)
         if rounding > 0.5 * tol:
             return math.inf, math.inf
         nf = fine_grid_size(n, w)
-        cost = 8e5 + setup.n_rows * 30.0 * nf + m * 90.0 + slots * 0.75 * w
+        cost = 8e5 + setup.n_rows * 30.0 * nf + m * 130.0 + slots * 0.75 * w
         return 0.5 * tol + rounding, cost
     raise ValueError(f"no error/cost model for beam method {method!r}")
 
@@ -670,7 +688,7 @@ def finufft_beam_scan(
     opts = {} if upsampfac is None else {"upsampfac": upsampfac}
     f = finufft.nufft2d1(
         t, phi, c, (scene.n_pixels, n_modes), eps=tol / 20 if eps is None else eps, isign=1,
-        nthreads=_n_threads() if nthreads is None else nthreads, **opts,
+        nthreads=numba.get_num_threads() if nthreads is None else nthreads, **opts,
     )  # fmt: skip
     m = np.arange(n_modes) - n_modes // 2
     ghat = w0 * math.sqrt(math.pi / 2) * np.exp(-((2 * np.pi * m / period) ** 2) * w0**2 / 8)
