@@ -528,7 +528,10 @@ def _setup(scene: BeamScene, beam: Beam, tol: float) -> _Setup:
     if grid is None:
         return _Setup(None, 0, 0.0, 0.0)
     n_rows = int(np.prod(grid.size))
-    reach = beam.waist * math.sqrt(math.log(4.0 / tol) / 2.0)
+    gam = beam.gamma(scene.z)
+    # mean beam width over the scatterers (w(z) = w0 / sqrt(Re gamma) with a focus)
+    width = beam.waist * (1.0 if gam is None else float(np.mean(1.0 / np.sqrt(gam.real))))
+    reach = width * math.sqrt(math.log(4.0 / tol) / 2.0)
     slots = 1.0
     energy = 1.0
     for p, n in zip(grid.pitch, grid.size, strict=True):
