@@ -34,8 +34,10 @@ Errors (relative l2 over the B-scan, against ``"direct"``), budgeted to add up b
   ``~ 2 d/w0``: admissible only while ``4 d/w0 <= tol/8`` (float64 rounding of ``linspace``
   grids is ~1e-16 relative);
 * ``"nufft32"`` only: float32 rounding of the spreading and FFTs,
-  :func:`speckle.imaging.nufft.float32_error_estimate` with the number of terms per fine-grid
-  cell of this method, admissible while ``<= tol/2``.
+  :func:`speckle.imaging.nufft.float32_error_estimate` with the number of terms per line
+  weighted by their relative weight energy (``sum_k exp(-4 d_k^2/w0^2) ~ w0 sqrt(pi)/(2 p)``
+  lines per axis), admissible while ``<= tol/2``; measured floors are 1.4-1.6x below it on five
+  scenes (w0 = 1-6 pitches, 1-16 scatterers per pixel per line).
 """
 
 from __future__ import annotations
