@@ -254,7 +254,7 @@ def image(
             )
             for i in range(scene.sizes[d])
         ]
-        return xr.concat(parts, dim=d, combine_attrs="override")
+        return xr.concat(parts, dim=scene[d] if d in scene.coords else d, combine_attrs="override")
     ndim = check_scene(scene)
     if (ndim == 3) != (ys is not None):
         raise ValueError(
