@@ -31,7 +31,7 @@ import xarray as xr
 
 from .._validate import as_finite_array, check_real
 
-__all__ = ["lateral_correlation", "poisson_lateral_factor"]
+__all__ = ["axial_correlation", "lateral_correlation", "poisson_lateral_factor"]
 
 
 def _axial_integrals(spectrum: object, pixel_size: float) -> tuple[float, float]:
@@ -97,6 +97,75 @@ def lateral_correlation(
         },
         coords={"lag": lag},
         attrs={"waist": w0, "density": np.nan if density is None else float(density)},
+    )
+
+
+def axial_correlation(
+    lags: object,
+    spectrum: object,
+    *,
+    density: float,
+    pixel_size: float,
+    waist: float | None = None,
+    kurtosis: float = 2.0,
+) -> xr.Dataset:
+    """Expected correlation of pixels ``lag`` apart in depth along one line (pooled).
+
+    With ``g_d = sum_n S_n^2 exp(2i pi n d/N)`` and ``h_d = sum_m c_m^2 exp(2i pi m d/N)``
+    (``c`` the autocorrelation of ``S``), Campbell's theorem gives the complex correlation
+    ``|g_d|/g_0`` and the intensity correlation
+    ``(rho^2 W2^2 p^2 N^2 |g_d|^2 + rho kappa W4 p N h_d) / (same at d = 0)``, with the
+    lateral integrals ``W2 = (sqrt(pi)/2) w0``, ``W4 = sqrt(pi/8) w0`` of a beam of waist
+    ``w0`` (density in µm^-2) or ``W2 = W4 = 1`` for the paper's independent lines
+    (``waist=None``, density in scatterers per µm of line, i.e. per pixel / ``pixel_size``).
+
+    Parameters
+    ----------
+    lags : array_like
+        Depth lags in pixels (integers or not).
+    spectrum : array_like
+        Spectral weights ``S_n``.
+    density : float
+        Scatterers per µm^2 (beam) or per pixel (independent lines), > 0.
+    pixel_size : float
+        ``H/N`` in µm.
+    waist : float, optional
+        Beam waist in µm; ``None``: independent lines.
+    kurtosis : float
+        ``E|a|^4/(E|a|^2)^2``, >= 1.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``complex`` and ``intensity`` over dim ``lag`` (pixels).
+    """
+    d = np.atleast_1d(as_finite_array(lags, "lags"))
+    s = as_finite_array(spectrum, "spectrum")
+    rho = check_real(density, "density", low=0, low_inclusive=False)
+    p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
+    kappa = check_real(kurtosis, "kurtosis", low=1.0)
+    n = s.size
+    idx = np.arange(n) - n // 2
+    c = np.correlate(s, s, mode="full")
+    m = np.arange(-(n - 1), n)
+    g = np.abs(np.exp(2j * np.pi * np.outer(d, idx) / n) @ (s**2))
+    h = (np.exp(2j * np.pi * np.outer(d, m) / n) @ (c**2)).real
+    if waist is None:
+        w2, w4, rho = 1.0, 1.0, rho / p
+    else:
+        w0 = check_real(waist, "waist", low=0, low_inclusive=False)
+        w2, w4 = np.sqrt(np.pi) / 2 * w0, np.sqrt(np.pi / 8) * w0
+    g0, h0 = float(np.sum(s**2)), float(np.sum(c**2))
+    scale = (rho * w2 * p * n) ** 2
+    incoh = rho * kappa * w4 * p * n
+    intensity = (scale * g**2 + incoh * h) / (scale * g0**2 + incoh * h0)
+    lag = ("lag", d, {"units": "1", "long_name": "depth lag (pixels)"})
+    return xr.Dataset(
+        {
+            "complex": ("lag", g / g0, {"units": "1", "long_name": "complex correlation"}),
+            "intensity": ("lag", intensity, {"units": "1", "long_name": "intensity correlation"}),
+        },
+        coords={"lag": lag},
     )
 
 
