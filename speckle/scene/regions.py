@@ -58,8 +58,10 @@ __all__ = [
     "bounding_box",
     "cell_density",
     "circle",
+    "compile_regions",
     "ellipse",
     "from_label_image",
+    "labels_of",
     "layer",
     "make_regions",
     "rasterize",
@@ -309,15 +311,82 @@ def _check_regions(regions: xr.Dataset) -> None:
         raise ValueError("region labels must be 0 ... R-1 in order")
 
 
-def _image_lookup(regions: xr.Dataset, z: np.ndarray, x: np.ndarray) -> np.ndarray:
-    img = regions.label_image.transpose("depth", "x")
-    dz, dx = spacing(img, "depth"), spacing(img, "x")
-    iz = np.floor((z - img.depth.values[0]) / dz + 0.5).astype(np.int64)
-    ix = np.floor((x - img.x.values[0]) / dx + 0.5).astype(np.int64)
-    nz, nx = img.shape
-    inside = (iz >= 0) & (iz < nz) & (ix >= 0) & (ix < nx)
+def compile_regions(regions: xr.Dataset) -> list[dict]:
+    """Plain-Python view of ``regions`` (one dict per region) for fast repeated lookups.
+
+    Each dict holds ``shape``, ``density``, ``amplitude_model``, ``backscatter``, the geometry
+    (floats, NaN where unused), ``box`` (:func:`bounding_box`) and, for label images,
+    ``image`` (int32 array), ``origin`` and ``step`` (µm, ``(depth, x)``).
+    """
+    _check_regions(regions)
+    out = []
+    image = None
+    if "label_image" in regions:
+        img = regions.label_image.transpose("depth", "x")
+        image = {
+            "image": np.asarray(img.values, dtype=np.int32),
+            "origin": (float(img.depth.values[0]), float(img.x.values[0])),
+            "step": (spacing(img, "depth"), spacing(img, "x")),
+        }
+    for r in range(regions.sizes["region"]):
+        row = {
+            name: regions[name].values[r].item()
+            for name in ("shape", "density", "amplitude_model", "backscatter", *_GEOMETRY)
+        }
+        row["shape"] = str(row["shape"])
+        row["amplitude_model"] = str(row["amplitude_model"])
+        row["box"] = _box(row, image)
+        if image is not None:
+            row.update(image)
+        out.append(row)
+    return out
+
+
+def _box(row: dict, image: dict | None) -> dict[str, tuple[float, float]]:
+    inf = (-np.inf, np.inf)
+    box = {"z": inf, "x": inf, "y": inf}
+    if row["shape"] == "layer":
+        box["z"] = (row["z_top"], row["z_bottom"])
+    elif row["shape"] == "ellipse":
+        for ax in ("z", "x", "y"):
+            c, rad = row[f"centre_{ax}"], row[f"radius_{ax}"]
+            if np.isfinite(c):
+                box[ax] = (c - rad, c + rad)
+    elif row["shape"] == "image":
+        nz, nx = image["image"].shape
+        for i, ax in enumerate(("z", "x")):
+            o, st = image["origin"][i], image["step"][i]
+            box[ax] = (o - st / 2, o + ((nz, nx)[i] - 0.5) * st)
+    return box
+
+
+def labels_of(
+    compiled: list[dict], z: np.ndarray, x: np.ndarray, y: np.ndarray | None = None
+) -> np.ndarray:
+    """:func:`region_label` on compiled regions (:func:`compile_regions`), no checks."""
     out = np.full(z.shape, -1, dtype=np.int32)
-    out[inside] = img.values[iz[inside], ix[inside]]
+    if compiled and compiled[0]["shape"] == "image":
+        first = compiled[0]
+        iz = np.floor((z - first["origin"][0]) / first["step"][0] + 0.5).astype(np.int64)
+        ix = np.floor((x - first["origin"][1]) / first["step"][1] + 0.5).astype(np.int64)
+        nz, nx = first["image"].shape
+        inside = (iz >= 0) & (iz < nz) & (ix >= 0) & (ix < nx)
+        out[inside] = first["image"][iz[inside], ix[inside]]
+        return out
+    for r, row in enumerate(compiled):
+        shape = row["shape"]
+        if shape == "background":
+            out[...] = r
+            continue
+        if shape == "layer":
+            inside = (z >= row["z_top"]) & (z < row["z_bottom"])
+        else:
+            q = ((z - row["centre_z"]) / row["radius_z"]) ** 2
+            q += ((x - row["centre_x"]) / row["radius_x"]) ** 2
+            if y is not None and np.isfinite(row["centre_y"]):
+                q += ((y - row["centre_y"]) / row["radius_y"]) ** 2
+            inside = q < 1.0
+        out[inside] = r
     return out
 
 
@@ -339,7 +408,7 @@ def region_label(regions: xr.Dataset, z: object, x: object, y: object | None = N
     numpy.ndarray
         int32 labels, shape of ``z``.
     """
-    _check_regions(regions)
+    compiled = compile_regions(regions)
     zz = as_finite_array(z, "z")
     xx = as_finite_array(x, "x")
     yy = None if y is None else as_finite_array(y, "y")
@@ -348,24 +417,7 @@ def region_label(regions: xr.Dataset, z: object, x: object, y: object | None = N
             f"z, x (and y) must have the same shape, got {zz.shape}, {xx.shape}"
             + ("" if yy is None else f", {yy.shape}")
         )
-    if "label_image" in regions:
-        return _image_lookup(regions, zz, xx)
-    out = np.full(zz.shape, -1, dtype=np.int32)
-    for r in range(regions.sizes["region"]):
-        row = regions.isel(region=r)
-        shape = str(row["shape"].values)
-        if shape == "background":
-            inside = np.ones(zz.shape, bool)
-        elif shape == "layer":
-            inside = (zz >= float(row.z_top)) & (zz < float(row.z_bottom))
-        else:
-            q = ((zz - float(row.centre_z)) / float(row.radius_z)) ** 2
-            q += ((xx - float(row.centre_x)) / float(row.radius_x)) ** 2
-            if yy is not None and np.isfinite(float(row.centre_y)):
-                q += ((yy - float(row.centre_y)) / float(row.radius_y)) ** 2
-            inside = q < 1.0
-        out[inside] = r
-    return out
+    return labels_of(compiled, zz, xx, yy)
 
 
 def bounding_box(regions: xr.Dataset, r: int) -> dict[str, tuple[float, float]]:
@@ -377,24 +429,7 @@ def bounding_box(regions: xr.Dataset, r: int) -> dict[str, tuple[float, float]]:
     _check_regions(regions)
     if not isinstance(r, numbers.Integral) or not 0 <= r < regions.sizes["region"]:
         raise ValueError(f"r must be a region label in [0, {regions.sizes['region'] - 1}]")
-    row = regions.isel(region=int(r))
-    inf = (-np.inf, np.inf)
-    box = {"z": inf, "x": inf, "y": inf}
-    shape = str(row["shape"].values)
-    if shape == "layer":
-        box["z"] = (float(row.z_top), float(row.z_bottom))
-    elif shape == "ellipse":
-        for ax in ("z", "x", "y"):
-            c, rad = float(row[f"centre_{ax}"]), float(row[f"radius_{ax}"])
-            if np.isfinite(c):
-                box[ax] = (c - rad, c + rad)
-    elif shape == "image":
-        img = regions.label_image
-        for ax, dim in (("z", "depth"), ("x", "x")):
-            step = spacing(img, dim)
-            v = img[dim].values
-            box[ax] = (float(v[0] - step / 2), float(v[-1] + step / 2))
-    return box
+    return compile_regions(regions)[int(r)]["box"]
 
 
 def rasterize(regions: xr.Dataset, depth_coord: object, x_coord: object) -> xr.DataArray:

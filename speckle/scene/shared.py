@@ -38,7 +38,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import check_int, check_real
-from .regions import _check_regions, bounding_box, region_label
+from .regions import compile_regions, labels_of
 from .scatterers import _draw_amplitudes
 
 __all__ = ["AXES", "check_scene", "is_shared", "scene_window", "shared_scene", "tile_generator"]
@@ -75,15 +75,15 @@ def _range(value: object, name: str) -> tuple[float, float]:
 
 
 def _draw_tile(
-    regions: xr.Dataset, seed: int, index: tuple[int, ...], tile: np.ndarray, ndim: int
+    compiled: list[dict], seed: int, index: tuple[int, ...], tile: np.ndarray, ndim: int
 ) -> list[np.ndarray]:
     """Scatterers of one tile: columns z, x[, y], amplitude, region."""
     lo = np.array(index) * tile
     hi = lo + tile
     parts = []
-    for r in range(regions.sizes["region"]):
-        rho = float(regions.density[r])
-        box = bounding_box(regions, r)
+    for r, row in enumerate(compiled):
+        rho = float(row["density"])
+        box = row["box"]
         blo = np.maximum(lo, [box[a][0] for a in AXES[:ndim]])
         bhi = np.minimum(hi, [box[a][1] for a in AXES[:ndim]])
         if rho == 0 or np.any(bhi <= blo):
@@ -91,11 +91,15 @@ def _draw_tile(
         rng = tile_generator(seed, index, r)
         count = rng.poisson(rho * float(np.prod(bhi - blo)))
         pos = rng.uniform(blo, bhi, size=(count, ndim))
-        model = str(regions.amplitude_model[r].values)
-        amp = _draw_amplitudes(rng, model, count) * math.sqrt(float(regions.backscatter[r]))
+        amp = _draw_amplitudes(rng, row["amplitude_model"], count)
+        amp = amp * math.sqrt(float(row["backscatter"]))
         y = pos[:, 2] if ndim == 3 else None
-        keep = region_label(regions, pos[:, 0], pos[:, 1], y) == r
-        parts.append(np.column_stack([pos[keep], amp[keep], np.full(keep.sum(), r)]))
+        if row["shape"] == "background" and r == len(compiled) - 1:
+            keep = slice(None)  # nothing painted over it
+        else:
+            keep = labels_of(compiled, pos[:, 0], pos[:, 1], y) == r
+        sel = pos[keep]
+        parts.append(np.column_stack([sel, amp[keep], np.full(sel.shape[0], float(r))]))
     return parts
 
 
@@ -138,7 +142,7 @@ def shared_scene(
     ValueError
         On an empty or inverted window, a non-positive tile or negative seed.
     """
-    _check_regions(regions)
+    compiled = compile_regions(regions)
     sd = check_int(seed, "seed", low=0)
     ranges = [_range(z_range, "z_range"), _range(x_range, "x_range")]
     if y_range is not None:
@@ -154,15 +158,18 @@ def shared_scene(
     parts = []
     for index in np.ndindex(*(last - first)):
         idx = tuple(int(i) for i in np.array(index) + first)
-        parts += _draw_tile(regions, sd, idx, tiles, ndim)
+        parts += _draw_tile(compiled, sd, idx, tiles, ndim)
     cols = ndim + 2
     table = np.concatenate(parts) if parts else np.zeros((0, cols))
     pos = table[:, :ndim].real
     inside = np.all((pos >= lo) & (pos < hi), axis=1)
     table, pos = table[inside], pos[inside]
-    # Canonical order: x, then z, then y (np.lexsort sorts by the last key first).
-    keys = [pos[:, 2]] if ndim == 3 else []
-    order = np.lexsort([*keys, pos[:, 0], pos[:, 1]])
+    # Canonical order: x, then z, then y. Ties in x are rare (continuous draws): sort by x and
+    # fall back to the (slower) full lexicographic sort only when there is one.
+    order = np.argsort(pos[:, 1])
+    if np.any(np.diff(pos[order, 1]) == 0):
+        keys = [pos[:, 2]] if ndim == 3 else []
+        order = np.lexsort([*keys, pos[:, 0], pos[:, 1]])  # the last key sorts first
     table, pos = table[order], pos[order]
     data = {a: ("scatterer", pos[:, i].copy(), _ATTRS[a]) for i, a in enumerate(AXES[:ndim])}
     data["amplitude"] = ("scatterer", table[:, ndim].astype(np.complex128), _ATTRS["amplitude"])
