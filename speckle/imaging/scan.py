@@ -340,6 +340,8 @@ def image_regions(
         return dask.delayed(kernel, pure=True)(part, cx, cy)
 
     field = _blocks(make_task, xs, ys, c, src["n_pixels"])
-    attrs.update({"scene_seed": sd, "scene_tile": np.broadcast_to(tile, (1,)).tolist()})
+    attrs.update(
+        {"scene_seed": sd, "scene_tile": np.atleast_1d(np.asarray(tile, dtype=float)).tolist()}
+    )
     attrs["density_units"] = f"scatterers per um^{2 if ys is None else 3}"
     return _dataset(field, xs, ys, src, attrs)
