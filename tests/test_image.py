@@ -255,3 +255,48 @@ def test_bad_scenes_and_sources():
         speckle.image(_scene(y_range=(0.0, 10.0), density=0.001), SRC, waist=5.0, x=[0.0])
     with pytest.raises(TypeError, match="shared scene"):
         speckle.image(xr.Dataset(), SRC, waist=5.0, x=[0.0])
+
+
+@pytest.mark.parametrize("three_d", [False, True])
+def test_focus_is_passed_and_its_halo_is_the_widest_beam(three_d):
+    """A focused beam widens away from z_f: chunked images equal beam_scan on the whole scene."""
+    y_range = (-60.0, 70.0) if three_d else None
+    scene = _scene(density=0.001 if three_d else 0.05, x_range=(-60.0, 90.0), y_range=y_range)
+    xs = speckle.scan_lines(6, 5.0)
+    ys = speckle.scan_lines(3, 5.0) if three_d else None
+    kw = {"focus": 60.0, "rayleigh_range": 40.0}  # w(z=H)/w0 = sqrt(1 + (196/40)^2) = 5
+    ds = speckle.image(scene, SRC, waist=4.0, x=xs, y=ys, chunk=2, **kw)
+    assert ds.attrs["focus"] == 60.0
+    extra = {}
+    lines = xs
+    if three_d:
+        extra["y"] = scene.y.values
+        lines = np.stack(np.meshgrid(xs, ys, indexing="ij"), -1).reshape(-1, 2)
+    ref = speckle.beam_scan(
+        scene.z.values, scene.x.values, scene.amplitude.values, lines=lines, waist=4.0,
+        **ARGS, **kw, **extra,
+    )  # fmt: skip
+    got = ds.field.values.reshape(N, -1).T
+    assert _rel(got, ref) < 1e-13
+
+
+def test_fast_method_within_tol():
+    scene = _scene(density=0.05)
+    xs = speckle.scan_lines(24, 4.0)
+    exact = speckle.image(scene, SRC, waist=8.0, x=xs, chunk=16).field.values
+    fast = speckle.image(scene, SRC, waist=8.0, x=xs, chunk=16, method="auto", tol=1e-6)
+    assert _rel(fast.field.values, exact) <= 1e-6
+
+
+@pytest.mark.parametrize(
+    ("kw", "match"),
+    [
+        ({"focus": H}, "focus"),
+        ({"focus": -1.0}, "focus"),
+        ({"rayleigh_range": 10.0}, "needs focus"),
+        ({"focus": 10.0, "rayleigh_range": 0.0}, "rayleigh_range"),
+    ],
+)
+def test_bad_focus(kw, match):
+    with pytest.raises(ValueError, match=match):
+        speckle.image(_scene(), SRC, waist=5.0, x=[0.0, 4.0], **kw)

@@ -5,10 +5,9 @@
 memory (a 3-D volume) is never built whole. Both return a Dataset over ``(depth, x[, y])`` in
 µm whose ``field`` is a Dask array, one task per chunk of lines: a chunk's task gets only the
 scatterers within the beam's reach of its lines (its halo, :func:`beam_reach`), and evaluates
-:func:`speckle.beam_scan` (the contract, any of its methods). Lines on a 2-D ``(x, y)`` grid use
-the separability of the Gaussian, ``exp(-2 r^2/w0^2) = exp(-2 dx^2/w0^2) exp(-2 dy^2/w0^2)``:
-each row of lines at ``Y_k`` is :func:`speckle.beam_scan` of the amplitudes weighted by
-``exp(-2 (y_j - Y_k)^2/w0^2)``. Results do not depend on the chunking (tested to rounding).
+:func:`speckle.beam_scan` (the contract, any of its methods, focus included); a 3-D chunk is
+its ``(x, y)`` grid of lines in one call. Results do not depend on the chunking (tested to
+rounding for the exact method).
 
 :func:`speckle.io.stream_to_netcdf` writes such a Dataset chunk by chunk to a chunked NetCDF
 file (on the local threads scheduler or a ``dask.distributed`` cluster).
@@ -38,14 +37,30 @@ __all__ = ["REACH_EPS", "beam_reach", "image", "image_regions", "scan_lines"]
 REACH_EPS = 1e-17
 
 
-def beam_reach(waist: float, eps: float = REACH_EPS) -> float:
-    """Lateral distance (µm) beyond which the weight ``exp(-2 r^2/w0^2)`` is below ``eps``.
+def beam_reach(waist: float, eps: float = REACH_EPS, *, widening: float = 1.0) -> float:
+    """Lateral distance (µm) beyond which the weight ``exp(-2 r^2/w^2)`` is below ``eps``.
 
-    ``w0 * sqrt(ln(1/eps)/2)``: 4.43 w0 for the default ``eps = 1e-17``.
+    ``w * sqrt(ln(1/eps)/2)`` with ``w = widening * w0`` the widest beam over the imaged depths
+    (``widening = 1`` without focus): 4.43 w for the default ``eps = 1e-17``.
     """
     w0 = check_real(waist, "waist", low=0, low_inclusive=False)
     e = check_real(eps, "eps", low=0, high=1, low_inclusive=False, high_inclusive=False)
-    return w0 * math.sqrt(math.log(1.0 / e) / 2.0)
+    g = check_real(widening, "widening", low=1.0)
+    return g * w0 * math.sqrt(math.log(1.0 / e) / 2.0)
+
+
+def _widening(optics: dict, waist: float, k0: float, z_lo: float, z_hi: float) -> float:
+    """Largest ``w(z)/w0 = sqrt(1 + ((z - z_f)/z_R)^2)`` over ``[z_lo, z_hi]`` (1 without focus).
+
+    A focused beam's double-pass weight has modulus ``(w0/w)^2 exp(-2 r^2/w^2)`` (see
+    :func:`speckle.beam_scan`), so the reach of the widest beam bounds every depth's.
+    """
+    zf = optics.get("focus")
+    if zf is None:
+        return 1.0
+    zr = optics.get("rayleigh_range") or k0 * waist**2 / 2.0
+    u = max(abs(z_lo - zf), abs(z_hi - zf)) / zr
+    return math.sqrt(1.0 + u * u)
 
 
 def scan_lines(n_lines: int, pitch: float, start: float = 0.0) -> np.ndarray:
@@ -85,6 +100,7 @@ def _lines_field(
     method: str,
     tol: float | None,
     wrap: bool,
+    optics: dict,
 ) -> np.ndarray:
     """Field of lines ``xs`` (x ``ys``) from scatterers ``part = (z, x, a[, y])``: (N, Lx[, Ly])."""
     z, x, a = part[:3]
@@ -92,17 +108,12 @@ def _lines_field(
         keep = (z >= 0) & (z < src["depth"])
         part = tuple(p[keep] for p in part)
         z, x, a = part[:3]
-    kw = {"waist": waist, "method": method, "tol": tol, **src}
+    kw = {"waist": waist, "method": method, "tol": tol, **src, **optics}
     if ys is None:
         return speckle.beam_scan(z, x, a, lines=xs, **kw).T
-    y = part[3]
-    reach = beam_reach(waist)
-    out = np.empty((src["n_pixels"], xs.size, ys.size), dtype=np.complex128)
-    for k, yk in enumerate(ys):
-        sel = np.abs(y - yk) <= reach
-        w = np.exp(-2.0 * (y[sel] - yk) ** 2 / waist**2)
-        out[:, :, k] = speckle.beam_scan(z[sel], x[sel], a[sel] * w, lines=xs, **kw).T
-    return out
+    grid = np.stack(np.meshgrid(xs, ys, indexing="ij"), axis=-1).reshape(-1, 2)
+    out = speckle.beam_scan(z, x, a, y=part[3], lines=grid, **kw)
+    return out.reshape(xs.size, ys.size, -1).transpose(2, 0, 1)
 
 
 def _blocks(
@@ -153,10 +164,19 @@ def _dataset(
     return ds
 
 
-def _prepare(source, waist, x, y, chunk, method, tol, wrap):
+def _prepare(source, waist, x, y, chunk, method, tol, wrap, focus, rayleigh_range):
     """Checked arguments, the per-chunk kernel and the attrs shared by both entry points."""
     src = _source(source)
     w0 = check_real(waist, "waist", low=0, low_inclusive=False)
+    optics = {}
+    if focus is not None:
+        optics["focus"] = check_real(focus, "focus", low=0, high=src["depth"], high_inclusive=False)
+    if rayleigh_range is not None:
+        if focus is None:
+            raise ValueError("rayleigh_range needs focus= (the focal depth in µm)")
+        optics["rayleigh_range"] = check_real(
+            rayleigh_range, "rayleigh_range", low=0, low_inclusive=False
+        )
     xs = _lines(x, "x")
     ys = None if y is None else _lines(y, "y")
     c = check_int(chunk, "chunk", low=1)
@@ -174,12 +194,16 @@ def _prepare(source, waist, x, y, chunk, method, tol, wrap):
         "tol": np.nan if tol is None else float(tol),
         "chunk": c,
         "wrap": int(bool(wrap)),
+        "focus": optics.get("focus", "none"),
+        "rayleigh_range": optics.get("rayleigh_range", "default" if optics else "none"),
     }
 
     def kernel(part, cx, cy):
-        return _lines_field(part, cx, cy, waist=w0, src=src, method=method, tol=tol, wrap=wrap)
+        return _lines_field(
+            part, cx, cy, waist=w0, src=src, method=method, tol=tol, wrap=wrap, optics=optics
+        )
 
-    return src, w0, xs, ys, c, attrs, kernel
+    return src, w0, xs, ys, c, attrs, kernel, optics
 
 
 def image(
@@ -193,6 +217,8 @@ def image(
     method: str = "direct",
     tol: float | None = None,
     wrap: bool = False,
+    focus: float | None = None,
+    rayleigh_range: float | None = None,
 ) -> xr.Dataset:
     """Image a shared scene with a scanned Gaussian beam, lazily over chunks of lines.
 
@@ -219,6 +245,10 @@ def image(
     wrap : bool
         ``False`` (default): only scatterers at depths in ``[0, H)`` are imaged (the tissue
         below the imaged depth does not alias in). ``True``: all, with SD-OCT wrap-around.
+    focus, rayleigh_range : float, optional
+        Focal depth ``z_f`` in ``[0, H)`` and Rayleigh range ``z_R`` in µm, passed to
+        :func:`speckle.beam_scan` (default: a depth-independent beam). The halo of each chunk
+        is that of the widest beam over the imaged depths.
 
     Returns
     -------
@@ -232,8 +262,8 @@ def image(
         On a scene that is not a non-empty shared scene, a 3-D scene without ``y`` (or a 2-D
         one with it), a non-positive waist, lines that are not 1-D, increasing and uniform.
     """
-    src, w0, xs, ys, c, attrs, kernel = _prepare(
-        source, waist, x, y, chunk, method, tol, bool(wrap)
+    src, w0, xs, ys, c, attrs, kernel, optics = _prepare(
+        source, waist, x, y, chunk, method, tol, bool(wrap), focus, rayleigh_range
     )
     if not isinstance(scene, xr.Dataset) or "z" not in scene:
         raise TypeError("scene must be a shared scene Dataset (see speckle.shared_scene)")
@@ -251,6 +281,8 @@ def image(
                 method=method,
                 tol=tol,
                 wrap=wrap,
+                focus=focus,
+                rayleigh_range=rayleigh_range,
             )
             for i in range(scene.sizes[d])
         ]
@@ -261,7 +293,9 @@ def image(
             f"a {ndim}-D scene needs {'y' if ndim == 3 else 'no y'} line positions "
             "(y given for 3-D scenes only)"
         )
-    reach = beam_reach(w0)
+    zs = scene.z.values
+    z_lo, z_hi = (0.0, src["depth"]) if not wrap else (float(zs.min()), float(zs.max()))
+    reach = beam_reach(w0, widening=_widening(optics, w0, src["k0"], z_lo, z_hi))
     order = np.argsort(scene.x.values, kind="stable")
     sc = scene.isel(scatterer=order)
 
@@ -293,6 +327,8 @@ def image_regions(
     chunk: int = 32,
     method: str = "direct",
     tol: float | None = None,
+    focus: float | None = None,
+    rayleigh_range: float | None = None,
 ) -> xr.Dataset:
     """Like :func:`image`, drawing the scene of ``regions`` tile by tile inside each chunk.
 
@@ -307,7 +343,7 @@ def image_regions(
         Regions (:mod:`speckle.scene.regions`); densities per µm^2 (2-D, no ``y``) or per µm^3.
     seed, tile
         As in :func:`speckle.scene.shared.shared_scene`.
-    source, waist, x, y, chunk, method, tol
+    source, waist, x, y, chunk, method, tol, focus, rayleigh_range
         As in :func:`image` (``wrap`` is ``False``: the scene is drawn over ``[0, H)`` only).
 
     Returns
@@ -315,8 +351,10 @@ def image_regions(
     xarray.Dataset
         As :func:`image`.
     """
-    src, w0, xs, ys, c, attrs, kernel = _prepare(source, waist, x, y, chunk, method, tol, False)
-    reach = beam_reach(w0)
+    src, w0, xs, ys, c, attrs, kernel, optics = _prepare(
+        source, waist, x, y, chunk, method, tol, False, focus, rayleigh_range
+    )
+    reach = beam_reach(w0, widening=_widening(optics, w0, src["k0"], 0.0, src["depth"]))
     h = src["depth"]
     sd = check_int(seed, "seed", low=0)
 
