@@ -287,7 +287,7 @@ def write_volume(source: Mapping, beam: Mapping, seed: int, path: str) -> dict:
         regions,
         src,
         seed=seed,
-        tile=float(cfg["tile"]),
+        tile=cfg["tile"],
         waist=float(cfg["waist_pitch"]) * pitch,
         x=xs,
         y=xs,
