@@ -221,7 +221,7 @@ def _table(rows: list[dict]) -> xr.Dataset:
             data[name] = ("region", np.full(len(rows), np.nan), {"units": "um", "long_name": name})
     return xr.Dataset(
         data,
-        coords={"region": ("region", np.arange(len(rows)), {"long_name": "region label"})},
+        coords={"region": coord("region", np.arange(len(rows)))},
     )
 
 
