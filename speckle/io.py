@@ -144,7 +144,7 @@ def stream_to_netcdf(
                 dprogress(future)
             future.result()
         elif progress:
-            with ProgressBar(out=_stderr()):
+            with ProgressBar(dt=1.0, out=_stderr()):
                 dask.compute(job)
         else:
             dask.compute(job)
