@@ -285,6 +285,8 @@ def _direct(scene: BeamScene, beam: Beam, tol: float | None) -> np.ndarray:
         r2 = (scene.x[sel] - line[0]) ** 2
         if scene.y is not None:
             r2 = r2 + (scene.y[sel] - line[1]) ** 2
+            near = r2 < reach**2  # the other weights underflow to exactly zero
+            sel, r2 = sel[near], r2[near]
         if gam is None:
             weight = np.exp(-2 * r2 / w0**2)
         else:

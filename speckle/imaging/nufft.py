@@ -33,6 +33,7 @@ B-scan (all lines and pixels).
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import NamedTuple
 
@@ -94,6 +95,7 @@ def es_kernel(y: np.ndarray, w: int) -> np.ndarray:
     return np.where(arg >= 0, np.exp(beta * (np.sqrt(np.clip(arg, 0, None)) - 1.0)), 0.0)
 
 
+@functools.lru_cache(maxsize=32)
 def _horner_table(w: int) -> np.ndarray:
     """Polynomial coefficients ``C[k, i]`` of the kernel at slot ``i`` in ``x = 2s - 1``.
 
@@ -108,6 +110,7 @@ def _horner_table(w: int) -> np.ndarray:
     coef = np.zeros((deg + 1, w))
     for i in range(w):
         coef[:, i] = np.polynomial.polynomial.polyfit(nodes, es_kernel(s + i - w / 2, w), deg)
+    coef.setflags(write=False)  # cached: shared by every call
     return coef
 
 
