@@ -65,7 +65,7 @@ def main() -> None:
 
         with (
             LocalCluster(
-                n_workers=args.workers, threads_per_worker=1, dashboard_address=None
+                n_workers=args.workers, threads_per_worker=1, dashboard_address=":0"
             ) as cluster,
             Client(cluster),
         ):

@@ -217,7 +217,7 @@ def test_streamed_netcdf_on_a_distributed_cluster(tmp_path):
     ds = speckle.image_regions(reg, SRC, seed=4, waist=6.0, x=speckle.scan_lines(10, 4.0), chunk=4)
     with (
         distributed.LocalCluster(
-            n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
+            n_workers=1, threads_per_worker=2, processes=False, dashboard_address=":0"
         ) as cluster,
         distributed.Client(cluster),
     ):
