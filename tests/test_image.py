@@ -300,3 +300,16 @@ def test_fast_method_within_tol():
 def test_bad_focus(kw, match):
     with pytest.raises(ValueError, match=match):
         speckle.image(_scene(), SRC, waist=5.0, x=[0.0, 4.0], **kw)
+
+
+def test_independent_lines_are_a_beam_much_narrower_than_the_pitch():
+    """The paper's B-scan is the shared-scene image of its scatterers put on their lines, with
+    a beam whose weight on the neighbouring line, exp(-2 p^2/w0^2) = exp(-200), is negligible."""
+    from speckle.scene.shared import from_lines
+
+    lines = speckle.random_scatterers(12, 3.0, n_pixels=N, depth=H, seed=4, aline_pitch=8.0)
+    scene = from_lines(lines)
+    assert scene.sizes["scatterer"] == int(lines["count"].sum())
+    ds = speckle.image(scene, SRC, waist=0.8, x=lines.aline.values, chunk=5)
+    ref = speckle.bscan(lines, SRC).field.transpose("depth", "aline").values
+    assert _rel(ds.field.values, ref) < 1e-13

@@ -26,7 +26,9 @@ the tiles it touches, cut to the window, so the scatterers in any window do not 
 window, the chunking or the number of workers (tested).
 
 The paper's independent A-lines (:func:`speckle.random_scatterers`) are the special case of a
-beam narrower than the scatterer spacing across lines: each line sees only its own scatterers.
+beam much narrower than the line pitch with every scatterer on its line: each line sees only its
+own scatterers (:func:`from_lines` makes that shared scene; tested against
+:func:`speckle.bscan`).
 """
 
 from __future__ import annotations
@@ -41,7 +43,15 @@ from .._validate import check_int, check_real
 from .regions import compile_regions, labels_of
 from .scatterers import _draw_amplitudes
 
-__all__ = ["AXES", "check_scene", "is_shared", "scene_window", "shared_scene", "tile_generator"]
+__all__ = [
+    "AXES",
+    "check_scene",
+    "from_lines",
+    "is_shared",
+    "scene_window",
+    "shared_scene",
+    "tile_generator",
+]
 
 #: Position variables of a shared scene, in order of the tile index.
 AXES = ("z", "x", "y")
@@ -221,3 +231,35 @@ def scene_window(scene: xr.Dataset, x_lo: float, x_hi: float) -> xr.Dataset:
         scene, x = scene.isel(scatterer=order), x[order]
     i0, i1 = np.searchsorted(x, [x_lo, x_hi])
     return scene.isel(scatterer=slice(int(i0), int(i1)))
+
+
+def from_lines(scene: xr.Dataset) -> xr.Dataset:
+    """The paper's independent A-lines as a shared scene: every scatterer at ``x`` = its line.
+
+    Parameters
+    ----------
+    scene : xarray.Dataset
+        Scatterer field with dims ``(aline, scatterer)`` (:func:`speckle.random_scatterers`);
+        zero-amplitude padding is dropped.
+
+    Returns
+    -------
+    xarray.Dataset
+        A 2-D shared scene (``region`` 0). Imaged with a waist ``w0`` much smaller than the line
+        pitch ``p`` (a neighbour's weight is ``exp(-2 p^2/w0^2)``), it gives the paper's B-scan.
+    """
+    if not isinstance(scene, xr.Dataset) or set(scene.z.dims) != {"aline", "scatterer"}:
+        raise TypeError("scene must be an independent-line field with dims (aline, scatterer)")
+    z = scene.z.transpose("aline", "scatterer").values
+    a = scene.amplitude.transpose("aline", "scatterer").values
+    x = np.broadcast_to(scene.aline.values[:, None], z.shape)
+    keep = a != 0
+    order = np.argsort(x[keep], kind="stable")
+    data = {
+        "z": ("scatterer", z[keep][order], _ATTRS["z"]),
+        "x": ("scatterer", x[keep][order].copy(), _ATTRS["x"]),
+        "amplitude": ("scatterer", a[keep][order].astype(np.complex128), _ATTRS["amplitude"]),
+        "region": ("scatterer", np.zeros(int(keep.sum()), np.int32), _ATTRS["region"]),
+    }
+    attrs = {"kind": "shared", "ndim": 2, "source": "independent A-lines", **scene.attrs}
+    return xr.Dataset(data, attrs=attrs)
