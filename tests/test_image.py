@@ -81,7 +81,8 @@ def test_lazy_until_computed(monkeypatch):
     real = speckle.beam_scan
 
     def counting(*args, **kw):
-        calls.append(1)
+        if np.size(args[0]):  # the empty call that checks the arguments up front is no work
+            calls.append(1)
         return real(*args, **kw)
 
     monkeypatch.setattr(speckle, "beam_scan", counting)
@@ -237,6 +238,8 @@ def test_streamed_netcdf_on_a_distributed_cluster(tmp_path):
         ({"x": []}, "non-empty"),
         ({"chunk": 0}, "chunk"),
         ({"y": [0.0, 1.0]}, "needs no y"),
+        ({"method": "fastest"}, "method"),
+        ({"method": "auto", "tol": 2.0}, "tol"),
     ],
 )
 def test_bad_inputs(kw, match):

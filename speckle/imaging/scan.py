@@ -203,7 +203,15 @@ def _prepare(source, waist, x, y, chunk, method, tol, wrap, focus, rayleigh_rang
             part, cx, cy, waist=w0, src=src, method=method, tol=tol, wrap=wrap, optics=optics
         )
 
+    # beam_scan checks method, tol and optics before any work: an empty scene runs them now,
+    # not in the first Dask task.
+    empty = np.zeros(0)
+    kernel((empty, empty, empty) + ((empty,) if ys is not None else ()), xs[:1], _first(ys))
     return src, w0, xs, ys, c, attrs, kernel, optics
+
+
+def _first(ys: np.ndarray | None) -> np.ndarray | None:
+    return None if ys is None else ys[:1]
 
 
 def image(
