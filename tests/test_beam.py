@@ -306,6 +306,7 @@ GOOD = dict(lines=[0.0, 1.0], waist=2.0, n_pixels=N, depth=H, k0=K0)
         (dict(rayleigh_range=5.0), "needs focus"),
         (dict(focus=10.0, rayleigh_range=0.0), "rayleigh_range"),
         (dict(method="fast"), "method"),
+        (dict(method="finufft", tol=1e-6, focus=10.0), "without focus"),
         (dict(tol=0.0), "tol"),
         (dict(n_pixels=1), "n_pixels"),
     ],
@@ -320,3 +321,22 @@ def test_bad_input_is_refused(change, match):
 def test_empty_scene_images_to_zeros():
     out = speckle.beam_scan([], [], [], **GOOD)
     assert out.shape == (2, N) and not out.any()
+
+
+def test_fast_result_does_not_depend_on_the_thread_count():
+    numba = pytest.importorskip("numba")
+    rng = np.random.default_rng(8)
+    n, n_lines = 64, 128
+    m = 4 * n * n_lines  # above the serial threshold: blocks of lines run in parallel
+    x, z = rng.uniform(0, 4.0 * n_lines, m), rng.uniform(0, 8.0 * n, m)
+    a = rng.normal(size=m) + 1j * rng.normal(size=m)
+    kw = dict(lines=np.arange(n_lines) * 4.0, waist=8.0, n_pixels=n, depth=8.0 * n,
+              k0=10 * np.pi / 8, method="nufft", tol=1e-6)  # fmt: skip
+    threads = numba.get_num_threads()
+    many = speckle.beam_scan(z, x, a, **kw)
+    try:
+        numba.set_num_threads(1)
+        one = speckle.beam_scan(z, x, a, **kw)
+    finally:
+        numba.set_num_threads(threads)
+    np.testing.assert_array_equal(one, many)

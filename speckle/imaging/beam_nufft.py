@@ -76,10 +76,16 @@ __all__ = [
 BEAM_AUTO_CANDIDATES = ("direct", "nufft", "nufft32")
 #: Largest fine-grid rows over scanned lines (grid with gaps) relative to distinct lines.
 MAX_GRID_FILL = 4
+#: Outer lines per parallel block (at least twice the halo of the beam reach).
+_BLOCK = 64
+#: Scatterer-line weights below which a scan runs on one thread.
+SERIAL_BELOW = 200_000
 #: Depth bins per line bucket in 2-D (cache locality of the spreading).
 _DEPTH_BINS = 32
 #: Vector length of the spreading loops (kernel values padded with zeros to a multiple).
 _LANES = 8
+#: Scatterers per chunk of the vectorised Horner evaluation of the depth kernel.
+_HORNER_CHUNK = 256
 #: Gaussian weights are re-anchored by a direct exponential every this many lines.
 _ANCHOR = 16
 
@@ -148,65 +154,83 @@ def line_grid(lines: np.ndarray, waist: float) -> LineGrid | None:
 
 
 @numba.njit(cache=True)
+def _bucket(x, y, z, j, three_d, o_ax, xo, po, r_o, n_outer, halo, yo, pi_, r_i, n_inner, bli,
+            depth, nbi):  # fmt: skip
+    """Bucket of scatterer ``j`` (see :func:`_sort_scene`), or -1 beyond the reach of the grid."""
+    so = ((x[j] if o_ax == 0 else y[j]) - xo) / po
+    if so < -r_o or so > n_outer - 1 + r_o:
+        return -1
+    ko = min(max(np.int64(math.floor(so)) + halo, 0), n_outer + 2 * halo - 1)
+    if three_d:
+        si = ((y[j] if o_ax == 0 else x[j]) - yo) / pi_
+        if si < -r_i or si > n_inner - 1 + r_i:
+            return -1
+        ki = min(max(np.int64(math.floor(si)) + bli, 0), nbi - 1)
+    else:
+        f = z[j] / depth
+        ki = min(max(np.int64((f - math.floor(f)) * nbi), 0), nbi - 1)
+    return ko * nbi + ki
+
+
+@numba.njit(parallel=True, cache=True)
 def _sort_scene(
     x, y, z, a, gam, three_d, o_ax, xo, po, r_o, n_outer, halo, yo, pi_, r_i, n_inner, bli,
     depth, nbi,
 ):  # fmt: skip
-    """Scatterers within reach of the grid, in bucket order, by a counting sort.
+    """Scatterers within reach of the grid, in bucket order, by a parallel counting sort.
 
     Lateral coordinates in pitches ``so = (x - X_0)/p`` along the outer axis (and ``si`` along
     the inner one in 3-D, ``y`` of size 1 in 2-D); bucket ``(floor(so) + halo) * nbi + sub``
     with ``sub`` the inner-axis bucket (3-D) or one of ``nbi`` depth bins (2-D, cache
-    locality). Both passes read the inputs in order (random writes only). Returns
-    ``(z, a, so, si, gam, starts)`` sorted (``si``/``gam`` of size 1 when not per scatterer).
+    locality). Each chunk of the input counts its buckets, then writes its scatterers at its
+    own offsets (inputs read in order, random writes only; the order within a bucket is the
+    input order whatever the number of threads). Returns ``(z, a, so, si, gam, starts)``
+    sorted (``si``/``gam`` of size 1 when not per scatterer).
     """
     m = z.size
-    nbo = n_outer + 2 * halo
-    starts = np.zeros(nbo * nbi + 1, dtype=np.int64)
+    nb = (n_outer + 2 * halo) * nbi
+    n_chunks = max(1, min(16, m // 32768))
+    size = (m + n_chunks - 1) // n_chunks
     key = np.empty(m, dtype=np.int64)
-    for j in range(m):
-        xa = x[j] if o_ax == 0 else y[j]
-        so = (xa - xo) / po
-        key[j] = -1
-        if so < -r_o or so > n_outer - 1 + r_o:
-            continue
-        ko = min(max(np.int64(math.floor(so)) + halo, 0), nbo - 1)
-        if three_d:
-            xb = y[j] if o_ax == 0 else x[j]
-            si = (xb - yo) / pi_
-            if si < -r_i or si > n_inner - 1 + r_i:
-                continue
-            ki = min(max(np.int64(math.floor(si)) + bli, 0), nbi - 1)
-        else:
-            f = z[j] / depth
-            ki = min(max(np.int64((f - math.floor(f)) * nbi), 0), nbi - 1)
-        k = ko * nbi + ki
-        key[j] = k
-        starts[k + 1] += 1
-    for k in range(nbo * nbi):
-        starts[k + 1] += starts[k]
-    kept = starts[nbo * nbi]
-    zs = np.empty(kept)
-    as_ = np.empty(kept, dtype=np.complex128)
-    sos = np.empty(kept)
-    sis = np.empty(kept if three_d else 1)
-    gams = np.empty(kept if gam.size > 1 else 1, dtype=np.complex128)
+    counts = np.zeros((n_chunks, nb), dtype=np.int64)
+    for c in numba.prange(n_chunks):
+        for j in range(c * size, min(m, (c + 1) * size)):
+            k = _bucket(x, y, z, j, three_d, o_ax, xo, po, r_o, n_outer, halo, yo, pi_, r_i,
+                        n_inner, bli, depth, nbi)  # fmt: skip
+            key[j] = k
+            if k >= 0:
+                counts[c, k] += 1
+    starts = np.zeros(nb + 1, dtype=np.int64)
+    offset = np.empty((n_chunks, nb), dtype=np.int64)
+    total = 0
+    for k in range(nb):
+        starts[k] = total
+        for c in range(n_chunks):
+            offset[c, k] = total
+            total += counts[c, k]
+    starts[nb] = total
+    zs = np.empty(total)
+    as_ = np.empty(total, dtype=np.complex128)
+    sos = np.empty(total)
+    sis = np.empty(total if three_d else 1)
+    gams = np.empty(total if gam.size > 1 else 1, dtype=np.complex128)
     if gam.size == 1:
         gams[0] = gam[0]
-    pos = starts[:-1].copy()
-    for j in range(m):
-        k = key[j]
-        if k < 0:
-            continue
-        t = pos[k]
-        pos[k] += 1
-        zs[t] = z[j]
-        as_[t] = a[j]
-        sos[t] = ((x[j] if o_ax == 0 else y[j]) - xo) / po
-        if three_d:
-            sis[t] = ((y[j] if o_ax == 0 else x[j]) - yo) / pi_
-        if gam.size > 1:
-            gams[t] = gam[j]
+    for c in numba.prange(n_chunks):
+        pos = offset[c]
+        for j in range(c * size, min(m, (c + 1) * size)):
+            k = key[j]
+            if k < 0:
+                continue
+            t = pos[k]
+            pos[k] += 1
+            zs[t] = z[j]
+            as_[t] = a[j]
+            sos[t] = ((x[j] if o_ax == 0 else y[j]) - xo) / po
+            if three_d:
+                sis[t] = ((y[j] if o_ax == 0 else x[j]) - yo) / pi_
+            if gam.size > 1:
+                gams[t] = gam[j]
     return zs, as_, sos, sis, gams, starts
 
 
@@ -235,17 +259,6 @@ def _gauss(s, b, lo, hi, out):
             ratio *= step
             out[kk] = g
         k = stop
-
-
-@numba.njit(parallel=True, cache=True)
-def _carriers(z, a, k0, depth, nf, cr, ci, u):
-    """Carrier ``cr + i ci = a exp(2i k0 z)`` and fine-grid depth ``u``, in parallel chunks."""
-    m = z.size
-    chunk = 8192
-    for c0 in numba.prange((m + chunk - 1) // chunk):
-        t0 = c0 * chunk
-        t1 = min(m, t0 + chunk)
-        carrier_and_position(z[t0:t1], a[t0:t1], k0, depth, nf, cr[t0:t1], ci[t0:t1], u[t0:t1])
 
 
 @numba.njit(fastmath=True, inline="always")
@@ -305,8 +318,8 @@ def _line_weights(c, s, b, lo, hi, per, wr, wi):
 
 @numba.njit(parallel=True, fastmath=True, cache=True)
 def _spread_beam(
-    cr, ci, u, so, si, gam, bo_scale, bi_scale, ln_cut, starts, nbi, n_outer, n_inner, inner,
-    block, halo, kmax_i, nf, w, coef, out,
+    z, a, k0, depth, so, si, gam, bo_scale, bi_scale, ln_cut, starts, nbi, n_outer, n_inner,
+    inner, block, halo, kmax_i, nf, w, coef, out,
 ):  # fmt: skip
     """Spread every scatterer into the fine grids of the lines within its reach.
 
@@ -337,28 +350,35 @@ def _spread_beam(
         j1 = starts[(k_hi + 1) * nbi]
         m = j1 - j0
         g = np.zeros((r1 - r0) * n_inner * 2 * plane, dtype=coef.dtype)
+        cr = np.empty(m)
+        ci = np.empty(m)
+        u = np.empty(m)
+        carrier_and_position(z[j0:j1], a[j0:j1], k0, depth, nf, cr, ci, u)
         # ES kernel values of every scatterer of the block, Horner vectorised over scatterers
         xk = np.empty(m)
         for t in range(m):
-            x0 = u[j0 + t] - half
+            x0 = u[t] - half
             xk[t] = 2.0 * (math.ceil(x0) - x0) - 1.0
         ker = np.empty((w, m), dtype=coef.dtype)
-        for i in range(w):
-            kr = ker[i]
-            c = coef[deg1 - 1, i]
-            for t in range(m):
-                kr[t] = c
-            for k in range(deg1 - 2, -1, -1):
-                c = coef[k, i]
-                for t in range(m):
-                    kr[t] = kr[t] * xk[t] + c
+        for t0 in range(0, m, _HORNER_CHUNK):  # chunks stay in L1 across the degree loop
+            t1 = min(m, t0 + _HORNER_CHUNK)
+            xs = xk[t0:t1]
+            for i in range(w):
+                kr = ker[i, t0:t1]  # views indexed from 0: no wrap-around checks, vectorised
+                c = coef[deg1 - 1, i]
+                for t in range(t1 - t0):
+                    kr[t] = c
+                for k in range(deg1 - 2, -1, -1):
+                    c = coef[k, i]
+                    for t in range(t1 - t0):
+                        kr[t] = kr[t] * xs[t] + c
         gi = np.ones(kmax_i, dtype=np.complex128)
         kv = np.zeros(wp, dtype=coef.dtype)
         wr = np.empty(kmax_o, dtype=coef.dtype)
         wi = np.empty(kmax_o, dtype=coef.dtype)
         for t in range(m):
             tt = j0 + t
-            if cr[tt] == 0.0 and ci[tt] == 0.0:
+            if cr[t] == 0.0 and ci[t] == 0.0:
                 continue
             gm = gam[tt] if per else gam[0]
             bo = gm * bo_scale
@@ -379,10 +399,10 @@ def _spread_beam(
                 if ilo > ihi:
                     continue
                 _gauss(s_i, bi, ilo, ihi, gi)
-            _line_weights(complex(cr[tt], ci[tt]) * gm * gm, s_o, bo, lo, hi, per, wr, wi)
+            _line_weights(complex(cr[t], ci[t]) * gm * gm, s_o, bo, lo, hi, per, wr, wi)
             for i in range(w):
                 kv[i] = ker[i, t]
-            st = np.int64(math.ceil(u[tt] - half)) + pad
+            st = np.int64(math.ceil(u[t] - half)) + pad
             for o in range(lo, hi + 1):
                 rbase = (o - r0) * n_inner
                 vr = wr[o - lo]
@@ -420,11 +440,6 @@ def _spread_beam(
 # --- the method --------------------------------------------------------------------------
 
 
-def _lateral(scene: BeamScene, grid: LineGrid, axis: int) -> np.ndarray:
-    coord = scene.x if axis == 0 else scene.y
-    return (coord - grid.origin[axis]) / grid.pitch[axis]
-
-
 @contextlib.contextmanager
 def _slp_vectorize():
     """Enable LLVM's SLP vectoriser while numba compiles (numba turns it off by default).
@@ -439,10 +454,6 @@ def _slp_vectorize():
         yield
     finally:
         numba.config.SLP_VECTORIZE = old
-
-
-def _n_threads() -> int:
-    return numba.get_num_threads()
 
 
 def beam_nufft_scan(
@@ -476,23 +487,29 @@ def beam_nufft_scan(
     bli = math.ceil(r_i) + 1
     nbi = n_inner + 2 * bli if three_d else _DEPTH_BINS
     y = scene.y if three_d else np.zeros(1)
-    z, a, so, si, gam, starts = _sort_scene(
-        scene.x, y, scene.z, scene.amplitude, gam, three_d, o_ax, grid.origin[o_ax], p_o, r_o,
-        n_outer, halo, grid.origin[i_ax], p_i, r_i, n_inner, bli, scene.depth, nbi,
-    )  # fmt: skip
-    m = z.size
-    cr, ci, u = np.empty(m), np.empty(m), np.empty(m)
-    block = max(1, min(n_outer, math.ceil(n_outer / (4 * _n_threads())), 64))
-    block = max(block, min(n_outer, 2 * halo))
+    # blocks of outer lines: independent of the thread count, so results are bitwise the same
+    # on any number of threads (the vectorised loops would round differently per blocking)
+    block = min(n_outer, max(_BLOCK, 2 * halo))
     kmax_i = int(2 * r_i) + 2 if three_d else 1
     g = np.zeros((n_outer * n_inner, plan.nf), dtype=plan.cplx)
+    # small scans run on one thread: waking the pool costs more than it saves
+    threads = numba.get_num_threads()
+    small = scene.z.size * (2 * r_o + 1) * ((2 * r_i + 1) if three_d else 1) < SERIAL_BELOW
     with PARALLEL_LOCK, _slp_vectorize():
-        _carriers(z, a, scene.k0, scene.depth, plan.nf, cr, ci, u)
-        _spread_beam(
-            cr, ci, u, so, si, gam, 2.0 * p_o**2 / w0**2, 2.0 * p_i**2 / w0**2, ln_cut,
-            starts, nbi, n_outer, n_inner, three_d, block, halo, kmax_i, plan.nf, plan.w,
-            plan.coef, g.view(plan.real),
-        )  # fmt: skip
+        numba.set_num_threads(1 if small else threads)
+        try:
+            z, a, so, si, gam, starts = _sort_scene(
+                scene.x, y, scene.z, scene.amplitude, gam, three_d, o_ax, grid.origin[o_ax],
+                p_o, r_o, n_outer, halo, grid.origin[i_ax], p_i, r_i, n_inner, bli, scene.depth,
+                nbi,
+            )  # fmt: skip
+            _spread_beam(
+                z, a, scene.k0, scene.depth, so, si, gam, 2.0 * p_o**2 / w0**2,
+                2.0 * p_i**2 / w0**2, ln_cut, starts, nbi, n_outer, n_inner, three_d, block, halo,
+                kmax_i, plan.nf, plan.w, plan.coef, g.view(plan.real),
+            )  # fmt: skip
+        finally:
+            numba.set_num_threads(threads)
     return fine_to_pixels(g, plan)[grid.rows]
 
 
@@ -539,20 +556,20 @@ def _estimate(method: str, scene: BeamScene, beam: Beam, tol: float, setup: _Set
     grid_err = 4.0 * setup.grid.deviation / beam.waist
     if grid_err > tol / 8:
         return math.inf, math.inf
+    slots = setup.terms_per_row * setup.n_rows  # scatterer-line weights written
     if method == "nufft":
         w = kernel_width(0.5 * tol)
         nf = fine_grid_size(n, w)
-        slots = setup.terms_per_row * setup.n_rows
-        cost = setup.n_rows * (10000.0 + 40.0 * nf) + m * 60.0 + slots * 2.0 * w
-        return tol, cost
+        return tol, 8e5 + setup.n_rows * 40.0 * nf + m * 60.0 + slots * 1.2 * w
     if method == "nufft32":
+        # float32 conversions cost per scatterer, narrower stores save per weight written
+        # (measured: 10 % slower than "nufft" in 2-D at w0 = 2 pitches, 1.5x faster in 3-D)
         w = kernel_width(0.25 * tol)
-        nf = fine_grid_size(n, w)
         rounding = float32_error_estimate(int(setup.weighted_terms), n, w)
         if rounding > 0.5 * tol:
             return math.inf, math.inf
-        slots = setup.terms_per_row * setup.n_rows
-        cost = setup.n_rows * (10000.0 + 25.0 * nf) + m * 60.0 + slots * 1.2 * w
+        nf = fine_grid_size(n, w)
+        cost = 8e5 + setup.n_rows * 30.0 * nf + m * 130.0 + slots * 0.75 * w
         return 0.5 * tol + rounding, cost
     raise ValueError(f"no error/cost model for beam method {method!r}")
 
@@ -671,7 +688,7 @@ def finufft_beam_scan(
     opts = {} if upsampfac is None else {"upsampfac": upsampfac}
     f = finufft.nufft2d1(
         t, phi, c, (scene.n_pixels, n_modes), eps=tol / 20 if eps is None else eps, isign=1,
-        nthreads=_n_threads() if nthreads is None else nthreads, **opts,
+        nthreads=numba.get_num_threads() if nthreads is None else nthreads, **opts,
     )  # fmt: skip
     m = np.arange(n_modes) - n_modes // 2
     ghat = w0 * math.sqrt(math.pi / 2) * np.exp(-((2 * np.pi * m / period) ** 2) * w0**2 / 8)
