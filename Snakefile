@@ -35,6 +35,7 @@ include: "workflow/rules/scan.smk"
 include: "workflow/rules/speed.smk"
 include: "workflow/rules/elastography.smk"
 include: "workflow/rules/system.smk"
+include: "workflow/rules/beam.smk"
 
 
 rule all:
@@ -46,4 +47,5 @@ rule all:
         + SCAN_TARGETS
         + SPEED_TARGETS
         + ELASTOGRAPHY_TARGETS
-        + SYSTEM_TARGETS,
+        + SYSTEM_TARGETS
+        + BEAM_TARGETS,

@@ -12,14 +12,15 @@ from .analysis.phase import add_complex_noise
 from .analysis.statistics import contrast_theory, fit_exponential, fit_rayleigh, speckle_contrast
 from .analysis.strain import accumulate_strain, estimate_displacement, estimate_strain
 from .analysis.tracking import track
-from .imaging import synthesis
+from .imaging import scan, synthesis
 from .imaging.aline import METHODS, ascan, pixel_depths
 from .imaging.beam import beam_scan
 from .imaging.bscan import bscan, expected_intensity
+from .imaging.scan import image, image_regions, scan_lines
 from .imaging.synthesis import choose_method
 from .io import open_dataset, to_netcdf
 from .provenance import package_version
-from .scene import deformation
+from .scene import deformation, regions, shared
 from .scene.deformation import deformable_scene, displace, translate, uniaxial_strain
 from .scene.mechanics import (
     compress,
@@ -29,7 +30,9 @@ from .scene.mechanics import (
     layer_strains,
     layered_labels,
 )
+from .scene.regions import make_regions, rasterize, region_label
 from .scene.scatterers import random_scatterers
+from .scene.shared import shared_scene
 from .system import detection
 from .system.datasheet import EXAMPLE_SYSTEMS, System, datasheet, example_system
 from .system.source import delta_k, k0_from_wavelength, spectrum
@@ -67,18 +70,28 @@ __all__ = [
     "expected_intensity",
     "fit_exponential",
     "fit_rayleigh",
+    "image",
+    "image_regions",
     "inclusion_labels",
     "inclusion_strain",
     "interferogram",
     "k0_from_wavelength",
     "layer_strains",
     "layered_labels",
+    "make_regions",
     "measured",
     "open_dataset",
     "pearson",
     "pixel_depths",
     "process",
     "random_scatterers",
+    "rasterize",
+    "region_label",
+    "regions",
+    "scan",
+    "scan_lines",
+    "shared",
+    "shared_scene",
     "speckle_contrast",
     "spectrum",
     "statistics",

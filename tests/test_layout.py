@@ -20,7 +20,8 @@ RANK = {"scene": 1, "system": 1, "imaging": 2, "analysis": 3, "figures": 4}
 
 #: Third-party packages each group may import, and why.
 ALLOWED = {
-    None: {"numpy", "xarray", "dask", "netCDF4", "yaml"},  # infrastructure: arrays, I/O, sweeps
+    # infrastructure: arrays, I/O, sweeps and streaming on a dask.distributed cluster
+    None: {"numpy", "xarray", "dask", "distributed", "netCDF4", "yaml"},
     "scene": {"numpy", "xarray", "dask", "scipy", "skfem"},  # geometry, FEM mechanics
     "system": {"numpy", "xarray", "scipy", "finufft"},  # spectra, noise, fast camera model
     "imaging": {"numpy", "xarray", "dask", "scipy", "numba", "finufft"},  # fast synthesis
