@@ -19,8 +19,16 @@ from .io import open_dataset, to_netcdf
 from .provenance import package_version
 from .scene import deformation
 from .scene.deformation import deformable_scene, displace, translate, uniaxial_strain
+from .scene.layers import layers, region_values
 from .scene.scatterers import random_scatterers
 from .system import detection
+from .system.attenuation import attenuate, attenuation_map, optical_depth
+from .system.backscatter import backscatter
+from .system.detection import log_compress, log_expand
+from .system.noise import add_noise
+from .system.phase import phase_perturb
+from .system.polarization import degree_of_polarization, depolarize
+from .system.rolloff import rolloff
 from .system.source import delta_k, k0_from_wavelength, spectrum
 
 __version__ = package_version()
@@ -28,7 +36,11 @@ __version__ = package_version()
 __all__ = [
     "METHODS",
     "__version__",
+    "add_noise",
     "ascan",
+    "attenuate",
+    "attenuation_map",
+    "backscatter",
     "beam_scan",
     "bscan",
     "choose_method",
@@ -38,7 +50,9 @@ __all__ = [
     "correlation_map",
     "deformable_scene",
     "deformation",
+    "degree_of_polarization",
     "delta_k",
+    "depolarize",
     "detection",
     "displace",
     "expected_correlation",
@@ -46,11 +60,18 @@ __all__ = [
     "fit_exponential",
     "fit_rayleigh",
     "k0_from_wavelength",
+    "layers",
+    "log_compress",
+    "log_expand",
     "measured",
     "open_dataset",
+    "optical_depth",
     "pearson",
+    "phase_perturb",
     "pixel_depths",
     "random_scatterers",
+    "region_values",
+    "rolloff",
     "speckle_contrast",
     "spectrum",
     "statistics",

@@ -1,0 +1,29 @@
+"""Helpers shared by the system effects that act on scatterer fields (not public)."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+
+def check_scene(scene: object) -> xr.Dataset:
+    """A scatterer field with variables ``z`` (µm) and ``amplitude`` (``TypeError`` otherwise)."""
+    if not isinstance(scene, xr.Dataset) or not {"z", "amplitude"} <= set(scene.data_vars):
+        raise TypeError("scene must be an xarray.Dataset with variables 'z' and 'amplitude'")
+    return scene
+
+
+def scale_amplitudes(scene: xr.Dataset, factor: object, **attrs: object) -> xr.Dataset:
+    """Multiply scatterer amplitudes by ``factor`` (shaped like ``scene.z``), record ``attrs``."""
+    amp = scene.amplitude * factor
+    out = scene.assign(amplitude=amp.assign_attrs(scene.amplitude.attrs))
+    return out.assign_attrs(attrs)
+
+
+def line_rng(seed: int, line: int, stream: int) -> np.random.Generator:
+    """Generator of A-line ``line`` for one effect (``stream``): independent of the scatterers'.
+
+    The scatterers of line ``i`` use ``SeedSequence(seed, spawn_key=(i,))``; effects use
+    ``spawn_key=(i, stream)``, so adding an effect never changes the scene.
+    """
+    return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(line, stream)))

@@ -1,0 +1,30 @@
+"""Relative backscattering strength per layer or region (off by default).
+
+A medium whose scatterers reflect ``b`` times more intensity has amplitudes ``sqrt(b) a_j``: the
+mean speckle intensity scales by ``b`` and the speckle statistics are unchanged.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from ..scene.layers import property_profile
+from ._scene import check_scene, scale_amplitudes
+
+__all__ = ["backscatter"]
+
+
+def backscatter(scene: xr.Dataset, value: float | xr.Dataset) -> xr.Dataset:
+    """Scale scatterer intensities by the backscatter of their layer.
+
+    Parameters
+    ----------
+    scene : xarray.Dataset
+        Scatterer field (``z`` in µm, ``amplitude``).
+    value : float or xarray.Dataset
+        Relative backscattered intensity (>= 0), or layers with ``backscatter``.
+    """
+    check_scene(scene)
+    b = xr.apply_ufunc(property_profile, scene.z, kwargs={"value": value, "name": "backscatter"})
+    return scale_amplitudes(scene, np.sqrt(b))
