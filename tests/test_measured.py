@@ -296,9 +296,7 @@ def test_additive_detector_noise_does_not_explain_the_departure(sample_path, com
     assert 0.03 < noise < 0.2 and noise > 5 * float(comparison.floor)
     n = 32
     scene = speckle.random_scatterers(800, 16.0, n_pixels=n, depth=n * 8.0, seed=19)
-    field = speckle.bscan(
-        scene, speckle.spectrum(n, n * 8.0, k0_dk=10), normalise="expected"
-    )
+    field = speckle.bscan(scene, speckle.spectrum(n, n * 8.0, k0_dk=10), normalise="expected")
     rng = np.random.default_rng(19)
     shape = field.field.shape
     w = np.sqrt(noise / 2) * (rng.normal(size=shape) + 1j * rng.normal(size=shape))

@@ -74,7 +74,9 @@ def depolarize(scene: xr.Dataset, depolarization: float | xr.Dataset, *, seed: i
         channel=list(CHANNELS)
     )
     mean_f = float(depolarization) if not isinstance(depolarization, xr.Dataset) else np.nan
-    out = scene.assign(amplitude=both.transpose("channel", *scene.amplitude.dims))
+    dims = ("channel", *scene.amplitude.dims)
+    z = scene.z.broadcast_like(both).transpose(*dims)  # both channels see the same depths
+    out = scene.assign(amplitude=both.transpose(*dims), z=z.assign_attrs(scene.z.attrs))
     return out.assign_attrs(depolarization=mean_f, polarization_seed=sd)
 
 
