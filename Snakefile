@@ -21,6 +21,7 @@ include: "workflow/rules/statistics.smk"
 include: "workflow/rules/deformation.smk"
 include: "workflow/rules/scan.smk"
 include: "workflow/rules/speed.smk"
+include: "workflow/rules/realism.smk"
 
 
 rule all:
@@ -30,4 +31,5 @@ rule all:
         + STATISTICS_TARGETS
         + DEFORMATION_TARGETS
         + SCAN_TARGETS
-        + SPEED_TARGETS,
+        + SPEED_TARGETS
+        + REALISM_TARGETS,

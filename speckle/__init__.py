@@ -22,8 +22,8 @@ from .scene.deformation import deformable_scene, displace, translate, uniaxial_s
 from .scene.layers import layers, region_values
 from .scene.scatterers import random_scatterers
 from .system import detection
-from .system.attenuation import attenuate, attenuation_map, optical_depth
-from .system.backscatter import backscatter
+from .system.attenuation import attenuate, attenuate_regions, attenuation_map, optical_depth
+from .system.backscatter import backscatter, backscatter_regions
 from .system.detection import log_compress, log_expand
 from .system.noise import add_noise
 from .system.phase import phase_perturb
@@ -39,8 +39,10 @@ __all__ = [
     "add_noise",
     "ascan",
     "attenuate",
+    "attenuate_regions",
     "attenuation_map",
     "backscatter",
+    "backscatter_regions",
     "beam_scan",
     "bscan",
     "choose_method",

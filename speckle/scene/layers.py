@@ -36,6 +36,7 @@ __all__ = [
     "property_integral",
     "property_profile",
     "region_values",
+    "sample_map",
 ]
 
 #: Property name -> (units, allowed interval (low, high), long name).
@@ -182,3 +183,28 @@ def region_values(labels: xr.DataArray, properties: xr.Dataset, name: str) -> xr
         raise ValueError(f"labels {missing.tolist()} have no row in properties (regions {table})")
     units = PROPERTIES[name][0]
     return labels.copy(data=values[order][pos]).assign_attrs(units=units, long_name=name)
+
+
+def sample_map(field: xr.DataArray, z: object, x: object) -> np.ndarray:
+    """Values of a ``(depth, x)`` map at points ``(z, x)`` (µm): linear in depth, nearest in x.
+
+    Depths outside the map take its first/last row; ``x`` must lie within half a column step of
+    the map's ``x`` range (a scatterer outside the labelled scene is an error).
+    """
+    if not isinstance(field, xr.DataArray) or {"depth", "x"} - set(field.dims):
+        raise TypeError("field must be a DataArray with dims (depth, x)")
+    f = field.transpose("depth", "x").values
+    zd = np.asarray(field.depth.values, dtype=float)
+    xd = np.asarray(field.x.values, dtype=float)
+    zz, xx = np.broadcast_arrays(np.asarray(z, dtype=float), np.asarray(x, dtype=float))
+    half = 0.5 * (xd[1] - xd[0]) if xd.size > 1 else 0.0
+    if np.any(xx < xd[0] - half - 1e-9) or np.any(xx > xd[-1] + half + 1e-9):
+        raise ValueError(f"x outside the labelled scene [{xd[0]:g}, {xd[-1]:g}] µm")
+    col = np.clip(
+        np.rint((xx - xd[0]) / (2 * half) if half else 0 * xx).astype(int), 0, xd.size - 1
+    )
+    out = np.empty(zz.shape)
+    for c in np.unique(col):
+        sel = col == c
+        out[sel] = np.interp(zz[sel], zd, f[:, c])
+    return out

@@ -27,3 +27,12 @@ def line_rng(seed: int, line: int, stream: int) -> np.random.Generator:
     ``spawn_key=(i, stream)``, so adding an effect never changes the scene.
     """
     return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(line, stream)))
+
+
+def lateral_positions(scene: xr.Dataset) -> xr.DataArray:
+    """Lateral position of every scatterer (µm): variable ``x``, else the ``aline`` coordinate."""
+    if "x" in scene.data_vars:
+        return scene.x
+    if "aline" in scene.coords:
+        return scene.aline.broadcast_like(scene.z)
+    raise ValueError("scene needs a variable 'x' or an 'aline' coordinate (µm)")

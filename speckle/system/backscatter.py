@@ -9,10 +9,10 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ..scene.layers import property_profile
-from ._scene import check_scene, scale_amplitudes
+from ..scene.layers import property_profile, region_values, sample_map
+from ._scene import check_scene, lateral_positions, scale_amplitudes
 
-__all__ = ["backscatter"]
+__all__ = ["backscatter", "backscatter_regions"]
 
 
 def backscatter(scene: xr.Dataset, value: float | xr.Dataset) -> xr.Dataset:
@@ -28,3 +28,28 @@ def backscatter(scene: xr.Dataset, value: float | xr.Dataset) -> xr.Dataset:
     check_scene(scene)
     b = xr.apply_ufunc(property_profile, scene.z, kwargs={"value": value, "name": "backscatter"})
     return scale_amplitudes(scene, np.sqrt(b))
+
+
+def backscatter_regions(
+    scene: xr.Dataset, labels: xr.DataArray, properties: xr.Dataset
+) -> xr.Dataset:
+    """Scale scatterer intensities by the ``backscatter`` of the region they lie in.
+
+    The region of a scatterer is the label of the nearest pixel of ``labels`` (dims
+    ``(depth, x)``, µm coordinates); ``properties`` is the per-region table (dim ``region``).
+    """
+    check_scene(scene)
+    b = region_values(labels, properties, "backscatter")
+    x = lateral_positions(scene)
+    step = (
+        float(labels.depth.values[1] - labels.depth.values[0]) if labels.sizes["depth"] > 1 else 1.0
+    )
+
+    def nearest(z, xx):
+        # nearest row: snap z to the row grid before sampling (no blending across a boundary)
+        z0 = float(labels.depth.values[0])
+        zs = z0 + np.rint((np.asarray(z) - z0) / step) * step
+        return sample_map(b, zs, xx)
+
+    factor = xr.apply_ufunc(lambda z, xx: np.sqrt(nearest(z, xx)), scene.z, x)
+    return scale_amplitudes(scene, factor, backscatter="by region")
