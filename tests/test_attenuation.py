@@ -86,3 +86,41 @@ def test_bad_attenuation_inputs(scene):
     empty = xr.Dataset({"attenuation": ("region", np.zeros(0))}, coords={"region": np.zeros(0)})
     with pytest.raises(ValueError, match="no region"):
         speckle.attenuation_map(labels, empty)
+
+
+def test_attenuation_and_backscatter_by_region_on_a_label_image():
+    """Per scatterer: tau is the path integral through the regions of its column (linear
+    interpolation of the cumulative sum: error <= |d mu| dz/4 next to a boundary inside a cell);
+    backscatter is the value of the region holding the scatterer."""
+    dz, nz = 1.0, 400
+    depth = (np.arange(nz) + 0.5) * dz  # boundaries at pixel edges, tops at 0
+    x = np.array([0.0, 8.0])
+    lab = np.zeros((nz, 2), dtype=int)
+    lab[150:, 1] = 1  # column x = 8: region 1 below 150 µm
+    labels = xr.DataArray(lab, dims=("depth", "x"), coords={"depth": depth, "x": x})
+    props = xr.Dataset(
+        {"attenuation": ("region", [1e-3, 6e-3]), "backscatter": ("region", [1.0, 0.25])},
+        coords={"region": [0, 1]},
+    )
+    z = np.array([[10.0, 149.0, 151.0, 300.0]] * 2)
+    scene = xr.Dataset(
+        {"z": (("aline", "scatterer"), z), "amplitude": (("aline", "scatterer"), np.ones((2, 4)))},
+        coords={"aline": x},
+    )
+    att = speckle.attenuate_regions(scene, labels, props).amplitude.values
+    tau = np.where(z < 150, 1e-3 * z, 0.15 + 6e-3 * (z - 150))
+    np.testing.assert_allclose(att[0], np.exp(-1e-3 * z[0]), rtol=1e-12)
+    np.testing.assert_allclose(-np.log(att[1]), tau[1], rtol=0, atol=5e-3 * dz / 4 + 1e-12)
+    bs = speckle.backscatter_regions(scene, labels, props).amplitude.values
+    np.testing.assert_allclose(bs**2, [[1, 1, 1, 1], [1, 1, 0.25, 0.25]])
+    with pytest.raises(ValueError, match="outside the labelled scene"):
+        speckle.attenuate_regions(scene.assign_coords(aline=[0.0, 30.0]), labels, props)
+
+
+def test_layered_backscatter_scales_mean_intensity(scene):
+    stack = speckle.layers([0.0, 512.0], backscatter=[1.0, 4.0])
+    out = speckle.backscatter(scene, stack)
+    ratio = (abs(out.amplitude) / abs(scene.amplitude)).values
+    np.testing.assert_allclose(ratio, np.where(scene.z.values < 512.0, 1.0, 2.0))
+    with pytest.raises(ValueError, match="backscatter"):
+        speckle.backscatter(scene, -1.0)
