@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import xarray as xr
 from scipy import integrate
 
 import speckle
@@ -85,3 +86,20 @@ def test_bad_depolarization():
             speckle.depolarize(scene, bad, seed=1)
     with pytest.raises(ValueError, match="depolarization"):
         speckle.layers([0.0, 10.0], depolarization=[0.5, 1.5])
+
+
+def test_depolarization_by_region_label():
+    depth = np.arange(64) * 8.0 + 4.0
+    lab = np.zeros((64, 4), dtype=int)
+    lab[:, 2:] = 1  # right half: fully depolarizing region
+    labels = xr.DataArray(
+        lab, dims=("depth", "x"), coords={"depth": depth, "x": [0.0, 4.0, 8.0, 12.0]}
+    )
+    props = xr.Dataset({"depolarization": ("region", [0.0, 1.0])}, coords={"region": [0, 1]})
+    scene = speckle.random_scatterers(4, 1.0, n_pixels=N, depth=H, seed=2, aline_pitch=4.0)
+    out = speckle.depolarize(scene, props, seed=1, labels=labels)
+    co, x = (abs(out.amplitude.sel(channel=c)) for c in ("co", "cross"))
+    left = (scene.aline < 6.0).broadcast_like(scene.z)
+    np.testing.assert_allclose(co.where(left, 0.0), abs(scene.amplitude).where(left, 0.0))
+    np.testing.assert_array_equal(x.where(left, 0.0), 0.0)
+    np.testing.assert_array_equal(co.where(~left, 0.0), 0.0)

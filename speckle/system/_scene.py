@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from ..scene.layers import region_values, sample_map
+
 
 def check_scene(scene: object) -> xr.Dataset:
     """A scatterer field with variables ``z`` (µm) and ``amplitude`` (``TypeError`` otherwise)."""
@@ -36,3 +38,22 @@ def lateral_positions(scene: xr.Dataset) -> xr.DataArray:
     if "aline" in scene.coords:
         return scene.aline.broadcast_like(scene.z)
     raise ValueError("scene needs a variable 'x' or an 'aline' coordinate (µm)")
+
+
+def region_property(
+    scene: xr.Dataset, labels: xr.DataArray, properties: xr.Dataset, name: str
+) -> xr.DataArray:
+    """Property ``name`` of the region holding each scatterer (label of the nearest pixel).
+
+    ``labels`` has dims ``(depth, x)`` (µm coordinates, uniform depth step); ``properties`` is
+    the per-region table (dim ``region``). Depths snap to the nearest row, so no value is
+    blended across a boundary.
+    """
+    values = region_values(labels, properties, name)
+    d = np.asarray(labels.depth.values, dtype=float)
+    step = float(d[1] - d[0]) if d.size > 1 else 1.0
+
+    def nearest(z, x):
+        return sample_map(values, d[0] + np.rint((np.asarray(z) - d[0]) / step) * step, x)
+
+    return xr.apply_ufunc(nearest, scene.z, lateral_positions(scene))

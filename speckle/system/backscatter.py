@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ..scene.layers import property_profile, region_values, sample_map
-from ._scene import check_scene, lateral_positions, scale_amplitudes
+from ..scene.layers import property_profile
+from ._scene import check_scene, region_property, scale_amplitudes
 
 __all__ = ["backscatter", "backscatter_regions"]
 
@@ -39,17 +39,5 @@ def backscatter_regions(
     ``(depth, x)``, µm coordinates); ``properties`` is the per-region table (dim ``region``).
     """
     check_scene(scene)
-    b = region_values(labels, properties, "backscatter")
-    x = lateral_positions(scene)
-    step = (
-        float(labels.depth.values[1] - labels.depth.values[0]) if labels.sizes["depth"] > 1 else 1.0
-    )
-
-    def nearest(z, xx):
-        # nearest row: snap z to the row grid before sampling (no blending across a boundary)
-        z0 = float(labels.depth.values[0])
-        zs = z0 + np.rint((np.asarray(z) - z0) / step) * step
-        return sample_map(b, zs, xx)
-
-    factor = xr.apply_ufunc(lambda z, xx: np.sqrt(nearest(z, xx)), scene.z, x)
-    return scale_amplitudes(scene, factor, backscatter="by region")
+    b = region_property(scene, labels, properties, "backscatter")
+    return scale_amplitudes(scene, np.sqrt(b), backscatter="by region")

@@ -25,7 +25,7 @@ import xarray as xr
 
 from .._validate import as_finite_array, check_int, check_real
 from ..scene.layers import property_profile
-from ._scene import check_scene, line_rng
+from ._scene import check_scene, line_rng, region_property
 
 __all__ = [
     "CHANNELS",
@@ -39,17 +39,28 @@ CHANNELS = ("co", "cross")
 _STREAM = 102
 
 
-def depolarize(scene: xr.Dataset, depolarization: float | xr.Dataset, *, seed: int) -> xr.Dataset:
+def depolarize(
+    scene: xr.Dataset,
+    depolarization: float | xr.Dataset,
+    *,
+    seed: int,
+    labels: xr.DataArray | None = None,
+) -> xr.Dataset:
     """Split each scatterer into co- and cross-polarized amplitudes (new dim ``channel``).
 
     Parameters
     ----------
     scene : xarray.Dataset
-        Scatterer field with dims ``(aline, scatterer)`` (others carried through).
+        Scatterer field, e.g. dims ``(aline, scatterer)`` (others carried through), or a
+        shared scene (variable ``x``).
     depolarization : float or xarray.Dataset
-        Cross-polarized fraction ``f`` in [0, 1], or layers with ``depolarization``.
+        Cross-polarized fraction ``f`` in [0, 1]; or layers with ``depolarization``; or, with
+        ``labels``, a per-region table (dim ``region``).
     seed : int
-        Seed of the cross-channel phases (A-line ``i`` uses its own stream).
+        Seed of the cross-channel phases (A-line ``i`` uses its own stream; a scene without
+        an ``aline`` dim uses one stream).
+    labels : xarray.DataArray, optional
+        Label image ``(depth, x)``: ``f`` of the region holding each scatterer.
 
     Returns
     -------
@@ -59,21 +70,29 @@ def depolarize(scene: xr.Dataset, depolarization: float | xr.Dataset, *, seed: i
     """
     check_scene(scene)
     sd = check_int(seed, "seed", low=0)
-    if "aline" not in scene.amplitude.dims:
-        raise ValueError("scene must have an 'aline' dim")
-    f = xr.apply_ufunc(
-        property_profile, scene.z, kwargs={"value": depolarization, "name": "depolarization"}
-    )
-    amp = scene.amplitude.transpose("aline", ...)
-    theta = np.stack(
-        [line_rng(sd, i, _STREAM).uniform(0, 2 * np.pi, amp.shape[1:]) for i in range(amp.shape[0])]
-    )
+    if labels is not None:
+        f = region_property(scene, labels, depolarization, "depolarization")
+    else:
+        f = xr.apply_ufunc(
+            property_profile, scene.z, kwargs={"value": depolarization, "name": "depolarization"}
+        )
+    if "aline" in scene.amplitude.dims:
+        amp = scene.amplitude.transpose("aline", ...)
+        theta = np.stack(
+            [
+                line_rng(sd, i, _STREAM).uniform(0, 2 * np.pi, amp.shape[1:])
+                for i in range(amp.shape[0])
+            ]
+        )
+    else:
+        amp = scene.amplitude
+        theta = line_rng(sd, 0, _STREAM).uniform(0, 2 * np.pi, amp.shape)
     cross = abs(amp) * np.exp(1j * theta) * np.sqrt(f)
     co = amp * np.sqrt(1 - f)
     both = xr.concat([co, cross.transpose(*co.dims)], dim="channel").assign_coords(
         channel=list(CHANNELS)
     )
-    mean_f = float(depolarization) if not isinstance(depolarization, xr.Dataset) else np.nan
+    mean_f = np.nan if isinstance(depolarization, xr.Dataset) else float(depolarization)
     dims = ("channel", *scene.amplitude.dims)
     z = scene.z.broadcast_like(both).transpose(*dims)  # both channels see the same depths
     out = scene.assign(amplitude=both.transpose(*dims), z=z.assign_attrs(scene.z.attrs))
