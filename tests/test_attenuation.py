@@ -124,3 +124,15 @@ def test_layered_backscatter_scales_mean_intensity(scene):
     np.testing.assert_allclose(ratio, np.where(scene.z.values < 512.0, 1.0, 2.0))
     with pytest.raises(ValueError, match="backscatter"):
         speckle.backscatter(scene, -1.0)
+
+
+def test_label_minus_one_is_no_medium():
+    depth = np.arange(4) * 2.0
+    labels = xr.DataArray(
+        np.array([[-1], [-1], [0], [0]]), dims=("depth", "x"), coords={"depth": depth, "x": [0.0]}
+    )
+    props = xr.Dataset({"attenuation": ("region", [0.01])}, coords={"region": [0]})
+    tau = -np.log(speckle.attenuation_map(labels, props).values[:, 0])
+    np.testing.assert_allclose(tau, [0.0, 0.0, 0.01, 0.03], atol=1e-15)  # edge at 3 µm
+    with pytest.raises(ValueError, match=r"labels \[-1\]"):
+        speckle.region_values(labels, props, "attenuation")

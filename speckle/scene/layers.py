@@ -148,7 +148,9 @@ def property_integral(z: object, value: float | xr.Dataset, name: str) -> np.nda
     return property_profile(z, value, name) * np.asarray(z, dtype=float)
 
 
-def region_values(labels: xr.DataArray, properties: xr.Dataset, name: str) -> xr.DataArray:
+def region_values(
+    labels: xr.DataArray, properties: xr.Dataset, name: str, outside: float | None = None
+) -> xr.DataArray:
     """Map a label image to property ``name`` by region label.
 
     Parameters
@@ -156,7 +158,10 @@ def region_values(labels: xr.DataArray, properties: xr.Dataset, name: str) -> xr
     labels : xarray.DataArray
         Integer region labels, e.g. dims ``(depth, x)``.
     properties : xarray.Dataset
-        Per-region properties with dim ``region`` whose coordinate holds the labels.
+        Per-region properties with dim ``region`` whose coordinate holds the labels (e.g. the
+        regions of :mod:`speckle.scene.regions`).
+    outside : float, optional
+        Value for label ``-1`` ("no region", e.g. air); without it ``-1`` is an error too.
 
     Raises
     ------
@@ -178,11 +183,16 @@ def region_values(labels: xr.DataArray, properties: xr.Dataset, name: str) -> xr
     pos = np.searchsorted(table[order], labels.values)
     pos = np.clip(pos, 0, table.size - 1)
     found = table[order][pos] == labels.values
+    vals = values[order][pos]
+    if outside is not None:
+        none = (labels.values == -1) & ~found
+        vals = np.where(none, float(check_property(name, outside)), vals)
+        found = found | none
     if not np.all(found):
         missing = np.unique(labels.values[~found])
         raise ValueError(f"labels {missing.tolist()} have no row in properties (regions {table})")
     units = PROPERTIES[name][0]
-    return labels.copy(data=values[order][pos]).assign_attrs(units=units, long_name=name)
+    return labels.copy(data=vals).assign_attrs(units=units, long_name=name)
 
 
 def sample_map(field: xr.DataArray, z: object, x: object) -> np.ndarray:

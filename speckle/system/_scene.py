@@ -41,15 +41,19 @@ def lateral_positions(scene: xr.Dataset) -> xr.DataArray:
 
 
 def region_property(
-    scene: xr.Dataset, labels: xr.DataArray, properties: xr.Dataset, name: str
+    scene: xr.Dataset,
+    labels: xr.DataArray,
+    properties: xr.Dataset,
+    name: str,
+    outside: float | None = None,
 ) -> xr.DataArray:
     """Property ``name`` of the region holding each scatterer (label of the nearest pixel).
 
     ``labels`` has dims ``(depth, x)`` (µm coordinates, uniform depth step); ``properties`` is
     the per-region table (dim ``region``). Depths snap to the nearest row, so no value is
-    blended across a boundary.
+    blended across a boundary. ``outside`` is the value for label ``-1`` (no region).
     """
-    values = region_values(labels, properties, name)
+    values = region_values(labels, properties, name, outside=outside)
     d = np.asarray(labels.depth.values, dtype=float)
     step = float(d[1] - d[0]) if d.size > 1 else 1.0
 

@@ -74,9 +74,10 @@ def attenuation_map(labels: xr.DataArray, properties: xr.Dataset) -> xr.DataArra
     labels : xarray.DataArray
         Integer label image with a uniform ``depth`` coordinate (µm), e.g. dims ``(depth, x)``.
     properties : xarray.Dataset
-        Per-region table with dim ``region`` holding ``attenuation`` (1/µm).
+        Per-region table with dim ``region`` holding ``attenuation`` (1/µm); label ``-1`` (no
+        region) does not attenuate.
     """
-    mu = region_values(labels, properties, "attenuation")
+    mu = region_values(labels, properties, "attenuation", outside=0.0)
     dz = spacing(labels, "depth")
     z0 = float(labels.depth.values[0])
     tau = dz * (mu.cumsum("depth") - mu / 2) + mu.isel(depth=0) * (z0 - dz / 2)

@@ -37,7 +37,8 @@ def backscatter_regions(
 
     The region of a scatterer is the label of the nearest pixel of ``labels`` (dims
     ``(depth, x)``, µm coordinates); ``properties`` is the per-region table (dim ``region``).
+    Scatterers at label ``-1`` (no region) get amplitude 0.
     """
     check_scene(scene)
-    b = region_property(scene, labels, properties, "backscatter")
+    b = region_property(scene, labels, properties, "backscatter", outside=0.0)
     return scale_amplitudes(scene, np.sqrt(b), backscatter="by region")
