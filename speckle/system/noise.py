@@ -91,11 +91,12 @@ def add_noise(
     Parameters
     ----------
     image : xarray.Dataset
-        From :func:`speckle.bscan`: ``field`` with dims ``(..., depth, aline)``.
+        From :func:`speckle.bscan`: ``field`` with dims ``(..., depth, aline)``; a scanned
+        shared scene's ``(..., depth, x)`` works the same (lines along ``x``).
     snr_db : float
         Mean signal intensity over mean noise intensity per pixel, in dB (finite).
     seed : int
-        Non-negative seed; line ``i`` (index along ``aline``) and every combination of the other
+        Non-negative seed; line ``i`` (index along ``aline`` or ``x``) and every combination of the other
         dims draw from their own stream, so the noise of a line does not depend on how many
         lines are imaged.
     kind : {"white", "shot", "rin"}
@@ -117,8 +118,9 @@ def add_noise(
     sd = check_int(seed, "seed", low=0)
     check_choice(kind, "kind", NOISE_KINDS)
     field = image.field
-    if "depth" not in field.dims or "aline" not in field.dims:
-        raise ValueError(f"field must have dims 'depth' and 'aline', got {field.dims}")
+    lateral = "aline" if "aline" in field.dims else "x"
+    if "depth" not in field.dims or lateral not in field.dims:
+        raise ValueError(f"field must have dims 'depth' and 'aline' (or 'x'), got {field.dims}")
     ref = (
         float((abs(field) ** 2).mean())
         if signal_intensity is None
@@ -127,14 +129,14 @@ def add_noise(
     if not ref > 0:
         raise ValueError("the image has zero mean intensity: give signal_intensity (> 0)")
     sigma2 = ref / 10 ** (snr / 10)
-    f = field.transpose(..., "aline", "depth")
+    f = field.transpose(..., lateral, "depth")
     n = f.sizes["depth"]
     w = _weights(kind, spectrum, n)
     amp = np.sqrt(sigma2 * w / w.sum())  # rms of e_n: sum_n E|e_n|^2 = sigma^2 per pixel
     shift = index_shift_phase(n, np.arange(n))
     lead = f.shape[:-2]
     noise = np.empty(f.shape, dtype=np.complex128)
-    for i in range(f.sizes["aline"]):
+    for i in range(f.sizes[lateral]):
         rng = line_rng(sd, i, _STREAM)
         e = (rng.standard_normal((*lead, n)) + 1j * rng.standard_normal((*lead, n))) / np.sqrt(2)
         noise[..., i, :] = shift * np.fft.fft(e * amp, axis=-1)
