@@ -96,9 +96,9 @@ def add_noise(
     snr_db : float
         Mean signal intensity over mean noise intensity per pixel, in dB (finite).
     seed : int
-        Non-negative seed; line ``i`` (index along ``aline`` or ``x``) and every combination of the other
-        dims draw from their own stream, so the noise of a line does not depend on how many
-        lines are imaged.
+        Non-negative seed; line ``i`` (index along ``aline`` or ``x``) and every combination
+        of the other dims draw from their own stream, so the noise of a line does not depend
+        on how many lines are imaged.
     kind : {"white", "shot", "rin"}
         Spectral shape of the noise (see module docstring); not white needs ``spectrum``.
     spectrum : xarray.DataArray, optional
