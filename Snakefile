@@ -22,6 +22,7 @@ include: "workflow/rules/deformation.smk"
 include: "workflow/rules/scan.smk"
 include: "workflow/rules/speed.smk"
 include: "workflow/rules/realism.smk"
+include: "workflow/rules/beam.smk"
 
 
 rule all:
@@ -32,4 +33,5 @@ rule all:
         + DEFORMATION_TARGETS
         + SCAN_TARGETS
         + SPEED_TARGETS
-        + REALISM_TARGETS,
+        + REALISM_TARGETS
+        + BEAM_TARGETS,

@@ -10,17 +10,20 @@ from .analysis import correlation, measured, statistics, tracking
 from .analysis.correlation import compensate, correlation_map, expected_correlation, pearson
 from .analysis.statistics import contrast_theory, fit_exponential, fit_rayleigh, speckle_contrast
 from .analysis.tracking import track
-from .imaging import synthesis
+from .imaging import scan, synthesis
 from .imaging.aline import METHODS, ascan, pixel_depths
 from .imaging.beam import beam_scan
 from .imaging.bscan import bscan, expected_intensity
+from .imaging.scan import image, image_regions, scan_lines
 from .imaging.synthesis import choose_method
 from .io import open_dataset, to_netcdf
 from .provenance import package_version
-from .scene import deformation
+from .scene import deformation, regions, shared
 from .scene.deformation import deformable_scene, displace, translate, uniaxial_strain
 from .scene.layers import layers, region_values
+from .scene.regions import make_regions, rasterize, region_label
 from .scene.scatterers import random_scatterers
+from .scene.shared import shared_scene
 from .system import detection
 from .system.attenuation import attenuate, attenuate_regions, attenuation_map, optical_depth
 from .system.backscatter import backscatter, backscatter_regions
@@ -61,10 +64,13 @@ __all__ = [
     "expected_intensity",
     "fit_exponential",
     "fit_rayleigh",
+    "image",
+    "image_regions",
     "k0_from_wavelength",
     "layers",
     "log_compress",
     "log_expand",
+    "make_regions",
     "measured",
     "open_dataset",
     "optical_depth",
@@ -72,8 +78,15 @@ __all__ = [
     "phase_perturb",
     "pixel_depths",
     "random_scatterers",
+    "rasterize",
+    "region_label",
     "region_values",
+    "regions",
     "rolloff",
+    "scan",
+    "scan_lines",
+    "shared",
+    "shared_scene",
     "speckle_contrast",
     "spectrum",
     "statistics",

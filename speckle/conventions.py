@@ -16,6 +16,7 @@ strain        1           uniaxial strain, compression > 0
 k0_dk         1           ``k0/delta_k`` (= ``Lc/lambda0``)
 density       1           scatterers per pixel (independent lines) or per voxel
 lag           1           lag in pixels or lines
+region        1           region label of a shared scene (:mod:`speckle.scene.regions`)
 ============  ==========  ===============================================================
 
 Units strings follow UDUNITS (``um``, ``rad/um``, ``1``) so that NetCDF readers understand
@@ -41,6 +42,7 @@ COORDS: dict[str, tuple[str, str]] = {
     "k0_dk": ("1", "k0/delta_k (= Lc/lambda0)"),
     "density": ("1", "scatterers per pixel"),
     "lag": ("1", "lag"),
+    "region": ("1", "region label (speckle.scene.regions)"),
 }
 
 

@@ -33,7 +33,9 @@ B-scan (all lines and pixels).
 
 from __future__ import annotations
 
+import functools
 import math
+from typing import NamedTuple
 
 import finufft
 import numba
@@ -47,7 +49,10 @@ from .carrier import PARALLEL_LOCK, carrier_and_position
 __all__ = [
     "DEFAULT_TOL",
     "NUFFT_TOL_FLOOR",
+    "FineGridPlan",
     "es_kernel",
+    "fine_grid_plan",
+    "fine_to_pixels",
     "finufft_ascan",
     "float32_error_estimate",
     "kernel_width",
@@ -90,6 +95,7 @@ def es_kernel(y: np.ndarray, w: int) -> np.ndarray:
     return np.where(arg >= 0, np.exp(beta * (np.sqrt(np.clip(arg, 0, None)) - 1.0)), 0.0)
 
 
+@functools.lru_cache(maxsize=32)
 def _horner_table(w: int) -> np.ndarray:
     """Polynomial coefficients ``C[k, i]`` of the kernel at slot ``i`` in ``x = 2s - 1``.
 
@@ -104,6 +110,7 @@ def _horner_table(w: int) -> np.ndarray:
     coef = np.zeros((deg + 1, w))
     for i in range(w):
         coef[:, i] = np.polynomial.polynomial.polyfit(nodes, es_kernel(s + i - w / 2, w), deg)
+    coef.setflags(write=False)  # cached: shared by every call
     return coef
 
 
@@ -236,28 +243,75 @@ def nufft_ascan(
     numpy.ndarray
         complex128 (B, N).
     """
+    plan = fine_grid_plan(n_pixels, spectrum, tol, precision)
+    nlines = z.shape[0]
+    out = np.empty((nlines, n_pixels), dtype=np.complex128)
+    step = max(1, chunk_elements // plan.nf)
+    for b0 in range(0, nlines, step):
+        sl = slice(b0, min(nlines, b0 + step))
+        nb = sl.stop - sl.start
+        g = np.empty((nb, plan.nf), dtype=plan.cplx)
+        with PARALLEL_LOCK:
+            _spread(
+                z[sl],
+                amplitude[sl],
+                float(k0),
+                float(depth),
+                plan.nf,
+                plan.w,
+                plan.coef,
+                g.view(plan.real),
+            )
+        out[sl] = fine_to_pixels(g, plan)
+    return out
+
+
+class FineGridPlan(NamedTuple):
+    """What a folded type-1 NUFFT needs besides the scatterers (:func:`fine_grid_plan`)."""
+
+    w: int  # ES kernel width (fine-grid points)
+    nf: int  # fine grid size over one unambiguous depth
+    coef: np.ndarray  # Horner table of the kernel, in the working precision
+    mult: np.ndarray  # S_n / phi_hat(n): deconvolution and spectrum, (N,)
+    modes: np.ndarray  # fine-grid index of each spectral index n, (N,)
+    phase: np.ndarray  # pixel index-shift phase, (N,)
+    real: type  # np.float64 or np.float32
+    cplx: type  # np.complex128 or np.complex64
+
+
+def fine_grid_plan(
+    n_pixels: int, spectrum: np.ndarray, tol: float, precision: str = "double"
+) -> FineGridPlan:
+    """Kernel width, fine grid, Horner table and spectral multiplier for accuracy ``tol``.
+
+    Shared by every method that spreads scatterers with the ES kernel onto a fine periodic
+    grid of one unambiguous depth (A-lines here, scanned-beam lines in
+    :mod:`speckle.imaging.beam_nufft`); ``precision`` is ``"double"`` or ``"single"``.
+    """
     real = np.float64 if precision == "double" else np.float32
     cplx = np.complex128 if precision == "double" else np.complex64
     w = kernel_width(tol)
     nf = fine_grid_size(n_pixels, w)
-    coef = _horner_table(w).astype(real)
     n = spectral_index(n_pixels)
-    mult = (spectrum / _kernel_fourier(w, nf, n)).astype(cplx)
-    modes = np.mod(n, nf)
-    phase = _pixel_phase(n_pixels).astype(cplx)
-    nlines = z.shape[0]
-    out = np.empty((nlines, n_pixels), dtype=np.complex128)
-    step = max(1, chunk_elements // nf)
-    for b0 in range(0, nlines, step):
-        sl = slice(b0, min(nlines, b0 + step))
-        nb = sl.stop - sl.start
-        g = np.empty((nb, nf), dtype=cplx)
-        with PARALLEL_LOCK:
-            _spread(z[sl], amplitude[sl], float(k0), float(depth), nf, w, coef, g.view(real))
-        fine = scipy.fft.ifft(g, axis=-1, norm="forward", overwrite_x=True, workers=-1)
-        field = fine[:, modes] * mult
-        out[sl] = scipy.fft.fft(field, axis=-1, overwrite_x=True, workers=-1) * phase
-    return out
+    return FineGridPlan(
+        w=w,
+        nf=nf,
+        coef=_horner_table(w).astype(real),
+        mult=(spectrum / _kernel_fourier(w, nf, n)).astype(cplx),
+        modes=np.mod(n, nf),
+        phase=_pixel_phase(n_pixels).astype(cplx),
+        real=real,
+        cplx=cplx,
+    )
+
+
+def fine_to_pixels(g: np.ndarray, plan: FineGridPlan) -> np.ndarray:
+    """Spread fine grids ``g`` (B, nf) -> pixels (B, N), complex128: inverse FFT, modes,
+    deconvolution and spectrum, exact pixel DFT. ``g`` is overwritten."""
+    fine = scipy.fft.ifft(g, axis=-1, norm="forward", overwrite_x=True, workers=-1)
+    field = fine[:, plan.modes] * plan.mult
+    out = scipy.fft.fft(field, axis=-1, overwrite_x=True, workers=-1) * plan.phase
+    return out.astype(np.complex128, copy=False)
 
 
 def finufft_ascan(

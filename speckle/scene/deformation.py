@@ -32,6 +32,7 @@ import xarray as xr
 from .._validate import as_finite_array, check_real
 from ..conventions import spacing
 from .scatterers import line_generator, random_scatterers
+from .shared import check_scene, is_shared
 
 __all__ = [
     "LATERAL_STREAM",
@@ -150,19 +151,26 @@ def deformable_scene(
 
 
 def uniaxial_displacement(
-    strain: float, *, poisson_ratio: float = 0.0, x_centre: float = 0.0
-) -> Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
+    strain: float,
+    *,
+    poisson_ratio: float = 0.0,
+    x_centre: float = 0.0,
+    y_centre: float = 0.0,
+) -> Callable[..., tuple[np.ndarray, ...]]:
     """Displacement function of a probe compressing the tissue from ``z = 0``.
 
-    Returns ``f(z, x) -> (u_z, u_x)`` in µm with ``u_z = -strain*z`` and
-    ``u_x = poisson_ratio*strain*(x - x_centre)``.
+    Returns ``f(z, x[, y]) -> (u_z, u_x[, u_y])`` in µm with ``u_z = -strain*z``,
+    ``u_x = poisson_ratio*strain*(x - x_centre)`` and, given ``y`` (3-D scenes),
+    ``u_y = poisson_ratio*strain*(y - y_centre)``: lateral expansion under compression.
     """
     s = float(check_strain(strain)[0])
     nu = check_real(poisson_ratio, "poisson_ratio", low=0.0, high=0.5)
     xc = check_real(x_centre, "x_centre")
+    yc = check_real(y_centre, "y_centre")
 
-    def field(z: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return -s * np.asarray(z, float), nu * s * (np.asarray(x, float) - xc)
+    def field(z: np.ndarray, x: np.ndarray, y: np.ndarray | None = None) -> tuple:
+        out = (-s * np.asarray(z, float), nu * s * (np.asarray(x, float) - xc))
+        return out if y is None else (*out, nu * s * (np.asarray(y, float) - yc))
 
     return field
 
@@ -256,7 +264,18 @@ def displace(scene: xr.Dataset, displacement: Displacement, *, wrap: bool = Fals
     xarray.Dataset
         The displaced field, restricted to the imaged A-lines. With a lateral displacement,
         scatterers are re-assigned to the A-line whose beam (width ``aline_pitch``) holds them.
+
+    Notes
+    -----
+    A shared scene (:mod:`speckle.scene.shared`, dim ``scatterer`` only) is moved continuously:
+    every scatterer keeps its amplitude and region and nothing is re-binned or dropped (the
+    imaging step, :func:`speckle.imaging.scan.image`, decides what the depth window shows).
+    Callables get ``(z, x)`` in 2-D and ``(z, x, y)`` in 3-D and return ``u_z`` or a tuple
+    ``(u_z, u_x[, u_y])``; xarray fields have dims among ``depth``, ``x`` (and ``y``) in µm,
+    e.g. the FEM displacement ``uz``, ``ux`` over ``(depth, x)``.
     """
+    if is_shared(scene):
+        return _displace_shared(scene, displacement)
     if not isinstance(scene, xr.Dataset) or not {"z", "amplitude"} <= set(scene.data_vars):
         raise TypeError("scene must be an xarray.Dataset with variables 'z' and 'amplitude'")
     if set(scene.z.dims) != {"aline", "scatterer"}:
@@ -301,6 +320,72 @@ def displace(scene: xr.Dataset, displacement: Displacement, *, wrap: bool = Fals
     return out
 
 
+#: Dims a displacement field of a shared scene may have (material coordinates, µm).
+SHARED_FIELD_DIMS = ("depth", "x", "y")
+_POSITIONS = ("z", "x", "y")
+
+
+def _shared_field_values(displacement: Displacement, pos: list[np.ndarray]) -> list[np.ndarray]:
+    """``[u_z, u_x[, u_y]]`` (µm) of a displacement at the material points ``pos`` of a scene."""
+    shape = pos[0].shape
+    names = [f"u_{a}" for a in _POSITIONS[: len(pos)]]
+    if callable(displacement) and not isinstance(displacement, xr.DataArray | xr.Dataset):
+        out = displacement(*pos)
+        out = list(out) if isinstance(out, tuple) else [out]
+        if len(out) > len(pos):
+            raise ValueError(
+                f"displacement returned {len(out)} components for a {len(pos)}-D scene"
+            )
+        out += [0.0] * (len(pos) - len(out))
+        return [
+            as_finite_array(np.broadcast_to(u, shape), f"displacement {n}")
+            for u, n in zip(out, names, strict=True)
+        ]
+    if isinstance(displacement, xr.DataArray):
+        displacement = xr.Dataset({"uz": displacement})
+    if not isinstance(displacement, xr.Dataset) or "uz" not in displacement:
+        raise TypeError(
+            "displacement must be a callable f(z, x[, y]) -> u_z or (u_z, u_x[, u_y]) in µm, or "
+            "an xarray DataArray/Dataset (variables uz[, ux, uy]) over dims among "
+            f"{SHARED_FIELD_DIMS}; got {type(displacement).__name__}"
+        )
+    where = dict(zip(("depth", "x", "y"), pos, strict=False))
+    out = []
+    for var in ("uz", "ux", "uy")[: len(pos)]:
+        if var not in displacement:
+            out.append(np.zeros(shape))
+            continue
+        da = displacement[var]
+        wrong = [d for d in da.dims if d not in where]
+        if wrong:
+            raise ValueError(
+                f"displacement field {var!r} must have dims among {tuple(where)} (material "
+                f"coordinates in µm) for this {len(pos)}-D scene; got dims {da.dims}"
+            )
+        for d in da.dims:
+            if d not in da.coords:
+                raise ValueError(f"displacement field {var!r} needs a coordinate {d!r} in µm")
+        as_finite_array(da.values, f"displacement field {var}")
+        pts = {d: xr.DataArray(where[d], dims="points") for d in da.dims}
+        if pts:
+            vals = da.interp(pts, method="linear", kwargs={"fill_value": None}).values
+        else:
+            vals = np.full(shape, float(da.values))
+        out.append(as_finite_array(vals, f"displacement {var}"))
+    return out
+
+
+def _displace_shared(scene: xr.Dataset, displacement: Displacement) -> xr.Dataset:
+    """Move every scatterer of a shared scene (continuously; nothing dropped or re-binned)."""
+    ndim = check_scene(scene)
+    pos = [scene[a].values for a in _POSITIONS[:ndim]]
+    moves = _shared_field_values(displacement, pos)
+    out = scene.copy()
+    for a, p, u in zip(_POSITIONS, pos, moves, strict=False):
+        out[a] = ("scatterer", p + u, scene[a].attrs)
+    return out
+
+
 def _rebin(
     line: np.ndarray, z: np.ndarray, amp: np.ndarray, x: np.ndarray, count: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -319,7 +404,16 @@ def _rebin(
 
 
 def _stack(scenes: list[xr.Dataset], dim: str, values: np.ndarray, attrs: dict) -> xr.Dataset:
-    """Concatenate displaced scenes along a new dim, padding the scatterer dim with zeros."""
+    """Concatenate displaced scenes along a new dim, padding the scatterer dim with zeros.
+
+    Shared scenes keep ``amplitude`` and ``region`` without the new dim (only positions move).
+    """
+    if is_shared(scenes[0]):
+        moved = [a for a in _POSITIONS if a in scenes[0]]
+        out = xr.concat(
+            scenes, dim=dim, data_vars=moved, coords="minimal", combine_attrs="override"
+        )
+        return out.assign_coords({dim: (dim, values, attrs)})
     width = max(s.sizes["scatterer"] for s in scenes)
     padded = [s.pad(scatterer=(0, width - s.sizes["scatterer"]), constant_values=0) for s in scenes]
     out = xr.concat(padded, dim=dim, combine_attrs="override")
@@ -332,9 +426,15 @@ def uniaxial_strain(
     *,
     poisson_ratio: float = 0.0,
     x_centre: float | None = None,
+    y_centre: float | None = None,
     wrap: bool = False,
 ) -> xr.Dataset:
     """Compress ``scene`` uniaxially from the surface ``z = 0`` for each strain.
+
+    Works on the paper's independent A-lines (dims ``aline, scatterer``; a lateral Poisson
+    expansion re-bins scatterers into lines) and on shared scenes (dim ``scatterer``; every
+    scatterer moves continuously, ``z -> z(1 - s)``, ``x -> x + nu s (x - x_centre)`` and in
+    3-D ``y -> y + nu s (y - y_centre)``; amplitudes and regions are unchanged).
 
     Parameters
     ----------
@@ -346,14 +446,21 @@ def uniaxial_strain(
     poisson_ratio : float
         Lateral expansion ``u_x = poisson_ratio*strain*(x - x_centre)``, in [0, 0.5].
     x_centre : float, optional
-        Lateral centre of the probe in µm; default the middle of the imaged A-lines.
+        Lateral centre of the probe in µm; default the middle of the imaged A-lines (shared
+        scenes: the middle of the scene's x window).
+    y_centre : float, optional
+        The same along ``y`` for 3-D shared scenes (default the middle of the y window).
     wrap : bool
-        See :func:`displace`.
+        See :func:`displace` (independent A-lines only; for shared scenes the imaging step
+        decides, :func:`speckle.imaging.scan.image`).
 
     Returns
     -------
     xarray.Dataset
-        Dims ``(strain, aline, scatterer)``; coordinate ``strain`` (dimensionless).
+        Dims ``(strain, aline, scatterer)``; coordinate ``strain`` (dimensionless). Shared
+        scenes: positions over ``(strain, scatterer)``, ``amplitude``/``region`` over
+        ``scatterer``. Populate a shared scene down to :func:`required_depth` and laterally
+        beyond the imaged lines by the expansion (``nu*s`` times the half-width) plus the beam.
 
     Raises
     ------
@@ -362,6 +469,8 @@ def uniaxial_strain(
     """
     s = check_strain(strain)
     nu = check_real(poisson_ratio, "poisson_ratio", low=0.0, high=0.5)
+    if is_shared(scene):
+        return _uniaxial_shared(scene, s, nu, x_centre, y_centre)
     need = required_depth(float(scene.attrs["depth"]), s)
     have = float(scene.attrs.get("z_max", scene.attrs["depth"]))
     if have < need * (1 - 1e-12):
@@ -382,15 +491,46 @@ def uniaxial_strain(
     return out
 
 
+def _uniaxial_shared(
+    scene: xr.Dataset, s: np.ndarray, nu: float, x_centre: float | None, y_centre: float | None
+) -> xr.Dataset:
+    ndim = check_scene(scene)
+
+    def centre(value: float | None, axis: str) -> float:
+        if value is not None:
+            return check_real(value, f"{axis}_centre")
+        lo, hi = scene.attrs.get(f"{axis}_min"), scene.attrs.get(f"{axis}_max")
+        if lo is None or hi is None:
+            return float(np.mean(scene[axis].values))
+        return 0.5 * (float(lo) + float(hi))
+
+    xc = centre(x_centre, "x")
+    yc = centre(y_centre, "y") if ndim == 3 else 0.0
+    fields = [uniaxial_displacement(si, poisson_ratio=nu, x_centre=xc, y_centre=yc) for si in s]
+    out = _stack(
+        [_displace_shared(scene, f) for f in fields],
+        "strain",
+        s,
+        {"units": "1", "long_name": "compressive strain"},
+    )
+    out.attrs.update({"poisson_ratio": nu, "x_centre": xc, "deformation": "uniaxial"})
+    if ndim == 3:
+        out.attrs["y_centre"] = yc
+    return out
+
+
 def translate(scene: xr.Dataset, dz: object, dx: float = 0.0, *, wrap: bool = False) -> xr.Dataset:
     """Rigid translation by ``dz`` µm in depth (scalar or sequence) and ``dx`` µm laterally.
 
     Returns a dataset with a ``shift`` dim (axial shift in µm) when ``dz`` is a sequence.
+    Shared scenes move continuously (``wrap`` is then not used).
     """
     dzs = as_finite_array(dz, "dz")
     dxv = check_real(dx, "dx")
     scenes = [
-        displace(scene, lambda z, x, d=d: (np.full(z.shape, d), np.full(z.shape, dxv)), wrap=wrap)
+        displace(
+            scene, lambda z, x, *_, d=d: (np.full(z.shape, d), np.full(z.shape, dxv)), wrap=wrap
+        )
         for d in np.atleast_1d(dzs)
     ]
     if dzs.ndim == 0:

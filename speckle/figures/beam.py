@@ -1,0 +1,412 @@
+"""Pipeline targets of the scanned beam over shared scenes (``results/beam/``).
+
+* :func:`bscans_data` / :func:`bscans_figure`: B-scans of one shared scene for several
+  waist/pitch ratios beside the paper's independent A-lines, with the measured lateral and
+  axial correlation against theory (:mod:`speckle.analysis.beam`).
+* :func:`strain_data` / :func:`strain_figure`: Fig. 6's correlation versus strain under the
+  beam, with and without lateral Poisson expansion, beside the independent-line result.
+* :func:`write_volume` / :func:`volume_figure`: a 3-D volume streamed by tiles to a chunked
+  NetCDF file, and its orthogonal slices.
+
+Config section ``beam`` (lengths in µm; densities in scatterers per pixel x pitch [x pitch]
+cell, converted with :func:`speckle.scene.regions.cell_density`).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+
+import numpy as np
+import xarray as xr
+
+import speckle
+
+from ..analysis import correlation as corr
+from ..analysis.beam import axial_correlation, lateral_correlation, poisson_lateral_factor
+from ..imaging.scan import beam_reach
+from ..io import open_dataset, stream_to_netcdf
+from ..provenance import provenance_attrs
+from ..scene import regions as reg
+from ..scene.deformation import required_depth, uniaxial_pixel_displacement
+from ._config import source_options, source_spectrum
+from ._style import new_figure, save
+
+__all__ = [
+    "bscans_data",
+    "bscans_figure",
+    "strain_data",
+    "strain_figure",
+    "volume_figure",
+    "write_volume",
+]
+
+#: Amplitude model of the beam scenes; its kurtosis enters the theory.
+_AMPLITUDE = "rayleigh"
+_KURTOSIS = 2.0
+
+
+def _source(source: Mapping, n_pixels: int | None = None) -> xr.DataArray:
+    opts = source_options(source)
+    if n_pixels is not None:
+        opts["n_pixels"] = int(n_pixels)
+    return source_spectrum(**opts, k0_dk=float(source["k0_dk"]))
+
+
+def _regions(density_per_cell: float, pixel: float, pitch: float, ndim: int) -> xr.Dataset:
+    rho = reg.cell_density(density_per_cell, pixel, pitch, ndim)
+    return speckle.make_regions(reg.background(density=rho, amplitude_model=_AMPLITUDE))
+
+
+def _pooled(a: np.ndarray, b: np.ndarray, kind: str) -> float:
+    """Pearson coefficient of two equally shaped samples (modulus for complex fields)."""
+    if kind == "intensity":
+        a, b = np.abs(a) ** 2, np.abs(b) ** 2
+    a, b = a.ravel() - a.mean(), b.ravel() - b.mean()
+    r = np.vdot(b, a) / np.sqrt(np.vdot(a, a).real * np.vdot(b, b).real)
+    return float(abs(r)) if kind == "complex" else float(r.real)
+
+
+def _lag_correlations(field: np.ndarray, lags: np.ndarray, axis: int) -> dict[str, np.ndarray]:
+    """Pooled complex and intensity correlation of a (depth, line) field at lags along ``axis``."""
+    out = {}
+    for kind in ("complex", "intensity"):
+        vals = []
+        for lag in lags:
+            if axis == 0:  # depth: periodic image (wrap-around), all pairs
+                a, b = field, np.roll(field, -int(lag), axis=0)
+            else:
+                a, b = field[:, : field.shape[1] - lag], field[:, lag:]
+            vals.append(_pooled(a, b, kind))
+        out[kind] = np.array(vals)
+    return out
+
+
+def bscans_data(source: Mapping, beam: Mapping, seed: int) -> xr.Dataset:
+    """B-scans of one shared scene for each waist/pitch ratio, and the independent-line B-scan.
+
+    Returns a Dataset with ``field`` (``waist_pitch, depth, x``), ``independent`` (``depth,
+    x``), measured and theoretical lateral (lag in lines) and axial (lag in pixels)
+    correlations, complex and intensity.
+    """
+    src = _source(source, beam.get("n_pixels"))
+    n, h = int(src.attrs["n_pixels"]), float(src.attrs["depth"])
+    pixel, pitch = h / n, float(beam["pitch"])
+    ratios = np.asarray(beam["waist_pitch"], dtype=float)
+    xs = speckle.scan_lines(int(beam["n_lines"]), pitch)
+    halo = beam_reach(float(ratios.max()) * pitch)
+    regions = _regions(float(beam["density"]), pixel, pitch, 2)
+    scene = speckle.shared_scene(
+        regions, z_range=(0.0, h), x_range=(xs[0] - halo, xs[-1] + halo), seed=seed, tile=64.0
+    )
+    opts = {"chunk": int(beam["chunk"]), "method": beam["method"], "tol": beam["tol"]}
+    images = [speckle.image(scene, src, waist=r * pitch, x=xs, **opts).field for r in ratios]
+    field = xr.concat(images, dim="waist_pitch", combine_attrs="drop").compute()
+    field = field.assign_coords(
+        waist_pitch=("waist_pitch", ratios, {"units": "1", "long_name": "waist / line pitch"})
+    )
+    lines = speckle.random_scatterers(
+        xs.size,
+        float(beam["density"]),
+        n_pixels=n,
+        depth=h,
+        seed=seed,
+        amplitude=_AMPLITUDE,
+        count="poisson",
+        aline_pitch=pitch,
+    )
+    method = "direct" if beam["method"] == "direct" else "nufft"
+    indep = speckle.bscan(lines, src, method=method, tol=beam["tol"]).field
+    indep = indep.rename(aline="x").assign_coords(x=field.x)
+    lat = np.arange(int(beam["lags"]) + 1)
+    ax = np.arange(int(beam["lags"]) + 1)
+    rho = reg.cell_density(float(beam["density"]), pixel, pitch, 2)
+    data = {}
+    for name, axis, lags in (("lateral", 1, lat), ("axial", 0, ax)):
+        meas = [_lag_correlations(field.sel(waist_pitch=r).values, lags, axis) for r in ratios]
+        ind = _lag_correlations(indep.values, lags, axis)
+        for kind in ("complex", "intensity"):
+            dim = f"{name}_lag"
+            data[f"{name}_{kind}"] = (("waist_pitch", dim), np.array([m[kind] for m in meas]))
+            data[f"{name}_{kind}_independent"] = ((dim,), ind[kind])
+            if name == "lateral":
+                th = [lateral_correlation(lags * pitch, r * pitch)[kind].values for r in ratios]
+                th_ind = (lags == 0).astype(float)
+            else:
+                th = [
+                    axial_correlation(
+                        lags,
+                        src.values,
+                        density=rho,
+                        pixel_size=pixel,
+                        waist=r * pitch,
+                        kurtosis=_KURTOSIS,
+                    )[kind].values
+                    for r in ratios
+                ]
+                th_ind = axial_correlation(
+                    lags,
+                    src.values,
+                    density=float(beam["density"]),
+                    pixel_size=pixel,
+                    kurtosis=_KURTOSIS,
+                )[kind].values
+            data[f"{name}_{kind}_theory"] = (("waist_pitch", dim), np.array(th))
+            data[f"{name}_{kind}_independent_theory"] = ((dim,), th_ind)
+    ds = xr.Dataset(
+        {"field": field, "independent": indep, **data},
+        coords={
+            "lateral_lag": ("lateral_lag", lat, {"units": "1", "long_name": "lag in lines"}),
+            "axial_lag": ("axial_lag", ax, {"units": "1", "long_name": "lag in pixels"}),
+        },
+    )
+    for name in data:
+        ds[name].attrs = {"units": "1", "long_name": name.replace("_", " ")}
+    ds.field.attrs = {"units": "1", "long_name": "complex field of the scanned beam"}
+    ds.independent.attrs = {"units": "1", "long_name": "complex field, independent A-lines"}
+    ds.attrs.update(
+        {
+            "pitch": pitch,
+            "pitch_units": "um",
+            "density_per_cell": float(beam["density"]),
+            "density": rho,
+            "density_units": "scatterers per um^2",
+            "amplitude_model": _AMPLITUDE,
+            "k0_dk": float(src.attrs["k0_dk"]),
+            "method": beam["method"],
+            **provenance_attrs(seed=seed),
+        }
+    )
+    return ds
+
+
+def _strain_images(scene, src, strains, nu, xs, w0, opts) -> xr.DataArray:
+    strained = speckle.uniaxial_strain(scene, strains, poisson_ratio=nu, x_centre=float(xs.mean()))
+    return speckle.image(strained, src, waist=w0, x=xs, **opts).field.compute()
+
+
+def _compensated_correlations(ref: xr.DataArray, dfm: xr.DataArray) -> dict[str, np.ndarray]:
+    """Area correlation after exact axial compensation, per strain (x renamed to aline)."""
+    r = ref.rename(x="aline")
+    d = dfm.rename(x="aline")
+    disp = uniaxial_pixel_displacement(d.strain.values, d.depth.values, d.aline.values)
+    comp = corr.compensate(d, disp[["uz"]])
+    return {kind: corr.pearson(r, comp, kind=kind).values for kind in ("complex", "intensity")}
+
+
+def strain_data(source: Mapping, beam: Mapping, seed: int) -> xr.Dataset:
+    """Correlation vs strain after exact axial compensation: beam (nu = 0 and nu > 0) vs lines.
+
+    Theory for the complex correlation under the beam: the axial factor of
+    :func:`speckle.expected_correlation` times the lateral Poisson factor
+    (:func:`speckle.analysis.beam.poisson_lateral_factor`) averaged over the lines.
+    """
+    cfg = beam["strain"]
+    src = _source(source, beam.get("n_pixels"))
+    n, h = int(src.attrs["n_pixels"]), float(src.attrs["depth"])
+    pixel, pitch = h / n, float(beam["pitch"])
+    strains = np.linspace(float(cfg["start"]), float(cfg["stop"]), int(cfg["num"]))
+    nu = float(cfg["poisson_ratio"])
+    w0 = float(cfg["waist_pitch"]) * pitch
+    xs = speckle.scan_lines(int(cfg["n_lines"]), pitch)
+    smax = float(max(strains.max(), 0.0))
+    half = 0.5 * (xs[-1] - xs[0])
+    halo = beam_reach(w0) + nu * smax * half + pitch
+    regions = _regions(float(beam["density"]), pixel, pitch, 2)
+    scene = speckle.shared_scene(
+        regions,
+        z_range=(0.0, required_depth(h, strains)),
+        x_range=(xs[0] - halo, xs[-1] + halo),
+        seed=seed,
+        tile=64.0,
+    )
+    opts = {"chunk": int(beam["chunk"]), "method": beam["method"], "tol": beam["tol"]}
+    ref = speckle.image(scene, src, waist=w0, x=xs, **opts).field.compute()
+    ref.attrs.update({"n_pixels": n, "depth_range": h, "k0": float(src.attrs["k0"])})
+    data = {}
+    for label, ratio in (("beam", 0.0), ("beam_poisson", nu)):
+        dfm = _strain_images(scene, src, strains, ratio, xs, w0, opts)
+        dfm.attrs.update(ref.attrs)
+        for kind, vals in _compensated_correlations(ref, dfm).items():
+            data[f"{kind}_{label}"] = (("strain",), np.asarray(vals, float))
+    lines = speckle.deformable_scene(
+        xs.size,
+        float(beam["density"]),
+        n_pixels=n,
+        depth=h,
+        seed=seed,
+        strain=strains,
+        amplitude=_AMPLITUDE,
+        count="poisson",
+    )
+    method = "direct" if beam["method"] == "direct" else "nufft"
+    ref_l = speckle.bscan(speckle.uniaxial_strain(lines, 0.0).isel(strain=0), src, method=method)
+    dfm_l = speckle.bscan(speckle.uniaxial_strain(lines, strains), src, method=method)
+    disp = uniaxial_pixel_displacement(strains, dfm_l.depth.values, dfm_l.aline.values)
+    comp = corr.compensate(dfm_l, disp[["uz"]])
+    for kind in ("complex", "intensity"):
+        data[f"{kind}_lines"] = (("strain",), corr.pearson(ref_l, comp, kind=kind).values)
+    axial = speckle.expected_correlation(
+        strains, spectrum=src, density=float(beam["density"]), kurtosis=_KURTOSIS
+    )
+    lateral = poisson_lateral_factor(strains, nu, xs, float(xs.mean()), w0).mean(axis=1)
+    data["complex_theory"] = (("strain",), axial.complex.values)
+    data["complex_poisson_theory"] = (("strain",), axial.complex.values * lateral)
+    data["intensity_lines_theory"] = (("strain",), axial.intensity.values)
+    ds = xr.Dataset(
+        data, coords={"strain": ("strain", strains, {"units": "1", "long_name": "strain"})}
+    )
+    for name in ds.data_vars:
+        ds[name].attrs = {"units": "1", "long_name": name.replace("_", " ")}
+    ds.attrs.update(
+        {
+            "waist": w0,
+            "waist_units": "um",
+            "pitch": pitch,
+            "poisson_ratio": nu,
+            "density_per_cell": float(beam["density"]),
+            "compensation": "exact axial (u_z = -s z), no lateral compensation",
+            **provenance_attrs(seed=seed),
+        }
+    )
+    return ds
+
+
+def write_volume(source: Mapping, beam: Mapping, seed: int, path: str) -> dict:
+    """Stream the 3-D volume of config ``beam.volume`` to a chunked NetCDF file at ``path``.
+
+    Returns timing/size facts (wall time in s, lines, pixels, chunks) for the log.
+    """
+    cfg = beam["volume"]
+    src = _source(source, cfg["n_pixels"])
+    n, h = int(src.attrs["n_pixels"]), float(src.attrs["depth"])
+    pitch = float(beam["pitch"])
+    xs = speckle.scan_lines(int(cfg["n_lines"]), pitch)
+    regions = _regions(float(cfg["density"]), h / n, pitch, 3)
+    ds = speckle.image_regions(
+        regions,
+        src,
+        seed=seed,
+        tile=cfg["tile"],
+        waist=float(cfg["waist_pitch"]) * pitch,
+        x=xs,
+        y=xs,
+        chunk=int(cfg["chunk"]),
+        method=cfg["method"],
+        tol=cfg["tol"],
+    )
+    ds = ds[["field"]]
+    ds.attrs.update(provenance_attrs(seed=seed))
+    t0 = time.perf_counter()
+    stream_to_netcdf(ds, path)
+    wall = time.perf_counter() - t0
+    return {"wall_s": wall, "lines": xs.size**2, "pixels": n, "chunks": ds.field.data.npartitions}
+
+
+def volume_figure(path_nc: str, path_png: str) -> None:
+    """Orthogonal slices (x-z, y-z, en-face x-y) of the streamed volume, read lazily."""
+    ds = open_dataset(path_nc, load=False)
+    with ds:
+        f = ds.field
+        xm, ym = f.sizes["x"] // 2, f.sizes["y"] // 2
+        zm = f.sizes["depth"] // 2
+        slices = {
+            f"x-z at y = {float(f.y[ym]):.0f} um": np.abs(f.isel(y=ym).values) ** 2,
+            f"y-z at x = {float(f.x[xm]):.0f} um": np.abs(f.isel(x=xm).values) ** 2,
+            f"x-y at depth {float(f.depth[zm]):.0f} um": np.abs(f.isel(depth=zm).values.T) ** 2,
+        }
+        ext = {
+            "xz": [f.x[0], f.x[-1], f.depth[-1], f.depth[0]],
+            "yz": [f.y[0], f.y[-1], f.depth[-1], f.depth[0]],
+            "xy": [f.x[0], f.x[-1], f.y[-1], f.y[0]],
+        }
+    fig, axes = new_figure(1, 3, width=10.0, height=3.6)
+    mean = np.mean([s.mean() for s in slices.values()])
+    for ax, (title, img), key in zip(axes[0], slices.items(), ext, strict=True):
+        extent = [float(v) for v in ext[key]]
+        ax.imshow(
+            10 * np.log10(img / mean + 1e-12),
+            cmap="gray",
+            vmin=-20,
+            vmax=10,
+            extent=extent,
+            aspect="auto",
+        )
+        ax.set_title(title, fontsize=9)
+        ax.set_xlabel({"xz": "x (µm)", "yz": "y (µm)", "xy": "x (µm)"}[key])
+        ax.set_ylabel("y (µm)" if key == "xy" else "depth (µm)")
+    save(fig, path_png)
+
+
+def bscans_figure(ds: xr.Dataset, path: str) -> None:
+    """B-scans (dB) per waist/pitch and independent lines; lateral and axial correlation."""
+    ratios = ds.waist_pitch.values
+    fig, axes = new_figure(2, max(len(ratios) + 1, 2), width=3.0 * (len(ratios) + 1), height=6)
+    imgs = [(f"w0 = {r:g} pitch", ds.field.sel(waist_pitch=r)) for r in ratios]
+    imgs.append(("independent A-lines (paper)", ds.independent))
+    for ax, (title, f) in zip(axes[0], imgs, strict=False):
+        i = np.abs(f.values) ** 2
+        ax.imshow(
+            10 * np.log10(i / i.mean() + 1e-12),
+            cmap="gray",
+            vmin=-20,
+            vmax=10,
+            aspect="auto",
+            extent=[float(f.x[0]), float(f.x[-1]), float(f.depth[-1]), float(f.depth[0])],
+        )
+        ax.set_title(title, fontsize=9)
+        ax.set_xlabel("x (µm)")
+    axes[0, 0].set_ylabel("depth (µm)")
+    for ax, name in zip(axes[1, :2], ("lateral", "axial"), strict=True):
+        lag = ds[f"{name}_lag"].values
+        for j, r in enumerate(ratios):
+            color = f"C{j}"
+            for kind, mk in (("complex", "o"), ("intensity", "s")):
+                ax.plot(
+                    lag,
+                    ds[f"{name}_{kind}"].sel(waist_pitch=r),
+                    mk,
+                    color=color,
+                    label=f"w0/pitch {r:g}, {kind}" if name == "lateral" else None,
+                )
+                ax.plot(
+                    lag, ds[f"{name}_{kind}_theory"].sel(waist_pitch=r), "-", color=color, lw=0.8
+                )
+        for kind, mk in (("complex", "x"), ("intensity", "+")):
+            ax.plot(
+                lag,
+                ds[f"{name}_{kind}_independent"],
+                mk,
+                color="k",
+                label=f"independent lines, {kind}" if name == "lateral" else None,
+            )
+            ax.plot(lag, ds[f"{name}_{kind}_independent_theory"], ":", color="k", lw=0.8)
+        ax.set_xlabel("lag (lines)" if name == "lateral" else "lag (pixels)")
+        ax.set_ylabel("correlation")
+        ax.set_title(f"{name}: markers measured, lines theory", fontsize=9)
+    axes[1, 0].legend(fontsize=6)
+    for ax in axes[1, 2:]:
+        ax.axis("off")
+    save(fig, path)
+
+
+def strain_figure(ds: xr.Dataset, path: str) -> None:
+    """Correlation vs strain: beam without / with Poisson expansion, independent lines."""
+    fig, axes = new_figure(1, 2, width=8.0, height=3.2)
+    s = 100 * ds.strain.values
+    nu = ds.attrs["poisson_ratio"]
+    for ax, kind in zip(axes[0], ("complex", "intensity"), strict=True):
+        ax.plot(s, ds[f"{kind}_beam"], "o", label="beam, nu = 0")
+        ax.plot(s, ds[f"{kind}_beam_poisson"], "s", label=f"beam, nu = {nu:g}")
+        ax.plot(s, ds[f"{kind}_lines"], "x", color="k", label="independent lines")
+        if kind == "complex":
+            ax.plot(s, ds.complex_theory, "-", color="C0", lw=0.8, label="theory, nu = 0")
+            ax.plot(
+                s, ds.complex_poisson_theory, "-", color="C1", lw=0.8, label=f"theory, nu = {nu:g}"
+            )
+        else:
+            ax.plot(s, ds.intensity_lines_theory, ":", color="k", lw=0.8, label="theory, lines")
+        ax.set_xlabel("strain (%)")
+        ax.set_ylabel(f"{kind} correlation")
+        ax.legend(fontsize=7)
+    save(fig, path)

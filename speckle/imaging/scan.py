@@ -1,0 +1,393 @@
+"""The labelled scan API: shared scene + Gaussian beam + scan geometry -> lazy image Dataset.
+
+:func:`image` images a shared scene (:mod:`speckle.scene.shared`) held in memory;
+:func:`image_regions` draws the scene tile by tile inside each chunk, so a scene too large for
+memory (a 3-D volume) is never built whole. Both return a Dataset over ``(depth, x[, y])`` in
+µm whose ``field`` is a Dask array, one task per chunk of lines: a chunk's task gets only the
+scatterers within the beam's reach of its lines (its halo, :func:`beam_reach`), and evaluates
+:func:`speckle.beam_scan` (the contract, any of its methods, focus included); a 3-D chunk is
+its ``(x, y)`` grid of lines in one call. Results do not depend on the chunking (tested to
+rounding for the exact method).
+
+:func:`speckle.io.stream_to_netcdf` writes such a Dataset chunk by chunk to a chunked NetCDF
+file (on the local threads scheduler or a ``dask.distributed`` cluster).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import dask
+import dask.array as da
+import numpy as np
+import xarray as xr
+
+import speckle
+
+from .._validate import as_finite_array, check_int, check_real
+from ..conventions import coord, spacing
+from ..provenance import provenance_attrs
+from ..scene.shared import check_scene, scene_window, shared_scene
+
+__all__ = ["REACH_EPS", "beam_reach", "image", "image_regions", "scan_lines"]
+
+#: Relative double-pass weight below which a scatterer is outside the beam's reach: below
+#: float64 rounding (2^-53 = 1.1e-16), so the halo changes nothing beyond rounding.
+REACH_EPS = 1e-17
+
+
+def beam_reach(waist: float, eps: float = REACH_EPS, *, widening: float = 1.0) -> float:
+    """Lateral distance (µm) beyond which the weight ``exp(-2 r^2/w^2)`` is below ``eps``.
+
+    ``w * sqrt(ln(1/eps)/2)`` with ``w = widening * w0`` the widest beam over the imaged depths
+    (``widening = 1`` without focus): 4.43 w for the default ``eps = 1e-17``.
+    """
+    w0 = check_real(waist, "waist", low=0, low_inclusive=False)
+    e = check_real(eps, "eps", low=0, high=1, low_inclusive=False, high_inclusive=False)
+    g = check_real(widening, "widening", low=1.0)
+    return g * w0 * math.sqrt(math.log(1.0 / e) / 2.0)
+
+
+def _widening(optics: dict, waist: float, k0: float, z_lo: float, z_hi: float) -> float:
+    """Largest ``w(z)/w0 = sqrt(1 + ((z - z_f)/z_R)^2)`` over ``[z_lo, z_hi]`` (1 without focus).
+
+    A focused beam's double-pass weight has modulus ``(w0/w)^2 exp(-2 r^2/w^2)`` (see
+    :func:`speckle.beam_scan`), so the reach of the widest beam bounds every depth's.
+    """
+    zf = optics.get("focus")
+    if zf is None:
+        return 1.0
+    zr = optics.get("rayleigh_range") or k0 * waist**2 / 2.0
+    u = max(abs(z_lo - zf), abs(z_hi - zf)) / zr
+    return math.sqrt(1.0 + u * u)
+
+
+def scan_lines(n_lines: int, pitch: float, start: float = 0.0) -> np.ndarray:
+    """Lateral positions ``start + i*pitch`` (µm) of ``n_lines`` A-lines, ``i = 0 ... n-1``."""
+    n = check_int(n_lines, "n_lines", low=1)
+    p = check_real(pitch, "pitch", low=0, low_inclusive=False)
+    return check_real(start, "start") + p * np.arange(n)
+
+
+def _lines(values: object, name: str) -> np.ndarray:
+    v = as_finite_array(values, name)
+    if v.ndim != 1 or v.size == 0:
+        raise ValueError(f"{name} must be a non-empty 1-D array of line positions in µm")
+    if v.size > 1:
+        spacing(xr.DataArray(v, dims=name, coords={name: v}), name)  # increasing, uniform
+    return v
+
+
+def _source(source: object) -> dict:
+    if not isinstance(source, xr.DataArray) or "n_pixels" not in source.attrs:
+        raise TypeError("source must be a DataArray from speckle.spectrum")
+    return {
+        "n_pixels": int(source.attrs["n_pixels"]),
+        "depth": float(source.attrs["depth"]),
+        "k0": float(source.attrs["k0"]),
+        "spectrum": np.asarray(source.values, dtype=float),
+    }
+
+
+def _lines_field(
+    part: tuple[np.ndarray, ...],
+    xs: np.ndarray,
+    ys: np.ndarray | None,
+    *,
+    waist: float,
+    src: dict,
+    method: str,
+    tol: float | None,
+    wrap: bool,
+    optics: dict,
+) -> np.ndarray:
+    """Field of lines ``xs`` (x ``ys``) from scatterers ``part = (z, x, a[, y])``: (N, Lx[, Ly])."""
+    z, x, a = part[:3]
+    if not wrap:
+        keep = (z >= 0) & (z < src["depth"])
+        part = tuple(p[keep] for p in part)
+        z, x, a = part[:3]
+    kw = {"waist": waist, "method": method, "tol": tol, **src, **optics}
+    if ys is None:
+        return speckle.beam_scan(z, x, a, lines=xs, **kw).T
+    grid = np.stack(np.meshgrid(xs, ys, indexing="ij"), axis=-1).reshape(-1, 2)
+    out = speckle.beam_scan(z, x, a, y=part[3], lines=grid, **kw)
+    return out.reshape(xs.size, ys.size, -1).transpose(2, 0, 1)
+
+
+def _blocks(
+    make_task: Callable[[np.ndarray, np.ndarray | None, tuple], object],
+    xs: np.ndarray,
+    ys: np.ndarray | None,
+    chunk: int,
+    n: int,
+) -> da.Array:
+    """Dask array (N, Lx[, Ly]) with one task per chunk of lines.
+
+    ``make_task(cx, cy, (x0, x1, y0, y1))`` returns the Delayed field of lines ``cx`` (x
+    ``cy``) spanning ``[x0, x1]`` (x ``[y0, y1]``) µm.
+    """
+    xsplit = [xs[i : i + chunk] for i in range(0, xs.size, chunk)]
+    ysplit = [None] if ys is None else [ys[i : i + chunk] for i in range(0, ys.size, chunk)]
+    rows = []
+    for cx in xsplit:
+        row = []
+        for cy in ysplit:
+            ylo, yhi = (-np.inf, np.inf) if cy is None else (cy[0], cy[-1])
+            task = make_task(cx, cy, (cx[0], cx[-1], ylo, yhi))
+            shape = (n, cx.size) if cy is None else (n, cx.size, cy.size)
+            row.append(da.from_delayed(task, shape=shape, dtype=np.complex128))
+        rows.append(row)
+    if ys is None:
+        return da.concatenate([r[0] for r in rows], axis=1)
+    return da.block(rows)
+
+
+def _dataset(
+    field: da.Array, xs: np.ndarray, ys: np.ndarray | None, src: dict, attrs: dict
+) -> xr.Dataset:
+    dims = ("depth", "x") if ys is None else ("depth", "x", "y")
+    coords = {
+        "depth": coord("depth", speckle.pixel_depths(src["n_pixels"], src["depth"])),
+        "x": coord("x", xs),
+    }
+    if ys is not None:
+        coords["y"] = coord("y", ys)
+    f = xr.DataArray(
+        field, dims=dims, attrs={"units": "1", "long_name": "complex field A(q) of the beam"}
+    )
+    ds = xr.Dataset({"field": f}, coords=coords)
+    ds["intensity"] = (abs(ds.field) ** 2).assign_attrs(units="1", long_name="intensity |A|^2")
+    ds.attrs.update(attrs)
+    ds.attrs.update(provenance_attrs())
+    return ds
+
+
+def _prepare(source, waist, x, y, chunk, method, tol, wrap, focus, rayleigh_range):
+    """Checked arguments, the per-chunk kernel and the attrs shared by both entry points."""
+    src = _source(source)
+    w0 = check_real(waist, "waist", low=0, low_inclusive=False)
+    optics = {}
+    if focus is not None:
+        optics["focus"] = check_real(focus, "focus", low=0, high=src["depth"], high_inclusive=False)
+    if rayleigh_range is not None:
+        if focus is None:
+            raise ValueError("rayleigh_range needs focus= (the focal depth in µm)")
+        optics["rayleigh_range"] = check_real(
+            rayleigh_range, "rayleigh_range", low=0, low_inclusive=False
+        )
+    xs = _lines(x, "x")
+    ys = None if y is None else _lines(y, "y")
+    c = check_int(chunk, "chunk", low=1)
+    attrs = {
+        "waist": w0,
+        "waist_units": "um",
+        "beam": "Gaussian, double-pass amplitude exp(-2 r^2/w0^2)",
+        "n_pixels": src["n_pixels"],
+        "depth_range": src["depth"],
+        "k0": src["k0"],
+        "k0_units": "rad/um",
+        "k0_dk": float(source.attrs.get("k0_dk", np.nan)),
+        "spectrum_shape": source.attrs.get("shape", "array"),
+        "method": method,
+        "tol": np.nan if tol is None else float(tol),
+        "chunk": c,
+        "wrap": int(bool(wrap)),
+        "focus": optics.get("focus", "none"),
+        "rayleigh_range": optics.get("rayleigh_range", "default" if optics else "none"),
+    }
+
+    def kernel(part, cx, cy):
+        return _lines_field(
+            part, cx, cy, waist=w0, src=src, method=method, tol=tol, wrap=wrap, optics=optics
+        )
+
+    # beam_scan checks method, tol and optics before any work: an empty scene runs them now,
+    # not in the first Dask task.
+    empty = np.zeros(0)
+    kernel((empty, empty, empty) + ((empty,) if ys is not None else ()), xs[:1], _first(ys))
+    return src, w0, xs, ys, c, attrs, kernel, optics
+
+
+def _first(ys: np.ndarray | None) -> np.ndarray | None:
+    return None if ys is None else ys[:1]
+
+
+def image(
+    scene: xr.Dataset,
+    source: xr.DataArray,
+    *,
+    waist: float,
+    x: object,
+    y: object | None = None,
+    chunk: int = 64,
+    method: str = "direct",
+    tol: float | None = None,
+    wrap: bool = False,
+    focus: float | None = None,
+    rayleigh_range: float | None = None,
+) -> xr.Dataset:
+    """Image a shared scene with a scanned Gaussian beam, lazily over chunks of lines.
+
+    Parameters
+    ----------
+    scene : xarray.Dataset
+        Shared scene (:func:`speckle.scene.shared.shared_scene`), possibly deformed; extra
+        dims of the positions (e.g. ``strain`` from :func:`speckle.uniaxial_strain`) are
+        carried to the output.
+    source : xarray.DataArray
+        Spectrum from :func:`speckle.spectrum` (gives ``N``, ``H`` in µm and ``k0`` in rad/µm).
+    waist : float
+        Beam waist ``w0`` in µm (> 0), as in :func:`speckle.beam_scan`.
+    x : array_like
+        Lateral positions of the lines in µm (1-D, increasing, uniform: e.g.
+        :func:`scan_lines`).
+    y : array_like, optional
+        Positions of the lines along ``y`` in µm for a 3-D scene: a C-scan over the grid
+        ``x`` x ``y`` (one ``y`` value: one B-scan at that ``y``).
+    chunk : int
+        Lines per Dask chunk along each lateral axis (>= 1).
+    method, tol
+        Passed to :func:`speckle.beam_scan` (``"direct"``: exact).
+    wrap : bool
+        ``False`` (default): only scatterers at depths in ``[0, H)`` are imaged (the tissue
+        below the imaged depth does not alias in). ``True``: all, with SD-OCT wrap-around.
+    focus, rayleigh_range : float, optional
+        Focal depth ``z_f`` in ``[0, H)`` and Rayleigh range ``z_R`` in µm, passed to
+        :func:`speckle.beam_scan` (default: a depth-independent beam). The halo of each chunk
+        is that of the widest beam over the imaged depths.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``field`` (complex128, Dask) and ``intensity`` over ``(..., depth, x[, y])``,
+        coordinates in µm; attrs record beam, source, method and provenance.
+
+    Raises
+    ------
+    TypeError, ValueError
+        On a scene that is not a non-empty shared scene, a 3-D scene without ``y`` (or a 2-D
+        one with it), a non-positive waist, lines that are not 1-D, increasing and uniform.
+    """
+    src, w0, xs, ys, c, attrs, kernel, optics = _prepare(
+        source, waist, x, y, chunk, method, tol, bool(wrap), focus, rayleigh_range
+    )
+    if not isinstance(scene, xr.Dataset) or "z" not in scene:
+        raise TypeError("scene must be a shared scene Dataset (see speckle.shared_scene)")
+    extra = [d for d in scene.z.dims if d != "scatterer"]
+    if extra:
+        d = extra[0]
+        parts = [
+            image(
+                scene.isel({d: i}),
+                source,
+                waist=w0,
+                x=xs,
+                y=ys,
+                chunk=c,
+                method=method,
+                tol=tol,
+                wrap=wrap,
+                focus=focus,
+                rayleigh_range=rayleigh_range,
+            )
+            for i in range(scene.sizes[d])
+        ]
+        return xr.concat(parts, dim=scene[d] if d in scene.coords else d, combine_attrs="override")
+    ndim = check_scene(scene)
+    if (ndim == 3) != (ys is not None):
+        raise ValueError(
+            f"a {ndim}-D scene needs {'y' if ndim == 3 else 'no y'} line positions "
+            "(y given for 3-D scenes only)"
+        )
+    zs = scene.z.values
+    z_lo, z_hi = (0.0, src["depth"]) if not wrap else (float(zs.min()), float(zs.max()))
+    reach = beam_reach(w0, widening=_widening(optics, w0, src["k0"], z_lo, z_hi))
+    order = np.argsort(scene.x.values, kind="stable")
+    sc = scene.isel(scatterer=order)
+
+    def get_part(x0: float, x1: float, y0: float, y1: float) -> tuple[np.ndarray, ...]:
+        part = scene_window(sc, x0 - reach, np.nextafter(x1 + reach, np.inf))
+        cols = [part.z.values, part.x.values, part.amplitude.values]
+        if ndim == 3:
+            keep = (part.y.values >= y0 - reach) & (part.y.values <= y1 + reach)
+            cols = [c_[keep] for c_ in cols] + [part.y.values[keep]]
+        return tuple(cols)
+
+    def make_task(cx, cy, bounds):
+        return dask.delayed(kernel, pure=True)(get_part(*bounds), cx, cy)
+
+    field = _blocks(make_task, xs, ys, c, src["n_pixels"])
+    attrs.update({f"scene_{k}": v for k, v in scene.attrs.items()})
+    return _dataset(field, xs, ys, src, attrs)
+
+
+def image_regions(
+    regions: xr.Dataset,
+    source: xr.DataArray,
+    *,
+    seed: int,
+    tile: object = 64.0,
+    waist: float,
+    x: object,
+    y: object | None = None,
+    chunk: int = 32,
+    method: str = "direct",
+    tol: float | None = None,
+    focus: float | None = None,
+    rayleigh_range: float | None = None,
+) -> xr.Dataset:
+    """Like :func:`image`, drawing the scene of ``regions`` tile by tile inside each chunk.
+
+    Each chunk's task draws :func:`speckle.scene.shared.shared_scene` over depths ``[0, H)``
+    and the lateral window of its lines plus the beam reach, and images it: memory holds one
+    chunk's scatterers per worker, never the whole scene. The scene is the same whatever the
+    chunking (tiles are seeded by their index), so the image is too.
+
+    Parameters
+    ----------
+    regions : xarray.Dataset
+        Regions (:mod:`speckle.scene.regions`); densities per µm^2 (2-D, no ``y``) or per µm^3.
+    seed, tile
+        As in :func:`speckle.scene.shared.shared_scene`.
+    source, waist, x, y, chunk, method, tol, focus, rayleigh_range
+        As in :func:`image` (``wrap`` is ``False``: the scene is drawn over ``[0, H)`` only).
+
+    Returns
+    -------
+    xarray.Dataset
+        As :func:`image`.
+    """
+    src, w0, xs, ys, c, attrs, kernel, optics = _prepare(
+        source, waist, x, y, chunk, method, tol, False, focus, rayleigh_range
+    )
+    reach = beam_reach(w0, widening=_widening(optics, w0, src["k0"], 0.0, src["depth"]))
+    h = src["depth"]
+    sd = check_int(seed, "seed", low=0)
+
+    def get_part(x0: float, x1: float, y0: float, y1: float) -> tuple[np.ndarray, ...]:
+        yr = None if ys is None else (y0 - reach, np.nextafter(y1 + reach, np.inf))
+        part = shared_scene(
+            regions,
+            z_range=(0.0, h),
+            x_range=(x0 - reach, np.nextafter(x1 + reach, np.inf)),
+            y_range=yr,
+            seed=sd,
+            tile=tile,
+        )
+        cols = [part.z.values, part.x.values, part.amplitude.values]
+        return tuple(cols + ([part.y.values] if ys is not None else []))
+
+    get_part(xs[0], xs[0], *((-1.0, -1.0) if ys is None else (ys[0], ys[0])))  # check inputs
+
+    def make_task(cx, cy, bounds):
+        part = dask.delayed(get_part, pure=True)(*bounds)
+        return dask.delayed(kernel, pure=True)(part, cx, cy)
+
+    field = _blocks(make_task, xs, ys, c, src["n_pixels"])
+    attrs.update(
+        {"scene_seed": sd, "scene_tile": np.atleast_1d(np.asarray(tile, dtype=float)).tolist()}
+    )
+    attrs["density_units"] = f"scatterers per um^{2 if ys is None else 3}"
+    return _dataset(field, xs, ys, src, attrs)

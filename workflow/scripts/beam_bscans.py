@@ -1,0 +1,16 @@
+"""B-scans under the beam vs independent lines (thin): speckle.figures.beam, NetCDF + PNG."""
+
+from speckle.figures import beam
+from speckle.figures._style import log_to
+from speckle.io import to_netcdf
+
+with log_to(snakemake.log[0]):
+    params = snakemake.params
+    ds = beam.bscans_data(params.source, params.beam, params.seed)
+    to_netcdf(ds, snakemake.output.data)
+    beam.bscans_figure(ds, snakemake.output.figure)
+    for name in ("lateral", "axial"):
+        for kind in ("complex", "intensity"):
+            print(f"{name} {kind} measured:\n{ds[f'{name}_{kind}'].values.round(3)}")
+            print(f"{name} {kind} theory:\n{ds[f'{name}_{kind}_theory'].values.round(3)}")
+    print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
