@@ -57,7 +57,7 @@ import numpy as np
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
 from ..system.source import check_weights
-from .aline import ascan
+from .aline import DIRECT_CHUNK_ELEMENTS, ascan
 
 __all__ = ["BEAM_METHODS", "Beam", "beam_scan", "beam_weight", "register_beam_method"]
 
@@ -292,14 +292,18 @@ def _direct(scene: BeamScene, beam: Beam, tol: float | None) -> np.ndarray:
         else:
             g = gam[sel]
             weight = g**2 * np.exp(-2 * g * r2 / w0**2)
-        out[i] = ascan(
-            scene.z[sel] if sel.size else np.zeros(1),
-            scene.amplitude[sel] * weight if sel.size else np.zeros(1),
-            n_pixels=scene.n_pixels,
-            depth=scene.depth,
-            k0=scene.k0,
-            spectrum=scene.spectrum,
-        )
+        out[i] = 0.0
+        # scatterers in chunks: the direct sum holds (scatterers x pixels) phase factors
+        step = max(1, DIRECT_CHUNK_ELEMENTS // scene.n_pixels)
+        for c0 in range(0, sel.size, step):
+            out[i] += ascan(
+                scene.z[sel[c0 : c0 + step]],
+                scene.amplitude[sel[c0 : c0 + step]] * weight[c0 : c0 + step],
+                n_pixels=scene.n_pixels,
+                depth=scene.depth,
+                k0=scene.k0,
+                spectrum=scene.spectrum,
+            )
     return out
 
 
