@@ -103,3 +103,21 @@ def test_depolarization_by_region_label():
     np.testing.assert_allclose(co.where(left, 0.0), abs(scene.amplitude).where(left, 0.0))
     np.testing.assert_array_equal(x.where(left, 0.0), 0.0)
     np.testing.assert_array_equal(co.where(~left, 0.0), 0.0)
+
+
+def test_depolarization_by_region_of_a_shared_scene():
+    """A shared scene's own region labels select f: region 1 fully depolarizing."""
+    from speckle.scene.regions import layer, make_regions
+    from speckle.scene.shared import shared_scene
+
+    regions = make_regions(
+        layer(0.0, 100.0, density=0.05, depolarization=0.0),
+        layer(100.0, 200.0, density=0.05, depolarization=1.0),
+    )
+    scene = shared_scene(regions, z_range=(0.0, 200.0), x_range=(0.0, 50.0), seed=3)
+    out = speckle.depolarize(scene, regions, seed=1)
+    deep = scene.region == 1
+    co, x = (abs(out.amplitude.sel(channel=c)) for c in ("co", "cross"))
+    np.testing.assert_array_equal(co.where(deep, 0.0), 0.0)
+    np.testing.assert_array_equal(x.where(~deep, 0.0), 0.0)
+    np.testing.assert_allclose(x.where(deep, 0.0), abs(scene.amplitude).where(deep, 0.0))

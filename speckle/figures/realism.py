@@ -14,19 +14,25 @@ import numpy as np
 import xarray as xr
 
 from ..analysis.realism import EFFECTS, realism_study
-from ..imaging.bscan import bscan
-from ..scene.scatterers import random_scatterers
+from ..imaging.beam import beam_scan
+from ..scene.regions import cell_density, ellipse, layer, make_regions, rasterize
+from ..scene.shared import shared_scene
 from ..system.attenuation import attenuate_regions
-from ..system.backscatter import backscatter_regions
 from ..system.noise import add_noise
 from ..system.rolloff import rolloff
 from ..system.source import spectrum
 from ._style import new_figure
 
-__all__ = ["phantom_labels", "plot_realism", "plot_showcase", "realism_dataset", "showcase_dataset"]
+__all__ = [
+    "phantom_regions",
+    "plot_realism",
+    "plot_showcase",
+    "realism_dataset",
+    "showcase_dataset",
+]
 
-#: Region labels of the showcase phantom, in the order of the config's ``regions``.
-REGIONS = ("air", "top", "bottom", "inclusion")
+#: Regions of the showcase phantom (labels 0, 1, 2; air above the surface is label -1).
+REGIONS = ("top", "bottom", "inclusion")
 
 
 def realism_dataset(
@@ -120,69 +126,88 @@ def plot_realism(ds: xr.Dataset):
     return fig
 
 
-def phantom_labels(
-    n_pixels: int, pixel_size: float, n_alines: int, pitch: float, cfg: Mapping, oversample: int = 4
-) -> xr.DataArray:
-    """Label image ``(depth, x)``: air, top layer, bottom layer and an elliptic inclusion.
+def phantom_regions(cfg: Mapping) -> xr.Dataset:
+    """Regions of the showcase phantom: two layers below the surface and an elliptic inclusion.
 
-    The depth grid is ``oversample`` times finer than the pixels (for the attenuation path
-    integral); ``cfg`` gives ``surface`` and ``interface`` depths and the inclusion's ``centre``
-    and ``radii`` (depth, lateral), all in µm.
+    ``cfg`` gives ``surface``, ``interface`` and ``bottom`` depths, the inclusion's ``centre``
+    and ``radii`` (depth, lateral) in µm, ``density`` (scatterers per pixel x pitch cell) and
+    per region ``backscatter`` and ``attenuation`` (``mu_t``, 1/µm). Above the surface is no
+    region (label -1: air, no scatterers, no attenuation).
     """
-    dz = pixel_size / oversample
-    depth = np.arange(n_pixels * oversample) * dz
-    x = np.arange(n_alines) * pitch
-    zz, xx = np.meshgrid(depth, x, indexing="ij")
-    lab = np.where(zz < cfg["surface"], 0, np.where(zz < cfg["interface"], 1, 2))
+    rho = cell_density(cfg["density"], cfg["pixel_size"], cfg["pitch"])
+    props = {r: dict(cfg["regions"][r]) for r in REGIONS}
     (cz, cx), (rz, rx) = cfg["inclusion"]["centre"], cfg["inclusion"]["radii"]
-    lab = np.where(((zz - cz) / rz) ** 2 + ((xx - cx) / rx) ** 2 < 1, 3, lab)
-    return xr.DataArray(
-        lab.astype(int),
-        dims=("depth", "x"),
-        coords={"depth": ("depth", depth, {"units": "um"}), "x": ("x", x, {"units": "um"})},
-        name="label",
-        attrs={"regions": ",".join(REGIONS)},
-    )
+    return make_regions(
+        layer(cfg["surface"], cfg["interface"], density=rho, **props["top"]),
+        layer(cfg["interface"], cfg["bottom"], density=rho, **props["bottom"]),
+        ellipse(cz, cx, rz, rx, density=rho, **props["inclusion"]),
+    ).assign_coords(name=("region", list(REGIONS)))
 
 
 def showcase_dataset(cfg: Mapping, seed: int) -> xr.Dataset:
-    """The layered phantom under the pure model and with the system effects, in dB."""
-    n, p, nl = cfg["n_pixels"], cfg["pixel_size"], cfg["n_alines"]
-    h = n * p
-    labels = phantom_labels(n, p, nl, p, cfg)
-    props = xr.Dataset(
-        {
-            k: ("region", [float(cfg["regions"][r][k]) for r in REGIONS])
-            for k in ("backscatter", "attenuation")
-        },
-        coords={"region": np.arange(len(REGIONS)), "name": ("region", list(REGIONS))},
-    )
+    """The phantom under the pure model and with focus and system effects, in dB.
+
+    A shared scene of :func:`phantom_regions` imaged by a scanned Gaussian beam
+    (:func:`speckle.beam_scan`). Pure: the depth-independent beam of waist ``w0``, no system
+    effect. System: the beam focused at ``focus`` (Rayleigh range ``k0 w0^2/2``), Beer-Lambert
+    attenuation integrated through the regions (:func:`speckle.attenuate_regions` on a label
+    image four times finer than the pixels in depth), the roll-off and white receiver noise.
+    """
+    n, p, nl, pitch = cfg["n_pixels"], cfg["pixel_size"], cfg["n_lines"], cfg["pitch"]
+    h, w0 = n * p, cfg["waist"]
+    regions = phantom_regions(cfg)
+    lines = np.arange(nl) * pitch
+    margin = 5 * w0
+    x_range = (lines[0] - margin, lines[-1] + margin)
+    scene = shared_scene(regions, z_range=(0.0, h), x_range=x_range, seed=seed)
     src = spectrum(n, h, k0_dk=cfg["k0_dk"], shape="gaussian", fwhm_fraction=cfg["fwhm_fraction"])
-    scene = random_scatterers(nl, cfg["density"], n_pixels=n, depth=h, seed=seed, aline_pitch=p)
-    scene = backscatter_regions(scene, labels, props)
-    pure = bscan(scene, src, method="nufft", tol=1e-9)
-    sys_scene = rolloff(attenuate_regions(scene, labels, props), z_max=cfg["rolloff_z_max"])
-    system = bscan(sys_scene, src, method="nufft", tol=1e-9)
-    ref = float(pure.intensity.where(labels.isel(depth=slice(None, None, 4)).values > 0).mean())
+    fine = np.arange(4 * n) * p / 4
+    xl = np.arange(x_range[0], x_range[1] + pitch, pitch)
+    labels = rasterize(regions, fine, xl)
+    beam = {
+        "lines": lines,
+        "waist": w0,
+        "n_pixels": n,
+        "depth": h,
+        "k0": src.attrs["k0"],
+        "spectrum": src.values,
+        "method": cfg["method"],
+        "tol": cfg["tol"],
+    }
+
+    def image(sc, **kw):
+        f = beam_scan(sc.z.values, sc.x.values, sc.amplitude.values, **beam, **kw)
+        field = xr.DataArray(
+            f.T, dims=("depth", "x"), coords={"depth": np.arange(n) * p, "x": lines}
+        )
+        return xr.Dataset({"field": field, "intensity": abs(field) ** 2})
+
+    pure = image(scene)
+    sys_scene = rolloff(attenuate_regions(scene, labels, regions), z_max=cfg["rolloff_z_max"])
+    system = image(sys_scene, focus=cfg["focus"])
+    tissue = rasterize(regions, pure.depth.values, lines).values >= 0
+    ref = float(pure.intensity.where(tissue).mean())
     system = add_noise(system, cfg["snr_db"], seed=seed, signal_intensity=ref)
 
     def db(img):
         return (10 * np.log10(img.intensity / ref)).assign_attrs(units="dB re mean tissue")
 
+    label = rasterize(regions, pure.depth.values, lines)
     return xr.Dataset(
         {
             "pure_db": db(pure),
             "system_db": db(system),
-            "label": labels.isel(depth=slice(None, None, 4))
-            .rename(x="aline")
-            .assign_coords(depth=pure.depth.values, aline=pure.aline.values),
-            "attenuation": props.attenuation.assign_attrs(units="1/um"),
-            "backscatter": props.backscatter.assign_attrs(units="1"),
+            "label": label.drop_attrs(),
+            "attenuation": regions.attenuation.assign_attrs(units="1/um"),
+            "backscatter": regions.backscatter.assign_attrs(units="1"),
         },
         attrs={
             "snr_db": float(cfg["snr_db"]),
             "rolloff_z_max": float(cfg["rolloff_z_max"]),
-            "focus": "not modelled (independent A-lines; the beam focus comes with the beam issue)",
+            "waist": float(w0),
+            "focus": float(cfg["focus"]),
+            "rayleigh_range": float(src.attrs["k0"] * w0**2 / 2),
+            "scatterers": int(scene.sizes["scatterer"]),
         },
     )
 
@@ -190,17 +215,21 @@ def showcase_dataset(cfg: Mapping, seed: int) -> xr.Dataset:
 def plot_showcase(ds: xr.Dataset, dynamic_range: float = 40.0):
     """Pure model beside the model with system effects, same dB scale."""
     fig, axes = new_figure(1, 2, width=7.0, height=3.4)
-    extent = [ds.aline.values[0], ds.aline.values[-1], ds.depth.values[-1], ds.depth.values[0]]
+    extent = [ds.x.values[0], ds.x.values[-1], ds.depth.values[-1], ds.depth.values[0]]
     for ax, var, title in zip(
         axes[0],
         ("pure_db", "system_db"),
-        ("pure model", f"attenuation + roll-off + noise ({ds.attrs['snr_db']:g} dB)"),
+        (
+            "pure model (unfocused beam)",
+            f"focus at {ds.attrs['focus']:g} µm + attenuation + roll-off + noise "
+            f"({ds.attrs['snr_db']:g} dB)",
+        ),
         strict=True,
     ):
         im = ax.imshow(
             ds[var], cmap="gray", vmin=-dynamic_range + 10, vmax=10, extent=extent, aspect="auto"
         )
-        ax.contour(ds.aline, ds.depth, ds.label, levels=[0.5, 1.5, 2.5], colors="y", linewidths=0.4)
+        ax.contour(ds.x, ds.depth, ds.label, levels=[-0.5, 0.5, 1.5], colors="y", linewidths=0.4)
         ax.set(xlabel="x (µm)", ylabel="depth (µm)", title=title)
     fig.colorbar(im, ax=axes[0, 1], label="dB re mean tissue intensity")
     return fig

@@ -42,7 +42,7 @@ def lateral_positions(scene: xr.Dataset) -> xr.DataArray:
 
 def region_property(
     scene: xr.Dataset,
-    labels: xr.DataArray,
+    labels: xr.DataArray | None,
     properties: xr.Dataset,
     name: str,
     outside: float | None = None,
@@ -52,7 +52,12 @@ def region_property(
     ``labels`` has dims ``(depth, x)`` (µm coordinates, uniform depth step); ``properties`` is
     the per-region table (dim ``region``). Depths snap to the nearest row, so no value is
     blended across a boundary. ``outside`` is the value for label ``-1`` (no region).
+    ``labels=None``: a shared scene's own ``region`` variable (the label of each scatterer).
     """
+    if labels is None:
+        if "region" not in scene.data_vars:
+            raise ValueError("give labels (a label image) or a scene with a 'region' variable")
+        return region_values(scene.region, properties, name, outside=outside)
     values = region_values(labels, properties, name, outside=outside)
     d = np.asarray(labels.depth.values, dtype=float)
     step = float(d[1] - d[0]) if d.size > 1 else 1.0

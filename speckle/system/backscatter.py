@@ -31,13 +31,15 @@ def backscatter(scene: xr.Dataset, value: float | xr.Dataset) -> xr.Dataset:
 
 
 def backscatter_regions(
-    scene: xr.Dataset, labels: xr.DataArray, properties: xr.Dataset
+    scene: xr.Dataset, labels: xr.DataArray | None, properties: xr.Dataset
 ) -> xr.Dataset:
     """Scale scatterer intensities by the ``backscatter`` of the region they lie in.
 
     The region of a scatterer is the label of the nearest pixel of ``labels`` (dims
     ``(depth, x)``, µm coordinates); ``properties`` is the per-region table (dim ``region``).
-    Scatterers at label ``-1`` (no region) get amplitude 0.
+    Scatterers at label ``-1`` (no region) get amplitude 0. ``labels=None`` uses a shared
+    scene's ``region`` variable (note that :func:`speckle.shared_scene` already scales its
+    amplitudes by the regions' ``backscatter``: apply this only to scenes drawn without it).
     """
     check_scene(scene)
     b = region_property(scene, labels, properties, "backscatter", outside=0.0)

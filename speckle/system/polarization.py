@@ -60,7 +60,8 @@ def depolarize(
         Seed of the cross-channel phases (A-line ``i`` uses its own stream; a scene without
         an ``aline`` dim uses one stream).
     labels : xarray.DataArray, optional
-        Label image ``(depth, x)``: ``f`` of the region holding each scatterer.
+        Label image ``(depth, x)``: ``f`` of the region holding each scatterer. A per-region
+        table without ``labels`` uses a shared scene's own ``region`` variable.
 
     Returns
     -------
@@ -70,8 +71,9 @@ def depolarize(
     """
     check_scene(scene)
     sd = check_int(seed, "seed", low=0)
-    if labels is not None:
-        f = region_property(scene, labels, depolarization, "depolarization")
+    by_region = isinstance(depolarization, xr.Dataset) and "region" in depolarization.dims
+    if labels is not None or by_region:
+        f = region_property(scene, labels, depolarization, "depolarization", outside=0.0)
     else:
         f = xr.apply_ufunc(
             property_profile, scene.z, kwargs={"value": depolarization, "name": "depolarization"}
