@@ -35,6 +35,7 @@ include: "workflow/rules/scan.smk"
 include: "workflow/rules/speed.smk"
 include: "workflow/rules/elastography.smk"
 include: "workflow/rules/system.smk"
+include: "workflow/rules/realism.smk"
 include: "workflow/rules/beam.smk"
 
 
@@ -48,4 +49,5 @@ rule all:
         + SPEED_TARGETS
         + ELASTOGRAPHY_TARGETS
         + SYSTEM_TARGETS
+        + REALISM_TARGETS
         + BEAM_TARGETS,

@@ -53,3 +53,17 @@ def test_log_compress_is_gain_log_plus_offset(intensity):
 def test_bad_input(intensity, call, match):
     with pytest.raises((ValueError, TypeError), match=match):
         call(intensity)
+
+
+def test_log_expand_inverts_log_compress(intensity):
+    from speckle.system.detection import log_expand
+
+    g, c = 20.0, 100.0
+    exact = log_expand(log_compress(intensity, g, c, bits=None), g, c)
+    np.testing.assert_allclose(exact, intensity, rtol=1e-13)
+    q = log_compress(intensity, g, c)  # 8-bit: rounding error <= 1/2 level inside the clip range
+    inside = (q > 0) & (q < 255)
+    rel = abs(log_expand(q, g, c) / intensity - 1).where(inside)
+    assert float(rel.max()) <= np.exp(0.5 / g) - 1 + 1e-12
+    with pytest.raises(ValueError, match="gain"):
+        log_expand(q, 0.0, c)

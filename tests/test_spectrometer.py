@@ -95,7 +95,7 @@ def test_rolloff_through_the_chain_is_closed_form():
     measured_db = 20 * np.log10(peak)
     w = s.fill_factor * s.wavenumber_step
     np.testing.assert_allclose(
-        measured_db, 10 * np.log10(sp.rolloff(z[:, 0], w, s.resolution_k)), atol=1e-9
+        measured_db, 10 * np.log10(sp.rolloff_power(z[:, 0], w, s.resolution_k)), atol=1e-9
     )
 
 

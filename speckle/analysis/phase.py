@@ -2,7 +2,7 @@
 
 Complex noise
 -------------
-:func:`add_complex_noise` adds circular complex Gaussian noise of power
+:func:`speckle.add_complex_noise` adds circular complex Gaussian noise of power
 ``sigma^2 = <|A|^2> / 10^(snr_db/10)`` to a complex image (SNR = mean image intensity over noise
 power). At high SNR a pixel of intensity ``I`` has phase noise of variance ``sigma^2/(2 I)``.
 
@@ -38,45 +38,14 @@ import numpy as np
 
 from .._validate import check_int, check_real
 
-__all__ = ["DEFAULT_MAX_BIAS", "add_complex_noise", "choose_lag", "depth_autocorrelation"]
+__all__ = ["DEFAULT_MAX_BIAS", "choose_lag", "depth_autocorrelation", "noise_power"]
 
 #: Largest relative low bias ``rho(L)^2`` accepted by :func:`choose_lag` (0.5 %).
 DEFAULT_MAX_BIAS = 0.005
 
 
-def add_complex_noise(field: object, snr_db: float, *, seed: int) -> np.ndarray:
-    """Add circular complex Gaussian noise at a given SNR to a complex image.
-
-    Parameters
-    ----------
-    field : array_like of complex
-        The noise-free image (any shape).
-    snr_db : float
-        Mean image intensity over noise power, in dB; ``inf`` returns a copy of ``field``.
-    seed : int
-        Seed of the ``numpy.random.Generator`` (same seed, same noise).
-
-    Returns
-    -------
-    numpy.ndarray
-        ``field + n`` with ``n ~ CN(0, sigma^2)``, ``sigma^2 = mean(|field|^2) / 10^(snr_db/10)``.
-    """
-    a = np.asarray(field)
-    if not np.iscomplexobj(a):
-        raise TypeError("field must be a complex image (e.g. the 'field' of speckle.bscan)")
-    if isinstance(snr_db, bool) or not isinstance(snr_db, int | float | np.floating):
-        raise TypeError(f"snr_db must be a real number in dB, got {snr_db!r}")
-    if np.isposinf(snr_db):
-        return a.astype(np.complex128, copy=True)
-    snr = check_real(snr_db, "snr_db")
-    power = noise_power(a, snr)
-    rng = np.random.default_rng(check_int(seed, "seed", low=0))
-    noise = rng.standard_normal((*a.shape, 2)) @ np.array([1.0, 1.0j])
-    return a + noise * np.sqrt(power / 2)
-
-
 def noise_power(field: object, snr_db: float) -> float:
-    """Noise power ``sigma^2 = mean(|field|^2) / 10^(snr_db/10)`` of :func:`add_complex_noise`."""
+    """Noise power ``sigma^2 = mean(|field|^2) / 10^(snr_db/10)`` (:func:`speckle.add_noise`)."""
     snr = check_real(snr_db, "snr_db")
     return float(np.mean(np.abs(np.asarray(field)) ** 2)) / 10 ** (snr / 10)
 

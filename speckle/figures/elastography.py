@@ -21,12 +21,13 @@ import xarray as xr
 from scipy import ndimage
 
 from ..analysis.correlation import expected_correlation
-from ..analysis.phase import add_complex_noise, choose_lag, depth_autocorrelation, noise_power
+from ..analysis.phase import choose_lag, depth_autocorrelation, noise_power
 from ..analysis.strain import accumulate_strain, estimate_strain, predicted_strain_std
 from ..imaging.bscan import bscan
 from ..provenance import provenance_attrs
 from ..scene.deformation import deformable_scene, displace
 from ..scene.mechanics import compress, inclusion_labels
+from ..system.noise import add_complex_noise
 from ..system.source import spectrum
 from ._style import new_figure, save
 

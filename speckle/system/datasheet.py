@@ -39,7 +39,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import check_choice, check_int, check_real
-from .rolloff import rolloff
+from .rolloff import rolloff_power
 from .source import spectrum as _spectrum
 
 __all__ = ["EXAMPLE_SYSTEMS", "System", "datasheet", "example_system"]
@@ -165,7 +165,7 @@ class System:
         depth : array_like
             Depths ``z`` in µm (medium) from the zero delay.
         """
-        return rolloff(depth, self.pixel_width_k, self.resolution_k)
+        return rolloff_power(depth, self.pixel_width_k, self.resolution_k)
 
     def rolloff_db(self, depth: object) -> np.ndarray:
         """:meth:`rolloff` in dB (``10 log10``)."""

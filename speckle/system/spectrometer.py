@@ -43,7 +43,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
-from .rolloff import carrier_response, rolloff
+from .rolloff import carrier_response, rolloff_power
 
 __all__ = [
     "DETECTIONS",
@@ -59,7 +59,7 @@ __all__ = [
     "linearize",
     "process",
     "resampling_error",
-    "rolloff",
+    "rolloff_power",
     "spectral_window",
     "system_ascan",
     "to_pixels",

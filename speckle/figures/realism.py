@@ -1,0 +1,235 @@
+"""Realism figures: the measured image against the model effect by effect, and a showcase.
+
+:func:`realism_dataset` / :func:`plot_realism` draw :func:`speckle.analysis.realism.realism_study`
+(autocorrelations along depth and across A-lines, the misfit score of each step and of the full
+model without each effect). :func:`showcase_dataset` / :func:`plot_showcase` image a layered
+phantom with an inclusion under the pure model and with attenuation, roll-off and noise, in dB.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+import xarray as xr
+
+from ..analysis.realism import EFFECTS, realism_study
+from ..imaging.beam import beam_scan
+from ..scene.regions import cell_density, ellipse, layer, make_regions, rasterize
+from ..scene.shared import shared_scene
+from ..system.attenuation import attenuate_regions
+from ..system.noise import add_noise
+from ..system.rolloff import rolloff
+from ..system.source import spectrum
+from ._style import new_figure
+
+__all__ = [
+    "phantom_regions",
+    "plot_realism",
+    "plot_showcase",
+    "realism_dataset",
+    "showcase_dataset",
+]
+
+#: Regions of the showcase phantom (labels 0, 1, 2; air above the surface is label -1).
+REGIONS = ("top", "bottom", "inclusion")
+
+
+def realism_dataset(
+    measured: xr.DataArray | None, air: xr.DataArray | None, cfg: Mapping, seed: int, reason: str
+) -> xr.Dataset:
+    """Run the realism study from the pipeline's ``realism`` config section."""
+    ds = realism_study(
+        measured,
+        air,
+        pixel_size=cfg["pixel_size"],
+        n_pixels=cfg["n_pixels"],
+        n_alines=cfg["n_alines"],
+        density=cfg["density"],
+        k0_dk=cfg["k0_dk"],
+        max_lag=cfg["max_lag"],
+        n_blocks=cfg["n_blocks"],
+        phase=dict(cfg["phase"]),
+        fallback=dict(cfg["fallback"]),
+        seed=seed,
+    )
+    ds.attrs["measured"] = (
+        measured.attrs.get("source", "yes") if measured is not None else f"none: {reason}"
+    )
+    return ds
+
+
+def plot_realism(ds: xr.Dataset):
+    """Autocorrelations (depth, lateral) and the misfit of each model; model only without data."""
+    have = "measured_autocorrelation" in ds
+    fig, axes = new_figure(1, 3 if have else 2, width=10.0 if have else 7.0, height=3.2)
+    lags = ds.lag.values
+    for ax, axis in zip(axes[0], ("depth", "lateral"), strict=False):
+        for step in ds.step.values:
+            ax.plot(
+                lags,
+                ds.cumulative_autocorrelation.sel(step=step, axis=axis),
+                lw=0.7,
+                alpha=0.5,
+                label=str(step),
+            )
+        ax.plot(
+            lags,
+            ds.model_autocorrelation.sel(axis=axis),
+            "k-",
+            lw=2,
+            label="final model",
+        )
+        if have:
+            ax.errorbar(
+                lags,
+                ds.measured_autocorrelation.sel(axis=axis),
+                yerr=2 * ds.measured_autocorrelation_se.sel(axis=axis),
+                fmt="ro",
+                ms=3,
+                label="measured (2 SE)",
+            )
+        ax.set(
+            xlabel="lag (pixels)" if axis == "depth" else "lag (A-lines)",
+            ylabel="intensity autocorrelation",
+            title=f"{axis} autocorrelation",
+        )
+        ax.axhline(0, color="0.7", lw=0.5)
+    axes[0, 0].legend(fontsize=5, ncol=2)
+    if not have:
+        axes[0, 1].text(
+            0.02,
+            0.98,
+            f"measured image {ds.attrs['measured']}",
+            transform=axes[0, 1].transAxes,
+            va="top",
+            fontsize=6,
+            wrap=True,
+        )
+        return fig
+    ax = axes[0, 2]
+    y = np.arange(len(EFFECTS))
+    ax.barh(y + 0.2, ds.dropped_score, height=0.4, label="full model without it")
+    ax.barh(y - 0.2, ds.cumulative_score.values[1:], height=0.4, label="added (cumulative)")
+    full = float(ds.cumulative_score.isel(step=-1))
+    ax.axvline(full, color="k", lw=0.8, label=f"full model {full:.1f}")
+    ax.axvline(full + 2, color="k", ls=":", lw=0.8, label="needed threshold")
+    ax.set_yticks(
+        y,
+        [f"{e}{' *' if bool(ds.needed.sel(effect=e)) else ''}" for e in EFFECTS],
+    )
+    ax.set(
+        xlabel="misfit score (largest deviation in combined SE)",
+        title=f"needed (*): {ds.attrs['final_effects']}",
+    )
+    ax.legend(fontsize=5)
+    return fig
+
+
+def phantom_regions(cfg: Mapping) -> xr.Dataset:
+    """Regions of the showcase phantom: two layers below the surface and an elliptic inclusion.
+
+    ``cfg`` gives ``surface``, ``interface`` and ``bottom`` depths, the inclusion's ``centre``
+    and ``radii`` (depth, lateral) in µm, ``density`` (scatterers per pixel x pitch cell) and
+    per region ``backscatter`` and ``attenuation`` (``mu_t``, 1/µm). Above the surface is no
+    region (label -1: air, no scatterers, no attenuation).
+    """
+    rho = cell_density(cfg["density"], cfg["pixel_size"], cfg["pitch"])
+    props = {r: dict(cfg["regions"][r]) for r in REGIONS}
+    (cz, cx), (rz, rx) = cfg["inclusion"]["centre"], cfg["inclusion"]["radii"]
+    return make_regions(
+        layer(cfg["surface"], cfg["interface"], density=rho, **props["top"]),
+        layer(cfg["interface"], cfg["bottom"], density=rho, **props["bottom"]),
+        ellipse(cz, cx, rz, rx, density=rho, **props["inclusion"]),
+    ).assign_coords(name=("region", list(REGIONS)))
+
+
+def showcase_dataset(cfg: Mapping, seed: int) -> xr.Dataset:
+    """The phantom under the pure model and with focus and system effects, in dB.
+
+    A shared scene of :func:`phantom_regions` imaged by a scanned Gaussian beam
+    (:func:`speckle.beam_scan`). Pure: the depth-independent beam of waist ``w0``, no system
+    effect. System: the beam focused at ``focus`` (Rayleigh range ``k0 w0^2/2``), Beer-Lambert
+    attenuation integrated through the regions (:func:`speckle.attenuate_regions` on a label
+    image four times finer than the pixels in depth), the roll-off and white receiver noise.
+    """
+    n, p, nl, pitch = cfg["n_pixels"], cfg["pixel_size"], cfg["n_lines"], cfg["pitch"]
+    h, w0 = n * p, cfg["waist"]
+    regions = phantom_regions(cfg)
+    lines = np.arange(nl) * pitch
+    margin = 5 * w0
+    x_range = (lines[0] - margin, lines[-1] + margin)
+    scene = shared_scene(regions, z_range=(0.0, h), x_range=x_range, seed=seed)
+    src = spectrum(n, h, k0_dk=cfg["k0_dk"], shape="gaussian", fwhm_fraction=cfg["fwhm_fraction"])
+    fine = np.arange(4 * n) * p / 4
+    xl = np.arange(x_range[0], x_range[1] + pitch, pitch)
+    labels = rasterize(regions, fine, xl)
+    beam = {
+        "lines": lines,
+        "waist": w0,
+        "n_pixels": n,
+        "depth": h,
+        "k0": src.attrs["k0"],
+        "spectrum": src.values,
+        "method": cfg["method"],
+        "tol": cfg["tol"],
+    }
+
+    def image(sc, **kw):
+        f = beam_scan(sc.z.values, sc.x.values, sc.amplitude.values, **beam, **kw)
+        field = xr.DataArray(
+            f.T, dims=("depth", "x"), coords={"depth": np.arange(n) * p, "x": lines}
+        )
+        return xr.Dataset({"field": field, "intensity": abs(field) ** 2})
+
+    pure = image(scene)
+    sys_scene = rolloff(attenuate_regions(scene, labels, regions), z_max=cfg["rolloff_z_max"])
+    system = image(sys_scene, focus=cfg["focus"])
+    tissue = rasterize(regions, pure.depth.values, lines).values >= 0
+    ref = float(pure.intensity.where(tissue).mean())
+    system = add_noise(system, cfg["snr_db"], seed=seed, signal_intensity=ref)
+
+    def db(img):
+        return (10 * np.log10(img.intensity / ref)).assign_attrs(units="dB re mean tissue")
+
+    label = rasterize(regions, pure.depth.values, lines)
+    return xr.Dataset(
+        {
+            "pure_db": db(pure),
+            "system_db": db(system),
+            "label": label.drop_attrs(),
+            "attenuation": regions.attenuation.assign_attrs(units="1/um"),
+            "backscatter": regions.backscatter.assign_attrs(units="1"),
+        },
+        attrs={
+            "snr_db": float(cfg["snr_db"]),
+            "rolloff_z_max": float(cfg["rolloff_z_max"]),
+            "waist": float(w0),
+            "focus": float(cfg["focus"]),
+            "rayleigh_range": float(src.attrs["k0"] * w0**2 / 2),
+            "scatterers": int(scene.sizes["scatterer"]),
+        },
+    )
+
+
+def plot_showcase(ds: xr.Dataset, dynamic_range: float = 40.0):
+    """Pure model beside the model with system effects, same dB scale."""
+    fig, axes = new_figure(1, 2, width=7.0, height=3.4)
+    extent = [ds.x.values[0], ds.x.values[-1], ds.depth.values[-1], ds.depth.values[0]]
+    for ax, var, title in zip(
+        axes[0],
+        ("pure_db", "system_db"),
+        (
+            "pure model (unfocused beam)",
+            f"focus at {ds.attrs['focus']:g} µm + attenuation + roll-off + noise "
+            f"({ds.attrs['snr_db']:g} dB)",
+        ),
+        strict=True,
+    ):
+        im = ax.imshow(
+            ds[var], cmap="gray", vmin=-dynamic_range + 10, vmax=10, extent=extent, aspect="auto"
+        )
+        ax.contour(ds.x, ds.depth, ds.label, levels=[-0.5, 0.5, 1.5], colors="y", linewidths=0.4)
+        ax.set(xlabel="x (µm)", ylabel="depth (µm)", title=title)
+    fig.colorbar(im, ax=axes[0, 1], label="dB re mean tissue intensity")
+    return fig

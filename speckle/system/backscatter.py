@@ -1,0 +1,46 @@
+"""Relative backscattering strength per layer or region (off by default).
+
+A medium whose scatterers reflect ``b`` times more intensity has amplitudes ``sqrt(b) a_j``: the
+mean speckle intensity scales by ``b`` and the speckle statistics are unchanged.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from ..scene.layers import property_profile
+from ._scene import check_scene, region_property, scale_amplitudes
+
+__all__ = ["backscatter", "backscatter_regions"]
+
+
+def backscatter(scene: xr.Dataset, value: float | xr.Dataset) -> xr.Dataset:
+    """Scale scatterer intensities by the backscatter of their layer.
+
+    Parameters
+    ----------
+    scene : xarray.Dataset
+        Scatterer field (``z`` in µm, ``amplitude``).
+    value : float or xarray.Dataset
+        Relative backscattered intensity (>= 0), or layers with ``backscatter``.
+    """
+    check_scene(scene)
+    b = xr.apply_ufunc(property_profile, scene.z, kwargs={"value": value, "name": "backscatter"})
+    return scale_amplitudes(scene, np.sqrt(b))
+
+
+def backscatter_regions(
+    scene: xr.Dataset, labels: xr.DataArray | None, properties: xr.Dataset
+) -> xr.Dataset:
+    """Scale scatterer intensities by the ``backscatter`` of the region they lie in.
+
+    The region of a scatterer is the label of the nearest pixel of ``labels`` (dims
+    ``(depth, x)``, µm coordinates); ``properties`` is the per-region table (dim ``region``).
+    Scatterers at label ``-1`` (no region) get amplitude 0. ``labels=None`` uses a shared
+    scene's ``region`` variable (note that :func:`speckle.shared_scene` already scales its
+    amplitudes by the regions' ``backscatter``: apply this only to scenes drawn without it).
+    """
+    check_scene(scene)
+    b = region_property(scene, labels, properties, "backscatter", outside=0.0)
+    return scale_amplitudes(scene, np.sqrt(b), backscatter="by region")

@@ -1,0 +1,157 @@
+"""Random phase perturbations along depth from refractive-index fluctuations (off by default).
+
+The refractive index along an A-line fluctuates, ``n(z) = n + dn(z)``, with ``dn`` a stationary
+Gaussian process of variance ``s^2`` (``index_variance``, dimensionless) and Gaussian correlation
+``E dn(z) dn(z + u) = s^2 exp(-u^2/l^2)`` (``l``: ``correlation_length`` in µm). Light reaching a
+scatterer at depth ``z`` and returning picks up the extra phase
+
+    phi(z) = 2 k0 int_0^z dn(z') dz',
+
+a Gaussian process (zero mean) with structure ``Var[phi(b) - phi(a)] = 4 k0^2 D(|b - a|)`` and
+``Var phi(z) = 4 k0^2 D(z)``, where
+
+    D(u) = s^2 [u l sqrt(pi) erf(u/l) + l^2 (exp(-u^2/l^2) - 1)]
+
+(``~ s^2 u^2`` for ``u << l``; ``~ s^2 l sqrt(pi) u``, a random walk, for ``u >> l``). Each
+scatterer's amplitude is multiplied by ``exp(i phi(z_j))`` of its own depth (the phase belongs to
+the path to the scatterer, not to a pixel). Two acquisitions with independent fluctuations keep,
+for a scatterer at ``z``, the complex correlation ``E exp(i (phi_1 - phi_2)) = exp(-4 k0^2 D(z))``.
+
+Sampling: ``phi`` is drawn exactly (multivariate normal, covariance from ``D``) on a grid of
+step ``min(l/8, H/N)`` and linearly interpolated to the scatterer depths; each A-line (and each
+combination of other dims) has an independent screen.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+from scipy import special
+
+from .._validate import as_finite_array, check_int, check_real
+from ._scene import check_scene, line_rng, scale_amplitudes
+
+__all__ = ["phase_perturb", "phase_screens", "phase_structure"]
+
+_STREAM = 103
+_MAX_NODES = 2048
+
+
+def phase_structure(
+    u: object, index_variance: float, correlation_length: float, k0: float
+) -> np.ndarray:
+    """``Var[phi(z + u) - phi(z)] = 4 k0^2 D(|u|)`` in rad^2 (module docstring)."""
+    s2 = check_real(index_variance, "index_variance", low=0)
+    ell = check_real(correlation_length, "correlation_length", low=0, low_inclusive=False)
+    k = check_real(k0, "k0", low=0)
+    uu = np.abs(as_finite_array(u, "u"))
+    d = uu * ell * np.sqrt(np.pi) * special.erf(uu / ell) + ell**2 * np.expm1(-(uu**2) / ell**2)
+    return 4 * k**2 * s2 * d
+
+
+def _grid(z_max: float, step: float) -> np.ndarray:
+    n = int(np.ceil(z_max / step)) + 1
+    if n > _MAX_NODES:
+        raise ValueError(
+            f"phase screen needs {n} nodes (> {_MAX_NODES}) for depths up to {z_max:g} µm: "
+            "use a longer correlation_length or fewer pixels"
+        )
+    return np.linspace(0.0, max(z_max, step), max(n, 2))
+
+
+def _factor(grid: np.ndarray, s2: float, ell: float, k0: float) -> np.ndarray:
+    """``L`` with ``L L^T = Cov(phi(grid))`` (eigen-decomposition, tiny negatives clipped)."""
+    dz = phase_structure(grid, s2, ell, k0)
+    cov = 0.5 * (
+        dz[:, None] + dz[None, :] - phase_structure(grid[:, None] - grid[None, :], s2, ell, k0)
+    )
+    val, vec = np.linalg.eigh(cov)
+    return vec * np.sqrt(np.clip(val, 0.0, None))
+
+
+def _draw(z: np.ndarray, s2: float, ell: float, k0: float, seed: int, step: float) -> np.ndarray:
+    """One independent screen per row of ``z`` (depths in µm, >= 0), evaluated at ``z``."""
+    if np.any(z < 0):
+        raise ValueError("scatterer depths must be >= 0 µm (the path starts at z = 0)")
+    grid = _grid(float(z.max(initial=0.0)), min(step, ell / 8))
+    lmat = _factor(grid, s2, ell, k0)
+    phi = np.empty(z.shape)
+    for i in range(z.shape[0]):
+        screen = lmat @ line_rng(seed, i, _STREAM).standard_normal(grid.size)
+        phi[i] = np.interp(z[i], grid, screen)
+    return phi
+
+
+def phase_screens(
+    depths: object,
+    *,
+    n_screens: int,
+    index_variance: float,
+    correlation_length: float,
+    k0: float,
+    seed: int,
+) -> np.ndarray:
+    """Independent phase screens ``phi(z)`` in rad at ``depths`` (µm, >= 0).
+
+    Screen ``i`` is the one :func:`phase_perturb` gives A-line ``i`` with the same seed (for
+    the same grid step). Returns shape ``(n_screens, depths.size)``.
+    """
+    z = as_finite_array(depths, "depths").ravel()
+    ns = check_int(n_screens, "n_screens", low=1)
+    s2 = check_real(index_variance, "index_variance", low=0)
+    ell = check_real(correlation_length, "correlation_length", low=0, low_inclusive=False)
+    k = check_real(k0, "k0", low=0)
+    sd = check_int(seed, "seed", low=0)
+    return _draw(np.broadcast_to(z, (ns, z.size)), s2, ell, k, sd, ell / 8)
+
+
+def phase_perturb(
+    scene: xr.Dataset,
+    *,
+    index_variance: float,
+    correlation_length: float,
+    k0: float,
+    seed: int,
+) -> xr.Dataset:
+    """Multiply each scatterer amplitude by ``exp(i phi(z_j))`` of an independent screen per line.
+
+    Parameters
+    ----------
+    scene : xarray.Dataset
+        Scatterer field (``z`` in µm, >= 0, ``amplitude``) with an ``aline`` dim.
+    index_variance : float
+        Variance ``s^2`` of the refractive-index fluctuation (>= 0).
+    correlation_length : float
+        Correlation length ``l`` in µm (> 0).
+    k0 : float
+        Central wavenumber in the medium, rad/µm (>= 0), e.g. ``source.attrs["k0"]``.
+    seed : int
+        Seed of the screens; screen ``i`` belongs to the ``i``-th A-line (other dims share it).
+
+    Returns
+    -------
+    xarray.Dataset
+        The perturbed scene; attributes record the parameters.
+    """
+    check_scene(scene)
+    if "aline" not in scene.z.dims:
+        raise ValueError("scene must have an 'aline' dim")
+    s2 = check_real(index_variance, "index_variance", low=0)
+    ell = check_real(correlation_length, "correlation_length", low=0, low_inclusive=False)
+    k = check_real(k0, "k0", low=0)
+    sd = check_int(seed, "seed", low=0)
+    step = ell / 8
+    if "depth" in scene.attrs and "n_pixels" in scene.attrs:
+        step = min(step, float(scene.attrs["depth"]) / int(scene.attrs["n_pixels"]))
+    z = scene.z.transpose("aline", ...)
+    zv = z.values.reshape(z.shape[0], -1)
+    phi = _draw(zv, s2, ell, k, sd, step).reshape(z.shape)
+    factor = z.copy(data=np.exp(1j * phi))
+    return scale_amplitudes(
+        scene,
+        factor,
+        phase_index_variance=s2,
+        phase_correlation_length=ell,
+        phase_k0=k,
+        phase_seed=sd,
+    )
