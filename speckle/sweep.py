@@ -10,6 +10,7 @@ arguments (e.g. :func:`speckle.scene.scatterers.line_generator`), never from glo
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import logging
 from collections.abc import Callable, Mapping, Sequence
@@ -38,14 +39,17 @@ def _compute(
         return list(dask.compute(*tasks, scheduler=scheduler, num_workers=n_workers))
     from dask.distributed import Client, LocalCluster, as_completed
 
-    cluster = (
-        None
-        if address
-        else LocalCluster(
-            n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None
-        )
-    )
-    with Client(address or cluster) as client:
+    with contextlib.ExitStack() as stack:
+        if not address:  # a local cluster for this sweep, closed with it (also on errors)
+            address = stack.enter_context(
+                LocalCluster(
+                    n_workers=n_workers,
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=None,
+                )
+            )
+        client = stack.enter_context(Client(address))
         futures = client.compute(tasks)
         index = {f.key: i for i, f in enumerate(futures)}
         results: list = [None] * len(futures)
@@ -53,8 +57,6 @@ def _compute(
             results[index[future.key]] = future.result()
             if progress:
                 log.info("sweep: %d/%d points done", done, len(futures))
-    if cluster is not None:
-        cluster.close()
     return results
 
 

@@ -301,3 +301,15 @@ def test_ci_runs_the_readme_commands(repo_root):
     assert test_cmd in [line.strip() for line in ci.splitlines()]
     assert f"--configfile {CI_CONFIG}" in ci
     assert ci.splitlines()[0].startswith("#!") and "set -euo pipefail" in ci
+
+
+def test_report_renders_without_docutils_messages(built):
+    """``snakemake --report``: captions render (no docutils error, warning or substitution)."""
+    proc = snakemake(built, "--cores", "1", "--configfile", CI_CONFIG, "--report", "report.html")
+    bad = [
+        line
+        for line in proc.stdout.splitlines()
+        if re.search(r"ERROR|WARNING|SEVERE|Undefined substitution|\(\w+/\d\)", line)
+    ]
+    assert not bad, proc.stdout
+    assert (built / "report.html").stat().st_size > 0

@@ -2,16 +2,14 @@
 
 Every figure module imports this first, so matplotlib always runs on the Agg backend (no
 screen). :func:`new_figure` and :func:`save` give all figures the same size, resolution and
-style (applied to ``matplotlib.rcParams`` on import); :func:`log_to` sends a pipeline script's
-output (including Dask progress bars) to its Snakemake ``log:`` file.
+style (applied to ``matplotlib.rcParams`` on import); :func:`log_to` (re-exported from
+:mod:`speckle._workflow`) sends a pipeline script's output, including Dask progress bars and
+tracebacks, to its ``log:`` file.
 """
 
 from __future__ import annotations
 
-import contextlib
-import logging
 import os
-from collections.abc import Iterator
 
 import matplotlib
 
@@ -19,6 +17,7 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt
 
+from .._workflow import log_to
 from ..io import atomic_path
 
 __all__ = ["DPI", "STYLE", "log_to", "new_figure", "save"]
@@ -63,32 +62,3 @@ def save(fig, path: str | os.PathLike) -> None:
             fig.savefig(tmp, dpi=DPI, format=os.path.splitext(str(path))[1][1:] or None)
     finally:
         plt.close(fig)
-
-
-@contextlib.contextmanager
-def log_to(path: str | os.PathLike | None) -> Iterator[None]:
-    """Send stdout, stderr and ``logging`` (INFO) to ``path`` while the block runs.
-
-    Used by the pipeline scripts so that Dask progress bars and sweep progress lines end up in
-    the rule's ``log:`` file. ``path=None`` leaves the streams alone.
-    """
-    if path is None:
-        yield
-        return
-    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-    root = logging.getLogger()
-    with (
-        open(path, "w", buffering=1) as stream,
-        contextlib.redirect_stdout(stream),
-        contextlib.redirect_stderr(stream),
-    ):
-        handler = logging.StreamHandler(stream)
-        handler.setFormatter(logging.Formatter("%(asctime)s %(name)s %(message)s"))
-        old_level = root.level
-        root.addHandler(handler)
-        root.setLevel(logging.INFO)
-        try:
-            yield
-        finally:
-            root.removeHandler(handler)
-            root.setLevel(old_level)

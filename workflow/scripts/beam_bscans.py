@@ -1,10 +1,11 @@
 """B-scans under the beam vs independent lines (thin): speckle.figures.beam, NetCDF + PNG."""
 
+from speckle._workflow import run
 from speckle.figures import beam
-from speckle.figures._style import log_to
 from speckle.io import to_netcdf
 
-with log_to(snakemake.log[0]):
+
+def main(snakemake) -> None:
     params = snakemake.params
     ds = beam.bscans_data(params.source, params.beam, params.seed)
     to_netcdf(ds, snakemake.output.data)
@@ -14,3 +15,6 @@ with log_to(snakemake.log[0]):
             print(f"{name} {kind} measured:\n{ds[f'{name}_{kind}'].values.round(3)}")
             print(f"{name} {kind} theory:\n{ds[f'{name}_{kind}_theory'].values.round(3)}")
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
+
+
+run(main)

@@ -5,12 +5,17 @@ Runs on the local threads scheduler with the rule's threads; the progress bar go
 
 import dask
 
+from speckle._workflow import run
 from speckle.figures import beam
-from speckle.figures._style import log_to
 
-with log_to(snakemake.log[0]), dask.config.set(num_workers=snakemake.threads):
-    params = snakemake.params
-    facts = beam.write_volume(params.source, params.beam, params.seed, snakemake.output.data)
-    print(f"volume: {facts}")
-    beam.volume_figure(snakemake.output.data, snakemake.output.figure)
-    print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
+
+def main(snakemake) -> None:
+    with dask.config.set(num_workers=snakemake.threads):
+        params = snakemake.params
+        facts = beam.write_volume(params.source, params.beam, params.seed, snakemake.output.data)
+        print(f"volume: {facts}")
+        beam.volume_figure(snakemake.output.data, snakemake.output.figure)
+        print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
+
+
+run(main)

@@ -1,11 +1,13 @@
 """Fig. 1: one scatterer at 0, 1, 1.25 pixels, its A-scan and spectral components (thin)."""
 
+from speckle._workflow import run
 from speckle.figures import static
-from speckle.figures._style import log_to, save
+from speckle.figures._style import save
 from speckle.io import to_netcdf
 from speckle.provenance import provenance_attrs
 
-with log_to(snakemake.log[0]):
+
+def main(snakemake) -> None:
     fig1, source = snakemake.params.fig1, snakemake.params.source
     ds = static.single_scatterer(
         fig1["positions"],
@@ -19,3 +21,6 @@ with log_to(snakemake.log[0]):
     to_netcdf(ds, snakemake.output.data)
     save(static.plot_single_scatterer(ds), snakemake.output.figure)
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
+
+
+run(main)

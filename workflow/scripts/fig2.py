@@ -1,11 +1,13 @@
 """Fig. 2: 10x10-pixel speckle fragments for several densities (thin)."""
 
+from speckle._workflow import run
 from speckle.figures import static
-from speckle.figures._style import log_to, save
+from speckle.figures._style import save
 from speckle.io import to_netcdf
 from speckle.provenance import provenance_attrs
 
-with log_to(snakemake.log[0]):
+
+def main(snakemake) -> None:
     fig2, source, seed = snakemake.params.fig2, snakemake.params.source, snakemake.params.seed
     ds = static.density_sweep(
         fig2["densities"],
@@ -21,3 +23,6 @@ with log_to(snakemake.log[0]):
     to_netcdf(ds, snakemake.output.data)
     save(static.plot_density_fragments(ds, fig2["fragment"]), snakemake.output.figure)
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
+
+
+run(main)

@@ -1,11 +1,13 @@
 """Fig. 3: amplitude histograms for a density sweep with one Rayleigh fit (thin)."""
 
+from speckle._workflow import run
 from speckle.figures import _config, histograms
-from speckle.figures._style import log_to, save
+from speckle.figures._style import save
 from speckle.io import to_netcdf
 from speckle.provenance import provenance_attrs
 
-with log_to(snakemake.log[0]):
+
+def main(snakemake) -> None:
     fig3, source, seed = snakemake.params.fig3, snakemake.params.source, snakemake.params.seed
     ds = histograms.density_histograms(
         fig3["densities"],
@@ -30,3 +32,6 @@ with log_to(snakemake.log[0]):
             f"theory {float(p.contrast_theory):.4f}, Rayleigh sigma {float(p.rayleigh_sigma):.2f}"
         )
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
+
+
+run(main)

@@ -2,13 +2,15 @@
 
 import logging
 
+from speckle._workflow import run
 from speckle.analysis.measured import load_measured
 from speckle.figures import _config, histograms
-from speckle.figures._style import log_to, save
+from speckle.figures._style import save
 from speckle.io import to_netcdf
 from speckle.provenance import provenance_attrs
 
-with log_to(snakemake.log[0]):
+
+def main(snakemake) -> None:
     fig4, source, seed = snakemake.params.fig4, snakemake.params.source, snakemake.params.seed
     sim = histograms.simulated_panels(
         density=fig4["density"],
@@ -54,3 +56,6 @@ with log_to(snakemake.log[0]):
         if k in ds:
             print(f"{k} = {float(ds[k]):.4f}")
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
+
+
+run(main)

@@ -1,11 +1,13 @@
 """Fig. 5: the same fragment for several k0/delta_k with amplitude histograms (thin)."""
 
+from speckle._workflow import run
 from speckle.figures import static
-from speckle.figures._style import log_to, save
+from speckle.figures._style import save
 from speckle.io import to_netcdf
 from speckle.provenance import provenance_attrs
 
-with log_to(snakemake.log[0]):
+
+def main(snakemake) -> None:
     fig5, source, seed = snakemake.params.fig5, snakemake.params.source, snakemake.params.seed
     ds = static.k0_sweep(
         fig5["k0_dk"],
@@ -22,3 +24,6 @@ with log_to(snakemake.log[0]):
     to_netcdf(ds, snakemake.output.data)
     save(static.plot_k0_fragments(ds, fig5["fragment"]), snakemake.output.figure)
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
+
+
+run(main)

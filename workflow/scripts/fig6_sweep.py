@@ -4,14 +4,18 @@ The ``dask`` config is read here rather than taken as a rule param: the numbers 
 the scheduler or the worker count, so changing them must not rerun the sweep.
 """
 
+from speckle._workflow import run
 from speckle.figures import _config, deformation
-from speckle.figures._style import log_to
 from speckle.io import to_netcdf
 
-with log_to(snakemake.log[0]):
+
+def main(snakemake) -> None:
     params, panel = snakemake.params, snakemake.rule  # "fig6b" or "fig6c"
     dask = _config.dask_options(snakemake.config["dask"], snakemake.threads)
     ds = getattr(deformation, f"{panel}_data")(params.source, params.fig6, dask, params.seed)
     to_netcdf(ds, snakemake.output.data)
     getattr(deformation, f"{panel}_figure")(ds, snakemake.output.figure)
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
+
+
+run(main)

@@ -1,12 +1,16 @@
 """Fig. 6a (thin): compute with speckle.figures.deformation, write NetCDF and PNG."""
 
+from speckle._workflow import run
 from speckle.figures import deformation
-from speckle.figures._style import log_to
 from speckle.io import to_netcdf
 
-with log_to(snakemake.log[0]):
+
+def main(snakemake) -> None:
     params = snakemake.params
     ds = deformation.fig6a_data(params.source, params.fig6, params.seed)
     to_netcdf(ds, snakemake.output.data)
     deformation.fig6a_figure(ds, snakemake.output.figure)
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
+
+
+run(main)

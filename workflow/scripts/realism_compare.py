@@ -2,15 +2,17 @@
 
 import logging
 
+from speckle._workflow import run
 from speckle.analysis.measured import load_measured
 from speckle.figures import realism
-from speckle.figures._style import log_to, save
+from speckle.figures._style import save
 from speckle.io import to_netcdf
 from speckle.provenance import provenance_attrs
 
 STEP_STATS = ("score", "ks_distance", "skewness", "excess_kurtosis")
 
-with log_to(snakemake.log[0]):
+
+def main(snakemake) -> None:
     cfg, seed = snakemake.params.realism, snakemake.params.seed
     meas_cfg = cfg["measured"]
     roi = air = None
@@ -45,3 +47,6 @@ with log_to(snakemake.log[0]):
             c = {k: float(ds[f"cumulative_{k}"].sel(step=s)) for k in STEP_STATS}
             print(f"{s}: " + ", ".join(f"{k} {v:.4f}" for k, v in c.items()))
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
+
+
+run(main)

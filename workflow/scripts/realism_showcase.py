@@ -1,14 +1,19 @@
 """results/realism/showcase: a layered phantom, pure model beside the system effects (thin)."""
 
+from speckle._workflow import run
 from speckle.figures import realism
-from speckle.figures._style import log_to, save
+from speckle.figures._style import save
 from speckle.io import to_netcdf
 from speckle.provenance import provenance_attrs
 
-with log_to(snakemake.log[0]):
+
+def main(snakemake) -> None:
     cfg, seed = snakemake.params.realism["showcase"], snakemake.params.seed
     ds = realism.showcase_dataset(cfg, seed)
     ds.attrs.update(provenance_attrs(config={"realism": {"showcase": cfg}}, seed=seed))
     to_netcdf(ds, snakemake.output.data)
     save(realism.plot_showcase(ds, cfg["dynamic_range_db"]), snakemake.output.figure)
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
+
+
+run(main)

@@ -1,12 +1,14 @@
 """Speed-versus-accuracy chart of the synthesis methods (thin: config -> package -> files)."""
 
-from speckle.figures._style import log_to, save
+from speckle._workflow import run
+from speckle.figures._style import save
 from speckle.figures.speed import speed_accuracy_figure
 from speckle.imaging.speed import speed_accuracy
 from speckle.io import to_netcdf
 from speckle.provenance import provenance_attrs
 
-with log_to(snakemake.log[0]):
+
+def main(snakemake) -> None:
     cfg, source, seed = (
         snakemake.params.speed_accuracy,
         snakemake.params.source,
@@ -27,3 +29,6 @@ with log_to(snakemake.log[0]):
     to_netcdf(ds, snakemake.output.data)
     save(speed_accuracy_figure(ds), snakemake.output.figure)
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
+
+
+run(main)

@@ -1,13 +1,15 @@
 """Failure map of the synthesis methods (thin: config -> package -> files)."""
 
+from speckle._workflow import run
 from speckle.figures._config import dask_options
-from speckle.figures._style import log_to, save
+from speckle.figures._style import save
 from speckle.figures.speed import failure_map_figure
 from speckle.imaging.speed import failure_map
 from speckle.io import to_netcdf
 from speckle.provenance import provenance_attrs
 
-with log_to(snakemake.log[0]):
+
+def main(snakemake) -> None:
     cfg, source, seed = (
         snakemake.params.speed_accuracy,
         snakemake.params.source,
@@ -29,3 +31,6 @@ with log_to(snakemake.log[0]):
     to_netcdf(ds, snakemake.output.data)
     save(failure_map_figure(ds), snakemake.output.figure)
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
+
+
+run(main)

@@ -1,11 +1,13 @@
 """Layered B-scan with DC, autocorrelation and mirror artefacts, raw and processed (thin)."""
 
+from speckle._workflow import run
 from speckle.figures import system as fs
-from speckle.figures._style import log_to, save
+from speckle.figures._style import save
 from speckle.io import to_netcdf
 from speckle.provenance import provenance_attrs
 
-with log_to(snakemake.log[0]):
+
+def main(snakemake) -> None:
     cfg, seed = snakemake.params.system, snakemake.params.seed
     system = fs.system_from_config(cfg["datasheet"])
     print(system.summary())
@@ -18,3 +20,6 @@ with log_to(snakemake.log[0]):
     to_netcdf(ds, snakemake.output.data)
     save(fs.plot_artefact_bscan(ds), snakemake.output.figure)
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
+
+
+run(main)

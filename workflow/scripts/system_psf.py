@@ -1,11 +1,13 @@
 """PSF at several depths with and without k-linearisation and compensation (thin)."""
 
+from speckle._workflow import run
 from speckle.figures import system as fs
-from speckle.figures._style import log_to, save
+from speckle.figures._style import save
 from speckle.io import to_netcdf
 from speckle.provenance import provenance_attrs
 
-with log_to(snakemake.log[0]):
+
+def main(snakemake) -> None:
     cfg = snakemake.params.system
     system = fs.system_from_config(cfg["datasheet"])
     print(system.summary())
@@ -15,3 +17,6 @@ with log_to(snakemake.log[0]):
     save(fs.plot_psf(ds), snakemake.output.figure)
     print(ds.width.to_pandas())
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
+
+
+run(main)

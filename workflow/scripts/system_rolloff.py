@@ -1,11 +1,13 @@
 """Roll-off measured through the spectrometer chain against its closed form (thin)."""
 
+from speckle._workflow import run
 from speckle.figures import system as fs
-from speckle.figures._style import log_to, save
+from speckle.figures._style import save
 from speckle.io import to_netcdf
 from speckle.provenance import provenance_attrs
 
-with log_to(snakemake.log[0]):
+
+def main(snakemake) -> None:
     cfg = snakemake.params.system
     system = fs.system_from_config(cfg["datasheet"])
     print(system.summary())
@@ -17,3 +19,6 @@ with log_to(snakemake.log[0]):
         dev = abs(ds[name] - ds.analytic_db).max().item()
         print(f"max |{name} - analytic_db| = {dev:.4f} dB")
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
+
+
+run(main)
