@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from speckle.imaging.aline import ascan
@@ -21,6 +21,7 @@ def rel_err(a, ref):
 
 
 @settings(max_examples=25, deadline=None)
+@example(seed=362880, n=4, m=114, fraction=0.1, tol=1e-9)  # one dominant spectral component
 @given(
     seed=st.integers(0, 2**31),
     n=st.integers(4, 200),
