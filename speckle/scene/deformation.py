@@ -269,17 +269,24 @@ def check_field(displacement: xr.Dataset, extra_dims: Sequence[str] = ()) -> Non
     for name in ("uz", "ux"):
         if name not in displacement:
             continue
-        da = displacement[name]
-        wrong = [d for d in da.dims if d not in allowed]
-        if wrong:
-            raise ValueError(
-                f"displacement field {name!r} must have dims among {allowed} (material "
-                f"coordinates in µm); got dims {da.dims}"
-            )
-        for d in da.dims:
-            if d in FIELD_DIMS and d not in da.coords:
-                raise ValueError(f"displacement field {name!r} needs a coordinate {d!r} in µm")
-        as_finite_array(da.values, f"displacement field {name}")
+        _check_component(displacement[name], name, allowed, FIELD_DIMS)
+
+
+def _check_component(
+    da: xr.DataArray, name: str, allowed: Sequence[str], spatial: Sequence[str]
+) -> None:
+    """One component of a displacement field: dims among ``allowed``, a coordinate (µm) on
+    each spatial dim, finite values."""
+    wrong = [d for d in da.dims if d not in allowed]
+    if wrong:
+        raise ValueError(
+            f"displacement field {name!r} must have dims among {tuple(allowed)} (material "
+            f"coordinates in µm); got dims {da.dims}"
+        )
+    for d in da.dims:
+        if d in spatial and d not in da.coords:
+            raise ValueError(f"displacement field {name!r} needs a coordinate {d!r} in µm")
+    as_finite_array(da.values, f"displacement field {name}")
 
 
 def displace(scene: xr.Dataset, displacement: Displacement, *, wrap: bool = False) -> xr.Dataset:
@@ -393,16 +400,7 @@ def _shared_field_values(displacement: Displacement, pos: list[np.ndarray]) -> l
             out.append(np.zeros(shape))
             continue
         da = displacement[var]
-        wrong = [d for d in da.dims if d not in where]
-        if wrong:
-            raise ValueError(
-                f"displacement field {var!r} must have dims among {tuple(where)} (material "
-                f"coordinates in µm) for this {len(pos)}-D scene; got dims {da.dims}"
-            )
-        for d in da.dims:
-            if d not in da.coords:
-                raise ValueError(f"displacement field {var!r} needs a coordinate {d!r} in µm")
-        as_finite_array(da.values, f"displacement field {var}")
+        _check_component(da, var, tuple(where), tuple(where))
         pts = {d: xr.DataArray(where[d], dims="points") for d in da.dims}
         if pts:
             vals = da.interp(pts, method="linear", kwargs={"fill_value": None}).values
