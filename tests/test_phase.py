@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import speckle
-from speckle.system.phase import phase_screens, phase_structure
+from speckle.system.phase import phase_screens, phase_structure, shared_phase_screen
 
 S2, ELL, K0 = 1e-6, 20.0, 6.0  # index variance, correlation length (µm), k0 (rad/µm)
 
@@ -82,3 +82,48 @@ def test_screens_reproducible_and_bad_inputs():
         phase_screens(z, seed=1, **{**kw, "correlation_length": 0.0})
     with pytest.raises(ValueError, match=">= 0"):
         phase_screens([-1.0], seed=1, **kw)
+
+
+def test_shared_screen_variance_and_lateral_correlation():
+    """2-D screen: Var phi(z, x) = 4 k0^2 D(z) at every x, correlation exp(-dx^2/l_x^2)."""
+    k0, s2, ell, lx, n = 7.5, 1e-6, 20.0, 30.0, 2000
+    z = np.array([50.0, 50.0, 50.0, 120.0])
+    x = np.array([0.0, 15.0, 45.0, 15.0])
+    draws = np.array(
+        [
+            shared_phase_screen(
+                z,
+                x,
+                index_variance=s2,
+                correlation_length=ell,
+                k0=k0,
+                seed=s,
+                lateral_correlation_length=lx,
+            )
+            for s in range(n)
+        ]
+    )
+    var = phase_structure(z, s2, ell, k0)
+    # sample variance of a Gaussian: relative SE sqrt(2/n)
+    assert np.all(np.abs(draws.var(axis=0) / var - 1) < 4 * np.sqrt(2 / n))
+    rho = np.corrcoef(draws.T)
+    for j, dx in ((1, 15.0), (2, 45.0)):
+        expected = np.exp(-(dx**2) / lx**2)
+        assert abs(rho[0, j] - expected) < 4 * (1 - expected**2) / np.sqrt(n) + 0.01
+    # the same depth process at every x: phi(50, 15) and phi(120, 15) as for one line
+    c_z = 0.5 * (var[1] + var[3] - phase_structure(70.0, s2, ell, k0)) / np.sqrt(var[1] * var[3])
+    assert abs(rho[1, 3] - c_z) < 4 * (1 - c_z**2) / np.sqrt(n) + 0.01
+
+
+def test_phase_perturb_on_shared_scene():
+    regions = speckle.make_regions(speckle.regions.background(density=0.01))
+    scene = speckle.shared_scene(regions, z_range=(0.0, 200.0), x_range=(0.0, 100.0), seed=3)
+    kw = dict(index_variance=1e-6, correlation_length=20.0, k0=7.5, seed=4)
+    out = speckle.phase_perturb(scene, **kw)
+    phi = shared_phase_screen(scene.z.values, scene.x.values, **kw)
+    np.testing.assert_allclose(out.amplitude.values, scene.amplitude.values * np.exp(1j * phi))
+    with pytest.raises(ValueError, match="lateral_correlation_length"):
+        speckle.phase_perturb(scene, **kw, lateral_correlation_length=-1.0)
+    lines = speckle.random_scatterers(2, 1.0, n_pixels=16, depth=128.0, seed=0)
+    with pytest.raises(ValueError, match="shared scenes only"):
+        speckle.phase_perturb(lines, **kw, lateral_correlation_length=10.0)

@@ -20,6 +20,15 @@ for a scatterer at ``z``, the complex correlation ``E exp(i (phi_1 - phi_2)) = e
 Sampling: ``phi`` is drawn exactly (multivariate normal, covariance from ``D``) on a grid of
 step ``min(l/8, H/N)`` and linearly interpolated to the scatterer depths; each A-line (and each
 combination of other dims) has an independent screen.
+
+Shared scenes (scatterers at ``(z, x)`` seen by overlapping A-lines): the fluctuation is a 2-D
+field with separable Gaussian correlation ``s^2 exp(-u^2/l^2) exp(-v^2/l_x^2)`` (``v`` lateral,
+``l_x``: ``lateral_correlation_length``, default ``l``), and the path to a scatterer runs
+straight down at its own ``x`` (paraxial). Then ``phi(z, x)`` is Gaussian with covariance
+``C_z(z1, z2) exp(-(x1 - x2)^2/l_x^2)``, ``C_z`` the single-line covariance above: the same
+variance ``4 k0^2 D(z)`` at every ``x``, and scatterers ``dx`` apart at one depth share the
+fraction ``exp(-dx^2/l_x^2)`` of it. One screen ``L_z W L_x^T`` (white ``W``) is drawn on a
+``(z, x)`` grid of step ``l/8`` by ``l_x/8`` over the scene and interpolated bilinearly.
 """
 
 from __future__ import annotations
@@ -29,9 +38,10 @@ import xarray as xr
 from scipy import special
 
 from .._validate import as_finite_array, check_int, check_real
+from ..scene.shared import is_shared
 from ._scene import check_scene, line_rng, scale_amplitudes
 
-__all__ = ["phase_perturb", "phase_screens", "phase_structure"]
+__all__ = ["phase_perturb", "phase_screens", "phase_structure", "shared_phase_screen"]
 
 _STREAM = 103
 _MAX_NODES = 2048
@@ -65,6 +75,10 @@ def _factor(grid: np.ndarray, s2: float, ell: float, k0: float) -> np.ndarray:
     cov = 0.5 * (
         dz[:, None] + dz[None, :] - phase_structure(grid[:, None] - grid[None, :], s2, ell, k0)
     )
+    return _sqrt_cov(cov)
+
+
+def _sqrt_cov(cov: np.ndarray) -> np.ndarray:
     val, vec = np.linalg.eigh(cov)
     return vec * np.sqrt(np.clip(val, 0.0, None))
 
@@ -105,6 +119,60 @@ def phase_screens(
     return _draw(np.broadcast_to(z, (ns, z.size)), s2, ell, k, sd, ell / 8)
 
 
+def shared_phase_screen(
+    z: object,
+    x: object,
+    *,
+    index_variance: float,
+    correlation_length: float,
+    k0: float,
+    seed: int,
+    lateral_correlation_length: float | None = None,
+    step: float | None = None,
+) -> np.ndarray:
+    """Phase ``phi(z_j, x_j)`` in rad of one 2-D screen at scatterer positions (µm; module
+    docstring). ``step``: the depth grid step (default ``l/8``). Same arguments, same screen.
+    """
+    zz = as_finite_array(z, "z").ravel()
+    xx = as_finite_array(x, "x").ravel()
+    if zz.shape != xx.shape:
+        raise ValueError(f"z and x must have the same size, got {zz.size} and {xx.size}")
+    if np.any(zz < 0):
+        raise ValueError("scatterer depths must be >= 0 µm (the path starts at z = 0)")
+    s2 = check_real(index_variance, "index_variance", low=0)
+    ell = check_real(correlation_length, "correlation_length", low=0, low_inclusive=False)
+    lx = (
+        ell
+        if lateral_correlation_length is None
+        else check_real(
+            lateral_correlation_length, "lateral_correlation_length", low=0, low_inclusive=False
+        )
+    )
+    k = check_real(k0, "k0", low=0)
+    sd = check_int(seed, "seed", low=0)
+    if zz.size == 0:
+        return np.zeros(0)
+    gz = _grid(float(zz.max()), min(ell / 8, ell / 8 if step is None else step))
+    x0 = float(xx.min())
+    gx = x0 + _grid(float(xx.max()) - x0, lx / 8)
+    lz = _factor(gz, s2, ell, k)
+    lxm = _sqrt_cov(np.exp(-((gx[:, None] - gx[None, :]) ** 2) / lx**2))
+    rng = np.random.default_rng(np.random.SeedSequence(sd, spawn_key=(_STREAM,)))
+    screen = lz @ rng.standard_normal((gz.size, gx.size)) @ lxm.T
+    iz = np.clip(np.searchsorted(gz, zz) - 1, 0, gz.size - 2)
+    ix = np.clip(np.searchsorted(gx, xx) - 1, 0, max(gx.size - 2, 0))
+    if gx.size == 1:
+        return np.interp(zz, gz, screen[:, 0])
+    tz = (zz - gz[iz]) / (gz[iz + 1] - gz[iz])
+    tx = (xx - gx[ix]) / (gx[ix + 1] - gx[ix])
+    return (
+        (1 - tz) * (1 - tx) * screen[iz, ix]
+        + tz * (1 - tx) * screen[iz + 1, ix]
+        + (1 - tz) * tx * screen[iz, ix + 1]
+        + tz * tx * screen[iz + 1, ix + 1]
+    )
+
+
 def phase_perturb(
     scene: xr.Dataset,
     *,
@@ -112,13 +180,16 @@ def phase_perturb(
     correlation_length: float,
     k0: float,
     seed: int,
+    lateral_correlation_length: float | None = None,
 ) -> xr.Dataset:
-    """Multiply each scatterer amplitude by ``exp(i phi(z_j))`` of an independent screen per line.
+    """Multiply each scatterer amplitude by ``exp(i phi(z_j))`` of an independent screen per line
+    (independent-line scenes) or of one 2-D screen ``phi(z_j, x_j)`` (shared scenes).
 
     Parameters
     ----------
     scene : xarray.Dataset
-        Scatterer field (``z`` in µm, >= 0, ``amplitude``) with an ``aline`` dim.
+        Scatterer field (``z`` in µm, >= 0, ``amplitude``) with an ``aline`` dim, or a shared
+        scene (:func:`speckle.shared_scene`: ``z``, ``x`` over ``scatterer``).
     index_variance : float
         Variance ``s^2`` of the refractive-index fluctuation (>= 0).
     correlation_length : float
@@ -127,6 +198,8 @@ def phase_perturb(
         Central wavenumber in the medium, rad/µm (>= 0), e.g. ``source.attrs["k0"]``.
     seed : int
         Seed of the screens; screen ``i`` belongs to the ``i``-th A-line (other dims share it).
+    lateral_correlation_length : float, optional
+        Shared scenes: lateral correlation length ``l_x`` in µm (> 0; default ``l``).
 
     Returns
     -------
@@ -134,8 +207,36 @@ def phase_perturb(
         The perturbed scene; attributes record the parameters.
     """
     check_scene(scene)
+    if is_shared(scene):
+        phi = shared_phase_screen(
+            scene.z.values,
+            scene.x.values,
+            index_variance=index_variance,
+            correlation_length=correlation_length,
+            k0=k0,
+            seed=seed,
+            lateral_correlation_length=lateral_correlation_length,
+        )
+        return scale_amplitudes(
+            scene,
+            scene.z.copy(data=np.exp(1j * phi)),
+            phase_index_variance=float(index_variance),
+            phase_correlation_length=float(correlation_length),
+            phase_lateral_correlation_length=float(
+                correlation_length
+                if lateral_correlation_length is None
+                else lateral_correlation_length
+            ),
+            phase_k0=float(k0),
+            phase_seed=int(seed),
+        )
+    if lateral_correlation_length is not None:
+        raise ValueError(
+            "lateral_correlation_length applies to shared scenes only (independent A-lines "
+            "have independent screens)"
+        )
     if "aline" not in scene.z.dims:
-        raise ValueError("scene must have an 'aline' dim")
+        raise ValueError("scene must have an 'aline' dim (or be a shared scene)")
     s2 = check_real(index_variance, "index_variance", low=0)
     ell = check_real(correlation_length, "correlation_length", low=0, low_inclusive=False)
     k = check_real(k0, "k0", low=0)
