@@ -19,10 +19,10 @@ import platform
 import resource
 import subprocess
 import sys
-import time
 
 import finufft
 import numpy as np
+from _common import best_time, cpu_model, rel_err
 
 from speckle.imaging.aline import ascan
 from speckle.imaging.nufft import finufft_ascan
@@ -52,19 +52,6 @@ def numpy_eq4(z, a, n_pixels, depth, k0, spectrum):
         field = (a[b] @ phase) * spectrum
         out[b] = dft @ field
     return out
-
-
-def best_time(func, repeat):
-    best, out = np.inf, None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = func()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
-
-
-def rel_err(a, ref):
-    return float(np.linalg.norm(a - ref) / np.linalg.norm(ref))
 
 
 # --- FINUFFT called directly on a whole B-scan, every way we found -----------------------
@@ -177,7 +164,7 @@ def main():
         return
     tol = args.tol
     print(
-        f"machine: {platform.processor() or platform.machine()}, {_cpu_model()}, "
+        f"machine: {platform.processor() or platform.machine()}, {cpu_model()}, "
         f"python {platform.python_version()}, numpy {np.__version__}, finufft {finufft.__version__}"
     )
     print(f"tol = {tol:g}; error = ||A - A_direct||_2/||A_direct||_2; times best of {args.repeat}")
@@ -209,13 +196,13 @@ def main():
         f"spectrum, depths in [0, 2H), k0/dk = 10"
     )
     print(f"  {'method':<28s} {'time':>13s} {'vs numpy':>10s} {'rel.err':>10s} {'scat/s':>10s}")
-    t_np, a_np = best_time(lambda: numpy_eq4(z, a, n_pix, depth, k0, s), 1)
-    t_ref, ref = best_time(lambda: ascan(z, a, n_pixels=n_pix, depth=depth, k0=k0), 1)
+    t_np, _, a_np = best_time(lambda: numpy_eq4(z, a, n_pix, depth, k0, s), 1)
+    t_ref, _, ref = best_time(lambda: ascan(z, a, n_pixels=n_pix, depth=depth, k0=k0), 1)
     row("numpy Eq. 4 (baseline)", t_np, rel_err(a_np, ref), n_scat, t_np)
     row("direct", t_ref, 0.0, n_scat, t_np)
     for name in ("finufft", "nufft", "nufft32", "psf", "auto"):
         try:
-            t, out = best_time(
+            t, _, out = best_time(
                 lambda name=name: ascan(
                     z, a, n_pixels=n_pix, depth=depth, k0=k0, method=name, tol=tol
                 ),
@@ -251,14 +238,14 @@ def main():
     }
     times = {}
     for label, func in direct_ways.items():
-        t, out = best_time(lambda func=func: func(z, a, n_pix, depth, k0, s, tol), args.repeat)
+        t, _, out = best_time(lambda func=func: func(z, a, n_pix, depth, k0, s, tol), args.repeat)
         times[label] = (t, rel_err(out[:nr], ref))
     best_label = min(times, key=lambda k: times[k][0])
     t_fin = times[best_label][0]
     for label, (t, err) in times.items():
         row(label + (" *" if label == best_label else ""), t, err, n_scat, t_fin)
     for name in ("nufft", "nufft32", "auto"):
-        t, out = best_time(
+        t, _, out = best_time(
             lambda name=name: ascan(z, a, n_pixels=n_pix, depth=depth, k0=k0, method=name, tol=tol),
             args.repeat,
         )
@@ -285,23 +272,6 @@ def main():
             f"  {npx} px x {nl} lines x {rho}/px ({nl * npx * rho / 1e6:.0f} M scatterers), "
             f"{what}: {rss:5.0f} MiB (output array {out_mb:.0f} MiB)"
         )
-
-
-def _cpu_model():
-    try:
-        out = subprocess.run(["lscpu"], capture_output=True, text=True).stdout
-        for line in out.splitlines():
-            if line.startswith("Model name"):
-                return line.split(":", 1)[1].strip() + f", {_ncpu()} cores"
-    except OSError:
-        pass
-    return f"{_ncpu()} cores"
-
-
-def _ncpu():
-    import os
-
-    return len(os.sched_getaffinity(0))
 
 
 if __name__ == "__main__":

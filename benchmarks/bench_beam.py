@@ -26,12 +26,12 @@ from __future__ import annotations
 import argparse
 import functools
 import platform
-import subprocess
 import time
 
 import finufft
 import numba
 import numpy as np
+from _common import best_time, cpu_model, rel_err
 
 import speckle
 from speckle.imaging.beam import _validate
@@ -48,22 +48,6 @@ def scene(n_pixels, n_lines, density, pitch, seed=1):
     a = (rng.normal(size=m) + 1j * rng.normal(size=m)) / np.sqrt(2)
     k0 = 10.0 * n_pixels * np.pi / depth  # k0/delta_k = 10
     return z, x, a, depth, k0
-
-
-def best_time(func, repeat):
-    """(best wall time, CPU time of that run, result)."""
-    best, cpu, out = np.inf, np.inf, None
-    for _ in range(repeat):
-        t0, c0 = time.perf_counter(), time.process_time()
-        out = func()
-        t, c = time.perf_counter() - t0, time.process_time() - c0
-        if t < best:
-            best, cpu = t, c
-    return best, cpu, out
-
-
-def rel_err(a, ref):
-    return float(np.linalg.norm(a - ref) / np.linalg.norm(ref))
 
 
 def row(name, t, cpu, err, n_scat, base=None, base_cpu=None, extra=""):
@@ -95,7 +79,7 @@ def main():
     lines = np.arange(n_lines) * pitch
     n_scat = z.size
     print(
-        f"machine: {_cpu_model()}, {numba.get_num_threads()} numba threads, python "
+        f"machine: {cpu_model()}, {numba.get_num_threads()} numba threads, python "
         f"{platform.python_version()}, numpy {np.__version__}, numba {numba.__version__}, "
         f"finufft {finufft.__version__}"
     )
@@ -184,17 +168,6 @@ def tile_3d(n_tile, tol, repeat, n_pix=512, pitch=4.0):
             f"  {name:<8s} wall {t:6.2f} s, CPU {c:6.2f} s, rel. error {err:.1e} (2 lines), "
             f"{m / t / 1e6:.2f} M scatterers/s"
         )
-
-
-def _cpu_model():
-    try:
-        out = subprocess.run(["lscpu"], capture_output=True, text=True).stdout
-        for line in out.splitlines():
-            if line.startswith("Model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
 
 
 if __name__ == "__main__":

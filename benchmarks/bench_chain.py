@@ -14,23 +14,12 @@ costs are given per B-scan and against a bare FFT of the same lines.
 from __future__ import annotations
 
 import argparse
-import time
 
 import numpy as np
+from _common import best_time
 
 import speckle
 from speckle.system import spectrometer as sp
-
-
-def best_time(func, repeat):
-    """Best wall time of ``repeat`` runs after one untimed warm-up run (JIT, caches)."""
-    func()
-    best, out = np.inf, None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = func()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
 
 
 def main(argv=None):
@@ -51,7 +40,7 @@ def main(argv=None):
     rows = []
 
     def add(label, func, ref_time=None):
-        t, out = best_time(func, args.repeat)
+        t, _, out = best_time(func, args.repeat, warmup=True)
         rows.append((label, t, None if ref_time is None else t / ref_time))
         return t, out
 
