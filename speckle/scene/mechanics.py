@@ -50,6 +50,7 @@ from skfem.helpers import ddot, div, sym_grad
 from skfem.models.elasticity import lame_parameters
 
 from speckle._validate import as_finite_array, check_choice, check_int, check_real
+from speckle.scene.regions import in_ellipse
 
 __all__ = [
     "CONTACTS",
@@ -175,7 +176,7 @@ def inclusion_labels(
             raise ValueError("background label image must have exactly the given depth and x")
     else:
         base = np.full((d.size, xx.size), check_int(background, "background"))
-    inside = ((d[:, None] - c[0]) / r[0]) ** 2 + ((xx[None, :] - c[1]) / r[1]) ** 2 <= 1.0
+    inside = in_ellipse([d[:, None], xx[None, :]], c, r)
     return _label_image(np.where(inside, lab, base), d, xx)
 
 

@@ -42,7 +42,7 @@ paper's density per pixel, extended laterally) to the number density used here.
 from __future__ import annotations
 
 import numbers
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 import xarray as xr
@@ -381,13 +381,25 @@ def labels_of(
         if shape == "layer":
             inside = (z >= row["z_top"]) & (z < row["z_bottom"])
         else:
-            q = ((z - row["centre_z"]) / row["radius_z"]) ** 2
-            q += ((x - row["centre_x"]) / row["radius_x"]) ** 2
+            axes = ["z", "x"]
             if y is not None and np.isfinite(row["centre_y"]):
-                q += ((y - row["centre_y"]) / row["radius_y"]) ** 2
-            inside = q < 1.0
+                axes.append("y")
+            pts = [{"z": z, "x": x, "y": y}[a] for a in axes]
+            centre = [row[f"centre_{a}"] for a in axes]
+            radii = [row[f"radius_{a}"] for a in axes]
+            inside = in_ellipse(pts, centre, radii)
         out[inside] = r
     return out
+
+
+def in_ellipse(points: Sequence[np.ndarray], centre: Sequence[float], radii: Sequence[float]):
+    """Whether points lie in the closed ellipse (ellipsoid) ``sum ((p - c)/r)^2 <= 1``.
+
+    ``points``: one array per axis (µm, broadcast together), with ``centre`` and semi-axes
+    ``radii`` (µm) in the same order. The one inside test of regions and label images.
+    """
+    q = sum(((p - c) / r) ** 2 for p, c, r in zip(points, centre, radii, strict=True))
+    return q <= 1.0
 
 
 def region_label(regions: xr.Dataset, z: object, x: object, y: object | None = None) -> np.ndarray:
