@@ -11,7 +11,7 @@ Shapes (variable ``shape``):
 * ``"background"`` -- everywhere;
 * ``"layer"`` -- depths ``z_top <= z < z_bottom`` (µm), all lateral positions;
 * ``"ellipse"`` -- ``((z - centre_z)/radius_z)^2 + ((x - centre_x)/radius_x)^2
-  [+ ((y - centre_y)/radius_y)^2] < 1`` (µm); in a 3-D scene an ellipse without ``centre_y``
+  [+ ((y - centre_y)/radius_y)^2] <= 1`` (µm); in a 3-D scene an ellipse without ``centre_y``
   is a cylinder along ``y``; in a 2-D scene (no ``y``) the ``y`` term is left out;
 * a label image (:func:`from_label_image`): a variable ``label_image`` over ``(depth, x)``
   (pixel centres in µm); a point takes the label of its nearest pixel (``-1`` outside the
