@@ -53,6 +53,7 @@ import numpy as np
 import scipy.fft
 
 from .beam import Beam, BeamScene, register_beam_method
+from .beam_row import ROW_MAX_B, row_fine_grids, row_weight_error
 from .carrier import PARALLEL_LOCK, carrier_and_position
 from .nufft import (
     DEFAULT_TOL,
@@ -458,6 +459,15 @@ def _slp_vectorize():
         numba.config.SLP_VECTORIZE = old
 
 
+def uses_row_path(beam: Beam, grid: LineGrid, tol: float) -> bool:
+    """Whether a scan takes the row path (:mod:`speckle.imaging.beam_row`): a row of lines
+    (2-D), no focus, ``b = 2 p^2/w0^2 <= ROW_MAX_B`` and weights accurate to ``tol/8``."""
+    if len(grid.size) != 1 or beam.focus is not None:
+        return False
+    p = grid.pitch[0]
+    return 2.0 * p**2 / beam.waist**2 <= ROW_MAX_B and row_weight_error(p, beam.waist) <= tol / 8
+
+
 def beam_nufft_scan(
     scene: BeamScene, beam: Beam, grid: LineGrid, *, tol: float, precision: str = "double"
 ) -> np.ndarray:
@@ -471,6 +481,20 @@ def beam_nufft_scan(
     plan = fine_grid_plan(scene.n_pixels, scene.spectrum, tol, precision)
     ln_cut = math.log(2.0 / tol)
     w0 = beam.waist
+    if uses_row_path(beam, grid, tol):
+        threads = numba.get_num_threads()
+        with PARALLEL_LOCK, _slp_vectorize():
+            # small scans run on one thread: waking the pool costs more than it saves
+            numba.set_num_threads(1 if scene.z.size < SERIAL_BELOW / 10 else threads)
+            try:
+                g = row_fine_grids(
+                    scene.x, scene.z, scene.amplitude, origin=grid.origin[0],
+                    pitch=grid.pitch[0], n_lines=grid.size[0], waist=w0, k0=scene.k0,
+                    depth=scene.depth, plan=plan, ln_cut=ln_cut,
+                )  # fmt: skip
+            finally:
+                numba.set_num_threads(threads)
+        return fine_to_pixels(g, plan)[grid.rows]
     gam = beam.gamma(scene.z)
     gam = np.ones(1, dtype=np.complex128) if gam is None else np.ascontiguousarray(gam)
     # widest beam on the scene: sets the bucket halo and the weight buffers

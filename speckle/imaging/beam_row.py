@@ -1,0 +1,370 @@
+"""The fast path of ``"nufft"``/``"nufft32"`` for a row of lines under a beam without focus.
+
+A 2-D scene scanned along ``x`` by a depth-independent beam is the common B-scan; here every
+scatterer costs the same, so the work is laid out for throughput rather than generality (the
+general code, for C-scans and focused beams, is :mod:`speckle.imaging.beam_nufft`; both compute
+the same sums, the result is the same within ``tol``):
+
+1. **Sort** (:func:`_sort_rows`): one parallel counting sort of the scatterers within reach of
+   the line grid by their line bucket ``floor(s)`` (``s = (x - X_0)/p`` in pitches), writing
+   records ``(Re c, Im c, u, s)`` with ``c = a exp(2i k0 z)`` (:mod:`speckle.imaging.carrier`)
+   and ``u`` the fine-grid depth. The records live in a numpy-allocated buffer (huge pages:
+   page faults cost more than the sort itself in a buffer allocated inside numba).
+2. **Spread** (:func:`_spread_rows`): buckets in blocks of lines; even blocks first, then odd
+   ones, in parallel, so that no two threads write the same line and the order of every sum is
+   fixed (bitwise the same on any number of threads). Within a bucket the records are visited
+   by depth bin (cache locality of the 2h + 2 lines they write); per chunk of 128 scatterers the
+   lateral weights are computed vectorised: with ``delta = s - floor(s)`` and
+   ``b = 2 p^2/w0^2``, line ``floor(s) + m - h`` (``m = 0 ... 2h + 1``) has weight
+   ``exp(-b (delta + h - m)^2)``, by fast Gaussian gridding: ``E1 = exp(-b delta^2)`` at
+   ``m = h`` and ratios ``exp(+-2 b delta)`` times constants to either side (three
+   exponentials per scatterer, each a branch-free Taylor polynomial and squarings that numba
+   vectorises). Per scatterer the ES kernel's ``w`` values come from Horner's scheme across
+   slots (in registers, 8 at a time), then each of the ``2h + 2`` lines gets two 8-wide axpys
+   (real and imaginary planes of a padded grid).
+3. **Fold** (:func:`_fold_rows`): padded planar rows back onto periodic interleaved fine grids,
+   which :func:`speckle.imaging.nufft.fine_to_pixels` turns into pixels.
+
+Weights: ``h = floor(r)`` with ``r = sqrt(ln_cut/b)`` the reach (pitches) of the weight cut of
+:func:`speckle.imaging.beam_nufft.beam_nufft_scan`: every line within reach is written (a few
+more, whose weights are below the cut, are written too). The exponentials carry a relative
+error ``~ 2^nsq eps`` (``nsq = ceil(log2(8 b))`` squarings), admissible while
+:func:`row_weight_error` ``<= tol/16``; a beam narrower than ``p/5.7`` (``b > 64``) or a tol
+below that bound takes the general path.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from .carrier import carrier_and_position
+
+__all__ = ["ROW_MAX_B", "row_fine_grids", "row_weight_error"]
+
+#: Largest ``b = 2 p^2/w0^2`` of the row path (``exp(2b)`` stays far from overflow).
+ROW_MAX_B = 64.0
+#: Scatterers per vectorised chunk of the spreading.
+_CH = 128
+#: Kernel slots per register group (zero-padded to a multiple).
+_LANES = 8
+#: Depth bins per line bucket (cache locality of the spreading).
+_NBINS = 8
+#: Scatterers per vectorised carrier chunk of the sort.
+_SUB = 256
+#: Lines per block of the spreading (at least the 2h + 2 lines a scatterer writes).
+_BLOCK = 32
+
+
+def _squarings(b: float) -> int:
+    """Squarings of the exponentials: ``|2 b delta| 2^-nsq <= 1/4`` for ``delta`` in [0, 1)."""
+    return max(0, math.ceil(math.log2(8.0 * b)))
+
+
+def row_weight_error(pitch: float, waist: float) -> float:
+    """Bound on the relative error of the row path's lateral weights (``2^nsq`` x 8 eps)."""
+    b = 2.0 * pitch**2 / waist**2
+    return 2.0 ** _squarings(b) * 8.0 * float(np.finfo(np.float64).eps)
+
+
+@numba.njit(fastmath=True, inline="always")
+def _exp_poly(y):
+    """Taylor polynomial of ``exp(y)`` to degree 12 (``|y| <= 1/4``: truncation < 3e-18)."""
+    p = 1.0 / 479001600.0
+    p = p * y + 1.0 / 39916800.0
+    p = p * y + 1.0 / 3628800.0
+    p = p * y + 1.0 / 362880.0
+    p = p * y + 1.0 / 40320.0
+    p = p * y + 1.0 / 5040.0
+    p = p * y + 1.0 / 720.0
+    p = p * y + 1.0 / 120.0
+    p = p * y + 1.0 / 24.0
+    p = p * y + 1.0 / 6.0
+    p = p * y + 0.5
+    p = p * y + 1.0
+    return p * y + 1.0
+
+
+@numba.njit(fastmath=True, inline="always")
+def _exp_into(out, factor, d, square, n, scale, nsq):
+    """``out[t] = exp(factor * (d[t]^2 if square else d[t]))`` for ``t < n``, vectorised:
+    the polynomial at ``scale = 2^-nsq`` of the argument, then ``nsq`` squarings."""
+    if square:
+        for t in range(n):
+            out[t] = _exp_poly(factor * scale * d[t] * d[t])
+    else:
+        for t in range(n):
+            out[t] = _exp_poly(factor * scale * d[t])
+    for _ in range(nsq):
+        for t in range(n):
+            out[t] = out[t] * out[t]
+
+
+@numba.njit(parallel=True, cache=True)
+def _sort_rows(x, z, a, k0, depth, nf, x0, pitch, reach, n_lines, h, rec):
+    """Records ``(Re c, Im c, u, s)`` of the scatterers within reach, by line bucket.
+
+    Bucket ``floor(s) + h + 1`` in ``[0, n_lines + 2h]`` for ``s`` in
+    ``[-reach, n_lines - 1 + reach]`` (``h = floor(reach)``); others are dropped. A parallel
+    counting sort over a fixed chunking of the input (each chunk writes at its own offsets), so
+    the order within a bucket is the input order whatever the number of threads. Fills the
+    first ``starts[-1]`` rows of ``rec`` (M, 4) and returns the bucket offsets ``starts``.
+    """
+    m = z.size
+    nb = n_lines + 2 * h + 1
+    n_chunks = max(1, min(64, m // 16384))
+    size = (m + n_chunks - 1) // n_chunks
+    key = np.empty(m, dtype=np.int32)
+    counts = np.zeros((n_chunks, nb), dtype=np.int64)
+    inv_p = 1.0 / pitch
+    for c in numba.prange(n_chunks):
+        for j in range(c * size, min(m, (c + 1) * size)):
+            s = (x[j] - x0) * inv_p
+            if s < -reach or s > n_lines - 1 + reach:
+                key[j] = -1
+            else:
+                k = min(max(np.int64(math.floor(s)) + h + 1, 0), nb - 1)
+                key[j] = k
+                counts[c, k] += 1
+    starts = np.zeros(nb + 1, dtype=np.int64)
+    offset = np.empty((n_chunks, nb), dtype=np.int64)
+    total = 0
+    for k in range(nb):
+        starts[k] = total
+        for c in range(n_chunks):
+            offset[c, k] = total
+            total += counts[c, k]
+    starts[nb] = total
+    for c in numba.prange(n_chunks):
+        pos = offset[c]
+        bcr = np.empty(_SUB)
+        bci = np.empty(_SUB)
+        bu = np.empty(_SUB)
+        hi = min(m, (c + 1) * size)
+        for j0 in range(c * size, hi, _SUB):
+            j1 = min(hi, j0 + _SUB)
+            carrier_and_position(z[j0:j1], a[j0:j1], k0, depth, nf, bcr, bci, bu)
+            for j in range(j0, j1):
+                k = key[j]
+                if k < 0:
+                    continue
+                t = pos[k]
+                pos[k] += 1
+                rec[t, 0] = bcr[j - j0]
+                rec[t, 1] = bci[j - j0]
+                rec[t, 2] = bu[j - j0]
+                rec[t, 3] = (x[j] - x0) * inv_p
+    return starts
+
+
+@numba.njit(parallel=True, fastmath=True, cache=True)
+def _spread_rows(rec, starts, h, b, w, coef, nf, pad, block, g):
+    """Spread the bucketed records into the padded planar grid ``g`` (rows, 2, nf + 2 pad).
+
+    Bucket ``kb`` writes rows ``kb ... kb + 2h + 1`` (line ``o`` is row ``o + 2h + 1``) at
+    fine-grid offset ``pad`` (``coef``: the Horner table zero-padded to ``pad``, a whole
+    number of groups of 8 slots, in the working precision). Blocks of ``block >= 2h + 2``
+    buckets: even blocks in parallel, then odd ones (their rows never overlap in a phase).
+    """
+    deg1 = coef.shape[0]
+    half = 0.5 * w
+    ngrp = coef.shape[1] // _LANES
+    kk = 2 * h + 2
+    nsq = max(0, np.int64(math.ceil(math.log2(8.0 * b))))
+    scale = 2.0 ** (-nsq)
+    up = np.empty(kk)  # weight(m + 1) = weight(m) exp(2 b delta) up[m]
+    dn = np.empty(kk)  # weight(m - 1) = weight(m) exp(-2 b delta) dn[m]
+    for m in range(kk):
+        up[m] = math.exp(b * (2.0 * (h - m) - 1.0))
+        dn[m] = math.exp(-b * (2.0 * (h - m) + 1.0))
+    plane = g.shape[2]
+    rowlen = 2 * plane
+    gf = g.reshape(-1)
+    bin_scale = _NBINS / nf
+    nb = starts.size - 1
+    nblk = (nb + block - 1) // block
+    for phase in range(2):
+        for bb in numba.prange((nblk - phase + 1) // 2):
+            blk = 2 * bb + phase
+            cnt = np.zeros(_NBINS + 1, dtype=np.int64)
+            perm = np.empty(0, dtype=np.int64)
+            wd = np.empty((kk, _CH))
+            wl = np.empty((kk, _CH), dtype=coef.dtype)
+            ld = np.empty(_CH)
+            e2 = np.empty(_CH)
+            lcr = np.empty(_CH, dtype=coef.dtype)
+            lci = np.empty(_CH, dtype=coef.dtype)
+            base = np.empty(_CH, dtype=np.uint64)
+            xk = np.empty(_CH)
+            for kb in range(blk * block, min(nb, (blk + 1) * block)):
+                j0 = starts[kb]
+                n = starts[kb + 1] - j0
+                if n == 0:
+                    continue
+                # the bucket's records by depth bin (stable counting sort of indices)
+                cnt[:] = 0
+                for t in range(j0, j0 + n):
+                    cnt[min(np.int64(rec[t, 2] * bin_scale), _NBINS - 1) + 1] += 1
+                for i in range(_NBINS):
+                    cnt[i + 1] += cnt[i]
+                if perm.size < n:
+                    perm = np.empty(n, dtype=np.int64)
+                for t in range(j0, j0 + n):
+                    bn = min(np.int64(rec[t, 2] * bin_scale), _NBINS - 1)
+                    perm[cnt[bn]] = t
+                    cnt[bn] += 1
+                rowb = kb * rowlen + pad
+                for c0 in range(0, n, _CH):
+                    nc = min(_CH, n - c0)
+                    for t in range(nc):
+                        r = rec[perm[c0 + t]]
+                        lcr[t] = r[0]
+                        lci[t] = r[1]
+                        ld[t] = r[3] - math.floor(r[3])
+                        x0 = r[2] - half
+                        cx = math.ceil(x0)
+                        xk[t] = 2.0 * (cx - x0) - 1.0
+                        base[t] = np.uint64(rowb + np.int64(cx))
+                    # lateral weights: exp(-b delta^2) at m = h, ratios to either side
+                    _exp_into(wd[h], -b, ld, True, nc, scale, nsq)
+                    _exp_into(e2, 2.0 * b, ld, False, nc, scale, nsq)
+                    for m in range(h, kk - 1):
+                        wa = wd[m]
+                        wb = wd[m + 1]
+                        f = up[m]
+                        for t in range(nc):
+                            wb[t] = wa[t] * e2[t] * f
+                    _exp_into(e2, -2.0 * b, ld, False, nc, scale, nsq)
+                    for m in range(h, 0, -1):
+                        wa = wd[m]
+                        wb = wd[m - 1]
+                        f = dn[m]
+                        for t in range(nc):
+                            wb[t] = wa[t] * e2[t] * f
+                    for m in range(kk):
+                        wa = wd[m]
+                        wc = wl[m]
+                        for t in range(nc):
+                            wc[t] = wa[t]
+                    for t in range(nc):
+                        _spread_one(gf, base[t], xk[t], lcr[t], lci[t], wl, t, coef, deg1,
+                                    ngrp, kk, plane, rowlen)  # fmt: skip
+
+
+@numba.njit(fastmath=True, inline="always")
+def _spread_one(gf, base, x, c_r, c_i, wl, t, coef, deg1, ngrp, kk, plane, rowlen):
+    """One scatterer: kernel values by Horner across 8 slots (registers; the SLP vectoriser
+    packs them), then two 8-wide axpys per line. Flat unsigned indices: no wrap-around checks."""
+    for gi in range(ngrp):
+        o = gi * _LANES
+        k0 = coef[deg1 - 1, o]
+        k1 = coef[deg1 - 1, o + 1]
+        k2 = coef[deg1 - 1, o + 2]
+        k3 = coef[deg1 - 1, o + 3]
+        k4 = coef[deg1 - 1, o + 4]
+        k5 = coef[deg1 - 1, o + 5]
+        k6 = coef[deg1 - 1, o + 6]
+        k7 = coef[deg1 - 1, o + 7]
+        for k in range(deg1 - 2, -1, -1):
+            k0 = k0 * x + coef[k, o]
+            k1 = k1 * x + coef[k, o + 1]
+            k2 = k2 * x + coef[k, o + 2]
+            k3 = k3 * x + coef[k, o + 3]
+            k4 = k4 * x + coef[k, o + 4]
+            k5 = k5 * x + coef[k, o + 5]
+            k6 = k6 * x + coef[k, o + 6]
+            k7 = k7 * x + coef[k, o + 7]
+        p0 = base + np.uint64(o)
+        for m in range(kk):
+            p1 = p0 + np.uint64(plane)
+            wm = wl[m, t]
+            v = c_r * wm
+            gf[p0] += v * k0
+            gf[p0 + np.uint64(1)] += v * k1
+            gf[p0 + np.uint64(2)] += v * k2
+            gf[p0 + np.uint64(3)] += v * k3
+            gf[p0 + np.uint64(4)] += v * k4
+            gf[p0 + np.uint64(5)] += v * k5
+            gf[p0 + np.uint64(6)] += v * k6
+            gf[p0 + np.uint64(7)] += v * k7
+            v = c_i * wm
+            gf[p1] += v * k0
+            gf[p1 + np.uint64(1)] += v * k1
+            gf[p1 + np.uint64(2)] += v * k2
+            gf[p1 + np.uint64(3)] += v * k3
+            gf[p1 + np.uint64(4)] += v * k4
+            gf[p1 + np.uint64(5)] += v * k5
+            gf[p1 + np.uint64(6)] += v * k6
+            gf[p1 + np.uint64(7)] += v * k7
+            p0 += np.uint64(rowlen)
+
+
+@numba.njit(parallel=True, cache=True)
+def _fold_rows(g, r0, n_lines, nf, pad, out):
+    """Rows ``r0 ... r0 + n_lines - 1`` of the padded planar grid -> periodic interleaved
+    fine grids ``out`` (n_lines, 2 nf)."""
+    for o in numba.prange(n_lines):
+        re = g[r0 + o, 0]
+        im = g[r0 + o, 1]
+        ob = out[o]
+        for i in range(nf):
+            ob[2 * i] = re[i + pad]
+            ob[2 * i + 1] = im[i + pad]
+        for i in range(pad):
+            ob[2 * (nf - pad + i)] += re[i]
+            ob[2 * (nf - pad + i) + 1] += im[i]
+            ob[2 * i] += re[nf + pad + i]
+            ob[2 * i + 1] += im[nf + pad + i]
+
+
+def _padded(coef: np.ndarray) -> np.ndarray:
+    """The Horner table with zero slots up to a whole number of groups of 8."""
+    wp = _LANES * -(-coef.shape[1] // _LANES)
+    out = np.zeros((coef.shape[0], wp), dtype=coef.dtype)
+    out[:, : coef.shape[1]] = coef
+    return out
+
+
+def row_fine_grids(
+    x: np.ndarray,
+    z: np.ndarray,
+    amplitude: np.ndarray,
+    *,
+    origin: float,
+    pitch: float,
+    n_lines: int,
+    waist: float,
+    k0: float,
+    depth: float,
+    plan,
+    ln_cut: float,
+) -> np.ndarray:
+    """Fine grids (n_lines, nf) of the lines ``origin + o * pitch`` (µm) under the beam.
+
+    ``x``, ``z`` (µm) and complex ``amplitude`` of shape (M,); ``waist`` w0 (µm); ``k0``
+    (rad/µm) and ``depth`` H (µm) as in :func:`speckle.ascan`; ``plan`` a
+    :class:`speckle.imaging.nufft.FineGridPlan`; weights below ``exp(-ln_cut)`` of a
+    scatterer's peak may be dropped. Returns ``plan.cplx`` grids for
+    :func:`speckle.imaging.nufft.fine_to_pixels`. Call inside
+    :func:`speckle.imaging.beam_nufft._slp_vectorize` and the parallel lock.
+    """
+    b = 2.0 * pitch**2 / waist**2
+    if b > ROW_MAX_B:
+        raise ValueError(f"row path: b = 2 pitch^2/waist^2 = {b:.3g} > {ROW_MAX_B:g}")
+    reach = math.sqrt(ln_cut / b)
+    h = math.floor(reach)
+    kk = 2 * h + 2
+    coef = _padded(plan.coef)
+    pad = coef.shape[1]  # >= w: a scatterer writes at most pad cells past its first one
+    # numpy buffers (huge pages): faulting in pages allocated inside numba costs more
+    rec = np.empty((z.size, 4))
+    starts = _sort_rows(x, z, amplitude, k0, depth, plan.nf, origin, pitch, reach, n_lines, h,
+                        rec)  # fmt: skip
+    n_buckets = n_lines + 2 * h + 1
+    g = np.zeros((n_buckets + kk - 1, 2, plan.nf + 2 * pad), dtype=plan.real)
+    _spread_rows(rec, starts, h, b, plan.w, coef, plan.nf, pad, max(_BLOCK, kk), g)
+    out = np.empty((n_lines, plan.nf), dtype=plan.cplx)
+    _fold_rows(g, 2 * h + 1, n_lines, plan.nf, pad, out.view(plan.real))
+    return out
