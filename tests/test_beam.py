@@ -11,8 +11,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import speckle
+from speckle.imaging import beam_nufft
 from speckle.imaging.beam import _validate, beam_weight
-from speckle.imaging.beam_nufft import choose_beam_method, line_grid
+from speckle.imaging.beam_nufft import choose_beam_method, line_grid, uses_row_path
 
 N, H = 32, 256.0  # pixels, depth (µm): 8 µm pixels
 K0 = 10 * N * np.pi / H  # k0/delta_k = 10
@@ -239,6 +240,38 @@ def test_fast_methods_stay_within_tol(
         assert method == "nufft32" and "rounding" in str(exc)
         return
     assert rel_err(out, ref) <= tol
+
+
+@pytest.mark.parametrize("tol", [1e-6, 1e-10])
+@pytest.mark.parametrize(
+    ("waist_pitch", "row"),
+    [(0.15, False), (0.2, True), (1.0, True), (2.0, True), (6.0, True)],
+)
+def test_row_path_stays_within_tol_and_agrees_with_the_general_path(waist_pitch, row, tol):
+    """The row path (2-D, no focus, b = 2 p^2/w0^2 <= 64) against direct, on lines with gaps
+    and scatterers beyond both ends of the scan (within and beyond the beam's reach); a beam
+    narrower than p/sqrt(32) takes the general path. Both paths meet tol on the same scene."""
+    rng = np.random.default_rng(11)
+    pitch = 3.0
+    w0 = waist_pitch * pitch
+    lines = np.array([0, 1, 2, 5, 6, 9, 10, 11]) * pitch + 7.0  # a grid with gaps
+    reach = w0 * np.sqrt(np.log(8 / tol) / 2)
+    m = 3000
+    x = rng.uniform(lines[0] - reach - 2 * pitch, lines[-1] + reach + 2 * pitch, m)
+    z = rng.uniform(-H, 2 * H, m)
+    a = rng.normal(size=m) + 1j * rng.normal(size=m)
+    kw = dict(lines=lines, waist=w0, n_pixels=N, depth=H, k0=K0)
+    ref = speckle.beam_scan(z, x, a, **kw)
+    sc, beam, _ = _validate(z, x, a, None, lines, w0, N, H, K0, None, "nufft", tol, None, None)
+    assert uses_row_path(beam, line_grid(sc.lines, w0), 0.5 * tol) is row
+    fast = speckle.beam_scan(z, x, a, method="nufft", tol=tol, **kw)
+    assert rel_err(fast, ref) <= tol
+    if row:  # the same scene on the general path
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(beam_nufft, "uses_row_path", lambda *args: False)
+            general = speckle.beam_scan(z, x, a, method="nufft", tol=tol, **kw)
+        assert rel_err(general, ref) <= tol
+        assert rel_err(fast, general) <= 2 * tol
 
 
 def test_finufft_reference_within_tol():

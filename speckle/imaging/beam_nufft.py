@@ -568,6 +568,16 @@ def _setup(scene: BeamScene, beam: Beam, tol: float) -> _Setup:
     return _Setup(grid, n_rows, per_row * slots, per_row * energy)
 
 
+def _row_cost(setup, beam, m, nf, w, tol_arg, *, per_cell, per_slot):
+    """Time (ns, one thread) of the row path: sort and weights per scatterer, two 8-wide
+    axpys per line written and kernel group, FFTs per fine-grid cell (fitted to
+    ``benchmarks/bench_beam.py``: 27 + 10 ns per scatterer, 17 ns per fine cell)."""
+    b = 2.0 * setup.grid.pitch[0] ** 2 / beam.waist**2
+    lines = 2 * math.floor(math.sqrt(math.log(2.0 / tol_arg) / b)) + 2
+    slots = 8 * -(-w // 8)
+    return 8e5 + setup.n_rows * per_cell * nf + m * (37.0 + per_slot * lines * slots)
+
+
 def _estimate(method: str, scene: BeamScene, beam: Beam, tol: float, setup: _Setup):
     """(predicted relative error, predicted time in ns) of a beam method on a scene."""
     n = scene.n_pixels
@@ -589,16 +599,22 @@ def _estimate(method: str, scene: BeamScene, beam: Beam, tol: float, setup: _Set
     if method == "nufft":
         w = kernel_width(0.5 * tol)
         nf = fine_grid_size(n, w)
+        if uses_row_path(beam, setup.grid, 0.5 * tol):
+            return tol, _row_cost(setup, beam, m, nf, w, 0.5 * tol, per_cell=17.0, per_slot=0.36)
         return tol, 8e5 + setup.n_rows * 40.0 * nf + m * 60.0 + slots * 1.2 * w
     if method == "nufft32":
         # float32 conversions cost per scatterer, narrower stores save per weight written
-        # (measured: 10 % slower than "nufft" in 2-D at w0 = 2 pitches, 1.5x faster in 3-D)
+        # (measured: 10 % slower than "nufft" in 2-D at w0 = 2 pitches, 1.5x faster in 3-D;
+        # on the row path 1.1-1.2x slower than "nufft")
         w = kernel_width(0.25 * tol)
         rounding = float32_error_estimate(int(setup.weighted_terms), n, w)
         if rounding > 0.5 * tol:
             return math.inf, math.inf
         nf = fine_grid_size(n, w)
-        cost = 8e5 + setup.n_rows * 30.0 * nf + m * 130.0 + slots * 0.75 * w
+        if uses_row_path(beam, setup.grid, 0.25 * tol):
+            cost = _row_cost(setup, beam, m, nf, w, 0.25 * tol, per_cell=12.0, per_slot=0.45)
+        else:
+            cost = 8e5 + setup.n_rows * 30.0 * nf + m * 130.0 + slots * 0.75 * w
         return 0.5 * tol + rounding, cost
     raise ValueError(f"no error/cost model for beam method {method!r}")
 
