@@ -53,7 +53,7 @@ import numpy as np
 import scipy.fft
 
 from .beam import Beam, BeamScene, register_beam_method
-from .beam_row import ROW_MAX_B, row_fine_grids, row_weight_error
+from .beam_row import ROW_MAX_B, row_fine_grids, row_lines, row_weight_error, weight_rate
 from .carrier import PARALLEL_LOCK, carrier_and_position
 from .nufft import (
     DEFAULT_TOL,
@@ -465,7 +465,7 @@ def uses_row_path(beam: Beam, grid: LineGrid, tol: float) -> bool:
     if len(grid.size) != 1 or beam.focus is not None:
         return False
     p = grid.pitch[0]
-    return 2.0 * p**2 / beam.waist**2 <= ROW_MAX_B and row_weight_error(p, beam.waist) <= tol / 8
+    return weight_rate(p, beam.waist) <= ROW_MAX_B and row_weight_error(p, beam.waist) <= tol / 8
 
 
 def beam_nufft_scan(
@@ -485,7 +485,8 @@ def beam_nufft_scan(
         threads = numba.get_num_threads()
         with PARALLEL_LOCK, _slp_vectorize():
             # small scans run on one thread: waking the pool costs more than it saves
-            numba.set_num_threads(1 if scene.z.size < SERIAL_BELOW / 10 else threads)
+            small = scene.z.size * row_lines(beam.waist, grid.pitch[0], ln_cut) < SERIAL_BELOW
+            numba.set_num_threads(1 if small else threads)
             try:
                 g = row_fine_grids(
                     scene.x, scene.z, scene.amplitude, origin=grid.origin[0],
@@ -530,8 +531,8 @@ def beam_nufft_scan(
                 nbi,
             )  # fmt: skip
             _spread_beam(
-                z, a, scene.k0, scene.depth, so, si, gam, 2.0 * p_o**2 / w0**2,
-                2.0 * p_i**2 / w0**2, ln_cut, starts, nbi, n_outer, n_inner, three_d, block, halo,
+                z, a, scene.k0, scene.depth, so, si, gam, weight_rate(p_o, w0),
+                weight_rate(p_i, w0), ln_cut, starts, nbi, n_outer, n_inner, three_d, block, halo,
                 kmax_i, plan.nf, plan.w, plan.coef, g.view(plan.real),
             )  # fmt: skip
         finally:
@@ -572,8 +573,7 @@ def _row_cost(setup, beam, m, nf, w, tol_arg, *, per_cell, per_slot):
     """Time (ns, one thread) of the row path: sort and weights per scatterer, two 8-wide
     axpys per line written and kernel group, FFTs per fine-grid cell (fitted to
     ``benchmarks/bench_beam.py``: 27 + 10 ns per scatterer, 17 ns per fine cell)."""
-    b = 2.0 * setup.grid.pitch[0] ** 2 / beam.waist**2
-    lines = 2 * math.floor(math.sqrt(math.log(2.0 / tol_arg) / b)) + 2
+    lines = row_lines(beam.waist, setup.grid.pitch[0], math.log(2.0 / tol_arg))
     slots = 8 * -(-w // 8)
     return 8e5 + setup.n_rows * per_cell * nf + m * (37.0 + per_slot * lines * slots)
 

@@ -42,7 +42,7 @@ import numpy as np
 
 from .carrier import carrier_and_position
 
-__all__ = ["ROW_MAX_B", "row_fine_grids", "row_weight_error"]
+__all__ = ["ROW_MAX_B", "row_fine_grids", "row_lines", "row_weight_error", "weight_rate"]
 
 #: Largest ``b = 2 p^2/w0^2`` of the row path (``exp(2b)`` stays far from overflow).
 ROW_MAX_B = 64.0
@@ -55,7 +55,7 @@ _NBINS = 8
 #: Scatterers per vectorised carrier chunk of the sort.
 _SUB = 256
 #: Lines per block of the spreading (at least the 2h + 2 lines a scatterer writes).
-_BLOCK = 32
+_BLOCK = 16
 
 
 def _squarings(b: float) -> int:
@@ -63,10 +63,28 @@ def _squarings(b: float) -> int:
     return max(0, math.ceil(math.log2(8.0 * b)))
 
 
+def weight_rate(pitch: float, waist: float) -> float:
+    """``b = 2 p^2/w0^2``: the double-pass weight of a line ``d`` pitches away is
+    ``exp(-b d^2)`` (pitch ``p`` and waist ``w0`` in µm)."""
+    return 2.0 * pitch**2 / waist**2
+
+
+def _reach(waist: float, pitch: float, ln_cut: float) -> tuple[float, float, int]:
+    """``(b, reach, h)``: :func:`weight_rate`, the reach ``sqrt(ln_cut/b)`` (pitches) of the
+    weight cut ``exp(-ln_cut)`` and ``h = floor(reach)``."""
+    b = weight_rate(pitch, waist)
+    reach = math.sqrt(ln_cut / b)
+    return b, reach, math.floor(reach)
+
+
+def row_lines(waist: float, pitch: float, ln_cut: float) -> int:
+    """Lines written per scatterer on the row path, ``2h + 2`` (module docstring)."""
+    return 2 * _reach(waist, pitch, ln_cut)[2] + 2
+
+
 def row_weight_error(pitch: float, waist: float) -> float:
     """Bound on the relative error of the row path's lateral weights (``2^nsq`` x 8 eps)."""
-    b = 2.0 * pitch**2 / waist**2
-    return 2.0 ** _squarings(b) * 8.0 * float(np.finfo(np.float64).eps)
+    return 2.0 ** _squarings(weight_rate(pitch, waist)) * 8.0 * float(np.finfo(np.float64).eps)
 
 
 @numba.njit(fastmath=True, inline="always")
@@ -197,7 +215,7 @@ def _spread_rows(rec, starts, h, b, w, coef, nf, pad, block, g):
             lcr = np.empty(_CH, dtype=coef.dtype)
             lci = np.empty(_CH, dtype=coef.dtype)
             base = np.empty(_CH, dtype=np.uint64)
-            xk = np.empty(_CH)
+            xk = np.empty(_CH, dtype=coef.dtype)  # Horner in the working precision
             for kb in range(blk * block, min(nb, (blk + 1) * block)):
                 j0 = starts[kb]
                 n = starts[kb + 1] - j0
@@ -350,11 +368,9 @@ def row_fine_grids(
     :func:`speckle.imaging.nufft.fine_to_pixels`. Call inside
     :func:`speckle.imaging.beam_nufft._slp_vectorize` and the parallel lock.
     """
-    b = 2.0 * pitch**2 / waist**2
+    b, reach, h = _reach(waist, pitch, ln_cut)
     if b > ROW_MAX_B:
         raise ValueError(f"row path: b = 2 pitch^2/waist^2 = {b:.3g} > {ROW_MAX_B:g}")
-    reach = math.sqrt(ln_cut / b)
-    h = math.floor(reach)
     kk = 2 * h + 2
     coef = _padded(plan.coef)
     pad = coef.shape[1]  # >= w: a scatterer writes at most pad cells past its first one
