@@ -121,31 +121,43 @@ def _exp_into(out, factor, d, square, n, scale, nsq):
 
 
 @numba.njit(parallel=True, cache=True)
-def _sort_rows(x, z, a, k0, depth, nf, x0, pitch, reach, n_lines, h, rec):
-    """Records ``(Re c, Im c, u, s)`` of the scatterers within reach, by line bucket.
+def _sort_rows(x, y, z, a, k0, depth, nf, origin, pitch, reach, size, h, two_d, rec):
+    """Records ``(Re c, Im c, u, s_o[, s_i])`` of the scatterers within reach, by bucket.
 
-    Bucket ``floor(s) + h + 1`` in ``[0, n_lines + 2h]`` for ``s`` in
-    ``[-reach, n_lines - 1 + reach]`` (``h = floor(reach)``); others are dropped. A parallel
-    counting sort over a fixed chunking of the input (each chunk writes at its own offsets), so
-    the order within a bucket is the input order whatever the number of threads. Fills the
-    first ``starts[-1]`` rows of ``rec`` (M, 4) and returns the bucket offsets ``starts``.
+    Lateral positions in pitches along the outer axis, ``s_o = (x_o - X_o)/p_o`` (``x`` holds
+    the outer coordinate, ``y`` the inner one, used when ``two_d``: a raster of lines); bucket
+    ``(floor(s_o) + h_o + 1) * nb_i + floor(s_i) + h_i + 1`` with ``nb = size + 2h + 1`` per
+    axis, for ``s`` in ``[-reach, size - 1 + reach]`` on both axes; others are dropped. A
+    parallel counting sort over a fixed chunking of the input (each chunk writes at its own
+    offsets), so the order within a bucket is the input order whatever the number of threads.
+    Fills the first ``starts[-1]`` rows of ``rec`` (M, 4 or 5) and returns the offsets.
     """
     m = z.size
-    nb = n_lines + 2 * h + 1
+    nbo = size[0] + 2 * h[0] + 1
+    nbi = size[1] + 2 * h[1] + 1 if two_d else 1
+    nb = nbo * nbi
     n_chunks = max(1, min(64, m // 16384))
-    size = (m + n_chunks - 1) // n_chunks
+    chunk = (m + n_chunks - 1) // n_chunks
     key = np.empty(m, dtype=np.int32)
     counts = np.zeros((n_chunks, nb), dtype=np.int64)
-    inv_p = 1.0 / pitch
+    inv_o = 1.0 / pitch[0]
+    inv_i = 1.0 / pitch[1]
     for c in numba.prange(n_chunks):
-        for j in range(c * size, min(m, (c + 1) * size)):
-            s = (x[j] - x0) * inv_p
-            if s < -reach or s > n_lines - 1 + reach:
+        for j in range(c * chunk, min(m, (c + 1) * chunk)):
+            so = (x[j] - origin[0]) * inv_o
+            si = (y[j] - origin[1]) * inv_i if two_d else 0.0
+            if (
+                so < -reach[0]
+                or so > size[0] - 1 + reach[0]
+                or (two_d and (si < -reach[1] or si > size[1] - 1 + reach[1]))
+            ):
                 key[j] = -1
-            else:
-                k = min(max(np.int64(math.floor(s)) + h + 1, 0), nb - 1)
-                key[j] = k
-                counts[c, k] += 1
+                continue
+            k = min(max(np.int64(math.floor(so)) + h[0] + 1, 0), nbo - 1) * nbi
+            if two_d:
+                k += min(max(np.int64(math.floor(si)) + h[1] + 1, 0), nbi - 1)
+            key[j] = k
+            counts[c, k] += 1
     starts = np.zeros(nb + 1, dtype=np.int64)
     offset = np.empty((n_chunks, nb), dtype=np.int64)
     total = 0
@@ -160,8 +172,8 @@ def _sort_rows(x, z, a, k0, depth, nf, x0, pitch, reach, n_lines, h, rec):
         bcr = np.empty(_SUB)
         bci = np.empty(_SUB)
         bu = np.empty(_SUB)
-        hi = min(m, (c + 1) * size)
-        for j0 in range(c * size, hi, _SUB):
+        hi = min(m, (c + 1) * chunk)
+        for j0 in range(c * chunk, hi, _SUB):
             j1 = min(hi, j0 + _SUB)
             carrier_and_position(z[j0:j1], a[j0:j1], k0, depth, nf, bcr, bci, bu)
             for j in range(j0, j1):
@@ -173,106 +185,140 @@ def _sort_rows(x, z, a, k0, depth, nf, x0, pitch, reach, n_lines, h, rec):
                 rec[t, 0] = bcr[j - j0]
                 rec[t, 1] = bci[j - j0]
                 rec[t, 2] = bu[j - j0]
-                rec[t, 3] = (x[j] - x0) * inv_p
+                rec[t, 3] = (x[j] - origin[0]) * inv_o
+                if two_d:
+                    rec[t, 4] = (y[j] - origin[1]) * inv_i
     return starts
 
 
+@numba.njit(fastmath=True, inline="always")
+def _ratios(b, h, kk):
+    """``up[m]``, ``dn[m]``: weight(m +- 1) = weight(m) exp(+-2 b delta) up/dn[m]."""
+    up = np.empty(kk)
+    dn = np.empty(kk)
+    for m in range(kk):
+        up[m] = math.exp(b * (2.0 * (h - m) - 1.0))
+        dn[m] = math.exp(-b * (2.0 * (h - m) + 1.0))
+    return up, dn
+
+
+@numba.njit(fastmath=True, inline="always")
+def _weights(wd, wl, e2, ld, nc, b, h, kk, up, dn, nsq):
+    """Weights ``exp(-b (delta + h - m)^2)`` of lines ``m = 0 ... kk - 1`` for the chunk's
+    offsets ``ld`` (vectorised over the chunk): ``exp(-b delta^2)`` at ``m = h``, ratios
+    ``exp(+-2 b delta)`` times constants to either side; into ``wd`` (float64), then ``wl``
+    (working precision)."""
+    scale = 2.0 ** (-nsq)
+    _exp_into(wd[h], -b, ld, True, nc, scale, nsq)
+    _exp_into(e2, 2.0 * b, ld, False, nc, scale, nsq)
+    for m in range(h, kk - 1):
+        wa = wd[m]
+        wb = wd[m + 1]
+        f = up[m]
+        for t in range(nc):
+            wb[t] = wa[t] * e2[t] * f
+    _exp_into(e2, -2.0 * b, ld, False, nc, scale, nsq)
+    for m in range(h, 0, -1):
+        wa = wd[m]
+        wb = wd[m - 1]
+        f = dn[m]
+        for t in range(nc):
+            wb[t] = wa[t] * e2[t] * f
+    for m in range(kk):
+        wa = wd[m]
+        wc = wl[m]
+        for t in range(nc):
+            wc[t] = wa[t]
+
+
 @numba.njit(parallel=True, fastmath=True, cache=True)
-def _spread_rows(rec, starts, h, b, w, coef, nf, pad, block, g):
+def _spread_rows(rec, starts, size, h, b, two_d, w, coef, nf, pad, block, g):
     """Spread the bucketed records into the padded planar grid ``g`` (rows, 2, nf + 2 pad).
 
-    Bucket ``kb`` writes rows ``kb ... kb + 2h + 1`` (line ``o`` is row ``o + 2h + 1``) at
-    fine-grid offset ``pad`` (``coef``: the Horner table zero-padded to ``pad``, a whole
-    number of groups of 8 slots, in the working precision). Blocks of ``block >= 2h + 2``
-    buckets: even blocks in parallel, then odd ones (their rows never overlap in a phase).
+    Outer bucket ``ko`` writes outer rows ``ko ... ko + 2h_o + 1`` (line ``o`` is row
+    ``o + 2h_o + 1``), likewise inner; padded row ``(r_o, r_i)`` is ``r_o * n_i + r_i`` with
+    ``n_i = nb_i + 2h_i + 1`` (1 in 2-D); fine-grid offset ``pad`` (``coef``: the Horner table
+    zero-padded to ``pad``, a whole number of groups of 8 slots, in the working precision).
+    Blocks of ``block >= 2h_o + 2`` outer buckets: even blocks in parallel, then odd ones (their
+    rows never overlap in a phase).
     """
     deg1 = coef.shape[0]
     half = 0.5 * w
     ngrp = coef.shape[1] // _LANES
-    kk = 2 * h + 2
-    nsq = max(0, np.int64(math.ceil(math.log2(8.0 * b))))
-    scale = 2.0 ** (-nsq)
-    up = np.empty(kk)  # weight(m + 1) = weight(m) exp(2 b delta) up[m]
-    dn = np.empty(kk)  # weight(m - 1) = weight(m) exp(-2 b delta) dn[m]
-    for m in range(kk):
-        up[m] = math.exp(b * (2.0 * (h - m) - 1.0))
-        dn[m] = math.exp(-b * (2.0 * (h - m) + 1.0))
+    ko_n = 2 * h[0] + 2
+    ki_n = 2 * h[1] + 2 if two_d else 1
+    nbo = size[0] + 2 * h[0] + 1
+    nbi = size[1] + 2 * h[1] + 1 if two_d else 1
+    n_i = nbi + ki_n - 1
+    nsq_o = max(0, np.int64(math.ceil(math.log2(8.0 * b[0]))))
+    nsq_i = max(0, np.int64(math.ceil(math.log2(8.0 * b[1]))))
+    up_o, dn_o = _ratios(b[0], h[0], ko_n)
+    up_i, dn_i = _ratios(b[1], h[1], ki_n)
     plane = g.shape[2]
     rowlen = 2 * plane
     gf = g.reshape(-1)
     bin_scale = _NBINS / nf
-    nb = starts.size - 1
-    nblk = (nb + block - 1) // block
+    nblk = (nbo + block - 1) // block
     for phase in range(2):
         for bb in numba.prange((nblk - phase + 1) // 2):
             blk = 2 * bb + phase
             cnt = np.zeros(_NBINS + 1, dtype=np.int64)
             perm = np.empty(0, dtype=np.int64)
-            wd = np.empty((kk, _CH))
-            wl = np.empty((kk, _CH), dtype=coef.dtype)
+            wd = np.empty((max(ko_n, ki_n), _CH))
+            wo = np.empty((ko_n, _CH), dtype=coef.dtype)
+            wi = np.ones((ki_n, _CH), dtype=coef.dtype)
             ld = np.empty(_CH)
             e2 = np.empty(_CH)
             lcr = np.empty(_CH, dtype=coef.dtype)
             lci = np.empty(_CH, dtype=coef.dtype)
             base = np.empty(_CH, dtype=np.uint64)
             xk = np.empty(_CH, dtype=coef.dtype)  # Horner in the working precision
-            for kb in range(blk * block, min(nb, (blk + 1) * block)):
-                j0 = starts[kb]
-                n = starts[kb + 1] - j0
-                if n == 0:
-                    continue
-                # the bucket's records by depth bin (stable counting sort of indices)
-                cnt[:] = 0
-                for t in range(j0, j0 + n):
-                    cnt[min(np.int64(rec[t, 2] * bin_scale), _NBINS - 1) + 1] += 1
-                for i in range(_NBINS):
-                    cnt[i + 1] += cnt[i]
-                if perm.size < n:
-                    perm = np.empty(n, dtype=np.int64)
-                for t in range(j0, j0 + n):
-                    bn = min(np.int64(rec[t, 2] * bin_scale), _NBINS - 1)
-                    perm[cnt[bn]] = t
-                    cnt[bn] += 1
-                rowb = kb * rowlen + pad
-                for c0 in range(0, n, _CH):
-                    nc = min(_CH, n - c0)
-                    for t in range(nc):
-                        r = rec[perm[c0 + t]]
-                        lcr[t] = r[0]
-                        lci[t] = r[1]
-                        ld[t] = r[3] - math.floor(r[3])
-                        x0 = r[2] - half
-                        cx = math.ceil(x0)
-                        xk[t] = 2.0 * (cx - x0) - 1.0
-                        base[t] = np.uint64(rowb + np.int64(cx))
-                    # lateral weights: exp(-b delta^2) at m = h, ratios to either side
-                    _exp_into(wd[h], -b, ld, True, nc, scale, nsq)
-                    _exp_into(e2, 2.0 * b, ld, False, nc, scale, nsq)
-                    for m in range(h, kk - 1):
-                        wa = wd[m]
-                        wb = wd[m + 1]
-                        f = up[m]
+            for ko in range(blk * block, min(nbo, (blk + 1) * block)):
+                for ki in range(nbi):
+                    kb = ko * nbi + ki
+                    j0 = starts[kb]
+                    n = starts[kb + 1] - j0
+                    if n == 0:
+                        continue
+                    # the bucket's records by depth bin (stable counting sort of indices)
+                    cnt[:] = 0
+                    for t in range(j0, j0 + n):
+                        cnt[min(np.int64(rec[t, 2] * bin_scale), _NBINS - 1) + 1] += 1
+                    for i in range(_NBINS):
+                        cnt[i + 1] += cnt[i]
+                    if perm.size < n:
+                        perm = np.empty(n, dtype=np.int64)
+                    for t in range(j0, j0 + n):
+                        bn = min(np.int64(rec[t, 2] * bin_scale), _NBINS - 1)
+                        perm[cnt[bn]] = t
+                        cnt[bn] += 1
+                    rowb = (ko * n_i + ki) * rowlen + pad
+                    for c0 in range(0, n, _CH):
+                        nc = min(_CH, n - c0)
                         for t in range(nc):
-                            wb[t] = wa[t] * e2[t] * f
-                    _exp_into(e2, -2.0 * b, ld, False, nc, scale, nsq)
-                    for m in range(h, 0, -1):
-                        wa = wd[m]
-                        wb = wd[m - 1]
-                        f = dn[m]
+                            r = rec[perm[c0 + t]]
+                            lcr[t] = r[0]
+                            lci[t] = r[1]
+                            ld[t] = r[3] - math.floor(r[3])
+                            x0 = r[2] - half
+                            cx = math.ceil(x0)
+                            xk[t] = 2.0 * (cx - x0) - 1.0
+                            base[t] = np.uint64(rowb + np.int64(cx))
+                        _weights(wd, wo, e2, ld, nc, b[0], h[0], ko_n, up_o, dn_o, nsq_o)
+                        if two_d:
+                            for t in range(nc):
+                                r = rec[perm[c0 + t]]
+                                ld[t] = r[4] - math.floor(r[4])
+                            _weights(wd, wi, e2, ld, nc, b[1], h[1], ki_n, up_i, dn_i, nsq_i)
                         for t in range(nc):
-                            wb[t] = wa[t] * e2[t] * f
-                    for m in range(kk):
-                        wa = wd[m]
-                        wc = wl[m]
-                        for t in range(nc):
-                            wc[t] = wa[t]
-                    for t in range(nc):
-                        _spread_one(gf, base[t], xk[t], lcr[t], lci[t], wl, t, coef, deg1,
-                                    ngrp, kk, plane, rowlen)  # fmt: skip
+                            _spread_one(gf, base[t], xk[t], lcr[t], lci[t], wo, wi, t, coef,
+                                        deg1, ngrp, ko_n, ki_n, n_i * rowlen, plane,
+                                        rowlen)  # fmt: skip
 
 
 @numba.njit(fastmath=True, inline="always")
-def _spread_one(gf, base, x, c_r, c_i, wl, t, coef, deg1, ngrp, kk, plane, rowlen):
+def _spread_one(gf, base, x, c_r, c_i, wo, wi, t, coef, deg1, ngrp, ko_n, ki_n, ostride,
+                plane, rowlen):  # fmt: skip
     """One scatterer: kernel values by Horner across 8 slots (registers; the SLP vectoriser
     packs them), then two 8-wide axpys per line. Flat unsigned indices: no wrap-around checks."""
     for gi in range(ngrp):
@@ -294,38 +340,42 @@ def _spread_one(gf, base, x, c_r, c_i, wl, t, coef, deg1, ngrp, kk, plane, rowle
             k5 = k5 * x + coef[k, o + 5]
             k6 = k6 * x + coef[k, o + 6]
             k7 = k7 * x + coef[k, o + 7]
-        p0 = base + np.uint64(o)
-        for m in range(kk):
-            p1 = p0 + np.uint64(plane)
-            wm = wl[m, t]
-            v = c_r * wm
-            gf[p0] += v * k0
-            gf[p0 + np.uint64(1)] += v * k1
-            gf[p0 + np.uint64(2)] += v * k2
-            gf[p0 + np.uint64(3)] += v * k3
-            gf[p0 + np.uint64(4)] += v * k4
-            gf[p0 + np.uint64(5)] += v * k5
-            gf[p0 + np.uint64(6)] += v * k6
-            gf[p0 + np.uint64(7)] += v * k7
-            v = c_i * wm
-            gf[p1] += v * k0
-            gf[p1 + np.uint64(1)] += v * k1
-            gf[p1 + np.uint64(2)] += v * k2
-            gf[p1 + np.uint64(3)] += v * k3
-            gf[p1 + np.uint64(4)] += v * k4
-            gf[p1 + np.uint64(5)] += v * k5
-            gf[p1 + np.uint64(6)] += v * k6
-            gf[p1 + np.uint64(7)] += v * k7
-            p0 += np.uint64(rowlen)
+        po = base + np.uint64(o)
+        for mo in range(ko_n):
+            p0 = po
+            wm_o = wo[mo, t]
+            for mi in range(ki_n):
+                p1 = p0 + np.uint64(plane)
+                wm = wm_o * wi[mi, t]
+                v = c_r * wm
+                gf[p0] += v * k0
+                gf[p0 + np.uint64(1)] += v * k1
+                gf[p0 + np.uint64(2)] += v * k2
+                gf[p0 + np.uint64(3)] += v * k3
+                gf[p0 + np.uint64(4)] += v * k4
+                gf[p0 + np.uint64(5)] += v * k5
+                gf[p0 + np.uint64(6)] += v * k6
+                gf[p0 + np.uint64(7)] += v * k7
+                v = c_i * wm
+                gf[p1] += v * k0
+                gf[p1 + np.uint64(1)] += v * k1
+                gf[p1 + np.uint64(2)] += v * k2
+                gf[p1 + np.uint64(3)] += v * k3
+                gf[p1 + np.uint64(4)] += v * k4
+                gf[p1 + np.uint64(5)] += v * k5
+                gf[p1 + np.uint64(6)] += v * k6
+                gf[p1 + np.uint64(7)] += v * k7
+                p0 += np.uint64(rowlen)
+            po += np.uint64(ostride)
 
 
 @numba.njit(parallel=True, cache=True)
-def _fold_rows(g, r0, n_lines, nf, pad, out):
-    """Rows ``r0 ... r0 + n_lines - 1`` of the padded planar grid -> periodic interleaved
-    fine grids ``out`` (n_lines, 2 nf)."""
-    for o in numba.prange(n_lines):
-        re = g[r0 + o, 0]
-        im = g[r0 + o, 1]
+def _fold_rows(g, src, nf, pad, out):
+    """Padded planar rows ``src`` of ``g`` -> periodic interleaved fine grids ``out``
+    (len(src), 2 nf)."""
+    for o in numba.prange(src.size):
+        re = g[src[o], 0]
+        im = g[src[o], 1]
         ob = out[o]
         for i in range(nf):
             ob[2 * i] = re[i + pad]
@@ -346,41 +396,57 @@ def _padded(coef: np.ndarray) -> np.ndarray:
 
 
 def row_fine_grids(
-    x: np.ndarray,
+    lateral: tuple[np.ndarray, ...],
     z: np.ndarray,
     amplitude: np.ndarray,
     *,
-    origin: float,
-    pitch: float,
-    n_lines: int,
+    origin: tuple[float, ...],
+    pitch: tuple[float, ...],
+    size: tuple[int, ...],
     waist: float,
     k0: float,
     depth: float,
     plan,
     ln_cut: float,
 ) -> np.ndarray:
-    """Fine grids (n_lines, nf) of the lines ``origin + o * pitch`` (µm) under the beam.
+    """Fine grids of the lines ``origin + o * pitch`` (µm) of a row or raster under the beam.
 
-    ``x``, ``z`` (µm) and complex ``amplitude`` of shape (M,); ``waist`` w0 (µm); ``k0``
-    (rad/µm) and ``depth`` H (µm) as in :func:`speckle.ascan`; ``plan`` a
-    :class:`speckle.imaging.nufft.FineGridPlan`; weights below ``exp(-ln_cut)`` of a
-    scatterer's peak may be dropped. Returns ``plan.cplx`` grids for
+    ``lateral`` holds the scatterers' coordinates (µm, shape (M,) each) along the grid's axes:
+    ``(x,)`` for a row, ``(outer, inner)`` for a raster of ``size = (n_outer, n_inner)`` lines
+    (``origin`` and ``pitch`` per axis, µm); ``z`` (µm) and complex ``amplitude`` of shape
+    (M,); ``waist`` w0 (µm); ``k0`` (rad/µm) and ``depth`` H (µm) as in
+    :func:`speckle.ascan`; ``plan`` a :class:`speckle.imaging.nufft.FineGridPlan`; weights
+    below ``exp(-ln_cut)`` of a scatterer's peak may be dropped. Returns ``plan.cplx`` grids
+    (prod(size), nf), line ``(o, i)`` at row ``o * n_inner + i``, for
     :func:`speckle.imaging.nufft.fine_to_pixels`. Call inside
     :func:`speckle.imaging.beam_nufft._slp_vectorize` and the parallel lock.
     """
-    b, reach, h = _reach(waist, pitch, ln_cut)
-    if b > ROW_MAX_B:
-        raise ValueError(f"row path: b = 2 pitch^2/waist^2 = {b:.3g} > {ROW_MAX_B:g}")
-    kk = 2 * h + 2
+    raster = len(size) == 2
+    axes = [_reach(waist, p, ln_cut) for p in pitch]
+    if max(a[0] for a in axes) > ROW_MAX_B:
+        raise ValueError(f"row path: b = 2 pitch^2/waist^2 > {ROW_MAX_B:g} on pitch {pitch}")
+    if not raster:  # a row: one inner "line" of weight 1
+        axes.append((1.0, 0.0, 0))
+    b, reach, h = (np.array(v) for v in zip(*axes, strict=True))
+    h = h.astype(np.int64)
+    size2 = np.array([size[0], size[1] if raster else 1], dtype=np.int64)
     coef = _padded(plan.coef)
     pad = coef.shape[1]  # >= w: a scatterer writes at most pad cells past its first one
     # numpy buffers (huge pages): faulting in pages allocated inside numba costs more
-    rec = np.empty((z.size, 4))
-    starts = _sort_rows(x, z, amplitude, k0, depth, plan.nf, origin, pitch, reach, n_lines, h,
-                        rec)  # fmt: skip
-    n_buckets = n_lines + 2 * h + 1
-    g = np.zeros((n_buckets + kk - 1, 2, plan.nf + 2 * pad), dtype=plan.real)
-    _spread_rows(rec, starts, h, b, plan.w, coef, plan.nf, pad, max(_BLOCK, kk), g)
-    out = np.empty((n_lines, plan.nf), dtype=plan.cplx)
-    _fold_rows(g, 2 * h + 1, n_lines, plan.nf, pad, out.view(plan.real))
+    rec = np.empty((z.size, 5 if raster else 4))
+    inner = lateral[1] if raster else np.zeros(1)
+    starts = _sort_rows(lateral[0], inner, z, amplitude, k0, depth, plan.nf,
+                        np.array([origin[0], origin[1] if raster else 0.0]),
+                        np.array([pitch[0], pitch[1] if raster else 1.0]), reach, size2, h,
+                        raster, rec)  # fmt: skip
+    k_n = 2 * h + 2 if raster else np.array([2 * h[0] + 2, 1])
+    nb = size2 + 2 * h + 1 if raster else np.array([size2[0] + 2 * h[0] + 1, 1])
+    n_i = int(nb[1] + k_n[1] - 1)
+    g = np.zeros(((nb[0] + k_n[0] - 1) * n_i, 2, plan.nf + 2 * pad), dtype=plan.real)
+    _spread_rows(rec, starts, size2, h, b, raster, plan.w, coef, plan.nf, pad,
+                 max(_BLOCK, int(k_n[0])), g)  # fmt: skip
+    o, i = np.divmod(np.arange(size2[0] * size2[1]), size2[1])
+    src = (o + 2 * h[0] + 1) * n_i + (i + 2 * h[1] + 1 if raster else 0)
+    out = np.empty((src.size, plan.nf), dtype=plan.cplx)
+    _fold_rows(g, src, plan.nf, pad, out.view(plan.real))
     return out
