@@ -19,6 +19,13 @@ MAP_FLOOR = 1e-12
 _MARKERS = {"direct": "*", "nufft": "o", "nufft32": "s", "finufft": "^", "psf": "D", "auto": "x"}
 
 
+def _color(method: str) -> str | None:
+    """The same colour for a method in every panel (A-scan and beam rows list different ones)."""
+    cycle = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    names = list(_MARKERS)
+    return cycle[names.index(method) % len(cycle)] if method in names else None
+
+
 def pareto_front(time: np.ndarray, error: np.ndarray) -> np.ndarray:
     """Indices of the points no other point beats in both time and error, by time."""
     ok = np.flatnonzero(np.isfinite(time) & np.isfinite(error))
@@ -43,6 +50,7 @@ def _chart_panel(ax, sc: xr.Dataset, title: str, *, legend: bool) -> None:
             t,
             e,
             _MARKERS.get(str(method), "."),
+            color=_color(str(method)),
             ls="-" if method != "direct" else "",
             lw=0.8,
             ms=5,
