@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import copy
 import shutil
 
 import numpy as np
 import pytest
 import xarray as xr
 import yaml
+from snakemake.exceptions import WorkflowError
+from snakemake.utils import validate
 from test_pipeline import CI_CONFIG, IGNORE, snakemake
 
 from speckle.figures.speed import failure_map_figure, pareto_front, speed_accuracy_figure
@@ -163,10 +166,24 @@ def test_random_beam_scene_is_the_documented_scene():
     assert not np.array_equal(z, other[0])
 
 
-def test_schema_beam_methods_match_the_package(repo_root):
-    schema = yaml.safe_load((repo_root / "workflow/schemas/config.schema.yaml").read_text())
+def test_schema_beam_section(repo_root):
+    """The schema lists the registered beam methods and refuses bad beam scenes by key."""
+    path = repo_root / "workflow/schemas/config.schema.yaml"
+    schema = yaml.safe_load(path.read_text())
     beam = schema["properties"]["speed_accuracy"]["properties"]["beam"]
     assert sorted(beam["properties"]["methods"]["items"]["enum"]) == sorted(BEAM_METHODS)
+    cfg = yaml.safe_load((repo_root / "workflow/config/config.yaml").read_text())
+    validate(copy.deepcopy(cfg), str(path))
+    size = cfg["speed_accuracy"]["beam"]["sizes"][0]
+    for key, value in (("waist_pitch", 0), ("density", -1.0), ("n_lines", 0)):
+        bad = copy.deepcopy(cfg)
+        bad["speed_accuracy"]["beam"]["sizes"][0] = {**size, key: value}
+        with pytest.raises(WorkflowError, match=key):
+            validate(bad, str(path))
+    bad = copy.deepcopy(cfg)
+    bad["speed_accuracy"]["beam"]["methods"] = ["psf"]  # an A-scan method only
+    with pytest.raises(WorkflowError, match="psf"):
+        validate(bad, str(path))
 
 
 def test_figures_render(chart, beam_chart):
