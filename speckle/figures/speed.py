@@ -19,6 +19,13 @@ MAP_FLOOR = 1e-12
 _MARKERS = {"direct": "*", "nufft": "o", "nufft32": "s", "finufft": "^", "psf": "D", "auto": "x"}
 
 
+def _color(method: str) -> str | None:
+    """The same colour for a method in every panel (A-scan and beam rows list different ones)."""
+    cycle = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    names = list(_MARKERS)
+    return cycle[names.index(method) % len(cycle)] if method in names else None
+
+
 def pareto_front(time: np.ndarray, error: np.ndarray) -> np.ndarray:
     """Indices of the points no other point beats in both time and error, by time."""
     ok = np.flatnonzero(np.isfinite(time) & np.isfinite(error))
@@ -31,55 +38,74 @@ def pareto_front(time: np.ndarray, error: np.ndarray) -> np.ndarray:
     return np.array(front, dtype=int)
 
 
-def speed_accuracy_figure(ds: xr.Dataset) -> Figure:
-    """Time versus relative error, one panel per scene size, Pareto front as a line."""
-    n_scene = ds.sizes["scene"]
-    fig, axes = new_figure(1, n_scene, width=3.4 * n_scene, height=3.4)
-    tols = ds["tol"].values
-    for i, ax in enumerate(axes[0]):
-        sc = ds.isel(scene=i)
-        all_t, all_e = [], []
-        for method in ds["method"].values:
-            t = sc["time"].sel({"method": method}).values
-            e = np.maximum(sc["error"].sel({"method": method}).values, ERROR_FLOOR)
-            if method == "direct":
-                t, e = t[:1], e[:1]
-            ax.plot(
-                t,
-                e,
-                _MARKERS.get(str(method), "."),
-                ls="-" if method != "direct" else "",
-                lw=0.8,
-                ms=5,
-                label=str(method),
-                alpha=0.85,
-            )
-            all_t.extend(t)
-            all_e.extend(e)
-        all_t, all_e = np.array(all_t), np.array(all_e)
-        front = pareto_front(all_t, all_e)
-        ax.step(
-            all_t[front],
-            all_e[front],
-            where="post",
-            color="k",
-            lw=2,
-            alpha=0.35,
-            label="Pareto front",
+def _chart_panel(ax, sc: xr.Dataset, title: str, *, legend: bool) -> None:
+    """One scene of a chart: time vs error per method (a line over tol), the Pareto front."""
+    all_t, all_e = [], []
+    for method in sc["method"].values:
+        t = sc["time"].sel({"method": method}).values
+        e = np.maximum(sc["error"].sel({"method": method}).values, ERROR_FLOOR)
+        if method == "direct":
+            t, e = t[:1], e[:1]
+        ax.plot(
+            t,
+            e,
+            _MARKERS.get(str(method), "."),
+            color=_color(str(method)),
+            ls="-" if method != "direct" else "",
+            lw=0.8,
+            ms=5,
+            label=str(method),
+            alpha=0.85,
         )
-        for tol in tols:
-            ax.axhline(tol, color="0.8", lw=0.5, zorder=0)
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel("wall time (s)")
-        ax.set_title(f"N={int(sc.n_pixels)} px, {int(sc.n_lines)} lines, {float(sc.density):g}/px")
-        if i == 0:
-            ax.set_ylabel("relative error vs direct")
-            ax.legend(fontsize=7, loc="lower left")
+        all_t.extend(t)
+        all_e.extend(e)
+    all_t, all_e = np.array(all_t), np.array(all_e)
+    front = pareto_front(all_t, all_e)
+    ax.step(
+        all_t[front], all_e[front], where="post", color="k", lw=2, alpha=0.35, label="Pareto front"
+    )
+    for tol in sc["tol"].values:
+        ax.axhline(tol, color="0.8", lw=0.5, zorder=0)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("wall time (s)")
+    ax.set_title(title)
+    if legend:
+        ax.set_ylabel("relative error vs direct")
+        ax.legend(fontsize=7, loc="lower left")
+
+
+def speed_accuracy_figure(ds: xr.Dataset, beam: xr.Dataset | None = None) -> Figure:
+    """Time versus relative error, one panel per scene size, Pareto front as a line.
+
+    ``ds``: the A-scan chart (:func:`speckle.imaging.speed.speed_accuracy`), first row;
+    ``beam``: the scanned-beam chart (:func:`speckle.imaging.speed.beam_speed_accuracy`),
+    second row, if given.
+    """
+    rows = [ds] if beam is None else [ds, beam]
+    n_col = max(r.sizes["scene"] for r in rows)
+    fig, axes = new_figure(len(rows), n_col, width=3.4 * n_col, height=3.4 * len(rows))
+    for i in range(ds.sizes["scene"]):
+        sc = ds.isel(scene=i)
+        title = f"N={int(sc.n_pixels)} px, {int(sc.n_lines)} lines, {float(sc.density):g}/px"
+        _chart_panel(axes[0, i], sc, title, legend=i == 0)
+    for i in range(0 if beam is None else beam.sizes["scene"]):
+        sc = beam.isel(scene=i)
+        title = (
+            f"beam: N={int(sc.n_pixels)} px, {int(sc.n_lines)} lines, "
+            f"{float(sc.density):g}/px/line, w0={float(sc.waist_pitch):g} pitch"
+        )
+        _chart_panel(axes[1, i], sc, title, legend=i == 0)
+    for r, row in enumerate(rows):  # rows with fewer scenes than columns
+        for ax in axes[r, row.sizes["scene"] :]:
+            ax.remove()
+    tols = ds["tol"].values
+    what = "A-scan methods (top) and scanned-beam methods (bottom)" if beam is not None else ""
     fig.suptitle(
-        f"Speed vs accuracy, knob tol = {', '.join(f'{t:g}' for t in tols)} "
-        f"(grey lines); spectrum {ds.attrs.get('spectrum_shape')}, "
-        f"k0/dk = {ds.attrs.get('k0_dk')}; pipeline timings are noisy",
+        f"Speed vs accuracy{', ' + what if what else ''}, knob tol = "
+        f"{', '.join(f'{t:g}' for t in tols)} (grey lines); spectrum "
+        f"{ds.attrs.get('spectrum_shape')}, k0/dk = {ds.attrs.get('k0_dk')}; pipeline timings "
+        "are noisy",
         fontsize=8,
     )
     return fig

@@ -2,13 +2,14 @@
 
 :func:`speed_accuracy` times every method at every value of its knob (``tol``) on the same
 random scenes and measures its relative error ``||A - A_direct||_2 / ||A_direct||_2`` over the
-B-scan. :func:`failure_map` measures how the error of each method (and of naive float32) grows
-with the number of pixels ``N``, the scatterer density and ``k0/delta_k``, next to the error the
-rules of :mod:`speckle.imaging.synthesis` predict.
+B-scan; :func:`beam_speed_accuracy` does the same for the scanned-beam B-scan
+(:func:`speckle.beam_scan`) on shared 2-D scenes. :func:`failure_map` measures how the error of
+each method (and of naive float32) grows with the number of pixels ``N``, the scatterer density
+and ``k0/delta_k``, next to the error the rules of :mod:`speckle.imaging.synthesis` predict.
 
 Timings inside a pipeline are noisy (other jobs share the cores); ``benchmarks/bench_ascan.py``
-is the reference for speed claims. Each time is the best of ``repeat`` runs, numba compilation
-excluded.
+and ``benchmarks/bench_beam.py`` are the references for speed claims. Each time is the best of
+``repeat`` runs, numba compilation excluded.
 """
 
 from __future__ import annotations
@@ -23,12 +24,21 @@ from ..scene.scatterers import line_generator
 from ..sweep import sweep
 from ..system.source import spectrum as make_spectrum
 from .aline import ascan
+from .beam import Beam, BeamScene, beam_scan
+from .beam_nufft import choose_beam_method
 from .carrier import naive_float32_phase_error_estimate
 from .nufft import float32_error_estimate, kernel_width
 from .psf import psf_ascan, tail_error
 from .synthesis import choose_method
 
-__all__ = ["FAILURE_CASES", "failure_map", "random_scene", "speed_accuracy"]
+__all__ = [
+    "FAILURE_CASES",
+    "beam_speed_accuracy",
+    "failure_map",
+    "random_beam_scene",
+    "random_scene",
+    "speed_accuracy",
+]
 
 
 def random_scene(
@@ -74,6 +84,82 @@ def _best_time(func, repeat, **kwargs):
 
 def _rel_err(a, ref):
     return float(np.linalg.norm(a - ref) / np.linalg.norm(ref))
+
+
+def _warm_up(run_small, methods, tols) -> None:
+    """Call every method at every tol once on a tiny scene: numba compiles every code path a
+    timed run takes (e.g. the beam's row and general paths) before any timing."""
+    for name in methods:
+        for tol in tols:
+            try:
+                run_small(method=name, tol=tol)
+            except ValueError:
+                pass  # refused: nothing to compile for it
+
+
+def _time_methods(run, methods, tols, repeat):
+    """Best time (s) and relative error of ``run(method=, tol=)`` for every method and tol.
+
+    The reference is ``run()`` (the exact ``"direct"`` method: time at every tol, error 0);
+    NaN where a method refuses a tol
+    (ValueError). Returns two (method, tol) arrays.
+    """
+    t_ref, ref = _best_time(run, repeat)
+    t_all = np.full((len(methods), len(tols)), np.nan)
+    e_all = np.full((len(methods), len(tols)), np.nan)
+    for j, name in enumerate(methods):
+        for k, tol in enumerate(tols):
+            if name == "direct":
+                t_all[j, k], e_all[j, k] = t_ref, 0.0
+                continue
+            try:
+                t, out = _best_time(run, repeat, method=name, tol=tol)
+            except ValueError:
+                continue  # the method refuses this tol on this scene
+            t_all[j, k], e_all[j, k] = t, _rel_err(out, ref)
+    return t_all, e_all
+
+
+def _chart_dataset(time_, error, chosen, methods, tols, coords, attrs) -> xr.Dataset:
+    """The chart's dataset: dims ``(scene, method, tol)``, ``coords`` per scene as
+    ``{name: (values, attrs)}`` (``n_scatterers`` among them), ``rate`` from ``time``."""
+    ds = xr.Dataset(
+        {
+            "time": (
+                ("scene", "method", "tol"),
+                time_,
+                {"units": "s", "long_name": "wall time (best of repeat; noisy in a pipeline)"},
+            ),
+            "error": (
+                ("scene", "method", "tol"),
+                error,
+                {"units": "1", "long_name": "relative error ||A - A_direct||_2/||A_direct||_2"},
+            ),
+            "chosen": (("scene", "tol"), chosen.astype(str), {"long_name": "method auto picks"}),
+        },
+        coords={
+            "scene": np.arange(time_.shape[0]),
+            "method": list(methods),
+            "tol": ("tol", list(map(float, tols)), {"long_name": "requested relative accuracy"}),
+            **{k: ("scene", v, a) for k, (v, a) in coords.items()},
+        },
+        attrs=attrs,
+    )
+    ds["rate"] = (ds["n_scatterers"] / ds["time"]).assign_attrs(
+        units="1/s", long_name="scatterers per second"
+    )
+    return ds
+
+
+def _source_attrs(k0_dk, shape, fwhm_fraction, pixel_size, seed, repeat) -> dict:
+    return {
+        "k0_dk": k0_dk,
+        "spectrum_shape": shape,
+        "fwhm_fraction": np.nan if fwhm_fraction is None else fwhm_fraction,
+        "pixel_size_um": pixel_size,
+        "seed": seed,
+        "repeat": repeat,
+    }
 
 
 def speed_accuracy(
@@ -125,73 +211,140 @@ def speed_accuracy(
         k0 = float(spec.attrs["k0"])
         s = spec.values
         n_scat.append(z.size)
-        run = functools.partial(ascan, z, a, n_pixels=n, depth=depth, k0=k0, spectrum=s)
-        for name in methods:  # warm-up (numba compilation) on a tiny slice
-            try:
-                ascan(
-                    z[:1, :4],
-                    a[:1, :4],
-                    n_pixels=n,
-                    depth=depth,
-                    k0=k0,
-                    spectrum=s,
-                    method=name,
-                    tol=1e-3,
-                )
-            except ValueError:
-                pass
-        t_ref, ref = _best_time(run, repeat)
-        for j, name in enumerate(methods):
-            for k, tol in enumerate(tols):
-                chosen[i, k] = choose_method(nl, z.shape[1], n, s, tol)
-                if name == "direct":
-                    t_all[i, j, k], e_all[i, j, k] = t_ref, 0.0
-                    continue
-                try:
-                    t, out = _best_time(run, repeat, method=name, tol=tol)
-                except ValueError:
-                    continue  # the method refuses this tol on this scene
-                t_all[i, j, k], e_all[i, j, k] = t, _rel_err(out, ref)
-    scene = np.arange(len(sizes))
-    ds = xr.Dataset(
-        {
-            "time": (
-                ("scene", "method", "tol"),
-                t_all,
-                {"units": "s", "long_name": "wall time (best of repeat; noisy in a pipeline)"},
-            ),
-            "error": (
-                ("scene", "method", "tol"),
-                e_all,
-                {"units": "1", "long_name": "relative error ||A - A_direct||_2/||A_direct||_2"},
-            ),
-            "chosen": (("scene", "tol"), chosen.astype(str), {"long_name": "method auto picks"}),
-        },
-        coords={
-            "scene": scene,
-            "method": list(methods),
-            "tol": ("tol", list(map(float, tols)), {"long_name": "requested relative accuracy"}),
-            "n_pixels": ("scene", [int(s["n_pixels"]) for s in sizes]),
-            "n_lines": ("scene", [int(s["n_lines"]) for s in sizes]),
-            "density": ("scene", [float(s["density"]) for s in sizes], {"units": "1/pixel"}),
-            "n_scatterers": ("scene", n_scat),
-        },
-        attrs={
-            "title": "speed versus accuracy of the A-scan synthesis methods",
-            "k0_dk": k0_dk,
-            "spectrum_shape": shape,
-            "fwhm_fraction": np.nan if fwhm_fraction is None else fwhm_fraction,
-            "pixel_size_um": pixel_size,
-            "seed": seed,
-            "repeat": repeat,
-            "note": "timings from a pipeline run are noisy; benchmarks/bench_ascan.py is the "
-            "reference for speed claims",
-        },
-    )
-    ds["rate"] = (ds["n_scatterers"] / ds["time"]).assign_attrs(
-        units="1/s", long_name="scatterers per second"
-    )
-    return ds
+        common = dict(n_pixels=n, depth=depth, k0=k0, spectrum=s)
+        _warm_up(functools.partial(ascan, z[:1, :4], a[:1, :4], **common), methods, tols)
+        run = functools.partial(ascan, z, a, **common)
+        t_all[i], e_all[i] = _time_methods(run, methods, tols, repeat)
+        chosen[i] = [choose_method(nl, z.shape[1], n, s, tol) for tol in tols]
+    coords = {
+        "n_pixels": ([int(s["n_pixels"]) for s in sizes], {"units": "1"}),
+        "n_lines": ([int(s["n_lines"]) for s in sizes], {"units": "1"}),
+        "density": ([float(s["density"]) for s in sizes], {"units": "1/pixel"}),
+        "n_scatterers": (n_scat, {"units": "1"}),
+    }
+    attrs = {
+        "title": "speed versus accuracy of the A-scan synthesis methods",
+        **_source_attrs(k0_dk, shape, fwhm_fraction, pixel_size, seed, repeat),
+        "note": "timings from a pipeline run are noisy; benchmarks/bench_ascan.py is the "
+        "reference for speed claims",
+    }
+    return _chart_dataset(t_all, e_all, chosen, methods, tols, coords, attrs)
+
+
+def random_beam_scene(
+    n_pixels: int, n_lines: int, density: float, *, pitch: float, pixel_size: float, seed: int
+):
+    """Shared 2-D scene of a scanned-beam B-scan with lines every ``pitch`` µm from ``x = 0``.
+
+    ``round(density * N * L)`` scatterers, ``x`` uniform over the scanned span
+    ``[-pitch/2, (L - 1/2) pitch)`` and ``z`` over one unambiguous depth ``[0, H)``,
+    ``H = N * pixel_size``, complex Gaussian amplitudes (``E|a|^2 = 1``). The generator is
+    seeded by ``SeedSequence(seed, spawn_key=(N, L, M))``: the same size gives the same scene.
+
+    Returns
+    -------
+    (z, x, a, lines, depth)
+        Depths and lateral positions (µm), amplitudes, shapes (M,); line positions (L,) in µm;
+        ``H`` in µm.
+    """
+    depth = pixel_size * n_pixels
+    m = max(1, round(density * n_pixels * n_lines))
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(n_pixels, n_lines, m)))
+    x = rng.uniform(-0.5 * pitch, (n_lines - 0.5) * pitch, m)
+    z = rng.uniform(0.0, depth, m)
+    a = (rng.normal(size=m) + 1j * rng.normal(size=m)) / np.sqrt(2)
+    return z, x, a, np.arange(n_lines) * pitch, depth
+
+
+def beam_speed_accuracy(
+    sizes: list[dict],
+    methods: list[str],
+    tols: list[float],
+    *,
+    pixel_size: float,
+    k0_dk: float,
+    shape: str,
+    fwhm_fraction: float | None,
+    seed: int,
+    repeat: int = 2,
+) -> xr.Dataset:
+    """Time and relative error of every :func:`speckle.beam_scan` method at every ``tol``.
+
+    Each scene is :func:`random_beam_scene` with lines every ``pitch = pixel_size`` µm, imaged
+    by a beam without focus of waist ``w0 = waist_pitch * pitch``. The reference is
+    ``method="direct"`` on all lines (exact, float64); errors are relative l2 over the whole
+    B-scan, as the ``tol`` of :func:`speckle.beam_scan` is defined.
+
+    Parameters
+    ----------
+    sizes : list of dict
+        Scenes, each ``{"n_pixels": N, "n_lines": L, "density": rho, "waist_pitch": w0/p}``
+        (``rho`` scatterers per pixel per line).
+    methods : list of str
+        Methods of :func:`speckle.beam_scan` (``"direct"`` is timed once per scene).
+    tols : list of float
+        The knob: requested relative accuracy.
+    pixel_size, k0_dk, shape, fwhm_fraction
+        Source as in :func:`speed_accuracy` (pixel size and line pitch in µm).
+    seed : int
+        Root seed of the scenes.
+    repeat : int
+        Each time is the best of ``repeat`` runs.
+
+    Returns
+    -------
+    xarray.Dataset
+        As :func:`speed_accuracy` (``chosen``: the beam's auto choice), scene coords
+        ``n_pixels``, ``n_lines``, ``density``, ``waist_pitch``, ``n_scatterers``.
+    """
+    shape_ = (len(sizes), len(methods), len(tols))
+    t_all = np.full(shape_, np.nan)
+    e_all = np.full(shape_, np.nan)
+    chosen = np.empty((len(sizes), len(tols)), dtype=object)
+    n_scat = []
+    pitch = pixel_size
+    for i, sz in enumerate(sizes):
+        n, nl, rho = int(sz["n_pixels"]), int(sz["n_lines"]), float(sz["density"])
+        w0 = float(sz["waist_pitch"]) * pitch
+        z, x, a, lines, depth = random_beam_scene(
+            n, nl, rho, pitch=pitch, pixel_size=pixel_size, seed=seed
+        )
+        spec = _spectrum(n, depth, k0_dk, shape, fwhm_fraction)
+        k0 = float(spec.attrs["k0"])
+        s = spec.values
+        n_scat.append(z.size)
+        common = dict(lines=lines, waist=w0, n_pixels=n, depth=depth, k0=k0, spectrum=s)
+        small = slice(0, 64)
+        _warm_up(functools.partial(beam_scan, z[small], x[small], a[small], **common),
+                 methods, tols)  # fmt: skip
+        run = functools.partial(beam_scan, z, x, a, **common)
+        t_all[i], e_all[i] = _time_methods(run, methods, tols, repeat)
+        scene = BeamScene(z, x, None, a, lines, n, depth, k0, s)
+        chosen[i] = [choose_beam_method(scene, Beam(w0, None, None), tol) for tol in tols]
+    coords = {
+        "n_pixels": ([int(s["n_pixels"]) for s in sizes], {"units": "1"}),
+        "n_lines": ([int(s["n_lines"]) for s in sizes], {"units": "1"}),
+        "density": (
+            [float(s["density"]) for s in sizes],
+            {"units": "1/(pixel line)", "long_name": "scatterers per pixel per line"},
+        ),
+        "waist_pitch": (
+            [float(s["waist_pitch"]) for s in sizes],
+            {"units": "1", "long_name": "beam waist w0 / line pitch"},
+        ),
+        "n_scatterers": (n_scat, {"units": "1"}),
+    }
+    attrs = {
+        "title": "speed versus accuracy of the scanned-beam B-scan methods",
+        **_source_attrs(k0_dk, shape, fwhm_fraction, pixel_size, seed, repeat),
+        "pitch_um": pitch,
+        "scene": "shared 2-D scene: x uniform over the scanned span, z uniform over [0, H), "
+        "complex Gaussian amplitudes; beam without focus",
+        "reference": "method='direct' on all lines (exact float64); errors over the whole B-scan",
+        "note": "timings from a pipeline run are noisy; benchmarks/bench_beam.py is the "
+        "reference for speed claims",
+    }
+    return _chart_dataset(t_all, e_all, chosen, methods, tols, coords, attrs)
 
 
 #: Failure-map cases: (label, method, knob). Gaussian cases use ``fwhm_fraction``.

@@ -1,8 +1,10 @@
-# Speed versus accuracy of the synthesis methods: the chart and the failure map (results/speed/).
-# Timings inside a pipeline are noisy; benchmarks/bench_ascan.py is the reference for speed.
+# Speed versus accuracy of the synthesis methods: the chart (A-scan and scanned-beam methods) and
+# the failure map (results/speed/). Timings inside a pipeline are noisy; benchmarks/bench_ascan.py
+# and benchmarks/bench_beam.py are the references for speed.
 
 SPEED_TARGETS = [
     f"{RESULTS}/speed/speed_accuracy.nc",
+    f"{RESULTS}/speed/beam_speed_accuracy.nc",
     f"{RESULTS}/speed/speed_accuracy.png",
     f"{RESULTS}/speed/failure_map.nc",
     f"{RESULTS}/speed/failure_map.png",
@@ -20,6 +22,7 @@ rule speed_accuracy:
         ),
     output:
         data=f"{RESULTS}/speed/speed_accuracy.nc",
+        beam=f"{RESULTS}/speed/beam_speed_accuracy.nc",
         figure=report(
             f"{RESULTS}/speed/speed_accuracy.png",
             caption="../report/speed_accuracy.rst",

@@ -1,9 +1,10 @@
-"""Speed-versus-accuracy chart of the synthesis methods (thin: config -> package -> files)."""
+"""Speed-versus-accuracy chart of the A-scan and scanned-beam synthesis methods (thin: config ->
+package -> files)."""
 
 from speckle._workflow import run
 from speckle.figures._style import save
 from speckle.figures.speed import speed_accuracy_figure
-from speckle.imaging.speed import speed_accuracy
+from speckle.imaging.speed import beam_speed_accuracy, speed_accuracy
 from speckle.io import to_netcdf
 from speckle.provenance import provenance_attrs
 
@@ -14,10 +15,7 @@ def main(snakemake) -> None:
         snakemake.params.source,
         snakemake.params.seed,
     )
-    ds = speed_accuracy(
-        cfg["sizes"],
-        cfg["methods"],
-        cfg["tols"],
+    common = dict(
         pixel_size=source["pixel_size"],
         k0_dk=source["k0_dk"],
         shape=cfg["shape"],
@@ -25,10 +23,14 @@ def main(snakemake) -> None:
         seed=seed,
         repeat=cfg["repeat"],
     )
-    ds.attrs.update(provenance_attrs(config={"speed_accuracy": cfg, "source": source}, seed=seed))
-    to_netcdf(ds, snakemake.output.data)
-    save(speed_accuracy_figure(ds), snakemake.output.figure)
-    print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
+    ds = speed_accuracy(cfg["sizes"], cfg["methods"], cfg["tols"], **common)
+    beam = beam_speed_accuracy(cfg["beam"]["sizes"], cfg["beam"]["methods"], cfg["tols"], **common)
+    prov = provenance_attrs(config={"speed_accuracy": cfg, "source": source}, seed=seed)
+    for out, path in ((ds, snakemake.output.data), (beam, snakemake.output.beam)):
+        out.attrs.update(prov)
+        to_netcdf(out, path)
+    save(speed_accuracy_figure(ds, beam), snakemake.output.figure)
+    print(f"wrote {snakemake.output.data}, {snakemake.output.beam} and {snakemake.output.figure}")
 
 
 run(main)
