@@ -274,6 +274,35 @@ def test_row_path_stays_within_tol_and_agrees_with_the_general_path(waist_pitch,
         assert rel_err(fast, general) <= 2 * tol
 
 
+@pytest.mark.parametrize("method", ["nufft", "nufft32"])
+@pytest.mark.parametrize(("n_y", "pitch_y"), [(1, 3.0), (5, 2.0), (4, 5.0)])
+def test_raster_row_path_stays_within_tol_and_agrees_with_the_general_path(n_y, pitch_y, method):
+    """C-scans without focus take the row path too (outer x inner weights): against direct on
+    a raster with different pitches per axis (and a single y line), scatterers beyond every
+    edge; the general path on the same scene meets tol as well."""
+    rng = np.random.default_rng(12)
+    tol = {"nufft": 1e-6, "nufft32": 1e-5}[method]  # float32 rounding ~7e-7 on this scene
+    w0, pitch_x = 6.0, 3.0
+    xs, ys = np.arange(7) * pitch_x, np.arange(n_y) * pitch_y - 4.0
+    gx, gy = np.meshgrid(xs, ys)
+    lines = np.stack([gx.ravel(), gy.ravel()], 1)[rng.permutation(gx.size)]
+    m = 4000
+    x = rng.uniform(xs[0] - 4 * w0, xs[-1] + 4 * w0, m)
+    y = rng.uniform(ys[0] - 4 * w0, ys[-1] + 4 * w0, m)
+    z = rng.uniform(0, H, m)
+    a = rng.normal(size=m) + 1j * rng.normal(size=m)
+    kw = dict(y=y, lines=lines, waist=w0, n_pixels=N, depth=H, k0=K0)
+    ref = speckle.beam_scan(z, x, a, **kw)
+    sc, beam, _ = _validate(z, x, a, y, lines, w0, N, H, K0, None, method, tol, None, None)
+    assert uses_row_path(beam, line_grid(sc.lines, w0), 0.25 * tol)
+    fast = speckle.beam_scan(z, x, a, method=method, tol=tol, **kw)
+    assert rel_err(fast, ref) <= tol
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(beam_nufft, "uses_row_path", lambda *args: False)
+        general = speckle.beam_scan(z, x, a, method=method, tol=tol, **kw)
+    assert rel_err(general, ref) <= tol
+
+
 def test_finufft_reference_within_tol():
     rng = np.random.default_rng(5)
     m = 4 * N * 30
@@ -356,7 +385,8 @@ def test_empty_scene_images_to_zeros():
     assert out.shape == (2, N) and not out.any()
 
 
-def test_fast_result_does_not_depend_on_the_thread_count():
+@pytest.mark.parametrize("raster", [False, True])
+def test_fast_result_does_not_depend_on_the_thread_count(raster):
     numba = pytest.importorskip("numba")
     rng = np.random.default_rng(8)
     n, n_lines = 64, 128
@@ -365,6 +395,10 @@ def test_fast_result_does_not_depend_on_the_thread_count():
     a = rng.normal(size=m) + 1j * rng.normal(size=m)
     kw = dict(lines=np.arange(n_lines) * 4.0, waist=8.0, n_pixels=n, depth=8.0 * n,
               k0=10 * np.pi / 8, method="nufft", tol=1e-6)  # fmt: skip
+    if raster:  # 32 x 4 lines of a C-scan
+        gx, gy = np.meshgrid(np.arange(32) * 4.0, np.arange(4) * 4.0)
+        kw.update(lines=np.stack([gx.ravel(), gy.ravel()], 1), y=rng.uniform(-8, 20, m))
+        x = rng.uniform(-8, 132, m)
     threads = numba.get_num_threads()
     many = speckle.beam_scan(z, x, a, **kw)
     try:

@@ -620,14 +620,14 @@ def _estimate(method: str, scene: BeamScene, beam: Beam, tol: float, setup: _Set
     if method == "nufft32":
         # float32 conversions cost per scatterer, narrower stores save per weight written
         # (measured: 10 % slower than "nufft" in 2-D at w0 = 2 pitches, 1.5x faster in 3-D;
-        # on the row path 1.1-1.2x slower than "nufft")
+        # on the row path, with Horner in float32, 1.1-1.2x faster than "nufft")
         w = kernel_width(0.25 * tol)
         rounding = float32_error_estimate(int(setup.weighted_terms), n, w)
         if rounding > 0.5 * tol:
             return math.inf, math.inf
         nf = fine_grid_size(n, w)
         if uses_row_path(beam, setup.grid, 0.25 * tol):
-            cost = _row_cost(setup, beam, m, nf, w, 0.25 * tol, per_cell=12.0, per_slot=0.45)
+            cost = _row_cost(setup, beam, m, nf, w, 0.25 * tol, per_cell=12.0, per_slot=0.28)
         else:
             cost = 8e5 + setup.n_rows * 30.0 * nf + m * 130.0 + slots * 0.75 * w
         return 0.5 * tol + rounding, cost
