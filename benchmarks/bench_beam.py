@@ -13,6 +13,10 @@ all threads: on a shared machine the CPU time is the steadier of the two), numba
 excluded. Relative error ``||A - A_direct||_2 / ||A_direct||_2`` on ``--ref-lines`` lines spread
 over the scan (the exact direct reference costs seconds per line here).
 
+``beam_scan`` rows: the row path (:mod:`speckle.imaging.beam_row`, taken by a row or raster of
+lines without focus) and, as its baseline in the same run, the general code of
+:mod:`speckle.imaging.beam_nufft` (``(general path)``, as before the row path existed).
+
 FINUFFT baseline: the depth-independent beam is a Gaussian in ``x - X_i``, so one 2-D type-1
 transform of the scene (depth frequency x lateral frequency over a lateral period padded by the
 beam reach) times the beam's lateral Fourier transform, folded onto the line grid and
@@ -24,6 +28,7 @@ upsampling factors 2 and 1.25; the fastest of these is the baseline of the ratio
 from __future__ import annotations
 
 import argparse
+import contextlib
 import functools
 import platform
 import time
@@ -34,6 +39,7 @@ import numpy as np
 from _common import best_time, cpu_model, rel_err
 
 import speckle
+from speckle.imaging import beam_nufft
 from speckle.imaging.beam import _validate
 from speckle.imaging.beam_nufft import choose_beam_method, finufft_beam_scan, line_grid
 
@@ -54,7 +60,7 @@ def row(name, t, cpu, err, n_scat, base=None, base_cpu=None, extra=""):
     ratio = f"{base / t:6.2f}x" if base else " " * 7
     ratio_cpu = f"{base_cpu / cpu:6.2f}x" if base_cpu else " " * 7
     print(
-        f"  {name:<34s} {t * 1e3:8.0f} ms {ratio} {cpu * 1e3:8.0f} ms {ratio_cpu} "
+        f"  {name:<42s} {t * 1e3:8.0f} ms {ratio} {cpu * 1e3:8.0f} ms {ratio_cpu} "
         f"{err:9.2e} {n_scat / t / 1e6:7.2f} M/s {extra}"
     )
 
@@ -106,7 +112,7 @@ def main():
                 finufft_beam_scan, sc, beam, grid, tol=tol, eps=tol, nthreads=threads, upsampfac=up
             )
     print(
-        f"\n  {'method':<34s} {'wall':>11s} {'ratio':>7s} {'CPU':>11s} {'ratio':>7s} "
+        f"\n  {'method':<42s} {'wall':>11s} {'ratio':>7s} {'CPU':>11s} {'ratio':>7s} "
         f"{'rel.err':>9s} {'scat/s':>11s}"
     )
     res = {}
@@ -120,16 +126,31 @@ def main():
     threads = numba.get_num_threads()
     for nthr in sorted({1, threads}):
         numba.set_num_threads(nthr)
-        for name in ("nufft", "nufft32", "auto"):
-            t, c, out = best_time(
-                lambda name=name: speckle.beam_scan(z, x, a, method=name, tol=tol, **kw),
-                args.repeat,
-            )
+        for name, path in (("nufft", "general"), ("nufft", "row"), ("nufft32", "row"),
+                           ("auto", "row")):  # fmt: skip
+            with general_path(path == "general"):
+                t, c, out = best_time(
+                    lambda name=name: speckle.beam_scan(z, x, a, method=name, tol=tol, **kw),
+                    args.repeat,
+                )
             extra = f"(auto -> {choose_beam_method(sc, beam, tol)})" if name == "auto" else ""
-            label = f"beam_scan {name}, {nthr} thr"
+            label = f"beam_scan {name}{' (general path)' if path == 'general' else ''}, {nthr} thr"
             row(label, t, c, rel_err(out[ref_idx], ref), n_scat, base, base_cpu, extra)
     numba.set_num_threads(threads)
     print("  * fastest FINUFFT call (wall): the baseline of both ratio columns")
+
+
+@contextlib.contextmanager
+def general_path(on: bool):
+    """Run the scans inside on the general code of ``beam_nufft`` (no row path): the
+    baseline of the row path (:mod:`speckle.imaging.beam_row`) in the same run."""
+    orig = beam_nufft.uses_row_path
+    if on:
+        beam_nufft.uses_row_path = lambda *args: False
+    try:
+        yield
+    finally:
+        beam_nufft.uses_row_path = orig
 
 
 def tile_3d(n_tile, tol, repeat, n_pix=512, pitch=4.0):
@@ -159,15 +180,18 @@ def tile_3d(n_tile, tol, repeat, n_pix=512, pitch=4.0):
         f"+ {halo} µm halo), pitch {pitch} µm, w0 = {w0} µm, tol = {tol:g}"
     )
     for name in ("nufft", "nufft32"):
-        t, c, out = best_time(
-            lambda name=name: speckle.beam_scan(z, x, a, method=name, tol=tol, **kw), repeat
-        )
-        pick = [0, n_tile * n_tile // 2 + n_tile // 2]
-        err = rel_err(out[pick], ref)
-        print(
-            f"  {name:<8s} wall {t:6.2f} s, CPU {c:6.2f} s, rel. error {err:.1e} (2 lines), "
-            f"{m / t / 1e6:.2f} M scatterers/s"
-        )
+        for path in ("general", "row"):
+            with general_path(path == "general"):
+                t, c, out = best_time(
+                    lambda name=name: speckle.beam_scan(z, x, a, method=name, tol=tol, **kw),
+                    repeat,
+                )
+            pick = [0, n_tile * n_tile // 2 + n_tile // 2]
+            err = rel_err(out[pick], ref)
+            print(
+                f"  {name:<8s} {path:<8s} path: wall {t:6.2f} s, CPU {c:6.2f} s, rel. error "
+                f"{err:.1e} (2 lines), {m / t / 1e6:.2f} M scatterers/s"
+            )
 
 
 if __name__ == "__main__":
