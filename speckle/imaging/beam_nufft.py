@@ -24,8 +24,8 @@ exp(-b_y d_y^2)``, and each scatterer is written into the ``K_x K_y`` lines of i
 A row or raster of lines under a beam without focus (the common B-scan or C-scan) takes the
 row path of :mod:`speckle.imaging.beam_row` (:func:`uses_row_path`): the same sums and error
 budget, laid out for throughput (1.9x less time than the general code on the benchmark
-scene, 1.5x less CPU time on a 3-D tile). The code here serves focused beams, beams narrower than ``p/sqrt(32)`` and tolerances
-near the float64 floor.
+scene, 1.5x less CPU time on a 3-D tile). The code here serves focused beams, beams narrower
+than ``p/sqrt(32)`` and tolerances near the float64 floor.
 
 Errors (relative l2 over the B-scan, against ``"direct"``), budgeted to add up below ``tol``:
 
