@@ -122,7 +122,11 @@ def as_finite_array(value: object, name: str, *, dtype=float) -> np.ndarray:
         raise TypeError(
             f"{name} must be an array of {np.dtype(dtype).name} values, got {type(value).__name__}"
         ) from None
-    if not np.all(np.isfinite(arr)):
+    # a finite sum means every element is finite (NaN and inf propagate); only a non-finite
+    # sum (a bad element, or an overflow of huge finite values) needs the elementwise check
+    with np.errstate(over="ignore", invalid="ignore"):
+        total = np.sum(arr)
+    if not np.isfinite(total) and not np.all(np.isfinite(arr)):
         bad = int(np.size(arr) - np.count_nonzero(np.isfinite(arr)))
         raise ValueError(f"{name} must be finite; it holds {bad} NaN or infinite value(s)")
     return arr

@@ -509,3 +509,17 @@ def test_malformed_inputs_raise_naming_a_parameter_or_give_valid_results(target,
         assert param.split("_")[0] in str(err) or param in str(err), (param, value, str(err))
     else:
         assert _is_valid_result(out), (name, param, value)
+
+
+@pytest.mark.parametrize("dtype", [float, complex])
+def test_finite_check_takes_huge_finite_values_and_finds_every_bad_one(dtype):
+    """The finite check sums first (NaN and inf propagate) and checks elementwise only when the
+    sum is not finite: huge finite values whose sum overflows are accepted, bad values among
+    them are still found and counted."""
+    from speckle._validate import as_finite_array
+
+    huge = np.array([1e308, 1e308, -1.0], dtype=dtype)
+    np.testing.assert_array_equal(as_finite_array(huge, "v", dtype=dtype), huge)
+    for bad, count in (([1e308, 1e308, np.nan], 1), ([np.inf, -np.inf, 1.0], 2), ([np.nan], 1)):
+        with pytest.raises(ValueError, match=f"v must be finite; it holds {count} NaN"):
+            as_finite_array(np.array(bad, dtype=dtype), "v", dtype=dtype)
