@@ -59,7 +59,14 @@ import numpy as np
 import scipy.fft
 
 from .beam import Beam, BeamScene, register_beam_method
-from .beam_row import ROW_MAX_B, row_fine_grids, row_lines, row_weight_error, weight_rate
+from .beam_row import (
+    ROW_MAX_B,
+    bucket_offsets,
+    row_fine_grids,
+    row_lines,
+    row_weight_error,
+    weight_rate,
+)
 from .carrier import PARALLEL_LOCK, carrier_and_position
 from .nufft import (
     DEFAULT_TOL,
@@ -209,15 +216,8 @@ def _sort_scene(
             key[j] = k
             if k >= 0:
                 counts[c, k] += 1
-    starts = np.zeros(nb + 1, dtype=np.int64)
-    offset = np.empty((n_chunks, nb), dtype=np.int64)
-    total = 0
-    for k in range(nb):
-        starts[k] = total
-        for c in range(n_chunks):
-            offset[c, k] = total
-            total += counts[c, k]
-    starts[nb] = total
+    starts, offset = bucket_offsets(counts)
+    total = starts[nb]
     zs = np.empty(total)
     as_ = np.empty(total, dtype=np.complex128)
     sos = np.empty(total)

@@ -49,7 +49,14 @@ import numpy as np
 
 from .carrier import carrier_and_position
 
-__all__ = ["ROW_MAX_B", "row_fine_grids", "row_lines", "row_weight_error", "weight_rate"]
+__all__ = [
+    "ROW_MAX_B",
+    "bucket_offsets",
+    "row_fine_grids",
+    "row_lines",
+    "row_weight_error",
+    "weight_rate",
+]
 
 #: Largest ``b = 2 p^2/w0^2`` of the row path (``exp(2b)`` stays far from overflow).
 ROW_MAX_B = 64.0
@@ -127,6 +134,24 @@ def _exp_into(out, factor, d, square, n, scale, nsq):
             out[t] = out[t] * out[t]
 
 
+@numba.njit(cache=True)
+def bucket_offsets(counts):
+    """Offsets of a parallel counting sort: ``counts`` (chunks, buckets) -> ``starts``
+    (buckets + 1) of every bucket and ``offset`` (chunks, buckets) where each chunk writes its
+    scatterers of each bucket (chunks in input order within a bucket)."""
+    n_chunks, nb = counts.shape
+    starts = np.zeros(nb + 1, dtype=np.int64)
+    offset = np.empty((n_chunks, nb), dtype=np.int64)
+    total = 0
+    for k in range(nb):
+        starts[k] = total
+        for c in range(n_chunks):
+            offset[c, k] = total
+            total += counts[c, k]
+    starts[nb] = total
+    return starts, offset
+
+
 @numba.njit(parallel=True, cache=True)
 def _sort_rows(x, y, z, a, k0, depth, nf, origin, pitch, reach, size, h, two_d, rec):
     """Records ``(Re c, Im c, u, s_o[, s_i])`` of the scatterers within reach, by bucket.
@@ -165,15 +190,7 @@ def _sort_rows(x, y, z, a, k0, depth, nf, origin, pitch, reach, size, h, two_d, 
                 k += min(max(np.int64(math.floor(si)) + h[1] + 1, 0), nbi - 1)
             key[j] = k
             counts[c, k] += 1
-    starts = np.zeros(nb + 1, dtype=np.int64)
-    offset = np.empty((n_chunks, nb), dtype=np.int64)
-    total = 0
-    for k in range(nb):
-        starts[k] = total
-        for c in range(n_chunks):
-            offset[c, k] = total
-            total += counts[c, k]
-    starts[nb] = total
+    starts, offset = bucket_offsets(counts)
     for c in numba.prange(n_chunks):
         pos = offset[c]
         bcr = np.empty(_SUB)
@@ -324,6 +341,20 @@ def _spread_rows(rec, starts, size, h, b, two_d, w, coef, nf, pad, block, g):
 
 
 @numba.njit(fastmath=True, inline="always")
+def _axpy8(gf, p, v, k0, k1, k2, k3, k4, k5, k6, k7):
+    """``gf[p:p + 8] += v * k`` written out (flat unsigned index ``p``: no wrap-around
+    checks; LLVM's SLP vectoriser packs the eight updates)."""
+    gf[p] += v * k0
+    gf[p + np.uint64(1)] += v * k1
+    gf[p + np.uint64(2)] += v * k2
+    gf[p + np.uint64(3)] += v * k3
+    gf[p + np.uint64(4)] += v * k4
+    gf[p + np.uint64(5)] += v * k5
+    gf[p + np.uint64(6)] += v * k6
+    gf[p + np.uint64(7)] += v * k7
+
+
+@numba.njit(fastmath=True, inline="always")
 def _spread_one(gf, base, x, c_r, c_i, wo, wi, t, coef, deg1, ngrp, ko_n, ki_n, ostride,
                 plane, rowlen):  # fmt: skip
     """One scatterer: kernel values by Horner across 8 slots (registers; the SLP vectoriser
@@ -354,24 +385,8 @@ def _spread_one(gf, base, x, c_r, c_i, wo, wi, t, coef, deg1, ngrp, ko_n, ki_n, 
             for mi in range(ki_n):
                 p1 = p0 + np.uint64(plane)
                 wm = wm_o * wi[mi, t]
-                v = c_r * wm
-                gf[p0] += v * k0
-                gf[p0 + np.uint64(1)] += v * k1
-                gf[p0 + np.uint64(2)] += v * k2
-                gf[p0 + np.uint64(3)] += v * k3
-                gf[p0 + np.uint64(4)] += v * k4
-                gf[p0 + np.uint64(5)] += v * k5
-                gf[p0 + np.uint64(6)] += v * k6
-                gf[p0 + np.uint64(7)] += v * k7
-                v = c_i * wm
-                gf[p1] += v * k0
-                gf[p1 + np.uint64(1)] += v * k1
-                gf[p1 + np.uint64(2)] += v * k2
-                gf[p1 + np.uint64(3)] += v * k3
-                gf[p1 + np.uint64(4)] += v * k4
-                gf[p1 + np.uint64(5)] += v * k5
-                gf[p1 + np.uint64(6)] += v * k6
-                gf[p1 + np.uint64(7)] += v * k7
+                _axpy8(gf, p0, c_r * wm, k0, k1, k2, k3, k4, k5, k6, k7)
+                _axpy8(gf, p1, c_i * wm, k0, k1, k2, k3, k4, k5, k6, k7)
                 p0 += np.uint64(rowlen)
             po += np.uint64(ostride)
 
