@@ -29,6 +29,10 @@ BEAM_SIZES = [
     {"n_pixels": 48, "n_lines": 6, "density": 1, "waist_pitch": 1.0},
 ]
 BEAM_TOLS = [1e-2, 1e-6, 1e-9]
+#: Source and timing of both test charts.
+CHART_SOURCE = dict(
+    pixel_size=8.0, k0_dk=10.0, shape="gaussian", fwhm_fraction=0.15, seed=3, repeat=1
+)
 
 
 @pytest.fixture(scope="module")
@@ -40,12 +44,7 @@ def chart():
         ],
         ["direct", "nufft", "nufft32", "finufft", "psf", "auto"],
         [1e-2, 1e-6, 1e-9],
-        pixel_size=8.0,
-        k0_dk=10.0,
-        shape="gaussian",
-        fwhm_fraction=0.15,
-        seed=3,
-        repeat=1,
+        **CHART_SOURCE,
     )
 
 
@@ -55,12 +54,7 @@ def beam_chart():
         BEAM_SIZES,
         ["direct", "nufft", "nufft32", "finufft", "auto"],
         BEAM_TOLS,
-        pixel_size=8.0,
-        k0_dk=10.0,
-        shape="gaussian",
-        fwhm_fraction=0.15,
-        seed=3,
-        repeat=1,
+        **CHART_SOURCE,
     )
 
 
