@@ -72,6 +72,7 @@ _SUB = 256
 _BLOCK = 16
 
 
+@numba.njit(cache=True)
 def _squarings(b: float) -> int:
     """Squarings of the exponentials: ``|2 b delta| 2^-nsq <= 1/4`` for ``delta`` in [0, 1)."""
     return max(0, math.ceil(math.log2(8.0 * b)))
@@ -274,8 +275,8 @@ def _spread_rows(rec, starts, size, h, b, two_d, w, coef, nf, pad, block, g):
     nbo = size[0] + 2 * h[0] + 1
     nbi = size[1] + 2 * h[1] + 1 if two_d else 1
     n_i = nbi + ki_n - 1
-    nsq_o = max(0, np.int64(math.ceil(math.log2(8.0 * b[0]))))
-    nsq_i = max(0, np.int64(math.ceil(math.log2(8.0 * b[1]))))
+    nsq_o = _squarings(b[0])
+    nsq_i = _squarings(b[1])
     up_o, dn_o = _ratios(b[0], h[0], ko_n)
     up_i, dn_i = _ratios(b[1], h[1], ki_n)
     plane = g.shape[2]
@@ -447,28 +448,30 @@ def row_fine_grids(
     axes = [_reach(waist, p, ln_cut) for p in pitch]
     if max(a[0] for a in axes) > ROW_MAX_B:
         raise ValueError(f"row path: b = 2 pitch^2/waist^2 > {ROW_MAX_B:g} on pitch {pitch}")
-    if not raster:  # a row: one inner "line" of weight 1
+    if not raster:  # a row: one inner "line" at the origin, weight 1, unit pitch
         axes.append((1.0, 0.0, 0))
+        size, origin, pitch = (size[0], 1), (origin[0], 0.0), (pitch[0], 1.0)
     b, reach, h = (np.array(v) for v in zip(*axes, strict=True))
     h = h.astype(np.int64)
-    size2 = np.array([size[0], size[1] if raster else 1], dtype=np.int64)
+    size2 = np.array(size, dtype=np.int64)
+    k_n = 2 * h + 2  # lines per scatterer and axis: bucket k writes padded rows k ... k + 2h + 1
+    nb = size2 + 2 * h + 1  # buckets per axis
+    if not raster:
+        k_n[1], nb[1] = 1, 1
     coef = _padded(plan.coef)
     pad = coef.shape[1]  # >= w: a scatterer writes at most pad cells past its first one
     # numpy buffers (huge pages): faulting in pages allocated inside numba costs more
     rec = np.empty((z.size, 5 if raster else 4))
     inner = lateral[1] if raster else np.zeros(1)
-    starts = _sort_rows(lateral[0], inner, z, amplitude, k0, depth, plan.nf,
-                        np.array([origin[0], origin[1] if raster else 0.0]),
-                        np.array([pitch[0], pitch[1] if raster else 1.0]), reach, size2, h,
-                        raster, rec)  # fmt: skip
-    k_n = 2 * h + 2 if raster else np.array([2 * h[0] + 2, 1])
-    nb = size2 + 2 * h + 1 if raster else np.array([size2[0] + 2 * h[0] + 1, 1])
+    starts = _sort_rows(lateral[0], inner, z, amplitude, k0, depth, plan.nf, np.array(origin),
+                        np.array(pitch), reach, size2, h, raster, rec)  # fmt: skip
     n_i = int(nb[1] + k_n[1] - 1)
     g = np.zeros(((nb[0] + k_n[0] - 1) * n_i, 2, plan.nf + 2 * pad), dtype=plan.real)
     _spread_rows(rec, starts, size2, h, b, raster, plan.w, coef, plan.nf, pad,
                  max(_BLOCK, int(k_n[0])), g)  # fmt: skip
+    # line (o, i) sits at padded row (o + 2h_o + 1, i + 2h_i + 1), i.e. k_n - 1 past the origin
     o, i = np.divmod(np.arange(size2[0] * size2[1]), size2[1])
-    src = (o + 2 * h[0] + 1) * n_i + (i + 2 * h[1] + 1 if raster else 0)
+    src = (o + k_n[0] - 1) * n_i + (i + k_n[1] - 1)
     out = np.empty((src.size, plan.nf), dtype=plan.cplx)
     _fold_rows(g, src, plan.nf, pad, out.view(plan.real))
     return out
