@@ -495,9 +495,7 @@ def beam_nufft_scan(
         # the grid's axes, outer first (the row path splits blocks of outer lines over threads)
         axes = (grid.outer, 1 - grid.outer) if len(grid.size) == 2 else (0,)
         coords = (scene.x, scene.y)
-        lines_per = 1
-        for k in axes:
-            lines_per *= row_lines(w0, grid.pitch[k], ln_cut)
+        lines_per = row_lines(w0, grid.pitch, ln_cut)
         threads = numba.get_num_threads()
         with PARALLEL_LOCK, _slp_vectorize():
             # small scans run on one thread: waking the pool costs more than it saves
@@ -590,7 +588,7 @@ def _row_cost(setup, beam, m, nf, w, tol_arg, *, per_cell, per_slot):
     """Time (ns, one thread) of the row path: sort and weights per scatterer, two 8-wide
     axpys per line written and kernel group, FFTs per fine-grid cell (fitted to
     ``benchmarks/bench_beam.py``: 27 + 10 ns per scatterer, 17 ns per fine cell)."""
-    lines = math.prod(row_lines(beam.waist, p, math.log(2.0 / tol_arg)) for p in setup.grid.pitch)
+    lines = row_lines(beam.waist, setup.grid.pitch, math.log(2.0 / tol_arg))
     slots = 8 * -(-w // 8)
     return 8e5 + setup.n_rows * per_cell * nf + m * (37.0 + per_slot * lines * slots)
 

@@ -92,9 +92,10 @@ def _reach(waist: float, pitch: float, ln_cut: float) -> tuple[float, float, int
     return b, reach, math.floor(reach)
 
 
-def row_lines(waist: float, pitch: float, ln_cut: float) -> int:
-    """Lines written per scatterer on the row path, ``2h + 2`` (module docstring)."""
-    return 2 * _reach(waist, pitch, ln_cut)[2] + 2
+def row_lines(waist: float, pitches: tuple[float, ...], ln_cut: float) -> int:
+    """Lines written per scatterer on the row path: ``2h + 2`` per axis of the line grid
+    (pitches in µm; module docstring), multiplied over the axes."""
+    return math.prod(2 * _reach(waist, p, ln_cut)[2] + 2 for p in pitches)
 
 
 def row_weight_error(pitch: float, waist: float) -> float:
@@ -292,7 +293,8 @@ def _spread_rows(rec, starts, size, h, b, two_d, w, coef, nf, pad, block, g):
             wd = np.empty((max(ko_n, ki_n), _CH))
             wo = np.empty((ko_n, _CH), dtype=coef.dtype)
             wi = np.ones((ki_n, _CH), dtype=coef.dtype)
-            ld = np.empty(_CH)
+            ld = np.empty(_CH)  # sub-pitch offsets, outer axis
+            li = np.empty(_CH)  # and inner axis (rasters)
             e2 = np.empty(_CH)
             lcr = np.empty(_CH, dtype=coef.dtype)
             lci = np.empty(_CH, dtype=coef.dtype)
@@ -329,12 +331,11 @@ def _spread_rows(rec, starts, size, h, b, two_d, w, coef, nf, pad, block, g):
                             cx = math.ceil(x0)
                             xk[t] = 2.0 * (cx - x0) - 1.0
                             base[t] = np.uint64(rowb + np.int64(cx))
+                            if two_d:
+                                li[t] = r[4] - math.floor(r[4])
                         _weights(wd, wo, e2, ld, nc, b[0], h[0], ko_n, up_o, dn_o, nsq_o)
                         if two_d:
-                            for t in range(nc):
-                                r = rec[perm[c0 + t]]
-                                ld[t] = r[4] - math.floor(r[4])
-                            _weights(wd, wi, e2, ld, nc, b[1], h[1], ki_n, up_i, dn_i, nsq_i)
+                            _weights(wd, wi, e2, li, nc, b[1], h[1], ki_n, up_i, dn_i, nsq_i)
                         for t in range(nc):
                             _spread_one(gf, base[t], xk[t], lcr[t], lci[t], wo, wi, t, coef,
                                         deg1, ngrp, ko_n, ki_n, n_i * rowlen, plane,
