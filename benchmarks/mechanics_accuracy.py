@@ -8,7 +8,7 @@ Prints the relative error of the strain inside the inclusion (mean over pixels w
 its centre, against :func:`speckle.inclusion_strain`) versus the inclusion radius in pixels
 (worst and mean over 4 sub-pixel positions of the circle on the pixel grid), versus the plate
 size (finite-domain error) and versus the Poisson ratio (locking), and the time per solve.
-The phantom is the one of ``tests/test_mechanics.py`` (its helper is imported from there).
+The phantom is the one of ``tests/scene/test_mechanics.py`` (its helper is imported from there).
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "tests"))
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "tests" / "scene"))
 from test_mechanics import inclusion_error
 
 OFFSETS = [(0.0, 0.0), (0.5, 0.0), (0.5, 0.5), (0.25, 0.25)]

@@ -11,7 +11,7 @@ import xarray as xr
 import yaml
 from snakemake.exceptions import WorkflowError
 from snakemake.utils import validate
-from test_pipeline import CI_CONFIG, IGNORE, snakemake
+from workflow_run import CI_CONFIG, IGNORE, snakemake
 
 from speckle.figures.speed import failure_map_figure, pareto_front, speed_accuracy_figure
 from speckle.imaging.beam import BEAM_METHODS

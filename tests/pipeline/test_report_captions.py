@@ -3,7 +3,7 @@
 Captions are Jinja templates filled with ``snakemake.config`` (as ``snakemake --report`` does),
 then parsed by docutils. A bare ``|x|`` is a reStructuredText substitution reference (math goes
 in ``:math:``), and a config mapping must not be printed as a Python dict. The report built by
-Snakemake itself is checked in ``tests/test_pipeline.py``.
+Snakemake itself is checked in ``tests/pipeline/test_pipeline.py``.
 """
 
 from __future__ import annotations

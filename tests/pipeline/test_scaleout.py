@@ -26,7 +26,7 @@ from pathlib import Path
 import pytest
 import xarray as xr
 import yaml
-from test_pipeline import CI_CONFIG, IGNORE, snakemake
+from workflow_run import CI_CONFIG, IGNORE, snakemake
 
 from speckle.io import open_dataset
 

@@ -1,6 +1,6 @@
 """Pipeline scripts: ``main(snakemake)`` + ``speckle._workflow.run(main)``, everything in the log.
 
-Fast checks without Snakemake (the same through Snakemake: ``tests/test_scaleout.py``): every
+Fast checks without Snakemake (through Snakemake: ``tests/pipeline/test_scaleout.py``): every
 script in ``workflow/scripts`` has the shape that makes it safe to re-import in spawned Dask
 workers, and ``run`` sends output, logging, warnings, child-process output and tracebacks to
 the log file and does nothing on a re-import.
@@ -69,7 +69,7 @@ def test_reimport_as_mp_main_does_nothing(tmp_path):
     runpy.run_path(str(path), run_name="__mp_main__")
 
 
-SCRIPTS = sorted((Path(__file__).resolve().parents[1] / "workflow" / "scripts").glob("*.py"))
+SCRIPTS = sorted((Path(__file__).resolve().parents[2] / "workflow" / "scripts").glob("*.py"))
 
 
 @pytest.mark.parametrize("script", SCRIPTS, ids=[s.name for s in SCRIPTS])

@@ -13,7 +13,7 @@ import speckle
 from speckle.figures import _config
 from speckle.figures import system as fs
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SCHEMA = str(ROOT / "workflow/schemas/config.schema.yaml")
 SHEET = {
     "wavelength_nm": 840.0,

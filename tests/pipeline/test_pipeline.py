@@ -16,11 +16,11 @@ import os
 import re
 import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 import yaml
+from workflow_run import CI_CONFIG, IGNORE, snakemake
 
 import speckle
 from speckle.io import open_dataset
@@ -28,50 +28,16 @@ from speckle.provenance import module_sources
 
 pytestmark = [pytest.mark.pipeline, pytest.mark.slow]
 
-CI_CONFIG = "workflow/config/ci.yaml"
 #: Folder holding the imported ``speckle`` package (paths in rule inputs are relative to it).
 PACKAGE_ROOT = Path(speckle.__file__).resolve().parents[1]
-IGNORE = shutil.ignore_patterns(
-    ".git",
-    ".snakemake",
-    "results",
-    "__pycache__",
-    ".pytest_cache",
-    ".hypothesis",
-    "*.egg-info",
-    ".benchmarks",
-    "report.html",
-    ".ruff_cache",
-)
+
+
 #: The static-figure rules, the section each one reads and one value to change in it.
 STATIC_CHANGES = {
     "fig1": {"fig1": {"positions": [0.0, 1.5]}},
     "fig2": {"fig2": {"densities": [0.5, 8.0]}},
     "fig5": {"fig5": {"bins": 17}},
 }
-
-
-def snakemake(repo: Path, *args: str, check: bool = True) -> subprocess.CompletedProcess:
-    """Run snakemake in ``repo`` (the copy's package first on the path); output in stdout."""
-    env = {
-        **os.environ,
-        "PYTHONPATH": os.pathsep.join([str(repo), *filter(None, [os.environ.get("PYTHONPATH")])]),
-    }
-    cmd = [
-        sys.executable,
-        "-m",
-        "snakemake",
-        "--directory",
-        str(repo),
-        "--snakefile",
-        str(repo / "Snakefile"),
-        *args,
-    ]
-    proc = subprocess.run(cmd, cwd=repo, env=env, capture_output=True, text=True)
-    proc.stdout = proc.stdout + proc.stderr
-    if check and proc.returncode != 0:
-        raise AssertionError(f"{' '.join(cmd)} failed ({proc.returncode}):\n{proc.stdout}")
-    return proc
 
 
 def job_counts(repo: Path, *configfiles: str) -> dict[str, int]:
