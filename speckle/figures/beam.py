@@ -1,12 +1,15 @@
 """Pipeline targets of the scanned beam over shared scenes (``results/beam/``).
 
-* :func:`bscans_data` / :func:`bscans_figure`: B-scans of one shared scene for several
+* :func:`bscans_data` / :func:`plot_bscans`: B-scans of one shared scene for several
   waist/pitch ratios beside the paper's independent A-lines, with the measured lateral and
   axial correlation against theory (:mod:`speckle.analysis.beam`).
-* :func:`strain_data` / :func:`strain_figure`: Fig. 6's correlation versus strain under the
+* :func:`strain_data` / :func:`plot_strain`: Fig. 6's correlation versus strain under the
   beam, with and without lateral Poisson expansion, beside the independent-line result.
-* :func:`write_volume` / :func:`volume_figure`: a 3-D volume streamed by tiles to a chunked
-  NetCDF file, and its orthogonal slices.
+* :func:`volume_data` / :func:`plot_volume`: a 3-D volume computed lazily by tiles (the
+  pipeline streams it to a chunked NetCDF file), and its orthogonal slices.
+
+Each ``*_data`` function computes a dataset, each ``plot_*`` function draws one and returns the
+figure; the pipeline scripts write both (atomically).
 
 Config section ``beam`` (lengths in µm; densities in scatterers per pixel x pitch [x pitch]
 cell, converted with :func:`speckle.scene.regions.cell_density`).
@@ -14,31 +17,30 @@ cell, converted with :func:`speckle.scene.regions.cell_density`).
 
 from __future__ import annotations
 
-import time
 from collections.abc import Mapping
 
 import numpy as np
 import xarray as xr
+from matplotlib.figure import Figure
 
 import speckle
 
 from ..analysis import correlation as corr
 from ..analysis.beam import axial_correlation, lateral_correlation, poisson_lateral_factor
 from ..imaging.scan import beam_reach
-from ..io import open_dataset, stream_to_netcdf
 from ..provenance import provenance_attrs
 from ..scene import regions as reg
 from ..scene.deformation import required_depth, uniaxial_pixel_displacement
 from ._config import source_options, source_spectrum
-from ._style import new_figure, save
+from ._style import new_figure
 
 __all__ = [
     "bscans_data",
-    "bscans_figure",
+    "plot_bscans",
+    "plot_strain",
+    "plot_volume",
     "strain_data",
-    "strain_figure",
-    "volume_figure",
-    "write_volume",
+    "volume_data",
 ]
 
 #: Amplitude model of the beam scenes; its kurtosis enters the theory.
@@ -272,10 +274,11 @@ def strain_data(source: Mapping, beam: Mapping, seed: int) -> xr.Dataset:
     return ds
 
 
-def write_volume(source: Mapping, beam: Mapping, seed: int, path: str) -> dict:
-    """Stream the 3-D volume of config ``beam.volume`` to a chunked NetCDF file at ``path``.
+def volume_data(source: Mapping, beam: Mapping, seed: int) -> xr.Dataset:
+    """The 3-D volume of config ``beam.volume``, lazy (Dask): ``field`` (``depth, x, y``).
 
-    Returns timing/size facts (wall time in s, lines, pixels, chunks) for the log.
+    Nothing is computed here; :func:`speckle.io.stream_to_netcdf` writes it tile by tile to a
+    chunked NetCDF file (the pipeline's ``beam_volume`` rule).
     """
     cfg = beam["volume"]
     src = _source(source, cfg["n_pixels"])
@@ -297,29 +300,28 @@ def write_volume(source: Mapping, beam: Mapping, seed: int, path: str) -> dict:
     )
     ds = ds[["field"]]
     ds.attrs.update(provenance_attrs(seed=seed))
-    t0 = time.perf_counter()
-    stream_to_netcdf(ds, path)
-    wall = time.perf_counter() - t0
-    return {"wall_s": wall, "lines": xs.size**2, "pixels": n, "chunks": ds.field.data.npartitions}
+    return ds
 
 
-def volume_figure(path_nc: str, path_png: str) -> None:
-    """Orthogonal slices (x-z, y-z, en-face x-y) of the streamed volume, read lazily."""
-    ds = open_dataset(path_nc, load=False)
-    with ds:
-        f = ds.field
-        xm, ym = f.sizes["x"] // 2, f.sizes["y"] // 2
-        zm = f.sizes["depth"] // 2
-        slices = {
-            f"x-z at y = {float(f.y[ym]):.0f} um": np.abs(f.isel(y=ym).values) ** 2,
-            f"y-z at x = {float(f.x[xm]):.0f} um": np.abs(f.isel(x=xm).values) ** 2,
-            f"x-y at depth {float(f.depth[zm]):.0f} um": np.abs(f.isel(depth=zm).values.T) ** 2,
-        }
-        ext = {
-            "xz": [f.x[0], f.x[-1], f.depth[-1], f.depth[0]],
-            "yz": [f.y[0], f.y[-1], f.depth[-1], f.depth[0]],
-            "xy": [f.x[0], f.x[-1], f.y[-1], f.y[0]],
-        }
+def plot_volume(ds: xr.Dataset) -> Figure:
+    """Orthogonal slices (x-z, y-z, en-face x-y) of a volume; only the three slices are read.
+
+    ``ds`` may be a lazily opened file (``speckle.io.open_dataset(path, load=False)``): keep it
+    open while this runs.
+    """
+    f = ds.field
+    xm, ym = f.sizes["x"] // 2, f.sizes["y"] // 2
+    zm = f.sizes["depth"] // 2
+    slices = {
+        f"x-z at y = {float(f.y[ym]):.0f} um": np.abs(f.isel(y=ym).values) ** 2,
+        f"y-z at x = {float(f.x[xm]):.0f} um": np.abs(f.isel(x=xm).values) ** 2,
+        f"x-y at depth {float(f.depth[zm]):.0f} um": np.abs(f.isel(depth=zm).values.T) ** 2,
+    }
+    ext = {
+        "xz": [f.x[0], f.x[-1], f.depth[-1], f.depth[0]],
+        "yz": [f.y[0], f.y[-1], f.depth[-1], f.depth[0]],
+        "xy": [f.x[0], f.x[-1], f.y[-1], f.y[0]],
+    }
     fig, axes = new_figure(1, 3, width=10.0, height=3.6)
     mean = np.mean([s.mean() for s in slices.values()])
     for ax, (title, img), key in zip(axes[0], slices.items(), ext, strict=True):
@@ -335,10 +337,10 @@ def volume_figure(path_nc: str, path_png: str) -> None:
         ax.set_title(title, fontsize=9)
         ax.set_xlabel({"xz": "x (µm)", "yz": "y (µm)", "xy": "x (µm)"}[key])
         ax.set_ylabel("y (µm)" if key == "xy" else "depth (µm)")
-    save(fig, path_png)
+    return fig
 
 
-def bscans_figure(ds: xr.Dataset, path: str) -> None:
+def plot_bscans(ds: xr.Dataset) -> Figure:
     """B-scans (dB) per waist/pitch and independent lines; lateral and axial correlation."""
     ratios = ds.waist_pitch.values
     fig, axes = new_figure(2, max(len(ratios) + 1, 2), width=3.0 * (len(ratios) + 1), height=6)
@@ -387,10 +389,10 @@ def bscans_figure(ds: xr.Dataset, path: str) -> None:
     axes[1, 0].legend(fontsize=6)
     for ax in axes[1, 2:]:
         ax.axis("off")
-    save(fig, path)
+    return fig
 
 
-def strain_figure(ds: xr.Dataset, path: str) -> None:
+def plot_strain(ds: xr.Dataset) -> Figure:
     """Correlation vs strain: beam without / with Poisson expansion, independent lines."""
     fig, axes = new_figure(1, 2, width=8.0, height=3.2)
     s = 100 * ds.strain.values
@@ -409,4 +411,4 @@ def strain_figure(ds: xr.Dataset, path: str) -> None:
         ax.set_xlabel("strain (%)")
         ax.set_ylabel(f"{kind} correlation")
         ax.legend(fontsize=7)
-    save(fig, path)
+    return fig

@@ -1,7 +1,8 @@
 """The paper's Fig. 6: correlation maps, correlation versus strain and the non-monotonic question.
 
 Each ``fig6*_data`` function takes plain config sections (``source``, ``fig6``, ``dask``,
-``seed``) and returns the dataset a ``fig6*_figure`` function draws. Strain sweeps run through
+``seed``) and returns the dataset the matching ``plot_fig6*`` function draws and returns as a
+figure (the pipeline scripts write both). Strain sweeps run through
 :func:`speckle.sweep.sweep` (Dask), one task per (spectrum or k0/delta_k, strain) point; every
 task rebuilds the same seeded scene, so results do not depend on scheduler or workers.
 """
@@ -12,9 +13,9 @@ import functools
 import json
 from collections.abc import Mapping
 
-import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
+from matplotlib.figure import Figure
 
 from ..analysis import correlation as corr
 from ..analysis.tracking import interpolate_displacement, track
@@ -24,18 +25,18 @@ from ..scene.deformation import deformable_scene, uniaxial_pixel_displacement, u
 from ..scene.scatterers import amplitude_kurtosis
 from ..sweep import sweep
 from ..system.source import spectrum as make_spectrum
-from ._style import save
+from ._style import new_figure
 
 __all__ = [
     "fig6a_data",
-    "fig6a_figure",
     "fig6b_data",
-    "fig6b_figure",
     "fig6c_data",
-    "fig6c_figure",
     "make_source",
+    "plot_fig6a",
+    "plot_fig6b",
+    "plot_fig6c",
+    "plot_scan",
     "scan_combine",
-    "scan_figure",
     "scan_point_data",
     "strain_grid",
 ]
@@ -503,9 +504,10 @@ def scan_combine(points: list[xr.Dataset]) -> xr.Dataset:
 # --------------------------------------------------------------------------------------------
 
 
-def fig6a_figure(ds: xr.Dataset, path: str) -> None:
+def plot_fig6a(ds: xr.Dataset) -> Figure:
     """Reference image and correlation maps before/after exact and tracked compensation."""
-    fig, axes = plt.subplots(1, 4, figsize=(14, 4.4), sharey=True, constrained_layout=True)
+    fig, axes = new_figure(1, 4, width=14, height=4.4, sharey=True)
+    axes = axes[0]
     extent = [
         float(ds.aline[0]) / 1e3,
         float(ds.aline[-1]) / 1e3,
@@ -546,7 +548,7 @@ def fig6a_figure(ds: xr.Dataset, path: str) -> None:
         f" density {ds.attrs['density']:g}/pixel, window {ds.attrs['window_pixels']} px; "
         f"tracking rms error {ds.attrs['tracking_rms_error_pixels']:.3f} px"
     )
-    save(fig, path)
+    return fig
 
 
 def _curves(ax, ds: xr.Dataset, dim: str, var: str, theory: str | None, label_of) -> None:
@@ -568,9 +570,10 @@ def _strain_axes(axes, ylabel: str) -> None:
         ax.legend(fontsize=8)
 
 
-def fig6b_figure(ds: xr.Dataset, path: str) -> None:
+def plot_fig6b(ds: xr.Dataset) -> Figure:
     """Intensity correlation versus strain for each k0/delta_k: simulation and theory."""
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), constrained_layout=True)
+    fig, axes = new_figure(1, 2, width=11, height=4.2)
+    axes = axes[0]
     _curves(
         axes[0],
         ds,
@@ -595,12 +598,13 @@ def fig6b_figure(ds: xr.Dataset, path: str) -> None:
         f"{ds.attrs['spectrum_shape']} spectrum, N = {ds.attrs['n_pixels']}, "
         f"{ds.attrs['n_alines']} A-lines"
     )
-    save(fig, path)
+    return fig
 
 
-def fig6c_figure(ds: xr.Dataset, path: str) -> None:
+def plot_fig6c(ds: xr.Dataset) -> Figure:
     """Spectra, intensity correlation to 10 % strain, and carrier-window complex correlation."""
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.3), constrained_layout=True)
+    fig, axes = new_figure(1, 3, width=15, height=4.3)
+    axes = axes[0]
     n = ds.n.values / ds.attrs["n_pixels"]
     for i, name in enumerate(ds.spectrum.values):
         axes[0].plot(n, ds.spectrum_weight.sel(spectrum=name), color=f"C{i}", label=str(name))
@@ -645,10 +649,10 @@ def fig6c_figure(ds: xr.Dataset, path: str) -> None:
         "pixel (dots: simulation, lines: theory; grey dashed: the paper's "
         "s_ret = 1/(2 k0/Δk))"
     )
-    save(fig, path)
+    return fig
 
 
-def scan_figure(ds: xr.Dataset, path: str) -> None:
+def plot_scan(ds: xr.Dataset) -> Figure:
     """Intensity correlation versus strain: one panel per (spectrum, k0/delta_k), one colour per
     density; dots simulation, lines theory, dotted the incoherent floor."""
     pairs = [
@@ -657,9 +661,7 @@ def scan_figure(ds: xr.Dataset, path: str) -> None:
         for k in ds.k0_dk.values
         if ds.intensity_correlation.sel(spectrum=sp, k0_dk=k).notnull().any()
     ]
-    fig, axes = plt.subplots(
-        1, len(pairs), figsize=(4.2 * len(pairs), 3.8), squeeze=False, constrained_layout=True
-    )
+    fig, axes = new_figure(1, len(pairs), width=4.2 * len(pairs), height=3.8)
     for ax, (sp, k) in zip(axes[0], pairs, strict=True):
         sel = ds.sel(spectrum=sp, k0_dk=k).dropna(
             "density", how="all", subset=["intensity_correlation"]
@@ -686,4 +688,4 @@ def scan_figure(ds: xr.Dataset, path: str) -> None:
         f"Decorrelation scan ({ds.attrs.get('scan_points', len(pairs))} Paramspace jobs): "
         "dots simulation, lines theory, dotted the low-density floor"
     )
-    save(fig, path)
+    return fig

@@ -10,7 +10,7 @@ from matplotlib.figure import Figure
 
 from ._style import new_figure
 
-__all__ = ["failure_map_figure", "pareto_front", "speed_accuracy_figure"]
+__all__ = ["pareto_front", "plot_failure_map", "plot_speed_accuracy"]
 
 #: Errors below this are drawn at it (the direct sum is exact: error 0).
 ERROR_FLOOR = 1e-16
@@ -75,7 +75,7 @@ def _chart_panel(ax, sc: xr.Dataset, title: str, *, legend: bool) -> None:
         ax.legend(fontsize=7, loc="lower left")
 
 
-def speed_accuracy_figure(ds: xr.Dataset, beam: xr.Dataset | None = None) -> Figure:
+def plot_speed_accuracy(ds: xr.Dataset, beam: xr.Dataset | None = None) -> Figure:
     """Time versus relative error, one panel per scene size, Pareto front as a line.
 
     ``ds``: the A-scan chart (:func:`speckle.imaging.speed.speed_accuracy`), first row;
@@ -111,7 +111,7 @@ def speed_accuracy_figure(ds: xr.Dataset, beam: xr.Dataset | None = None) -> Fig
     return fig
 
 
-def failure_map_figure(ds: xr.Dataset) -> Figure:
+def plot_failure_map(ds: xr.Dataset) -> Figure:
     """Measured (markers) and predicted (dashed) error of each case versus N, density, k0/dk."""
     axes_names = [
         ("n_pixels", "pixels N"),

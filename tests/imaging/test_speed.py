@@ -13,7 +13,7 @@ from snakemake.exceptions import WorkflowError
 from snakemake.utils import validate
 from workflow_run import CI_CONFIG, IGNORE, snakemake
 
-from speckle.figures.speed import failure_map_figure, pareto_front, speed_accuracy_figure
+from speckle.figures.speed import pareto_front, plot_failure_map, plot_speed_accuracy
 from speckle.imaging.beam import BEAM_METHODS
 from speckle.imaging.beam_nufft import BEAM_AUTO_CANDIDATES
 from speckle.imaging.speed import (
@@ -181,12 +181,12 @@ def test_schema_beam_section(repo_root):
 
 
 def test_figures_render(chart, beam_chart):
-    fig = speed_accuracy_figure(chart)
+    fig = plot_speed_accuracy(chart)
     assert len(fig.axes) == 2
     # a second row: one panel per beam scene
-    assert len(speed_accuracy_figure(chart, beam_chart).axes) == 4
+    assert len(plot_speed_accuracy(chart, beam_chart).axes) == 4
     one = beam_chart.isel(scene=[0])
-    assert len(speed_accuracy_figure(chart, one).axes) == 3
+    assert len(plot_speed_accuracy(chart, one).axes) == 3
     fm = failure_map(
         [32],
         [1.0],
@@ -198,7 +198,7 @@ def test_figures_render(chart, beam_chart):
         seed=1,
         dask={"scheduler": "synchronous"},
     )
-    assert len(failure_map_figure(fm).axes) == 3
+    assert len(plot_failure_map(fm).axes) == 3
 
 
 @pytest.mark.pipeline

@@ -2,6 +2,7 @@
 
 from speckle._workflow import run
 from speckle.figures import beam
+from speckle.figures._style import save
 from speckle.io import to_netcdf
 
 
@@ -9,7 +10,7 @@ def main(snakemake) -> None:
     params = snakemake.params
     ds = beam.bscans_data(params.source, params.beam, params.seed)
     to_netcdf(ds, snakemake.output.data)
-    beam.bscans_figure(ds, snakemake.output.figure)
+    save(beam.plot_bscans(ds), snakemake.output.figure)
     for name in ("lateral", "axial"):
         for kind in ("complex", "intensity"):
             print(f"{name} {kind} measured:\n{ds[f'{name}_{kind}'].values.round(3)}")

@@ -2,6 +2,7 @@
 
 from speckle._workflow import run
 from speckle.figures import beam
+from speckle.figures._style import save
 from speckle.io import to_netcdf
 
 
@@ -9,7 +10,7 @@ def main(snakemake) -> None:
     params = snakemake.params
     ds = beam.strain_data(params.source, params.beam, params.seed)
     to_netcdf(ds, snakemake.output.data)
-    beam.strain_figure(ds, snakemake.output.figure)
+    save(beam.plot_strain(ds), snakemake.output.figure)
     print(ds.to_dataframe().round(4).to_string())
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
 

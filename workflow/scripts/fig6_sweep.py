@@ -6,6 +6,7 @@ the scheduler or the worker count, so changing them must not rerun the sweep.
 
 from speckle._workflow import run
 from speckle.figures import _config, deformation
+from speckle.figures._style import save
 from speckle.io import to_netcdf
 
 
@@ -14,7 +15,7 @@ def main(snakemake) -> None:
     dask = _config.dask_options(snakemake.config["dask"], snakemake.threads)
     ds = getattr(deformation, f"{panel}_data")(params.source, params.fig6, dask, params.seed)
     to_netcdf(ds, snakemake.output.data)
-    getattr(deformation, f"{panel}_figure")(ds, snakemake.output.figure)
+    save(getattr(deformation, f"plot_{panel}")(ds), snakemake.output.figure)
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
 
 

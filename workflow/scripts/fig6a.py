@@ -2,6 +2,7 @@
 
 from speckle._workflow import run
 from speckle.figures import deformation
+from speckle.figures._style import save
 from speckle.io import to_netcdf
 
 
@@ -9,7 +10,7 @@ def main(snakemake) -> None:
     params = snakemake.params
     ds = deformation.fig6a_data(params.source, params.fig6, params.seed)
     to_netcdf(ds, snakemake.output.data)
-    deformation.fig6a_figure(ds, snakemake.output.figure)
+    save(deformation.plot_fig6a(ds), snakemake.output.figure)
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
 
 

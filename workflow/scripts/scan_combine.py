@@ -1,14 +1,15 @@
 """Stack the decorrelation-scan rows into one dataset and draw it (thin)."""
 
 from speckle._workflow import run
-from speckle.figures.deformation import scan_combine, scan_figure
+from speckle.figures._style import save
+from speckle.figures.deformation import plot_scan, scan_combine
 from speckle.io import open_dataset, to_netcdf
 
 
 def main(snakemake) -> None:
     ds = scan_combine([open_dataset(path) for path in snakemake.input.points])
     to_netcdf(ds, snakemake.output.data)
-    scan_figure(ds, snakemake.output.figure)
+    save(plot_scan(ds), snakemake.output.figure)
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
 
 

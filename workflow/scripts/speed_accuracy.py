@@ -3,7 +3,7 @@ package -> files)."""
 
 from speckle._workflow import run
 from speckle.figures._style import save
-from speckle.figures.speed import speed_accuracy_figure
+from speckle.figures.speed import plot_speed_accuracy
 from speckle.imaging.speed import beam_speed_accuracy, speed_accuracy
 from speckle.io import to_netcdf
 from speckle.provenance import provenance_attrs
@@ -29,7 +29,7 @@ def main(snakemake) -> None:
     for out, path in ((ds, snakemake.output.data), (beam, snakemake.output.beam)):
         out.attrs.update(prov)
         to_netcdf(out, path)
-    save(speed_accuracy_figure(ds, beam), snakemake.output.figure)
+    save(plot_speed_accuracy(ds, beam), snakemake.output.figure)
     print(f"wrote {snakemake.output.data}, {snakemake.output.beam} and {snakemake.output.figure}")
 
 

@@ -3,7 +3,7 @@
 from speckle._workflow import run
 from speckle.figures._config import dask_options
 from speckle.figures._style import save
-from speckle.figures.speed import failure_map_figure
+from speckle.figures.speed import plot_failure_map
 from speckle.imaging.speed import failure_map
 from speckle.io import to_netcdf
 from speckle.provenance import provenance_attrs
@@ -29,7 +29,7 @@ def main(snakemake) -> None:
     )
     ds.attrs.update(provenance_attrs(config={"speed_accuracy": cfg, "source": source}, seed=seed))
     to_netcdf(ds, snakemake.output.data)
-    save(failure_map_figure(ds), snakemake.output.figure)
+    save(plot_failure_map(ds), snakemake.output.figure)
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
 
 
