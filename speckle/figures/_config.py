@@ -15,45 +15,94 @@ from ..system.source import spectrum
 
 __all__ = [
     "dask_options",
+    "random_bscan",
     "resolve_source",
+    "scene_kwargs",
     "source_options",
     "source_spectrum",
+    "spectrum_kwargs",
     "system_from_config",
 ]
 
 
-def source_spectrum(
-    n_pixels: int,
-    pixel_size: float,
-    k0_dk: float,
-    shape: str = "rectangular",
-    fwhm_fraction: float | None = None,
-) -> xr.DataArray:
-    """Spectrum of the pipeline's ``source`` config: depth ``H = N * pixel_size``.
+def _grid(source: Mapping) -> tuple[int, float]:
+    """``(N, H = N * pixel_size)`` of a source section, checked."""
+    missing = [k for k in ("n_pixels", "pixel_size") if source.get(k) is None]
+    if missing:
+        raise ValueError(f"the source section needs {missing} (it has {sorted(source)})")
+    n = check_int(source["n_pixels"], "n_pixels", low=2)
+    return n, n * check_real(source["pixel_size"], "pixel_size", low=0, low_inclusive=False)
+
+
+def spectrum_kwargs(source: Mapping, **override: object) -> dict:
+    """Keyword arguments of :func:`speckle.spectrum` from a ``source`` config section.
+
+    The one adapter from the pipeline's source parameters to the model's: every spectrum a
+    figure builds from config goes through it.
 
     Parameters
     ----------
-    n_pixels : int
-        Pixels (= spectral components) per A-scan, >= 2.
-    pixel_size : float
-        Pixel size ``H/N`` in µm, > 0.
-    k0_dk : float
-        ``k0/delta_k`` (= ``Lc/lambda0``), >= 0.
-    shape : {"rectangular", "gaussian"}
-        Spectrum shape.
-    fwhm_fraction : float, optional
-        Gaussian FWHM as a fraction of ``delta_k = N*pi/H`` (needed for ``"gaussian"``).
+    source : mapping
+        The section in model form (:func:`resolve_source`): ``n_pixels`` (>= 2),
+        ``pixel_size`` (µm, > 0), ``k0_dk``, optional ``shape`` (``"rectangular"`` by default,
+        ``"gaussian"`` or ``"array"``), ``fwhm_fraction`` (used by ``"gaussian"`` only) and
+        ``weights`` (used by ``"array"`` only). Other keys are ignored.
+    **override
+        Values replacing the section's, e.g. the ``k0_dk`` of a sweep point or a figure's own
+        ``n_pixels``.
+
+    Returns
+    -------
+    dict
+        ``n_pixels``, ``depth`` (``H = n_pixels * pixel_size``, µm), ``k0_dk``, ``shape`` and,
+        for a Gaussian, ``fwhm_fraction`` (a fraction of ``delta_k``) or, for an array,
+        ``weights``.
+
+    Raises
+    ------
+    ValueError
+        If ``n_pixels``, ``pixel_size`` or ``k0_dk`` is missing, ``n_pixels < 2`` or
+        ``pixel_size <= 0``; :func:`speckle.spectrum` checks the rest.
     """
-    n = check_int(n_pixels, "n_pixels", low=2)
-    h = n * check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
-    frac = fwhm_fraction if shape == "gaussian" else None
-    return spectrum(n, h, k0_dk=k0_dk, shape=shape, fwhm_fraction=frac)
+    s = {**source, **override}
+    n, h = _grid(s)
+    if s.get("k0_dk") is None:
+        raise ValueError(f"the source section needs 'k0_dk' (it has {sorted(s)})")
+    shape = s.get("shape") or "rectangular"
+    out = {"n_pixels": n, "depth": h, "k0_dk": s["k0_dk"], "shape": shape}
+    if shape == "gaussian":
+        out["fwhm_fraction"] = s.get("fwhm_fraction")
+    elif shape == "array":
+        out["weights"] = s.get("weights")
+    return out
+
+
+def scene_kwargs(source: Mapping, **override: object) -> dict:
+    """Keyword arguments ``n_pixels`` and ``depth`` (``H``, µm) of the scene builders
+    (:func:`speckle.random_scatterers`, :func:`speckle.deformable_scene`) from a ``source``
+    section, so that a scene and the spectrum of :func:`spectrum_kwargs` share one grid.
+
+    Raises
+    ------
+    ValueError
+        As :func:`spectrum_kwargs`, for ``n_pixels`` and ``pixel_size``.
+    """
+    n, h = _grid({**source, **override})
+    return {"n_pixels": n, "depth": h}
+
+
+def source_spectrum(source: Mapping, **override: object) -> xr.DataArray:
+    """:func:`speckle.spectrum` of a ``source`` section (see :func:`spectrum_kwargs`)."""
+    return spectrum(**spectrum_kwargs(source, **override))
 
 
 def source_options(source: Mapping) -> dict:
-    """Keyword arguments of :func:`source_spectrum` from the pipeline's ``source`` config.
+    """The figure functions' source keywords from the pipeline's ``source`` config.
 
-    ``k0_dk`` is left out: each figure sets it (Fig. 2 from ``source``, Figs. 1 and 5 sweep it).
+    ``n_pixels``, ``pixel_size``, ``shape`` (default ``"rectangular"``) and ``fwhm_fraction``
+    (default None): the names of the section itself, which the figure functions take as flat
+    keywords (they are dataset attributes of the sweeps). ``k0_dk`` is left out: each figure
+    sets it (Fig. 2 from ``source``, Figs. 1 and 5 sweep it).
     """
     return {
         "n_pixels": source["n_pixels"],
@@ -61,6 +110,46 @@ def source_options(source: Mapping) -> dict:
         "shape": source.get("shape", "rectangular"),
         "fwhm_fraction": source.get("fwhm_fraction"),
     }
+
+
+def random_bscan(
+    source: Mapping,
+    density: float,
+    *,
+    n_alines: int,
+    seed: int,
+    method: str = "direct",
+    normalise: str = "none",
+) -> tuple[xr.Dataset, xr.DataArray]:
+    """B-scan of a random scene of equal-amplitude scatterers and the spectrum it used.
+
+    The scene (:func:`speckle.random_scatterers`, fixed count per A-line) depends on ``(seed,
+    density, n_alines, n_pixels, pixel_size)`` only, not on ``k0_dk`` or the spectrum shape.
+
+    Parameters
+    ----------
+    source : mapping
+        A ``source`` section (:func:`spectrum_kwargs`).
+    density : float
+        Scatterers per pixel ``N_sc/N``.
+    n_alines, seed : int
+        Independent A-lines and the root seed.
+    method : str
+        A-scan method of :func:`speckle.bscan`.
+    normalise : {"none", "density", "expected"}
+        See :func:`speckle.bscan`.
+
+    Returns
+    -------
+    (xarray.Dataset, xarray.DataArray)
+        The :func:`speckle.bscan` dataset and the source spectrum.
+    """
+    from ..imaging.bscan import bscan
+    from ..scene.scatterers import random_scatterers
+
+    src = source_spectrum(source)
+    scene = random_scatterers(n_alines, density, **scene_kwargs(source), seed=seed)
+    return bscan(scene, src, normalise=normalise, method=method), src
 
 
 def system_from_config(sheet: Mapping):

@@ -31,7 +31,7 @@ from ..imaging.scan import beam_reach
 from ..provenance import provenance_attrs
 from ..scene import regions as reg
 from ..scene.deformation import required_depth, uniaxial_pixel_displacement
-from ._config import source_options, source_spectrum
+from ._config import source_spectrum
 from ._style import new_figure
 
 __all__ = [
@@ -49,10 +49,8 @@ _KURTOSIS = 2.0
 
 
 def _source(source: Mapping, n_pixels: int | None = None) -> xr.DataArray:
-    opts = source_options(source)
-    if n_pixels is not None:
-        opts["n_pixels"] = int(n_pixels)
-    return source_spectrum(**opts, k0_dk=float(source["k0_dk"]))
+    """The ``source`` spectrum, with the beam section's own ``n_pixels`` if it gives one."""
+    return source_spectrum(source, **({} if n_pixels is None else {"n_pixels": int(n_pixels)}))
 
 
 def _regions(density_per_cell: float, pixel: float, pitch: float, ndim: int) -> xr.Dataset:

@@ -25,6 +25,7 @@ from ..scene.deformation import deformable_scene, uniaxial_pixel_displacement, u
 from ..scene.scatterers import amplitude_kurtosis
 from ..sweep import sweep
 from ..system.source import spectrum as make_spectrum
+from ._config import scene_kwargs, spectrum_kwargs
 from ._style import new_figure
 
 __all__ = [
@@ -56,31 +57,32 @@ def make_source(
     ``fwhm_fraction*delta_k`` from ``fig6.panel_c`` or ``source``) or ``"two_peak"``
     (``fig6.panel_c.two_peak``).
     """
-    n = int(source["n_pixels"])
-    h = n * float(source["pixel_size"])
     shape = spectrum or source["shape"]
     panel = (fig6 or {}).get("panel_c", {})
     if shape == "rectangular":
-        return make_spectrum(n, h, k0_dk=k0_dk)
-    if shape == "gaussian":
+        options = {"shape": shape}
+    elif shape == "gaussian":
         frac = panel.get("gaussian_fwhm_fraction") or source.get("fwhm_fraction")
-        return make_spectrum(n, h, k0_dk=k0_dk, shape="gaussian", fwhm_fraction=float(frac))
-    if shape == "two_peak":
+        options = {"shape": shape, "fwhm_fraction": float(frac)}
+    elif shape == "two_peak":
         tp = panel["two_peak"]
         w = corr.two_peak_weights(
-            n, separation=float(tp["separation_fraction"]), fwhm=float(tp["fwhm_fraction"])
+            int(source["n_pixels"]),
+            separation=float(tp["separation_fraction"]),
+            fwhm=float(tp["fwhm_fraction"]),
         )
-        sp = make_spectrum(n, h, k0_dk=k0_dk, shape="array", weights=w)
-        return sp.assign_attrs(shape="two_peak")
-    raise ValueError(f"unknown spectrum {shape!r}: rectangular, gaussian or two_peak")
+        options = {"shape": "array", "weights": w}
+    else:
+        raise ValueError(f"unknown spectrum {shape!r}: rectangular, gaussian or two_peak")
+    sp = make_spectrum(**spectrum_kwargs(source, k0_dk=k0_dk, **options))
+    return sp.assign_attrs(shape="two_peak") if shape == "two_peak" else sp
 
 
 def _scene(source: Mapping, fig6: Mapping, seed: int, n_alines: int, max_strain: float):
     return deformable_scene(
         n_alines,
         float(fig6["density"]),
-        n_pixels=int(source["n_pixels"]),
-        depth=int(source["n_pixels"]) * float(source["pixel_size"]),
+        **scene_kwargs(source),
         seed=seed,
         strain=[0.0, max_strain],
         poisson_ratio=float(fig6["poisson_ratio"]),

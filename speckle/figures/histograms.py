@@ -25,11 +25,10 @@ from ..analysis.statistics import (
     histogram,
     rayleigh_pdf,
 )
-from ..imaging.bscan import bscan, expected_intensity
-from ..scene.scatterers import random_scatterers
+from ..imaging.bscan import expected_intensity
 from ..sweep import sweep
 from ..system.detection import add_floor
-from ._config import source_spectrum
+from ._config import random_bscan
 from ._style import new_figure
 
 __all__ = [
@@ -78,11 +77,11 @@ def simulate_speckle(
     normalise : {"none", "density", "expected"}
         See :func:`speckle.imaging.bscan`.
     """
-    src = source_spectrum(n_pixels, pixel_size, k0_dk, shape, fwhm_fraction)
-    scene = random_scatterers(
-        n_alines, density, n_pixels=n_pixels, depth=n_pixels * pixel_size, seed=seed
+    source = {"n_pixels": n_pixels, "pixel_size": pixel_size, "k0_dk": k0_dk, "shape": shape}
+    source["fwhm_fraction"] = fwhm_fraction
+    return random_bscan(
+        source, density, n_alines=n_alines, seed=seed, method=method, normalise=normalise
     )
-    return bscan(scene, src, normalise=normalise, method=method), src
 
 
 def density_point(

@@ -25,11 +25,9 @@ import xarray as xr
 from .._validate import as_finite_array, check_int
 from ..analysis.statistics import fit_rayleigh, histogram, rayleigh_pdf
 from ..imaging.aline import ascan, pixel_depths
-from ..imaging.bscan import bscan
 from ..provenance import provenance_attrs
-from ..scene.scatterers import random_scatterers
 from ..sweep import sweep
-from ._config import dask_options, source_options, source_spectrum
+from ._config import dask_options, random_bscan, source_options, source_spectrum
 from ._style import new_figure
 
 __all__ = [
@@ -83,7 +81,9 @@ def single_scatterer(
     ratios = as_finite_array(k0_dk, "k0_dk")
     if pos.ndim != 1 or ratios.ndim != 1 or pos.size == 0 or ratios.size == 0:
         raise ValueError("positions and k0_dk must be non-empty 1-D sequences")
-    sources = [source_spectrum(n_pixels, pixel_size, r, shape, fwhm_fraction) for r in ratios]
+    source = {"n_pixels": n_pixels, "pixel_size": pixel_size, "shape": shape}
+    source["fwhm_fraction"] = fwhm_fraction
+    sources = [source_spectrum(source, k0_dk=r) for r in ratios]
     h = float(sources[0].attrs["depth"])
     n = int(sources[0].attrs["n_pixels"])
     z0 = pos * (h / n)
@@ -227,11 +227,9 @@ def speckle_image(
     xarray.Dataset
         The :func:`speckle.bscan` dataset (dims ``depth, aline``).
     """
-    src = source_spectrum(n_pixels, pixel_size, k0_dk, shape, fwhm_fraction)
-    scene = random_scatterers(
-        n_alines, density, n_pixels=src.attrs["n_pixels"], depth=src.attrs["depth"], seed=seed
-    )
-    return bscan(scene, src, normalise=normalise)
+    source = {"n_pixels": n_pixels, "pixel_size": pixel_size, "k0_dk": k0_dk, "shape": shape}
+    source["fwhm_fraction"] = fwhm_fraction
+    return random_bscan(source, density, n_alines=n_alines, seed=seed, normalise=normalise)[0]
 
 
 def _image_sweep(

@@ -109,7 +109,9 @@ def test_dask_options_cap_local_workers():
 
 def test_gaussian_source_needs_fwhm():
     with pytest.raises(ValueError, match="fwhm_fraction"):
-        static.source_spectrum(N, PIXEL, 10.0, "gaussian")
+        static.source_spectrum(
+            {"n_pixels": N, "pixel_size": PIXEL, "k0_dk": 10.0, "shape": "gaussian"}
+        )
 
 
 def test_plots_draw(fig1):
