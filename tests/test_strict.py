@@ -216,7 +216,7 @@ def test_mismatched_images_are_refused(pair, src):
 
 def test_compensate_refuses_other_grids_and_missing_attrs(pair):
     ref, dfm = pair
-    disp = speckle.deformation.pixel_displacement(lambda z, x: 3.0 + 0 * z, ref.depth, ref.aline)
+    disp = speckle.scene.deformation.pixel_displacement(lambda z, x: 3.0 + 0 * z, ref.depth, ref.aline)
     assert speckle.compensate(dfm, disp).shape == dfm.field.shape
     with pytest.raises(ValueError, match="different 'depth' coordinates"):
         speckle.compensate(dfm, disp.assign_coords(depth=disp.depth * 2))
@@ -355,7 +355,7 @@ def test_scan_combine_refuses_duplicate_points():
 
 def _cases(scene, src, img, pair):
     ref, dfm = pair
-    disp = speckle.deformation.pixel_displacement(lambda z, x: 0 * z, ref.depth, ref.aline)
+    disp = speckle.scene.deformation.pixel_displacement(lambda z, x: 0 * z, ref.depth, ref.aline)
     return [
         (
             lambda: speckle.random_scatterers(4, 1.0, n_pixels=N, depth=H, seed=0, z_range=5.0),

@@ -1,1 +1,21 @@
-"""What is measured on images: statistics, correlation, tracking, strain, measured images."""
+"""What is measured on images: statistics, correlation, tracking, strain, measured images.
+
+``statistics`` fits the speckle histograms and contrast; ``correlation`` maps the correlation of
+two images with and without displacement compensation; ``tracking`` and ``strain`` estimate
+displacement and strain (OCT elastography); ``autocorrelation``, ``beam`` and ``phase`` measure
+the resolution cell and noise; ``measured`` and ``realism`` compare a measured image with the
+model. Names load on first use (SPEC 1, ``lazy_loader``).
+"""
+
+from .._lazy import attach
+
+__getattr__, __dir__, __all__ = attach(
+    __name__,
+    {
+        "correlation": ["compensate", "correlation_map", "expected_correlation", "pearson"],
+        "measured": ["compare_measured", "load_measured"],
+        "statistics": ["contrast_theory", "fit_exponential", "fit_rayleigh", "speckle_contrast"],
+        "strain": ["accumulate_strain", "estimate_displacement", "estimate_strain"],
+        "tracking": ["track"],
+    },
+)

@@ -1,1 +1,20 @@
-"""Forming images: the paper's Eq. 4 (``aline``), its fast methods, the beam, B-scans."""
+"""Forming images: the paper's Eq. 4 (``aline``), its fast methods, the beam, B-scans and scans.
+
+``aline.ascan`` is Eq. 4 for independent A-lines, computed by the method ``synthesis`` chooses
+(direct sums, NUFFT, PSF tables); ``bscan`` stacks A-lines; ``beam.beam_scan`` images a shared
+scene under a scanned, optionally focused Gaussian beam; ``scan`` ties scenes, beam and system
+effects into labelled images. Names load on first use (SPEC 1, ``lazy_loader``).
+"""
+
+from .._lazy import attach
+
+__getattr__, __dir__, __all__ = attach(
+    __name__,
+    {
+        "aline": ["METHODS", "ascan", "pixel_depths"],
+        "beam": ["beam_scan"],
+        "bscan": ["bscan", "expected_intensity"],
+        "scan": ["image", "image_regions", "scan_lines"],
+        "synthesis": ["choose_method", "stream_ascans"],
+    },
+)

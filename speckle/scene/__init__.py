@@ -1,1 +1,29 @@
-"""What is imaged: point scatterers (per A-line or shared), regions, deformation and mechanics."""
+"""What is imaged: point scatterers (per A-line or shared), regions, deformation and mechanics.
+
+``scatterers`` draws random scatterers for independent A-lines; ``shared`` builds one 2-D/3-D
+scene that overlapping A-lines see; ``regions`` and ``layers`` describe the sample's structure
+and per-region properties; ``deformation`` moves scatterers (uniform strain, translation, any
+displacement field); ``mechanics`` computes such fields with finite elements (scikit-fem).
+Names load on first use (SPEC 1, ``lazy_loader``).
+"""
+
+from .._lazy import attach
+
+__getattr__, __dir__, __all__ = attach(
+    __name__,
+    {
+        "deformation": ["deformable_scene", "displace", "translate", "uniaxial_strain"],
+        "layers": ["layers", "region_values"],
+        "mechanics": [
+            "compress",
+            "displacement_at",
+            "inclusion_labels",
+            "inclusion_strain",
+            "layer_strains",
+            "layered_labels",
+        ],
+        "regions": ["make_regions", "rasterize", "region_label"],
+        "scatterers": ["random_scatterers"],
+        "shared": ["from_lines", "shared_scene"],
+    },
+)

@@ -116,7 +116,7 @@ def test_shared_screen_variance_and_lateral_correlation():
 
 
 def test_phase_perturb_on_shared_scene():
-    regions = speckle.make_regions(speckle.regions.background(density=0.01))
+    regions = speckle.make_regions(speckle.scene.regions.background(density=0.01))
     scene = speckle.shared_scene(regions, z_range=(0.0, 200.0), x_range=(0.0, 100.0), seed=3)
     kw = dict(index_variance=1e-6, correlation_length=20.0, k0=7.5, seed=4)
     out = speckle.phase_perturb(scene, **kw)

@@ -1,0 +1,56 @@
+"""Lazy public names for the package's ``__init__`` files (scientific Python's SPEC 1).
+
+One call per package, through ``lazy_loader``: every public module and subpackage of the package
+can be reached as an attribute (found on disk, so a new module needs no entry here), and the
+names each module contributes load on first use. ``__all__`` lists the
+names only (functions, classes, constants), never the modules.
+
+Where a function has its module's name (``speckle.system.rolloff.rolloff``,
+``speckle.imaging.bscan.bscan``, ...), the package attribute is the function, whatever the order
+of imports: importing the module would otherwise rebind the attribute to the module. Import
+such a module's other names with ``from speckle.system.rolloff import rolloff_curve``.
+"""
+
+from __future__ import annotations
+
+import pkgutil
+import sys
+import types
+from collections.abc import Callable, Mapping, Sequence
+
+import lazy_loader
+
+
+class _Package(types.ModuleType):
+    """A package whose public names win over same-named submodules."""
+
+    def __setattr__(self, name: str, value: object) -> None:
+        if isinstance(value, types.ModuleType) and name in self.__dict__.get("__all__", ()):
+            return  # the import system binding the submodule: the public name stays
+        super().__setattr__(name, value)
+
+
+def attach(
+    package: str, names: Mapping[str, Sequence[str]]
+) -> tuple[Callable, Callable, list[str]]:
+    """``(__getattr__, __dir__, __all__)`` of a package whose public names load lazily.
+
+    Parameters
+    ----------
+    package : str
+        The package's ``__name__``.
+    names : Mapping[str, Sequence[str]]
+        Module (relative to the package) -> the public names it contributes.
+
+    Returns
+    -------
+    tuple
+        ``__getattr__`` and ``__dir__`` for the package's module, and its ``__all__``.
+    """
+    public = sorted({name for group in names.values() for name in group})
+    module = sys.modules[package]
+    found = {m.name for m in pkgutil.iter_modules(module.__path__)}
+    modules = sorted({*names, *found} - set(public) - {m for m in found if m.startswith("_")})
+    getattr_, dir_, _ = lazy_loader.attach(package, submodules=modules, submod_attrs=dict(names))
+    module.__class__ = _Package
+    return getattr_, dir_, public

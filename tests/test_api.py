@@ -1,0 +1,100 @@
+"""The public API: curated, lazy (SPEC 1), and complete for what the README and docs use."""
+
+from __future__ import annotations
+
+import importlib
+import re
+import subprocess
+import sys
+import types
+from pathlib import Path
+
+import pytest
+
+import speckle
+
+REPO = Path(__file__).resolve().parents[1]
+SUBPACKAGES = ["scene", "system", "imaging", "analysis"]
+#: Heavy dependencies that ``import speckle`` must not load (they load on first use).
+HEAVY = ["numba", "dask", "scipy", "skfem", "matplotlib", "skimage", "finufft", "netCDF4"]
+
+
+def _run(code: str) -> str:
+    return subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=REPO
+    ).stdout
+
+
+def test_import_speckle_loads_no_heavy_dependency():
+    loaded = _run(
+        f"import sys, speckle; print(' '.join(m for m in {HEAVY!r} if m in sys.modules))"
+    ).split()
+    assert loaded == [], f"import speckle loads {loaded}"
+
+
+def test_import_time_within_bound_of_numpy_and_xarray():
+    """``import speckle`` takes at most 1.5x ``import numpy, xarray`` (best of 3 processes)."""
+    timer = "import time; t = time.perf_counter(); import {}; print(time.perf_counter() - t)"
+    best = {
+        mods: min(float(_run(timer.format(mods))) for _ in range(3))
+        for mods in ("numpy, xarray", "speckle")
+    }
+    assert best["speckle"] <= 1.5 * best["numpy, xarray"], best
+
+
+@pytest.mark.parametrize("package", ["speckle", *(f"speckle.{g}" for g in SUBPACKAGES)])
+def test_every_lazy_name_resolves(package):
+    module = importlib.import_module(package)
+    assert module.__all__, package
+    for name in module.__all__:
+        value = getattr(module, name)
+        assert not isinstance(value, types.ModuleType), f"{package}.{name} is a module"
+        assert name in dir(module)
+
+
+def test_top_level_gathers_every_subpackage_name():
+    for group in SUBPACKAGES:
+        sub = importlib.import_module(f"speckle.{group}")
+        assert set(sub.__all__) <= set(speckle.__all__), group
+        for name in sub.__all__:
+            assert getattr(speckle, name) is getattr(sub, name)
+
+
+def test_unknown_name_is_an_attribute_error():
+    with pytest.raises(AttributeError, match="no_such_function"):
+        speckle.no_such_function  # noqa: B018
+
+
+def _documented_names() -> set[str]:
+    """``speckle.<name>`` used as a call or attribute in the README and the docs' pages."""
+    texts = [REPO / "README.md", *sorted((REPO / "docs").rglob("*.md"))]
+    names = set()
+    for path in texts:
+        names |= set(re.findall(r"\bspeckle\.([A-Za-z_]\w*)\b", path.read_text()))
+    modules = {"io", "sweep", "figures", "conventions", "provenance", "_workflow"}
+    return {n for n in names if n not in modules | set(SUBPACKAGES) and not n.startswith("_")}
+
+
+def test_every_documented_top_level_name_is_public():
+    missing = sorted(_documented_names() - set(speckle.__all__))
+    assert not missing, f"used as speckle.<name> in README/docs but not exported: {missing}"
+
+
+def test_distribution_name_is_not_the_index_speckle():
+    """The index's ``speckle`` is another project: the distribution is ``speckle-oct``."""
+    import tomllib
+
+    project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
+    assert project["name"] == "speckle-oct" == speckle.provenance.DISTRIBUTION
+    assert speckle.__version__ == project["version"]
+
+
+def test_function_wins_over_its_same_named_module_whatever_the_import_order():
+    """``speckle.system.rolloff`` is the function even after its module was imported first."""
+    out = _run(
+        "import speckle.system.rolloff, speckle.imaging.bscan, speckle.scene.layers\n"
+        "import speckle\n"
+        "print(callable(speckle.system.rolloff), callable(speckle.rolloff),"
+        " callable(speckle.imaging.bscan), callable(speckle.layers))"
+    )
+    assert out.split() == ["True"] * 4
