@@ -10,10 +10,15 @@ from importlib import metadata
 __all__ = ["config_hash", "package_version", "provenance_attrs"]
 
 
+#: Distribution name on the package index. The import name is ``speckle``; the index's
+#: ``speckle`` is an unrelated project (a client for Speckle servers).
+DISTRIBUTION = "speckle-oct"
+
+
 def package_version() -> str:
-    """Installed version of the ``speckle`` distribution (``"unknown"`` if not installed)."""
+    """Installed version of the ``speckle-oct`` distribution (``"unknown"`` if not installed)."""
     try:
-        return metadata.version("speckle")
+        return metadata.version(DISTRIBUTION)
     except metadata.PackageNotFoundError:
         return "unknown"
 
