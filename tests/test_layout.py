@@ -21,7 +21,7 @@ RANK = {"scene": 1, "system": 1, "imaging": 2, "analysis": 3, "figures": 4}
 #: Third-party packages each group may import, and why.
 ALLOWED = {
     # infrastructure: arrays, I/O, sweeps and streaming on a dask.distributed cluster
-    None: {"numpy", "xarray", "dask", "distributed", "netCDF4", "yaml"},
+    None: {"numpy", "xarray", "dask", "distributed", "netCDF4", "yaml", "lazy_loader"},
     "scene": {"numpy", "xarray", "dask", "scipy", "skfem"},  # geometry, FEM mechanics
     "system": {"numpy", "xarray", "scipy", "finufft"},  # spectra, noise, fast camera model
     "imaging": {"numpy", "xarray", "dask", "scipy", "numba", "finufft"},  # fast synthesis
@@ -30,6 +30,8 @@ ALLOWED = {
     "figures": {"numpy", "xarray", "scipy", "matplotlib", "dask"},  # drawing
 }
 STDLIB = set(sys.stdlib_module_names)
+#: Every subpackage ``__init__`` declares its names lazily (SPEC 1).
+LAZY = "lazy_loader"
 
 
 def _modules():
@@ -75,5 +77,104 @@ def test_imports_follow_the_flow(path, parts):
             assert not (group is None and parts[1] not in ("figures",)), (
                 f"infrastructure module {'.'.join(parts)} imports {name}"
             )
-        elif top not in STDLIB:
+        elif top not in STDLIB and top != LAZY:
             assert top in ALLOWED[group], f"{'.'.join(parts)} imports {top}: not allowed in {group}"
+
+
+def _module_name(parts: list[str]) -> str:
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+MODULES = {_module_name(parts): path for path, parts in _modules()}
+
+
+def _import_edges(path: Path, parts: list[str]):
+    """(imported module, imported names) for every import of a ``speckle`` module in a file.
+
+    ``from .pkg import name`` counts as an import of ``pkg.name`` when that is a module, else of
+    ``pkg``; every import counts, at module level or inside a function.
+    """
+    package = parts[:-1]
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = ".".join(package[: len(package) - node.level + 1])
+                module = ".".join(filter(None, [base, node.module]))
+            else:
+                module = node.module or ""
+            if not module.startswith("speckle"):
+                continue
+            names = [a.name for a in node.names]
+            submodules = [f"{module}.{n}" for n in names if f"{module}.{n}" in MODULES]
+            yield from ((m, []) for m in submodules)
+            rest = [n for n in names if f"{module}.{n}" not in MODULES]
+            if rest:
+                yield module, rest
+        elif isinstance(node, ast.Import):
+            yield from ((a.name, []) for a in node.names if a.name.startswith("speckle"))
+
+
+GRAPH = {
+    _module_name(parts): {m for m, _ in _import_edges(path, parts)} - {_module_name(parts)}
+    for path, parts in _modules()
+}
+
+
+def test_no_import_cycle_between_modules():
+    """No module reaches itself through imports (Tarjan's strongly connected components)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    cycles: list[list[str]] = []
+
+    def visit(node: str) -> None:
+        index[node] = low[node] = len(index)
+        stack.append(node)
+        for nxt in GRAPH.get(node, ()):
+            if nxt not in index:
+                visit(nxt)
+                low[node] = min(low[node], low[nxt])
+            elif nxt in stack:
+                low[node] = min(low[node], index[nxt])
+        if low[node] == index[node]:
+            component = []
+            while True:
+                top = stack.pop()
+                component.append(top)
+                if top == node:
+                    break
+            if len(component) > 1:
+                cycles.append(sorted(component))
+
+    for node in sorted(GRAPH):
+        if node not in index:
+            visit(node)
+    assert not cycles, f"import cycles: {cycles}"
+
+
+def _is_private(name: str) -> bool:
+    return name.startswith("_") and not name.startswith("__")
+
+
+@pytest.mark.parametrize("path,parts", list(_modules()), ids=lambda v: str(v)[-40:])
+def test_no_private_name_imported_from_a_public_module(path, parts):
+    """Helpers shared between modules live in a private module (``_kernels``, ``_validate``)."""
+    for module, names in _import_edges(path, parts):
+        if any(_is_private(p) for p in module.split(".")) or module == _module_name(parts):
+            continue
+        private = [n for n in names if _is_private(n)]
+        assert not private, f"{_module_name(parts)} imports {private} from public {module}"
+
+
+@pytest.mark.parametrize("path,parts", list(_modules()), ids=lambda v: str(v)[-40:])
+def test_package_modules_import_from_the_defining_module(path, parts):
+    """Inside the package, names come from the module that defines them, not a lazy __init__.
+
+    (The lazy ``__init__`` tables are for users; importing through them would hide the real
+    dependency from the cycle test above.)
+    """
+    if parts[-1] == "__init__":
+        return
+    for module, names in _import_edges(path, parts):
+        if names and MODULES.get(module, Path()).name == "__init__.py":
+            raise AssertionError(f"{_module_name(parts)} imports {names} from package {module}")

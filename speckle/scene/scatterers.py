@@ -28,6 +28,7 @@ __all__ = [
     "AMPLITUDE_MODELS",
     "COUNT_MODELS",
     "amplitude_kurtosis",
+    "draw_amplitudes",
     "line_generator",
     "random_scatterers",
 ]
@@ -49,7 +50,24 @@ def line_generator(seed: int, index: int, *stream: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(index, *stream)))
 
 
-def _draw_amplitudes(rng: np.random.Generator, model: str, size: int) -> np.ndarray:
+def draw_amplitudes(rng: np.random.Generator, model: str, size: int) -> np.ndarray:
+    """``size`` scatterer amplitudes of one amplitude model, each with E|a|^2 = 1.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Source of randomness (drawn from only for the random models).
+    model : {"equal", "rayleigh", "uniform"}
+        ``"equal"``: all 1; ``"rayleigh"``: Rayleigh with sigma^2 = 1/2; ``"uniform"``: uniform
+        on [0, sqrt(3)]. Checked by the callers (``AMPLITUDE_MODELS``).
+    size : int
+        Number of amplitudes.
+
+    Returns
+    -------
+    numpy.ndarray
+        Real amplitudes, shape ``(size,)``.
+    """
     if model == "equal":
         return np.ones(size)
     if model == "rayleigh":  # |a| Rayleigh with E|a|^2 = 1 (sigma^2 = 1/2)
@@ -152,7 +170,7 @@ def random_scatterers(
     amp = np.zeros((nl, width))
     for i, (rng, c) in enumerate(zip(rngs, counts, strict=True)):
         z[i, :c] = rng.uniform(z0, z1, size=c)
-        amp[i, :c] = _draw_amplitudes(rng, amplitude, c)
+        amp[i, :c] = draw_amplitudes(rng, amplitude, c)
     x = (i0 + np.arange(nl)) * pitch
     return xr.Dataset(
         {

@@ -41,7 +41,7 @@ import xarray as xr
 
 from .._validate import check_int, check_real
 from .regions import compile_regions, labels_of
-from .scatterers import _draw_amplitudes
+from .scatterers import draw_amplitudes
 
 __all__ = [
     "AXES",
@@ -101,7 +101,7 @@ def _draw_tile(
         rng = tile_generator(seed, index, r)
         count = rng.poisson(rho * float(np.prod(bhi - blo)))
         pos = rng.uniform(blo, bhi, size=(count, ndim))
-        amp = _draw_amplitudes(rng, row["amplitude_model"], count)
+        amp = draw_amplitudes(rng, row["amplitude_model"], count)
         amp = amp * math.sqrt(float(row["backscatter"]))
         y = pos[:, 2] if ndim == 3 else None
         if row["shape"] == "background" and r == len(compiled) - 1:
