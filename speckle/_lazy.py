@@ -53,4 +53,25 @@ def attach(
     modules = sorted({*names, *found} - set(public) - {m for m in found if m.startswith("_")})
     getattr_, dir_, _ = lazy_loader.attach(package, submodules=modules, submod_attrs=dict(names))
     module.__class__ = _Package
+    module.__dict__["_lazy_table"] = {n: m for m, group in names.items() for n in group}
     return getattr_, dir_, public
+
+
+def defining_module(package: str, name: str) -> str | None:
+    """The module that defines the lazy public name ``package.name`` (None if it is not one).
+
+    Follows the tables through the levels (``speckle.ascan`` -> ``speckle.imaging`` ->
+    ``speckle.imaging.aline``), importing only the packages' ``__init__`` files. Code tracking
+    (``speckle.provenance.module_sources``) uses it, since an ``import speckle`` alone no
+    longer says which modules a script needs.
+    """
+    import importlib
+
+    try:
+        table = importlib.import_module(package).__dict__.get("_lazy_table", {})
+    except ImportError:
+        return None
+    if name not in table:
+        return None
+    target = f"{package}.{table[name]}"
+    return defining_module(target, name) or target

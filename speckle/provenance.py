@@ -45,6 +45,63 @@ def provenance_attrs(config: Mapping | None = None, seed: int | None = None) -> 
     return attrs
 
 
+def _dotted(node) -> str | None:
+    """``a.b.c`` of an attribute chain rooted at a name, else None."""
+    import ast
+
+    parts = []
+    while isinstance(node, ast.Attribute):
+        parts.append(node.attr)
+        node = node.value
+    return ".".join([node.id, *reversed(parts)]) if isinstance(node, ast.Name) else None
+
+
+def _imported_modules(tree, package: list[str]) -> list[str]:
+    """Modules a parsed file may import, including what it reaches through lazy names.
+
+    ``from x import y`` counts ``x`` and ``x.y``; ``import speckle`` followed by
+    ``speckle.imaging.ascan(...)`` counts the module that defines ``ascan``
+    (``speckle._lazy.defining_module``), as does ``from speckle import ascan``.
+    """
+    import ast
+
+    from ._lazy import defining_module
+
+    found: list[str] = []
+    aliases: dict[str, str] = {}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package[: len(package) - node.level + 1]
+                mod = ".".join(base + ([node.module] if node.module else []))
+            else:
+                mod = node.module or ""
+            found.append(mod)
+            for a in node.names:
+                found.append(f"{mod}.{a.name}")
+                found.append(defining_module(mod, a.name) or "")
+                aliases[a.asname or a.name] = f"{mod}.{a.name}"
+        elif isinstance(node, ast.Import):
+            for a in node.names:
+                found.append(a.name)
+                # ``import a.b`` binds ``a``; ``import a.b as c`` binds ``c`` to ``a.b``
+                aliases[a.asname or a.name.split(".")[0]] = (
+                    a.name if a.asname else a.name.split(".")[0]
+                )
+    for node in ast.walk(tree):
+        chain = _dotted(node) if isinstance(node, ast.Attribute) else None
+        head = chain and chain.split(".")[0]
+        if head not in aliases or not aliases[head].startswith("speckle"):
+            continue
+        parts = [aliases[head], *chain.split(".")[1:]]
+        prefix = parts[0]
+        for part in parts[1:]:
+            lazy = defining_module(prefix, part)
+            found.append(lazy or f"{prefix}.{part}")
+            prefix = lazy or f"{prefix}.{part}"
+    return [m for m in found if m]
+
+
 def module_sources(*modules: str) -> list[str]:
     """Source files of ``speckle`` modules and every package module they import, recursively.
 
@@ -93,15 +150,5 @@ def module_sources(*modules: str) -> list[str]:
             if parent is not None:
                 seen.add(parent)
         package = parts if path.name == "__init__.py" else parts[:-1]
-        for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.ImportFrom):
-                if node.level:
-                    base = package[: len(package) - node.level + 1]
-                    mod = ".".join(base + ([node.module] if node.module else []))
-                else:
-                    mod = node.module or ""
-                todo.append(mod)
-                todo.extend(f"{mod}.{a.name}" for a in node.names)
-            elif isinstance(node, ast.Import):
-                todo.extend(a.name for a in node.names)
+        todo.extend(_imported_modules(ast.parse(path.read_text()), package))
     return sorted(str(p) for p in seen)
