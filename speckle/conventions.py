@@ -1,8 +1,10 @@
 """Names, units and attributes used across the package: one table, one place.
 
 Every labelled object ``speckle`` returns uses these dimension and coordinate names, and their
-``units``/``long_name`` attributes come from :data:`COORDS`. Spacing (pixel size, A-line pitch)
-is read from coordinates, never from attributes (:func:`spacing`).
+``units``/``long_name`` attributes come from :data:`COORDS` (coordinates) and
+:data:`QUANTITIES` (data variables) through :func:`attrs` and :func:`coord`, never from
+hand-written literals. Spacing (pixel size, A-line pitch) is read from coordinates, never from
+attributes (:func:`spacing`).
 
 ============  ==========  ===============================================================
 name          units       meaning
@@ -17,7 +19,18 @@ k0_dk         1           ``k0/delta_k`` (= ``Lc/lambda0``)
 density       1           scatterers per pixel (independent lines) or per voxel
 lag           1           lag in pixels or lines
 region        1           region label of a shared scene (:mod:`speckle.scene.regions`)
+waist_pitch   1           beam waist over the line pitch
+lateral_lag   1           lag in lines
+axial_lag     1           lag in pixels
+position      pixel       scatterer depth in pixels (``H/N``)
+pixel         1           pixel index ``q``
+n             1           spectral index ``n``
+reflector     um          depth of a point reflector
 ============  ==========  ===============================================================
+
+Data variables (:data:`QUANTITIES`): ``field``, ``amplitude``, ``weight``, ``correlation``,
+``contrast``, ``dimensionless`` (1); ``length``, ``displacement`` (um); ``area_density``
+(um-2); ``level`` (dB, ``20 log10 |A|``).
 
 Units strings follow UDUNITS (``um``, ``rad/um``, ``1``) so that NetCDF readers understand
 them; docstrings write µm.
@@ -28,7 +41,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-__all__ = ["COORDS", "coord", "spacing"]
+__all__ = ["COORDS", "QUANTITIES", "attrs", "coord", "spacing"]
 
 #: Coordinate/dimension name -> (units, long_name).
 COORDS: dict[str, tuple[str, str]] = {
@@ -43,17 +56,70 @@ COORDS: dict[str, tuple[str, str]] = {
     "density": ("1", "scatterers per pixel"),
     "lag": ("1", "lag"),
     "region": ("1", "region label (speckle.scene.regions)"),
+    "waist_pitch": ("1", "waist / line pitch"),
+    "lateral_lag": ("1", "lag in lines"),
+    "axial_lag": ("1", "lag in pixels"),
+    "position": ("pixel", "scatterer depth"),
+    "pixel": ("1", "pixel index q"),
+    "n": ("1", "spectral index"),
+    "reflector": ("um", "reflector depth"),
+}
+
+#: Data-variable quantity -> (units, long_name); a variable's own long name may be more specific.
+QUANTITIES: dict[str, tuple[str, str]] = {
+    "field": ("1", "complex field A"),
+    "amplitude": ("1", "amplitude |A|"),
+    "weight": ("1", "spectral weight S(k_n)"),
+    "correlation": ("1", "correlation coefficient"),
+    "contrast": ("1", "speckle contrast std(I)/<I>"),
+    "dimensionless": ("1", "dimensionless number"),
+    "length": ("um", "length"),
+    "displacement": ("um", "displacement"),
+    "area_density": ("um-2", "scatterers per square micrometre"),
+    "level": ("dB", "level 20 log10 |A|"),
 }
 
 
-def coord(name: str, values: object) -> tuple[str, np.ndarray, dict[str, str]]:
-    """A coordinate tuple ``(name, values, attrs)`` with the units and long name of :data:`COORDS`.
+def attrs(name: str, long_name: str | None = None) -> dict[str, str]:
+    """``units`` and ``long_name`` attributes of quantity ``name`` from the tables.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`COORDS` (a coordinate) or :data:`QUANTITIES` (a data variable).
+    long_name : str, optional
+        A more specific description replacing the table's (the units stay the table's).
+
+    Raises
+    ------
+    ValueError
+        If ``name`` is in neither table.
+
+    >>> attrs("level")
+    {'units': 'dB', 'long_name': 'level 20 log10 |A|'}
+    """
+    table = COORDS.get(name) or QUANTITIES.get(name)
+    if table is None:
+        raise ValueError(
+            f"unknown quantity {name!r}: add it to speckle.conventions.COORDS or QUANTITIES "
+            f"(known: {sorted({**COORDS, **QUANTITIES})})"
+        )
+    units, default = table
+    return {"units": units, "long_name": default if long_name is None else long_name}
+
+
+def coord(
+    name: str, values: object, long_name: str | None = None, *, dims: str | None = None
+) -> tuple[str, np.ndarray, dict[str, str]]:
+    """A coordinate tuple ``(dims, values, attrs)`` with the :func:`attrs` of ``name``.
+
+    ``dims`` defaults to ``name`` (a dimension coordinate); give it for a coordinate along
+    another dim, e.g. ``coords={"z0": coord("z", z0, dims="position")}``.
 
     >>> coord("depth", [0.0, 8.0])[2]["units"]
     'um'
     """
-    units, long_name = COORDS[name]
-    return (name, np.asarray(values), {"units": units, "long_name": long_name})
+    return (name if dims is None else dims, np.asarray(values), attrs(name, long_name))
 
 
 def spacing(obj: xr.DataArray | xr.Dataset, dim: str, default: float | None = None) -> float:

@@ -27,6 +27,7 @@ import speckle
 
 from ..analysis import correlation as corr
 from ..analysis.beam import axial_correlation, lateral_correlation, poisson_lateral_factor
+from ..conventions import attrs, coord
 from ..imaging.scan import beam_reach
 from ..provenance import provenance_attrs
 from ..scene import regions as reg
@@ -102,9 +103,7 @@ def bscans_data(source: Mapping, beam: Mapping, seed: int) -> xr.Dataset:
     opts = {"chunk": int(beam["chunk"]), "method": beam["method"], "tol": beam["tol"]}
     images = [speckle.image(scene, src, waist=r * pitch, x=xs, **opts).field for r in ratios]
     field = xr.concat(images, dim="waist_pitch", combine_attrs="drop").compute()
-    field = field.assign_coords(
-        waist_pitch=("waist_pitch", ratios, {"units": "1", "long_name": "waist / line pitch"})
-    )
+    field = field.assign_coords(waist_pitch=coord("waist_pitch", ratios))
     lines = speckle.random_scatterers(
         xs.size,
         float(beam["density"]),
@@ -155,22 +154,19 @@ def bscans_data(source: Mapping, beam: Mapping, seed: int) -> xr.Dataset:
             data[f"{name}_{kind}_independent_theory"] = ((dim,), th_ind)
     ds = xr.Dataset(
         {"field": field, "independent": indep, **data},
-        coords={
-            "lateral_lag": ("lateral_lag", lat, {"units": "1", "long_name": "lag in lines"}),
-            "axial_lag": ("axial_lag", ax, {"units": "1", "long_name": "lag in pixels"}),
-        },
+        coords={"lateral_lag": coord("lateral_lag", lat), "axial_lag": coord("axial_lag", ax)},
     )
     for name in data:
-        ds[name].attrs = {"units": "1", "long_name": name.replace("_", " ")}
-    ds.field.attrs = {"units": "1", "long_name": "complex field of the scanned beam"}
-    ds.independent.attrs = {"units": "1", "long_name": "complex field, independent A-lines"}
+        ds[name].attrs = attrs("correlation", name.replace("_", " "))
+    ds.field.attrs = attrs("field", "complex field of the scanned beam")
+    ds.independent.attrs = attrs("field", "complex field, independent A-lines")
     ds.attrs.update(
         {
             "pitch": pitch,
-            "pitch_units": "um",
+            "pitch_units": attrs("length")["units"],
             "density_per_cell": float(beam["density"]),
             "density": rho,
-            "density_units": "scatterers per um^2",
+            "density_units": attrs("area_density")["units"],
             "amplitude_model": _AMPLITUDE,
             "k0_dk": float(src.attrs["k0_dk"]),
             "method": beam["method"],
@@ -253,15 +249,13 @@ def strain_data(source: Mapping, beam: Mapping, seed: int) -> xr.Dataset:
     data["complex_theory"] = (("strain",), axial.complex.values)
     data["complex_poisson_theory"] = (("strain",), axial.complex.values * lateral)
     data["intensity_lines_theory"] = (("strain",), axial.intensity.values)
-    ds = xr.Dataset(
-        data, coords={"strain": ("strain", strains, {"units": "1", "long_name": "strain"})}
-    )
+    ds = xr.Dataset(data, coords={"strain": coord("strain", strains)})
     for name in ds.data_vars:
-        ds[name].attrs = {"units": "1", "long_name": name.replace("_", " ")}
+        ds[name].attrs = attrs("correlation", name.replace("_", " "))
     ds.attrs.update(
         {
             "waist": w0,
-            "waist_units": "um",
+            "waist_units": attrs("length")["units"],
             "pitch": pitch,
             "poisson_ratio": nu,
             "density_per_cell": float(beam["density"]),

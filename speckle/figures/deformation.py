@@ -19,6 +19,7 @@ from matplotlib.figure import Figure
 
 from ..analysis import correlation as corr
 from ..analysis.tracking import interpolate_displacement, track
+from ..conventions import attrs
 from ..imaging.bscan import bscan
 from ..provenance import config_hash, provenance_attrs
 from ..scene.deformation import deformable_scene, uniaxial_pixel_displacement, uniaxial_strain
@@ -227,8 +228,8 @@ def _strain_sweep(
         progress=True,
     )
     for name, long in _LONG_NAMES.items():
-        ds[name].attrs.update(long_name=long, units="1")
-    ds["strain"].attrs.update(units="1", long_name="compressive strain (u_z = -strain*z)")
+        ds[name].attrs.update(attrs("correlation", long))
+    ds["strain"].attrs.update(attrs("strain", "compressive strain (u_z = -strain*z)"))
     return ds
 
 
@@ -247,25 +248,34 @@ def _theory(
     return xr.Dataset(
         {
             "intensity_correlation_theory": th["intensity"].assign_attrs(
-                long_name="theory: Pearson |A|^2 after exact compensation (Poisson scatterers)"
+                attrs(
+                    "correlation",
+                    "theory: Pearson |A|^2 after exact compensation (Poisson scatterers)",
+                )
             ),
             "complex_correlation_theory": th["complex"].assign_attrs(
-                long_name="theory: |gamma| after exact compensation"
+                attrs("correlation", "theory: |gamma| after exact compensation")
             ),
             "amplitude_correlation_theory": th["amplitude"].assign_attrs(
-                long_name="theory: |A| correlation, Gaussian-speckle limit (no density floor)"
+                attrs(
+                    "correlation",
+                    "theory: |A| correlation, Gaussian-speckle limit (no density floor)",
+                )
             ),
             "incoherent_floor_theory": th["floor"].assign_attrs(
-                long_name="theory: intensity correlation left at gamma = 0 (finite density)"
+                attrs(
+                    "correlation",
+                    "theory: intensity correlation left at gamma = 0 (finite density)",
+                )
             ),
         }
     )
 
 
-def _attrs(source: Mapping, fig6: Mapping, seed: int, n_alines: int, shape: str) -> dict:
+def _run_attrs(source: Mapping, fig6: Mapping, seed: int, n_alines: int, shape: str) -> dict:
     return {
         "density": float(fig6["density"]),
-        "density_units": "scatterers per pixel",
+        "density_units": attrs("density")["long_name"],
         "spectrum_shape": shape,
         "n_pixels": int(source["n_pixels"]),
         "pixel_size_um": float(source["pixel_size"]),
@@ -300,14 +310,14 @@ def fig6b_data(source: Mapping, fig6: Mapping, dask: Mapping, seed: int) -> xr.D
         carrier_window=int(fig6["panel_c"]["carrier_window"]),
     )
     ds = ds.merge(_theory(ds, "k0_dk", float, lambda _k: shape, source, fig6))
-    ds["k0_dk"].attrs.update(units="1", long_name="k0/delta_k (= Lc/lambda0)")
-    attrs = _attrs(source, fig6, seed, n_alines, shape)
-    ds.attrs.update(attrs)
+    ds["k0_dk"].attrs.update(attrs("k0_dk"))
+    run = _run_attrs(source, fig6, seed, n_alines, shape)
+    ds.attrs.update(run)
     ds["intensity_correlation"].attrs.update(
-        density=attrs["density"],
+        density=run["density"],
         spectrum_shape=shape,
         compensation="exact",
-        amplitude_model=attrs["amplitude_model"],
+        amplitude_model=run["amplitude_model"],
     )
     return ds.transpose("k0_dk", "strain")
 
@@ -337,15 +347,17 @@ def fig6c_data(source: Mapping, fig6: Mapping, dask: Mapping, seed: int) -> xr.D
     factor = corr.carrier_window_factor(ds.strain.values, k0_dk, w)
     ds["complex_correlation_no_carrier_theory"] = (
         ds["complex_correlation_theory"] * xr.DataArray(factor, dims="strain")
-    ).assign_attrs(long_name=f"theory: |gamma| x carrier Dirichlet factor, window {w} px")
+    ).assign_attrs(
+        attrs("correlation", f"theory: |gamma| x carrier Dirichlet factor, window {w} px")
+    )
     spectra = [make_source(source, k0_dk, name, fig6) for name in names]
     ds["spectrum_weight"] = xr.DataArray(
         np.stack([s.values / s.values.max() for s in spectra]),
         dims=("spectrum", "n"),
         coords={"n": spectra[0].n.values},
-        attrs={"long_name": "normalised spectral weight S(k_n)", "units": "1"},
+        attrs=attrs("weight", "normalised spectral weight S(k_n)"),
     )
-    ds.attrs.update(_attrs(source, fig6, seed, n_alines, "see spectrum dim"))
+    ds.attrs.update(_run_attrs(source, fig6, seed, n_alines, "see spectrum dim"))
     ds.attrs.update(
         k0_dk=k0_dk,
         carrier_window_pixels=w,
@@ -389,19 +401,23 @@ def fig6a_data(source: Mapping, fig6: Mapping, seed: int) -> xr.Dataset:
     ds = xr.Dataset(
         {
             "correlation": cmap.drop_vars("strain", errors="ignore").assign_attrs(
-                long_name=f"{kind} correlation in a {window} pixel sliding window", units="1"
+                attrs("correlation", f"{kind} correlation in a {window} pixel sliding window")
             ),
-            "reference_amplitude": ref["amplitude"].drop_vars("strain").assign_attrs(units="1"),
-            "deformed_amplitude": dfm["amplitude"].drop_vars("strain").assign_attrs(units="1"),
+            "reference_amplitude": ref["amplitude"]
+            .drop_vars("strain")
+            .assign_attrs(attrs("amplitude", "reference amplitude |A|")),
+            "deformed_amplitude": dfm["amplitude"]
+            .drop_vars("strain")
+            .assign_attrs(attrs("amplitude", "deformed amplitude |A|")),
             "exact_uz": disp["uz"]
             .drop_vars("strain")
-            .assign_attrs(units="um", long_name="exact axial displacement"),
+            .assign_attrs(attrs("displacement", "exact axial displacement")),
         }
     )
     trk = tracked.rename({"depth": "window_depth", "aline": "window_aline"})
     for name in trk.data_vars:
         ds[f"tracked_{name}"] = trk[name]
-    ds.attrs.update(_attrs(source, fig6, seed, n_alines, src.attrs["shape"]))
+    ds.attrs.update(_run_attrs(source, fig6, seed, n_alines, src.attrs["shape"]))
     ds.attrs.update(
         strain=strain,
         k0_dk=float(panel["k0_dk"]),
@@ -452,9 +468,9 @@ def scan_point_data(
     )
     ds = ds.merge(_theory(ds, "k0_dk", float, lambda _k: spectrum, source, point))
     ds = ds.expand_dims(density=[float(density)], spectrum=[str(spectrum)])
-    ds["density"].attrs.update(units="1", long_name="scatterers per pixel")
-    ds["k0_dk"].attrs.update(units="1", long_name="k0/delta_k (= Lc/lambda0)")
-    ds.attrs.update(_attrs(source, point, seed, n_alines, str(spectrum)))
+    ds["density"].attrs.update(attrs("density"))
+    ds["k0_dk"].attrs.update(attrs("k0_dk"))
+    ds.attrs.update(_run_attrs(source, point, seed, n_alines, str(spectrum)))
     return ds.transpose("density", "k0_dk", "spectrum", "strain")
 
 

@@ -13,6 +13,7 @@ from collections.abc import Mapping
 
 import numpy as np
 import xarray as xr
+from matplotlib.figure import Figure
 from scipy import stats
 
 from ..analysis import measured as meas
@@ -25,6 +26,7 @@ from ..analysis.statistics import (
     histogram,
     rayleigh_pdf,
 )
+from ..conventions import attrs
 from ..imaging.bscan import expected_intensity
 from ..sweep import sweep
 from ..system.detection import add_floor
@@ -107,20 +109,19 @@ def density_point(
     out = xr.Dataset(
         {
             "amplitude_density": hist,
-            "contrast": ((), c, {"units": "1", "long_name": "speckle contrast std(I)/<I>"}),
+            "contrast": ((), c, attrs("contrast")),
             "contrast_se": (
                 (),
                 se,
-                {
-                    "units": "1",
-                    "long_name": "standard error of the contrast "
-                    "(delta method over independent A-lines)",
-                },
+                attrs(
+                    "contrast",
+                    "standard error of the contrast (delta method over independent A-lines)",
+                ),
             ),
             "contrast_theory": (
                 (),
                 contrast_theory(density, n_pixels, src.values),
-                {"units": "1", "long_name": "contrast theory, fixed count"},
+                attrs("contrast", "contrast theory, fixed count"),
             ),
             **_fit_vars(fit_rayleigh(ds.amplitude), "rayleigh"),
         }
@@ -147,18 +148,18 @@ def density_histograms(
         progress=progress,
         **dict(dask or {}),
     )
-    ds["density"].attrs.update(units="scatterers per pixel", long_name="density N_sc/N")
+    ds["density"].attrs.update(attrs("density", "density N_sc/N"))
     shared = ds.rayleigh_sigma.sel(density=ds.density.max())
     ds["rayleigh_sigma_shared"] = (
         (),
         float(shared),
-        {"long_name": "Rayleigh sigma shown in every panel (fit at the largest density)"},
+        attrs("amplitude", "Rayleigh sigma shown in every panel (fit at the largest density)"),
     )
     ds.attrs.update({k: ("none" if v is None else v) for k, v in fixed.items()})
     return ds
 
 
-def plot_density_histograms(ds: xr.Dataset):
+def plot_density_histograms(ds: xr.Dataset) -> Figure:
     """Fig. 3: one panel per density, bars = histogram, line = the shared Rayleigh fit."""
     nd = ds.sizes["density"]
     ncols = 3
@@ -220,21 +221,25 @@ def simulated_panels(
             "sim_log_density": histogram(zs, bins, z_range).rename(
                 bin="z_bin", bin_lower="z_lower", bin_upper="z_upper"
             ),
-            "sim_contrast": ((), c, {"units": "1"}),
-            "sim_contrast_se": ((), se, {"units": "1"}),
+            "sim_contrast": ((), c, attrs("contrast")),
+            "sim_contrast_se": ((), se, attrs("contrast", "standard error of the contrast")),
             # a floor b adds b to <I> = 1 and leaves Var I unchanged: C -> C/(1 + b)
             "sim_contrast_theory": (
                 (),
                 contrast_theory(density, n_pixels, src.values) / (1.0 + (floor or 0.0)),
-                {"units": "1"},
+                attrs("contrast", "contrast theory, fixed count, with the floor"),
             ),
             **_fit_vars(fit_exponential(intensity), "sim_exponential"),
             **_fit_vars(fit_rayleigh(amplitude), "sim_rayleigh"),
-            "sim_log_skewness": ((), float(stats.skew(zs.values.ravel())), {"units": "1"}),
+            "sim_log_skewness": (
+                (),
+                float(stats.skew(zs.values.ravel())),
+                attrs("dimensionless", "skewness of the standardised log intensity"),
+            ),
             "sim_log_excess_kurtosis": (
                 (),
                 float(stats.kurtosis(zs.values.ravel())),
-                {"units": "1"},
+                attrs("dimensionless", "excess kurtosis of the standardised log intensity"),
             ),
         },
         attrs={
@@ -256,7 +261,9 @@ def measured_panels(image: xr.DataArray, sim: xr.Dataset) -> xr.Dataset:
     """
     cmp_ = meas.compare_measured(image)
     d = meas.log_intensity(image)
-    lin = np.exp((d - float(cmp_.offset)) / float(cmp_.gain)).assign_attrs(units="1")
+    lin = np.exp((d - float(cmp_.offset)) / float(cmp_.gain)).assign_attrs(
+        attrs("dimensionless", "intensity / <I>, linearised with the floor fit")
+    )
     zs = meas.standardise(image)
 
     def level_bins(values, edges, name):
@@ -294,7 +301,7 @@ def fig4_dataset(sim: xr.Dataset, image: xr.DataArray | None, reason: str = "") 
     """Fig. 4 data: simulated panels, theory curves and (if given) the measured panels."""
     ds = sim.copy()
     ds["gumbel_log_pdf"] = meas.standardised_log_pdf(ds.z_bin, 0.0).assign_attrs(
-        long_name="standardised ln Exp(1) density (fully developed speckle)"
+        attrs("dimensionless", "standardised ln Exp(1) density (fully developed speckle)")
     )
     ds.attrs["compared"] = (
         "standardised log-intensity histogram, skewness and excess "
@@ -304,9 +311,9 @@ def fig4_dataset(sim: xr.Dataset, image: xr.DataArray | None, reason: str = "") 
         ds.attrs["measured"] = f"not available: {reason}"
         return ds
     mp = measured_panels(image, sim)
-    attrs = {**ds.attrs, **mp.attrs}
+    merged = {**ds.attrs, **mp.attrs}
     ds = xr.merge([ds, mp], compat="override", join="outer", combine_attrs="override")
-    ds.attrs = attrs
+    ds.attrs = merged
     ds.attrs["measured"] = "available"
     return ds
 
@@ -320,7 +327,7 @@ def _stairs(ax, density: xr.DataArray, **kw) -> None:
     ax.stairs(density.values, edges, fill=True, color="0.75", **kw)
 
 
-def plot_fig4(ds: xr.Dataset):
+def plot_fig4(ds: xr.Dataset) -> Figure:
     """Fig. 4: rows simulated / measured; columns intensity (log y), amplitude, log intensity."""
     fig, axes = new_figure(2, 3, width=7.5, height=4.6)
     have = ds.attrs.get("measured") == "available"

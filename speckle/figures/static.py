@@ -21,9 +21,11 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 import xarray as xr
+from matplotlib.figure import Figure
 
 from .._validate import as_finite_array, check_int
 from ..analysis.statistics import fit_rayleigh, histogram, rayleigh_pdf
+from ..conventions import attrs, coord
 from ..imaging.aline import ascan, pixel_depths
 from ..provenance import provenance_attrs
 from ..sweep import sweep
@@ -103,34 +105,26 @@ def single_scatterer(
             "ascan": (
                 ("k0_dk", "position", "depth"),
                 np.stack(scans),
-                {"long_name": "pixel field A(q) of one unit scatterer", "units": "1"},
+                attrs("field", "pixel field A(q) of one unit scatterer"),
             ),
             "spectral_component": (
                 ("k0_dk", "position", "wavenumber"),
                 np.stack(comps),
-                {"long_name": "spectral component S(k_n) exp(2i k_n z0)", "units": "1"},
+                attrs("field", "spectral component S(k_n) exp(2i k_n z0)"),
             ),
-            "spectrum": (
-                ("wavenumber",),
-                sources[0].values,
-                {"long_name": "spectral weight S(k_n)", "units": "1"},
-            ),
+            "spectrum": (("wavenumber",), sources[0].values, attrs("weight")),
         },
         coords={
-            "k0_dk": ("k0_dk", ratios, {"long_name": "k0/delta_k (= Lc/lambda0)", "units": "1"}),
-            "position": ("position", pos, {"long_name": "scatterer depth", "units": "pixel"}),
-            "z0": ("position", z0, {"long_name": "scatterer depth", "units": "um"}),
-            "depth": (
-                "depth",
-                pixel_depths(n, h),
-                {"long_name": "depth of pixel centre q*H/N", "units": "um"},
-            ),
-            "pixel": ("depth", np.arange(n), {"long_name": "pixel index q", "units": "1"}),
-            "n": ("wavenumber", sources[0].n.values, {"long_name": "spectral index"}),
+            "k0_dk": coord("k0_dk", ratios),
+            "position": coord("position", pos),
+            "z0": coord("z", z0, dims="position"),
+            "depth": coord("depth", pixel_depths(n, h), "depth of pixel centre q*H/N"),
+            "pixel": coord("pixel", np.arange(n), dims="depth"),
+            "n": coord("n", sources[0].n.values, dims="wavenumber"),
             "k": (
                 ("k0_dk", "wavenumber"),
                 np.stack(ks),
-                {"long_name": "wavenumber k_n = k0 + n*pi/H", "units": "rad/um"},
+                attrs("wavenumber", "wavenumber k_n = k0 + n*pi/H"),
             ),
         },
         attrs={
@@ -144,7 +138,7 @@ def single_scatterer(
     )
 
 
-def plot_single_scatterer(ds: xr.Dataset):
+def plot_single_scatterer(ds: xr.Dataset) -> Figure:
     """Fig. 1: pixel images |A(q)| (left) and spectral components (right) per position.
 
     One row per scatterer position; the right-hand columns show ``Re`` and ``Im`` of the
@@ -240,12 +234,7 @@ def _image_sweep(
     inspect.signature(speckle_image).bind(**dict.fromkeys(grid, 0.0), **image)
     out = sweep(speckle_image, grid, fixed=image, progress=progress, **dask_options(dask or {}))
     (name,) = grid
-    out[name].attrs.update(
-        {
-            "density": {"long_name": "scatterers per pixel N_sc/N", "units": "1"},
-            "k0_dk": {"long_name": "k0/delta_k (= Lc/lambda0)", "units": "1"},
-        }.get(name, {})
-    )
+    out[name].attrs.update(attrs(name))
     out.attrs.update({k: v for k, v in image.items() if v is not None})
     out.attrs.update(provenance_attrs(seed=image["seed"]))
     return out
@@ -346,7 +335,7 @@ def _fragment_panels(axes, ds: xr.Dataset, dim: str, frag: Mapping[str, int], la
     return im
 
 
-def plot_density_fragments(ds: xr.Dataset, frag: Mapping[str, int]):
+def plot_density_fragments(ds: xr.Dataset, frag: Mapping[str, int]) -> Figure:
     """Fig. 2: the same-size amplitude fragment for each density, one grey scale for all."""
     n = ds.sizes["density"]
     fig, axes = new_figure(1, n, width=1.8 * n + 0.8, height=2.1)
@@ -361,7 +350,7 @@ def plot_density_fragments(ds: xr.Dataset, frag: Mapping[str, int]):
     return fig
 
 
-def plot_k0_fragments(ds: xr.Dataset, frag: Mapping[str, int]):
+def plot_k0_fragments(ds: xr.Dataset, frag: Mapping[str, int]) -> Figure:
     """Fig. 5: fragments for each ``k0/delta_k`` (top) and their amplitude histograms (bottom).
 
     Each histogram shows the Rayleigh pdf of its own fit and, dashed, the fit of the first

@@ -18,7 +18,9 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 import xarray as xr
+from matplotlib.figure import Figure
 
+from ..conventions import attrs, coord
 from ..system import spectrometer as sp
 from ..system.datasheet import System
 from ._config import system_from_config
@@ -52,7 +54,7 @@ def _depth_coord(system: System) -> xr.DataArray:
     return xr.DataArray(
         np.arange(system.n_pixels) * system.pixel_size,
         dims="depth",
-        attrs={"units": "um", "long_name": "depth in the sample (pixel q at qH/N)"},
+        attrs=attrs("depth", "depth in the sample (pixel q at qH/N)"),
     )
 
 
@@ -96,13 +98,13 @@ def psf_dataset(
         widths.append(power.sum(axis=-1) / power.max(axis=-1) * system.pixel_size)
     ds = xr.Dataset(
         {
-            "psf_db": (("variant", "reflector", "depth"), np.array(out), {"units": "dB"}),
+            "psf_db": (("variant", "reflector", "depth"), np.array(out), attrs("level")),
             "width": (("variant", "reflector"), np.array(widths),
-                      {"units": "um", "long_name": "equivalent width sum |A|^2 / max |A|^2"}),
+                      attrs("length", "equivalent width sum |A|^2 / max |A|^2")),
         },
         coords={
             "variant": list(PSF_VARIANTS),
-            "reflector": ("reflector", z[:, 0], {"units": "um", "long_name": "reflector depth"}),
+            "reflector": coord("reflector", z[:, 0]),
             "depth": _depth_coord(system),
         },
         attrs={"axial_resolution": system.axial_resolution, "imaging_depth": system.imaging_depth,
@@ -126,14 +128,14 @@ def rolloff_dataset(system: System, n_depths: int, resample: str = "cubic") -> x
     for name, method in (("measured_db", resample), ("measured_exact_db", "exact")):
         img = sp.system_ascan(system, z, np.ones_like(z), resample=method)
         measured[name] = _db(img[np.arange(q.size), q], ref)
-    attrs = {"units": "dB"}
+    level = attrs("level")
     return xr.Dataset(
         {
-            "measured_db": ("depth", measured["measured_db"], {**attrs, "resample": resample}),
-            "measured_exact_db": ("depth", measured["measured_exact_db"], attrs),
-            "analytic_db": ("depth", system.rolloff_db(z[:, 0]), attrs),
+            "measured_db": ("depth", measured["measured_db"], {**level, "resample": resample}),
+            "measured_exact_db": ("depth", measured["measured_exact_db"], level),
+            "analytic_db": ("depth", system.rolloff_db(z[:, 0]), level),
         },
-        coords={"depth": ("depth", z[:, 0], {"units": "um", "long_name": "reflector depth"})},
+        coords={"depth": coord("depth", z[:, 0], "reflector depth")},
         attrs={"imaging_depth": system.imaging_depth, "rolloff_6db": system.rolloff_6db_depth},
     )  # fmt: skip
 
@@ -221,12 +223,12 @@ def artefact_bscan(
     depth = (np.arange(n) - shift) * system.pixel_size
     return xr.Dataset(
         {
-            "raw_db": (("aline", "depth"), np.roll(_db(raw, ref), shift, axis=-1), {"units": "dB"}),
+            "raw_db": (("aline", "depth"), np.roll(_db(raw, ref), shift, axis=-1), attrs("level")),
             "processed_db": (("aline", "depth"), np.roll(_db(proc, ref), shift, axis=-1),
-                             {"units": "dB"}),
+                             attrs("level")),
         },
         coords={
-            "depth": ("depth", depth, {"units": "um", "long_name": "depth from the zero delay"}),
+            "depth": coord("depth", depth, "depth from the zero delay"),
             "aline": ("aline", np.arange(n_alines)),
         },
         attrs={"surface": surface, "tilt": tilt, "window": window,
@@ -235,7 +237,7 @@ def artefact_bscan(
 
 
 # --- figures ----------------------------------------------------------------------------------
-def plot_psf(ds: xr.Dataset):
+def plot_psf(ds: xr.Dataset) -> Figure:
     """One panel per processing variant: the PSFs of all reflectors (dB)."""
     fig, axes = new_figure(1, ds.sizes["variant"], width=7.5, height=2.6, sharey=True)
     zmax = ds.attrs["imaging_depth"]
@@ -252,7 +254,7 @@ def plot_psf(ds: xr.Dataset):
     return fig
 
 
-def plot_rolloff(ds: xr.Dataset):
+def plot_rolloff(ds: xr.Dataset) -> Figure:
     """Measured roll-off (markers) against the closed form (line)."""
     fig, axes = new_figure(1, 1, width=4.0, height=3.0)
     ax = axes[0, 0]
@@ -266,7 +268,7 @@ def plot_rolloff(ds: xr.Dataset):
     return fig
 
 
-def plot_artefact_bscan(ds: xr.Dataset, dynamic_range: float = 60.0):
+def plot_artefact_bscan(ds: xr.Dataset, dynamic_range: float = 60.0) -> Figure:
     """Raw (DC, autocorrelation, mirror, no linearisation) beside the processed B-scan."""
     fig, axes = new_figure(1, 2, width=7.0, height=3.6, sharey=True)
     extent = [-0.5, ds.sizes["aline"] - 0.5, float(ds.depth[-1]), float(ds.depth[0])]
