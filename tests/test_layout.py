@@ -8,6 +8,7 @@ group and the groups before it, never from a later one; only ``speckle.figures``
 from __future__ import annotations
 
 import ast
+import re
 import sys
 from pathlib import Path
 
@@ -178,3 +179,37 @@ def test_package_modules_import_from_the_defining_module(path, parts):
     for module, names in _import_edges(path, parts):
         if names and MODULES.get(module, Path()).name == "__init__.py":
             raise AssertionError(f"{_module_name(parts)} imports {names} from package {module}")
+
+
+TESTS = Path(__file__).resolve().parent
+PRIVATE_IMPORT = re.compile(
+    r"^\s*(from\s+(speckle[\w.]*)\s+import\s+(.+)|import\s+(speckle[\w.]*))"
+)
+
+
+def _private_imports(path: Path):
+    """(line number, line) of imports of private speckle modules or names, unless explained.
+
+    An explained import carries a ``# private: <why>`` comment on its line or the line above.
+    """
+    lines = path.read_text().splitlines()
+    for i, line in enumerate(lines):
+        match = PRIVATE_IMPORT.match(line)
+        if not match:
+            continue
+        module = match.group(2) or match.group(4)
+        names = [n.strip().split(" as ")[0] for n in (match.group(3) or "").strip("()").split(",")]
+        private = any(_is_private(p) for p in module.split(".")) or any(map(_is_private, names))
+        explained = "# private:" in line or (i and "# private:" in lines[i - 1])
+        if private and not explained:
+            yield i + 1, line.strip()
+
+
+@pytest.mark.parametrize(
+    "path",
+    sorted([*TESTS.rglob("*.py"), *(TESTS.parent / "benchmarks").glob("*.py")]),
+    ids=lambda p: str(p.relative_to(TESTS.parent)),
+)
+def test_tests_and_benchmarks_use_public_names_or_say_why(path):
+    found = list(_private_imports(path))
+    assert not found, f"private imports without a '# private: <why>' comment: {found}"

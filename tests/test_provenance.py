@@ -48,6 +48,6 @@ def test_code_tracking_sees_through_lazy_names(code, module):
     """
     import ast
 
-    from speckle.provenance import _imported_modules
+    from speckle.provenance import _imported_modules  # private: the parser, see docstring
 
     assert module in _imported_modules(ast.parse(code), ["speckle"])

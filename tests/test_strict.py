@@ -123,7 +123,7 @@ def test_killed_writer_leaves_the_existing_file_intact(img, tmp_path):
 def test_figure_save_is_atomic(tmp_path, monkeypatch):
     import matplotlib.figure
 
-    from speckle.figures._style import new_figure, save
+    from speckle.figures._style import new_figure, save  # private: the scripts' atomic save
 
     path = tmp_path / "f.png"
     fig, _ = new_figure(1, 1)
@@ -216,7 +216,9 @@ def test_mismatched_images_are_refused(pair, src):
 
 def test_compensate_refuses_other_grids_and_missing_attrs(pair):
     ref, dfm = pair
-    disp = speckle.scene.deformation.pixel_displacement(lambda z, x: 3.0 + 0 * z, ref.depth, ref.aline)
+    disp = speckle.scene.deformation.pixel_displacement(
+        lambda z, x: 3.0 + 0 * z, ref.depth, ref.aline
+    )
     assert speckle.compensate(dfm, disp).shape == dfm.field.shape
     with pytest.raises(ValueError, match="different 'depth' coordinates"):
         speckle.compensate(dfm, disp.assign_coords(depth=disp.depth * 2))
@@ -516,7 +518,7 @@ def test_finite_check_takes_huge_finite_values_and_finds_every_bad_one(dtype):
     """The finite check sums first (NaN and inf propagate) and checks elementwise only when the
     sum is not finite: huge finite values whose sum overflows are accepted, bad values among
     them are still found and counted."""
-    from speckle._validate import as_finite_array
+    from speckle._validate import as_finite_array  # private: the shared input check
 
     huge = np.array([1e308, 1e308, -1.0], dtype=dtype)
     np.testing.assert_array_equal(as_finite_array(huge, "v", dtype=dtype), huge)

@@ -199,7 +199,7 @@ def _script_modules(script: Path) -> set[str]:
     (Through ``provenance._imported_modules``, the parser ``module_sources`` itself uses:
     ``speckle.ascan(...)`` after ``import speckle`` counts ``speckle.imaging.aline``.)
     """
-    from speckle.provenance import _imported_modules
+    from speckle.provenance import _imported_modules  # private: the code-tracking parser
 
     found = _imported_modules(ast.parse(script.read_text()), ["speckle"])
     return {m for m in found if m.startswith("speckle")}

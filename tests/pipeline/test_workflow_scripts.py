@@ -20,6 +20,7 @@ import pytest
 SCRIPT = """
 import logging, subprocess, sys, warnings
 from types import SimpleNamespace
+# private: the scripts' own runner (speckle._workflow is the workflow's, not users', API)
 from speckle._workflow import run
 
 snakemake = SimpleNamespace(log=[{log!r}], rule="demo")
