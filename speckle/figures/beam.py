@@ -59,6 +59,17 @@ def _regions(density_per_cell: float, pixel: float, pitch: float, ndim: int) -> 
     return speckle.make_regions(reg.background(density=rho, amplitude_model=_AMPLITUDE))
 
 
+def _line_scene(src: xr.DataArray, seed: int) -> dict:
+    """Keywords of the independent-line scene builders on the grid of ``src`` (Poisson counts)."""
+    n, h = int(src.attrs["n_pixels"]), float(src.attrs["depth"])
+    return {"n_pixels": n, "depth": h, "seed": seed, "amplitude": _AMPLITUDE, "count": "poisson"}
+
+
+def _line_method(beam: Mapping) -> str:
+    """The A-scan method of the independent lines: ``direct`` or ``nufft`` as the beam's."""
+    return "direct" if beam["method"] == "direct" else "nufft"
+
+
 def _pooled(a: np.ndarray, b: np.ndarray, kind: str) -> float:
     """Pearson coefficient of two equally shaped samples (modulus for complex fields)."""
     if kind == "intensity":
@@ -105,17 +116,9 @@ def bscans_data(source: Mapping, beam: Mapping, seed: int) -> xr.Dataset:
     field = xr.concat(images, dim="waist_pitch", combine_attrs="drop").compute()
     field = field.assign_coords(waist_pitch=coord("waist_pitch", ratios))
     lines = speckle.random_scatterers(
-        xs.size,
-        float(beam["density"]),
-        n_pixels=n,
-        depth=h,
-        seed=seed,
-        amplitude=_AMPLITUDE,
-        count="poisson",
-        aline_pitch=pitch,
+        xs.size, float(beam["density"]), **_line_scene(src, seed), aline_pitch=pitch
     )
-    method = "direct" if beam["method"] == "direct" else "nufft"
-    indep = speckle.bscan(lines, src, method=method, tol=beam["tol"]).field
+    indep = speckle.bscan(lines, src, method=_line_method(beam), tol=beam["tol"]).field
     indep = indep.rename(aline="x").assign_coords(x=field.x)
     lat = np.arange(int(beam["lags"]) + 1)
     ax = np.arange(int(beam["lags"]) + 1)
@@ -226,16 +229,9 @@ def strain_data(source: Mapping, beam: Mapping, seed: int) -> xr.Dataset:
         for kind, vals in _compensated_correlations(ref, dfm).items():
             data[f"{kind}_{label}"] = (("strain",), np.asarray(vals, float))
     lines = speckle.deformable_scene(
-        xs.size,
-        float(beam["density"]),
-        n_pixels=n,
-        depth=h,
-        seed=seed,
-        strain=strains,
-        amplitude=_AMPLITUDE,
-        count="poisson",
+        xs.size, float(beam["density"]), **_line_scene(src, seed), strain=strains
     )
-    method = "direct" if beam["method"] == "direct" else "nufft"
+    method = _line_method(beam)
     ref_l = speckle.bscan(speckle.uniaxial_strain(lines, 0.0).isel(strain=0), src, method=method)
     dfm_l = speckle.bscan(speckle.uniaxial_strain(lines, strains), src, method=method)
     disp = uniaxial_pixel_displacement(strains, dfm_l.depth.values, dfm_l.aline.values)

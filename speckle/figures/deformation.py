@@ -230,7 +230,7 @@ def _strain_sweep(
     for name, long in _LONG_NAMES.items():
         ds[name].attrs.update(attrs("correlation", long))
     ds["strain"].attrs.update(attrs("strain", "compressive strain (u_z = -strain*z)"))
-    return ds
+    return ds.merge(_theory(ds, grid_name, k0_of, spectrum_of, source, fig6))
 
 
 def _theory(
@@ -309,7 +309,6 @@ def fig6b_data(source: Mapping, fig6: Mapping, dask: Mapping, seed: int) -> xr.D
         n_alines=n_alines,
         carrier_window=int(fig6["panel_c"]["carrier_window"]),
     )
-    ds = ds.merge(_theory(ds, "k0_dk", float, lambda _k: shape, source, fig6))
     ds["k0_dk"].attrs.update(attrs("k0_dk"))
     run = _run_attrs(source, fig6, seed, n_alines, shape)
     ds.attrs.update(run)
@@ -342,7 +341,6 @@ def fig6c_data(source: Mapping, fig6: Mapping, dask: Mapping, seed: int) -> xr.D
         n_alines=n_alines,
         carrier_window=int(panel["carrier_window"]),
     )
-    ds = ds.merge(_theory(ds, "spectrum", lambda _s: k0_dk, str, source, fig6))
     w = int(panel["carrier_window"])
     factor = corr.carrier_window_factor(ds.strain.values, k0_dk, w)
     ds["complex_correlation_no_carrier_theory"] = (
@@ -466,7 +464,6 @@ def scan_point_data(
         n_alines=n_alines,
         carrier_window=int(fig6["panel_c"]["carrier_window"]),
     )
-    ds = ds.merge(_theory(ds, "k0_dk", float, lambda _k: spectrum, source, point))
     ds = ds.expand_dims(density=[float(density)], spectrum=[str(spectrum)])
     ds["density"].attrs.update(attrs("density"))
     ds["k0_dk"].attrs.update(attrs("k0_dk"))
