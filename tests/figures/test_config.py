@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import speckle
-from speckle.figures import _config
+from speckle.figures import _config  # private: the pipeline's config adapter (rules, scripts)
 
 SOURCE = {"n_pixels": 64, "pixel_size": 8.0, "k0_dk": 10, "shape": "gaussian", "fwhm_fraction": 0.4}
 

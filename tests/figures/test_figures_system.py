@@ -10,7 +10,7 @@ from snakemake.exceptions import WorkflowError
 from snakemake.utils import validate
 
 import speckle
-from speckle.figures import _config
+from speckle.figures import _config  # private: the pipeline's config adapter (rules, scripts)
 from speckle.figures import system as fs
 
 ROOT = Path(__file__).resolve().parents[2]
