@@ -382,6 +382,7 @@ def failure_data(cfg: Mapping, seed: int) -> xr.Dataset:
 
 
 def failure_figure(ds: xr.Dataset, path: str) -> None:
+    """Failure maps: rms error (top) and fraction answered (bottom) per sweep, with limits."""
     sweeps = ["strain", "snr_db", "window", "k0_dk", "fwhm_fraction", "density"]
     fig, axes = new_figure(2, len(sweeps), width=2.4 * len(sweeps), height=5.0)
     for j, name in enumerate(sweeps):
@@ -454,6 +455,7 @@ def speed_data(cfg: Mapping, seed: int) -> xr.Dataset:
 
 
 def speed_figure(ds: xr.Dataset, path: str) -> None:
+    """Rms strain error against time per megapixel for each method and window."""
     fig, axes = new_figure(1, 1, width=4.5, height=3.5)
     ax = axes[0, 0]
     for m in ds.method.values:
@@ -500,6 +502,7 @@ def sequence_data(cfg: Mapping, seed: int) -> xr.Dataset:
 
 
 def sequence_figure(ds: xr.Dataset, path: str) -> None:
+    """Accumulated strain of a compression sequence against the truth, per frame."""
     fig, axes = new_figure(1, 2, width=7.0, height=3.0)
     f = ds.frame.values
     axes[0, 0].plot(f, ds.true_cumulative, "k-", label="truth 1 - (1 - s)^k")
