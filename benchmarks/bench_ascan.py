@@ -24,9 +24,9 @@ import finufft
 import numpy as np
 from _common import best_time, cpu_model, rel_err
 
-from speckle.imaging.aline import ascan
+from speckle.imaging.aline import ascan, stream_ascans
 from speckle.imaging.nufft import finufft_ascan
-from speckle.imaging.synthesis import choose_method, stream_ascans
+from speckle.imaging.synthesis import choose_method
 
 
 def scene(n_pixels, n_lines, density, seed=1):

@@ -5,45 +5,27 @@
 with ``n = -(N//2) ... N-1-(N//2)`` and pixel ``q`` at depth ``q*H/N`` (µm). See
 :mod:`speckle.system.source` for the conventions and why the pixel step is ``H/N``.
 
-:func:`ascan` is the stable entry point. ``method`` selects how the double sum is evaluated;
-``"direct"`` is the exact float64 reference. Faster methods register themselves in
-:data:`METHODS` (see :func:`register_method`).
+:func:`ascan` is the stable entry point. ``method`` selects how the double sum is evaluated,
+from the table :data:`METHODS` (:data:`speckle.imaging.methods.ASCAN_METHODS`); ``"direct"``
+is the exact float64 reference (:mod:`speckle.imaging.direct`). :func:`stream_ascans` images a
+random scene too large for memory, a chunk of A-lines at a time.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
 
 from .._validate import as_finite_array, check_choice, check_int, check_memory, check_real
-from ..system.source import check_weights, index_shift_phase, spectral_index
+from ..scene.scatterers import random_scatterers
+from ..system.source import check_weights
+from ._rules import check_carrier_phase, check_tol
+from .methods import ASCAN_METHODS
 
-__all__ = ["METHODS", "ascan", "pixel_depths", "register_method"]
+__all__ = ["METHODS", "ascan", "pixel_depths", "stream_ascans"]
 
-#: Largest number of complex phase factors the direct method holds in memory at once.
-DIRECT_CHUNK_ELEMENTS = 1 << 22
-
-Method = Callable[..., np.ndarray]
-
-#: Registered A-scan synthesis methods: name -> callable(z, a, n_pixels, depth, k0, s, tol).
-METHODS: dict[str, Method] = {}
-
-
-def register_method(name: str) -> Callable[[Method], Method]:
-    """Decorator registering a synthesis method under ``name`` for :func:`ascan`.
-
-    The callable receives validated arguments ``(z, amplitude, n_pixels, depth, k0, spectrum,
-    tol)`` with ``z`` float64 of shape (B, M), ``amplitude`` complex128 of shape (B, M),
-    ``spectrum`` float64 of shape (N,) (never None) and ``tol`` a float or None, and returns a
-    complex128 array of shape (B, N).
-    """
-
-    def deco(func: Method) -> Method:
-        METHODS[name] = func
-        return func
-
-    return deco
+#: A-scan synthesis methods: name -> callable(z, a, n_pixels, depth, k0, spectrum, tol), the
+#: table :data:`speckle.imaging.methods.ASCAN_METHODS`.
+METHODS = ASCAN_METHODS
 
 
 def pixel_depths(n_pixels: int, depth: float) -> np.ndarray:
@@ -51,40 +33,6 @@ def pixel_depths(n_pixels: int, depth: float) -> np.ndarray:
     n = check_int(n_pixels, "n_pixels", low=2)
     h = check_real(depth, "depth", low=0, low_inclusive=False)
     return np.arange(n) * (h / n)
-
-
-def spectral_field_to_pixels(field: np.ndarray, n_pixels: int) -> np.ndarray:
-    """Sum spectral components into pixels: ``A(q) = sum_n F_n exp(-2i pi n q/N)``.
-
-    ``field`` has shape (..., N) ordered ``n = -(N//2) ... N-1-(N//2)``. The sum over ``n`` is an
-    exact DFT evaluated with an FFT (rounding error ~1e-16 relative).
-    """
-    return np.fft.fft(field, axis=-1) * index_shift_phase(n_pixels, np.arange(n_pixels))
-
-
-@register_method("direct")
-def _direct(z, amplitude, n_pixels, depth, k0, spectrum, tol):
-    """Exact float64 double sum: spectral field by explicit phase factors, then an exact DFT."""
-    del tol  # exact up to rounding whatever tol asks
-    batch, m = z.shape
-    n_idx = spectral_index(n_pixels).astype(float)
-    field = np.empty((batch, n_pixels), dtype=np.complex128)
-    # Split the k0 phase from the spectral phase: 2 k_n z = 2 k0 z + 2 pi n z / H, and the
-    # second factor is H-periodic in z, so z mod H keeps its argument small and accurate.
-    carrier = amplitude * np.exp(2j * k0 * z)
-    zr = np.mod(z, depth) * (2 * np.pi / depth)
-    step = max(1, DIRECT_CHUNK_ELEMENTS // max(1, m * n_pixels))
-    for b0 in range(0, batch, step):
-        sl = slice(b0, b0 + step)
-        phase = np.exp(1j * zr[sl, :, None] * n_idx)  # (b, M, N)
-        field[sl] = np.einsum("bm,bmn->bn", carrier[sl], phase)
-    return spectral_field_to_pixels(field * spectrum, n_pixels)
-
-
-def _check_tol(tol: object) -> float | None:
-    if tol is None:
-        return None
-    return check_real(tol, "tol", low=0, high=1, low_inclusive=False, high_inclusive=False)
 
 
 def ascan(
@@ -155,7 +103,7 @@ def ascan(
     h = check_real(depth, "depth", low=0, low_inclusive=False)
     k0v = check_real(k0, "k0", low=0)
     check_choice(method, "method", METHODS)
-    tolv = _check_tol(tol)
+    tolv = check_tol(tol)
     zz = as_finite_array(z, "z")
     if zz.ndim == 0:
         raise ValueError("z must have at least one dimension (the scatterer axis), got a scalar")
@@ -172,11 +120,7 @@ def ascan(
             f"amplitude must broadcast to the shape of z {z_shape}; broadcasting gave {zz.shape}"
         )
     s = np.ones(n) if spectrum is None else check_weights(spectrum, n)
-    if zz.size and not np.isfinite(2.0 * k0v * float(np.max(np.abs(zz)))):
-        raise ValueError(
-            f"k0 = {k0v:g} rad/µm and depths z up to {float(np.max(np.abs(zz))):g} µm give an "
-            "infinite carrier phase 2 k0 z in float64; use a smaller k0 or z"
-        )
+    check_carrier_phase(zz, k0v)
     batch_shape = zz.shape[:-1]
     m = zz.shape[-1]
     lines = int(np.prod(batch_shape, dtype=float))
@@ -189,7 +133,85 @@ def ascan(
     return np.asarray(out, dtype=np.complex128).reshape(*batch_shape, n)
 
 
-# Fast methods register themselves in METHODS on import (kept last: they import this module).
-from . import nufft as _nufft  # noqa: E402, F401
-from . import psf as _psf  # noqa: E402, F401
-from . import synthesis as _synthesis  # noqa: E402, F401
+def stream_ascans(
+    n_alines: int,
+    density: float,
+    *,
+    n_pixels: int,
+    depth: float,
+    k0: float,
+    seed: int,
+    spectrum: np.ndarray | None = None,
+    method: str = "auto",
+    tol: float | None = None,
+    amplitude: str = "equal",
+    count: str = "fixed",
+    chunk_lines: int = 256,
+    lines: object | None = None,
+) -> np.ndarray:
+    """Random-scene A-scans generated and imaged ``chunk_lines`` lines at a time.
+
+    Scatterers of lines ``i ... i + chunk_lines - 1`` are drawn with
+    :func:`speckle.random_scatterers` (``first_aline=i``, so the result does not
+    depend on ``chunk_lines``) and imaged with :func:`speckle.ascan`; only one chunk of
+    scatterers is alive at a time, so peak memory is the output plus one chunk whatever
+    ``n_alines`` (measured in ``benchmarks/bench_ascan.py``).
+
+    Parameters
+    ----------
+    n_alines, density, n_pixels, depth, seed, amplitude, count
+        Scene of :func:`speckle.random_scatterers` (``depth`` in µm).
+    k0, spectrum, method, tol
+        Imaging, as in :func:`speckle.ascan` (``k0`` in rad/µm).
+    chunk_lines : int
+        A-lines generated and imaged at once (>= 1).
+    lines : sequence of int, optional
+        Only these A-line indices (each in ``[0, n_alines)``) are generated and imaged, in the
+        given order; the values equal the same rows of the full scene.
+
+    Returns
+    -------
+    numpy.ndarray
+        complex128 (n_alines, n_pixels), or (len(lines), n_pixels) with ``lines``.
+    """
+    nl_total = check_int(n_alines, "n_alines", low=1)
+    step = check_int(chunk_lines, "chunk_lines", low=1)
+    if lines is None:
+        wanted = np.arange(nl_total)
+    else:
+        wanted = np.asarray(lines)
+        if wanted.ndim != 1 or not np.issubdtype(wanted.dtype, np.integer):
+            raise TypeError("lines must be a 1-D sequence of integer A-line indices")
+        if wanted.size and (wanted.min() < 0 or wanted.max() >= nl_total):
+            raise ValueError(f"lines must lie in [0, {nl_total - 1}]")
+    out = np.empty((wanted.size, n_pixels), dtype=np.complex128)
+    order = np.argsort(wanted, kind="stable")
+    sorted_lines = wanted[order]
+    # consecutive runs of requested lines, each drawn in chunks of at most `step` lines
+    breaks = np.flatnonzero(np.diff(sorted_lines) != 1) + 1
+    pos = 0
+    for run in np.split(sorted_lines, breaks):
+        for c0 in range(0, run.size, step):
+            first, nl = int(run[c0]), min(step, run.size - c0)
+            scene = random_scatterers(
+                nl,
+                density,
+                n_pixels=n_pixels,
+                depth=depth,
+                seed=seed,
+                amplitude=amplitude,
+                count=count,
+                first_aline=first,
+            )
+            out[order[pos : pos + nl]] = ascan(
+                scene["z"].values,
+                scene["amplitude"].values,
+                n_pixels=n_pixels,
+                depth=depth,
+                k0=k0,
+                spectrum=spectrum,
+                method=method,
+                tol=tol,
+            )
+            pos += nl
+    return out

@@ -49,7 +49,6 @@ Errors (relative l2 over the B-scan, against ``"direct"``), budgeted to add up b
 from __future__ import annotations
 
 import cmath
-import contextlib
 import math
 from typing import NamedTuple
 
@@ -58,19 +57,26 @@ import numba
 import numpy as np
 import scipy.fft
 
-from .beam import Beam, BeamScene, register_beam_method
-from .beam_row import (
-    ROW_MAX_B,
-    bucket_offsets,
-    row_fine_grids,
-    row_lines,
-    row_weight_error,
-    weight_rate,
+from ._kernels import (
+    LANES,
+    axpy8,
+    bucket_sort,
+    carrier_and_position,
+    es_kernel_values,
+    fold_padded,
+    parallel_section,
 )
-from .carrier import PARALLEL_LOCK, carrier_and_position
-from .nufft import (
-    DEFAULT_TOL,
+from ._rules import (
     NUFFT_TOL_FLOOR,
+    choose,
+    estimate_table,
+    refuse_below_floor,
+    refuse_float32,
+    resolve_tol,
+)
+from .beam_row import ROW_MAX_B, row_fine_grids, row_lines, row_weight_error, weight_rate
+from .gaussian_beam import Beam, BeamScene
+from .nufft import (
     fine_grid_plan,
     fine_grid_size,
     fine_to_pixels,
@@ -80,12 +86,17 @@ from .nufft import (
 
 __all__ = [
     "BEAM_AUTO_CANDIDATES",
+    "PATHS",
     "LineGrid",
     "beam_estimates",
+    "beam_finufft_method",
+    "beam_nufft32_method",
+    "beam_nufft_method",
     "beam_nufft_scan",
     "choose_beam_method",
     "finufft_beam_scan",
     "line_grid",
+    "uses_row_path",
 ]
 
 #: Methods ``method="auto"`` chooses from.
@@ -98,10 +109,10 @@ _BLOCK = 64
 SERIAL_BELOW = 200_000
 #: Depth bins per line bucket in 2-D (cache locality of the spreading).
 _DEPTH_BINS = 32
-#: Vector length of the spreading loops (kernel values padded with zeros to a multiple).
-_LANES = 8
-#: Scatterers per chunk of the vectorised Horner evaluation of the depth kernel.
-_HORNER_CHUNK = 256
+#: Paths of :func:`beam_nufft_scan`: ``"auto"`` (the row path where :func:`uses_row_path`),
+#: ``"row"`` (:mod:`speckle.imaging.beam_row`, refused where it does not apply) or
+#: ``"general"`` (the code here).
+PATHS = ("auto", "row", "general")
 #: Gaussian weights are re-anchored by a direct exponential every this many lines.
 _ANCHOR = 16
 
@@ -189,35 +200,22 @@ def _bucket(x, y, z, j, three_d, o_ax, xo, po, r_o, n_outer, halo, yo, pi_, r_i,
 
 
 @numba.njit(parallel=True, cache=True)
-def _sort_scene(
-    x, y, z, a, gam, three_d, o_ax, xo, po, r_o, n_outer, halo, yo, pi_, r_i, n_inner, bli,
-    depth, nbi,
-):  # fmt: skip
-    """Scatterers within reach of the grid, in bucket order, by a parallel counting sort.
-
-    Lateral coordinates in pitches ``so = (x - X_0)/p`` along the outer axis (and ``si`` along
-    the inner one in 3-D, ``y`` of size 1 in 2-D); bucket ``(floor(so) + halo) * nbi + sub``
-    with ``sub`` the inner-axis bucket (3-D) or one of ``nbi`` depth bins (2-D, cache
-    locality). Each chunk of the input counts its buckets, then writes its scatterers at its
-    own offsets (inputs read in order, random writes only; the order within a bucket is the
-    input order whatever the number of threads). Returns ``(z, a, so, si, gam, starts)``
-    sorted (``si``/``gam`` of size 1 when not per scatterer).
-    """
+def _scene_keys(x, y, z, three_d, o_ax, xo, po, r_o, n_outer, halo, yo, pi_, r_i, n_inner, bli,
+                depth, nbi):  # fmt: skip
+    """:func:`_bucket` of every scatterer (-1 beyond the reach of the grid)."""
     m = z.size
-    nb = (n_outer + 2 * halo) * nbi
-    n_chunks = max(1, min(16, m // 32768))
-    size = (m + n_chunks - 1) // n_chunks
     key = np.empty(m, dtype=np.int64)
-    counts = np.zeros((n_chunks, nb), dtype=np.int64)
-    for c in numba.prange(n_chunks):
-        for j in range(c * size, min(m, (c + 1) * size)):
-            k = _bucket(x, y, z, j, three_d, o_ax, xo, po, r_o, n_outer, halo, yo, pi_, r_i,
-                        n_inner, bli, depth, nbi)  # fmt: skip
-            key[j] = k
-            if k >= 0:
-                counts[c, k] += 1
-    starts, offset = bucket_offsets(counts)
-    total = starts[nb]
+    for j in numba.prange(m):
+        key[j] = _bucket(x, y, z, j, three_d, o_ax, xo, po, r_o, n_outer, halo, yo, pi_, r_i,
+                         n_inner, bli, depth, nbi)  # fmt: skip
+    return key
+
+
+@numba.njit(parallel=True, cache=True)
+def _gather_scene(order, x, y, z, a, gam, three_d, o_ax, xo, po, yo, pi_):
+    """``(z, a, so, si, gam)`` of scatterers ``order`` (``si``/``gam`` of size 1 when not per
+    scatterer), lateral coordinates in pitches."""
+    total = order.size
     zs = np.empty(total)
     as_ = np.empty(total, dtype=np.complex128)
     sos = np.empty(total)
@@ -225,22 +223,35 @@ def _sort_scene(
     gams = np.empty(total if gam.size > 1 else 1, dtype=np.complex128)
     if gam.size == 1:
         gams[0] = gam[0]
-    for c in numba.prange(n_chunks):
-        pos = offset[c]
-        for j in range(c * size, min(m, (c + 1) * size)):
-            k = key[j]
-            if k < 0:
-                continue
-            t = pos[k]
-            pos[k] += 1
-            zs[t] = z[j]
-            as_[t] = a[j]
-            sos[t] = ((x[j] if o_ax == 0 else y[j]) - xo) / po
-            if three_d:
-                sis[t] = ((y[j] if o_ax == 0 else x[j]) - yo) / pi_
-            if gam.size > 1:
-                gams[t] = gam[j]
-    return zs, as_, sos, sis, gams, starts
+    for t in numba.prange(total):
+        j = order[t]
+        zs[t] = z[j]
+        as_[t] = a[j]
+        sos[t] = ((x[j] if o_ax == 0 else y[j]) - xo) / po
+        if three_d:
+            sis[t] = ((y[j] if o_ax == 0 else x[j]) - yo) / pi_
+        if gam.size > 1:
+            gams[t] = gam[j]
+    return zs, as_, sos, sis, gams
+
+
+def _sort_scene(
+    x, y, z, a, gam, three_d, o_ax, xo, po, r_o, n_outer, halo, yo, pi_, r_i, n_inner, bli,
+    depth, nbi,
+):  # fmt: skip
+    """Scatterers within reach of the grid, in bucket order, by a stable counting sort.
+
+    Lateral coordinates in pitches ``so = (x - X_0)/p`` along the outer axis (and ``si`` along
+    the inner one in 3-D, ``y`` of size 1 in 2-D); bucket ``(floor(so) + halo) * nbi + sub``
+    with ``sub`` the inner-axis bucket (3-D) or one of ``nbi`` depth bins (2-D, cache
+    locality). :func:`speckle.imaging._kernels.bucket_sort`: the order within a bucket is the
+    input order whatever the number of threads. Returns ``(z, a, so, si, gam, starts)``
+    sorted (``si``/``gam`` of size 1 when not per scatterer).
+    """
+    key = _scene_keys(x, y, z, three_d, o_ax, xo, po, r_o, n_outer, halo, yo, pi_, r_i,
+                      n_inner, bli, depth, nbi)  # fmt: skip
+    starts, order = bucket_sort(key, (n_outer + 2 * halo) * nbi)
+    return (*_gather_scene(order, x, y, z, a, gam, three_d, o_ax, xo, po, yo, pi_), starts)
 
 
 @numba.njit(cache=True, fastmath=False)
@@ -268,21 +279,6 @@ def _gauss(s, b, lo, hi, out):
             ratio *= step
             out[kk] = g
         k = stop
-
-
-@numba.njit(fastmath=True, inline="always")
-def _axpy8(g, v, k):
-    """``g[0:8] += v * k[0:8]`` (slices), all loads first so LLVM's SLP vectoriser packs it."""
-    k0, k1, k2, k3, k4, k5, k6, k7 = k[0], k[1], k[2], k[3], k[4], k[5], k[6], k[7]
-    g0, g1, g2, g3, g4, g5, g6, g7 = g[0], g[1], g[2], g[3], g[4], g[5], g[6], g[7]
-    g[0] = g0 + v * k0
-    g[1] = g1 + v * k1
-    g[2] = g2 + v * k2
-    g[3] = g3 + v * k3
-    g[4] = g4 + v * k4
-    g[5] = g5 + v * k5
-    g[6] = g6 + v * k6
-    g[7] = g7 + v * k7
 
 
 @numba.njit(fastmath=True, cache=True)
@@ -342,9 +338,8 @@ def _spread_beam(
     ``g(o + 1) = g(o) r(o)``, ``r(o + 1) = r(o) exp(-2b)`` (re-anchored every :data:`_ANCHOR`
     lines, every line for a very narrow beam).
     """
-    deg1 = coef.shape[0]
     half = 0.5 * w
-    wp = _LANES * ((w + _LANES - 1) // _LANES)  # kernel padded with zeros to whole vectors
+    wp = LANES * ((w + LANES - 1) // LANES)  # kernel padded with zeros to whole vectors
     pad = wp
     plane = nf + 2 * pad
     nblocks = (n_outer + block - 1) // block
@@ -369,18 +364,7 @@ def _spread_beam(
             x0 = u[t] - half
             xk[t] = 2.0 * (math.ceil(x0) - x0) - 1.0
         ker = np.empty((w, m), dtype=coef.dtype)
-        for t0 in range(0, m, _HORNER_CHUNK):  # chunks stay in L1 across the degree loop
-            t1 = min(m, t0 + _HORNER_CHUNK)
-            xs = xk[t0:t1]
-            for i in range(w):
-                kr = ker[i, t0:t1]  # views indexed from 0: no wrap-around checks, vectorised
-                c = coef[deg1 - 1, i]
-                for t in range(t1 - t0):
-                    kr[t] = c
-                for k in range(deg1 - 2, -1, -1):
-                    c = coef[k, i]
-                    for t in range(t1 - t0):
-                        kr[t] = kr[t] * xs[t] + c
+        es_kernel_values(xk, coef, ker)
         gi = np.ones(kmax_i, dtype=np.complex128)
         kv = np.zeros(wp, dtype=coef.dtype)
         wr = np.empty(kmax_o, dtype=coef.dtype)
@@ -428,41 +412,19 @@ def _spread_beam(
                         vi2 = vi
                     re = (rbase + ii) * 2 * plane + st
                     im = re + plane
-                    for i0 in range(0, wp, _LANES):
-                        _axpy8(g[re + i0 : re + i0 + _LANES], vr2, kv[i0 : i0 + _LANES])
-                        _axpy8(g[im + i0 : im + i0 + _LANES], vi2, kv[i0 : i0 + _LANES])
+                    for i0 in range(0, wp, LANES):
+                        k0_, k1_, k2_, k3_ = kv[i0], kv[i0 + 1], kv[i0 + 2], kv[i0 + 3]
+                        k4_, k5_, k6_, k7_ = kv[i0 + 4], kv[i0 + 5], kv[i0 + 6], kv[i0 + 7]
+                        axpy8(g, np.uint64(re + i0), vr2, k0_, k1_, k2_, k3_, k4_, k5_, k6_, k7_)
+                        axpy8(g, np.uint64(im + i0), vi2, k0_, k1_, k2_, k3_, k4_, k5_, k6_, k7_)
         # fold each padded line back onto its periodic fine grid, interleaving re/im
         for rr in range((r1 - r0) * n_inner):
             re = rr * 2 * plane
-            im = re + plane
-            ob = out[r0 * n_inner + rr]
-            for i in range(nf):
-                ob[2 * i] = g[re + i + pad]
-                ob[2 * i + 1] = g[im + i + pad]
-            for i in range(pad):
-                ob[2 * (nf - pad + i)] += g[re + i]
-                ob[2 * (nf - pad + i) + 1] += g[im + i]
-                ob[2 * i] += g[re + nf + pad + i]
-                ob[2 * i + 1] += g[im + nf + pad + i]
+            fold_padded(g[re : re + plane], g[re + plane : re + 2 * plane], nf, pad,
+                        out[r0 * n_inner + rr])  # fmt: skip
 
 
 # --- the method --------------------------------------------------------------------------
-
-
-@contextlib.contextmanager
-def _slp_vectorize():
-    """Enable LLVM's SLP vectoriser while numba compiles (numba turns it off by default).
-
-    The 8-wide updates of :func:`_axpy8` become single vector instructions only with it
-    (measured 1.8-2x on the spreading loop). The flag is read when a function is compiled, so
-    this only matters at the first call (or a cache miss); it is restored afterwards.
-    """
-    old = numba.config.SLP_VECTORIZE
-    numba.config.SLP_VECTORIZE = 1
-    try:
-        yield
-    finally:
-        numba.config.SLP_VECTORIZE = old
 
 
 def uses_row_path(beam: Beam, grid: LineGrid, tol: float) -> bool:
@@ -478,38 +440,56 @@ def uses_row_path(beam: Beam, grid: LineGrid, tol: float) -> bool:
     )
 
 
+def _row_path(beam: Beam, grid: LineGrid, tol: float, path: str) -> bool:
+    """Whether ``path`` (one of :data:`PATHS`) runs the row path; ``ValueError`` for
+    ``path="row"`` where the row path does not apply."""
+    if path not in PATHS:
+        raise ValueError(f"path must be one of {PATHS}, got {path!r}")
+    row = uses_row_path(beam, grid, tol)
+    if path == "row" and not row:
+        raise ValueError(
+            "path='row' needs a beam without focus, b = 2 pitch^2/waist^2 <= "
+            f"{ROW_MAX_B:g} and weights accurate to tol/8 (see uses_row_path); use path='auto'"
+        )
+    return row and path != "general"
+
+
 def beam_nufft_scan(
-    scene: BeamScene, beam: Beam, grid: LineGrid, *, tol: float, precision: str = "double"
+    scene: BeamScene,
+    beam: Beam,
+    grid: LineGrid,
+    *,
+    tol: float,
+    precision: str = "double",
+    path: str = "auto",
 ) -> np.ndarray:
     """Scanned-beam lines by depth spreading and exact lateral weights (module docstring).
 
     ``tol`` is the accuracy of the depth kernel and the weight cut-off is ``ln_cut``-derived
-    from ``tol`` as in the error budget of :func:`_nufft_method`: here ``tol`` sets the kernel
-    (``fine_grid_plan(tol)``) and lateral weights below ``tol/2`` of the peak are dropped.
-    Returns complex128 (L, N) in the order of ``scene.lines``.
+    from ``tol`` as in the error budget of :func:`beam_nufft_method`: here ``tol`` sets the
+    kernel (``fine_grid_plan(tol)``) and lateral weights below ``tol/2`` of the peak are
+    dropped. ``path`` (:data:`PATHS`): ``"auto"`` takes the row path of
+    :mod:`speckle.imaging.beam_row` where :func:`uses_row_path`, ``"general"`` the code here
+    always (the benchmark's baseline of the row path), ``"row"`` the row path or a
+    ``ValueError``. Returns complex128 (L, N) in the order of ``scene.lines``.
     """
     plan = fine_grid_plan(scene.n_pixels, scene.spectrum, tol, precision)
     ln_cut = math.log(2.0 / tol)
     w0 = beam.waist
-    if uses_row_path(beam, grid, tol):
+    if _row_path(beam, grid, tol, path):
         # the grid's axes, outer first (the row path splits blocks of outer lines over threads)
         axes = (grid.outer, 1 - grid.outer) if len(grid.size) == 2 else (0,)
         coords = (scene.x, scene.y)
         lines_per = row_lines(w0, grid.pitch, ln_cut)
-        threads = numba.get_num_threads()
-        with PARALLEL_LOCK, _slp_vectorize():
-            # small scans run on one thread: waking the pool costs more than it saves
-            numba.set_num_threads(1 if scene.z.size * lines_per < SERIAL_BELOW else threads)
-            try:
-                g = row_fine_grids(
-                    tuple(coords[k] for k in axes), scene.z, scene.amplitude,
-                    origin=tuple(grid.origin[k] for k in axes),
-                    pitch=tuple(grid.pitch[k] for k in axes),
-                    size=tuple(grid.size[k] for k in axes), waist=w0, k0=scene.k0,
-                    depth=scene.depth, plan=plan, ln_cut=ln_cut,
-                )  # fmt: skip
-            finally:
-                numba.set_num_threads(threads)
+        # small scans run on one thread: waking the pool costs more than it saves
+        with parallel_section(serial=scene.z.size * lines_per < SERIAL_BELOW, slp=True):
+            g = row_fine_grids(
+                tuple(coords[k] for k in axes), scene.z, scene.amplitude,
+                origin=tuple(grid.origin[k] for k in axes),
+                pitch=tuple(grid.pitch[k] for k in axes),
+                size=tuple(grid.size[k] for k in axes), waist=w0, k0=scene.k0,
+                depth=scene.depth, plan=plan, ln_cut=ln_cut,
+            )  # fmt: skip
         return fine_to_pixels(g, plan)[grid.rows]
     gam = beam.gamma(scene.z)
     gam = np.ones(1, dtype=np.complex128) if gam is None else np.ascontiguousarray(gam)
@@ -535,23 +515,18 @@ def beam_nufft_scan(
     kmax_i = int(2 * r_i) + 2 if three_d else 1
     g = np.zeros((n_outer * n_inner, plan.nf), dtype=plan.cplx)
     # small scans run on one thread: waking the pool costs more than it saves
-    threads = numba.get_num_threads()
     small = scene.z.size * (2 * r_o + 1) * ((2 * r_i + 1) if three_d else 1) < SERIAL_BELOW
-    with PARALLEL_LOCK, _slp_vectorize():
-        numba.set_num_threads(1 if small else threads)
-        try:
-            z, a, so, si, gam, starts = _sort_scene(
-                scene.x, y, scene.z, scene.amplitude, gam, three_d, o_ax, grid.origin[o_ax],
-                p_o, r_o, n_outer, halo, grid.origin[i_ax], p_i, r_i, n_inner, bli, scene.depth,
-                nbi,
-            )  # fmt: skip
-            _spread_beam(
-                z, a, scene.k0, scene.depth, so, si, gam, weight_rate(p_o, w0),
-                weight_rate(p_i, w0), ln_cut, starts, nbi, n_outer, n_inner, three_d, block, halo,
-                kmax_i, plan.nf, plan.w, plan.coef, g.view(plan.real),
-            )  # fmt: skip
-        finally:
-            numba.set_num_threads(threads)
+    with parallel_section(serial=small, slp=True):
+        z, a, so, si, gam, starts = _sort_scene(
+            scene.x, y, scene.z, scene.amplitude, gam, three_d, o_ax, grid.origin[o_ax],
+            p_o, r_o, n_outer, halo, grid.origin[i_ax], p_i, r_i, n_inner, bli, scene.depth,
+            nbi,
+        )  # fmt: skip
+        _spread_beam(
+            z, a, scene.k0, scene.depth, so, si, gam, weight_rate(p_o, w0),
+            weight_rate(p_i, w0), ln_cut, starts, nbi, n_outer, n_inner, three_d, block, halo,
+            kmax_i, plan.nf, plan.w, plan.coef, g.view(plan.real),
+        )  # fmt: skip
     return fine_to_pixels(g, plan)[grid.rows]
 
 
@@ -634,30 +609,30 @@ def _estimate(method: str, scene: BeamScene, beam: Beam, tol: float, setup: _Set
     raise ValueError(f"no error/cost model for beam method {method!r}")
 
 
+def _estimator(scene: BeamScene, beam: Beam, tol: float):
+    setup = _setup(scene, beam, tol)
+
+    def estimate(name: str) -> tuple[float, float]:
+        return _estimate(name, scene, beam, tol, setup)
+
+    return estimate
+
+
 def beam_estimates(scene: BeamScene, beam: Beam, tol: float | None) -> dict[str, dict]:
-    """Predicted relative error and time (ns) of every ``auto`` candidate on a scene."""
-    tolv = DEFAULT_TOL if tol is None else float(tol)
-    setup = _setup(scene, beam, tolv)
-    out = {}
-    for name in BEAM_AUTO_CANDIDATES:
-        err, cost = _estimate(name, scene, beam, tolv, setup)
-        out[name] = {"error": err, "cost_ns": cost, "admissible": bool(err <= tolv)}
-    return out
+    """Predicted relative error and time (ns) of every ``auto`` candidate on a scene:
+    ``{method: {"error": e, "cost_ns": t, "admissible": e <= tol}}``."""
+    tolv = resolve_tol(tol)
+    return estimate_table(BEAM_AUTO_CANDIDATES, _estimator(scene, beam, tolv), tolv)
 
 
 def choose_beam_method(scene: BeamScene, beam: Beam, tol: float | None) -> str:
-    """Name of the fastest admissible beam method; never runs one."""
-    est = beam_estimates(scene, beam, tol)
-    ok = {k: v["cost_ns"] for k, v in est.items() if v["admissible"]}
-    return min(ok, key=ok.get)
+    """Name of the fastest admissible beam method (:func:`beam_estimates`); never runs one."""
+    tolv = resolve_tol(tol)
+    return choose(BEAM_AUTO_CANDIDATES, _estimator(scene, beam, tolv), tolv)
 
 
 def _grid_or_refuse(scene: BeamScene, beam: Beam, tol: float, method: str) -> LineGrid:
-    if tol < NUFFT_TOL_FLOOR:
-        raise ValueError(
-            f"method={method!r} reaches tol >= {NUFFT_TOL_FLOOR:g} only, got tol={tol:g}; "
-            "use method='direct' (exact) or method='auto'"
-        )
+    refuse_below_floor(tol, method)
     grid = line_grid(scene.lines, beam.waist)
     if grid is None:
         raise ValueError(
@@ -674,35 +649,31 @@ def _grid_or_refuse(scene: BeamScene, beam: Beam, tol: float, method: str) -> Li
     return grid
 
 
-@register_beam_method("nufft")
-def _nufft_method(scene: BeamScene, beam: Beam, tol: float | None) -> np.ndarray:
-    tolv = DEFAULT_TOL if tol is None else tol
+def beam_nufft_method(
+    scene: BeamScene, beam: Beam, tol: float | None, *, path: str = "auto"
+) -> np.ndarray:
+    """``beam_scan(..., method="nufft")`` on a validated problem
+    (:func:`speckle.imaging.gaussian_beam.beam_problem`); ``path`` as in
+    :func:`beam_nufft_scan`."""
+    tolv = resolve_tol(tol)
     grid = _grid_or_refuse(scene, beam, tolv, "nufft")
     # kernel at tol/2 (fine_grid_plan halves again internally), weights cut at tol/4
-    return beam_nufft_scan(scene, beam, grid, tol=0.5 * tolv)
+    return beam_nufft_scan(scene, beam, grid, tol=0.5 * tolv, path=path)
 
 
-@register_beam_method("nufft32")
-def _nufft32_method(scene: BeamScene, beam: Beam, tol: float | None) -> np.ndarray:
-    tolv = DEFAULT_TOL if tol is None else tol
+def beam_nufft32_method(
+    scene: BeamScene, beam: Beam, tol: float | None, *, path: str = "auto"
+) -> np.ndarray:
+    """``beam_scan(..., method="nufft32")`` on a validated problem; ``path`` as in
+    :func:`beam_nufft_scan`."""
+    tolv = resolve_tol(tol)
     grid = _grid_or_refuse(scene, beam, tolv, "nufft32")
     setup = _setup(scene, beam, tolv)
     rounding = float32_error_estimate(int(setup.weighted_terms), scene.n_pixels,
                                       kernel_width(0.25 * tolv))  # fmt: skip
-    if rounding > 0.5 * tolv:
-        raise ValueError(
-            f"method='nufft32' cannot reach tol={tolv:g} here: its float32 rounding error is "
-            f"~{rounding:.1e}; use tol >= {2 * rounding:.1e} or method='nufft'"
-        )
+    refuse_float32(rounding, tolv)
     # kernel at tol/4 and weights cut at tol/4 (beam_nufft_scan halves), rounding <= tol/2
-    return beam_nufft_scan(scene, beam, grid, tol=0.25 * tolv, precision="single")
-
-
-@register_beam_method("auto")
-def _auto_method(scene: BeamScene, beam: Beam, tol: float | None) -> np.ndarray:
-    from .beam import BEAM_METHODS
-
-    return BEAM_METHODS[choose_beam_method(scene, beam, tol)](scene, beam, tol)
+    return beam_nufft_scan(scene, beam, grid, tol=0.25 * tolv, precision="single", path=path)
 
 
 # --- FINUFFT: the lateral-Fourier way (reference and benchmark baseline) -----------------
@@ -764,8 +735,8 @@ def finufft_beam_scan(
     return out[grid.rows]
 
 
-@register_beam_method("finufft")
-def _finufft_method(scene: BeamScene, beam: Beam, tol: float | None) -> np.ndarray:
-    tolv = DEFAULT_TOL if tol is None else tol
+def beam_finufft_method(scene: BeamScene, beam: Beam, tol: float | None) -> np.ndarray:
+    """``beam_scan(..., method="finufft")`` on a validated problem."""
+    tolv = resolve_tol(tol)
     grid = _grid_or_refuse(scene, beam, tolv, "finufft")
     return finufft_beam_scan(scene, beam, grid, tol=tolv)

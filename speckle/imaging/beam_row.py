@@ -5,9 +5,9 @@ is the common case; every scatterer then costs the same, so the work is laid out
 throughput rather than generality (the general code, for focused beams and the rare cases
 below, is :mod:`speckle.imaging.beam_nufft`; both compute the same sums within ``tol``):
 
-1. **Sort** (:func:`_sort_rows`): one parallel counting sort of the scatterers within reach of
-   the line grid by their bucket ``floor(s)`` along each axis (``s = (x - X_0)/p`` in pitches;
-   outer axis first), writing records ``(Re c, Im c, u, s_o[, s_i])`` with
+1. **Sort** (:func:`_sort_rows`): one stable parallel counting sort of the scatterers within
+   reach of the line grid by their bucket ``floor(s)`` along each axis (``s = (x - X_0)/p``
+   in pitches; outer axis first), writing records ``(Re c, Im c, u, s_o[, s_i])`` with
    ``c = a exp(2i k0 z)`` (:mod:`speckle.imaging.carrier`) and ``u`` the fine-grid depth. The
    records live in a numpy-allocated buffer (huge pages: page faults cost more than the sort
    itself in a buffer allocated inside numba).
@@ -20,10 +20,11 @@ below, is :mod:`speckle.imaging.beam_nufft`; both compute the same sums within `
    ``exp(-b (delta + h - m)^2)``, by fast Gaussian gridding: ``exp(-b delta^2)`` at ``m = h``
    and ratios ``exp(+-2 b delta)`` times constants to either side (three exponentials per
    scatterer and axis, each a branch-free Taylor polynomial and squarings that numba
-   vectorises). A raster's weight is the product of its two axes' weights. Per scatterer the ES
-   kernel's ``w`` values come from Horner's scheme across slots (in registers, 8 at a time, in
-   the working precision), then each of its ``(2h_o + 2)(2h_i + 2)`` lines (``2h + 2`` for a
-   row) gets two 8-wide axpys (real and imaginary planes of a padded grid).
+   vectorises). A raster's weight is the product of its two axes' weights. The ES kernel's
+   slot values come from Horner's scheme vectorised over the chunk, in the working precision
+   (:func:`speckle.imaging._kernels.es_kernel_values`), then each of its
+   ``(2h_o + 2)(2h_i + 2)`` lines (``2h + 2`` for a row) gets two 8-wide axpys (real and
+   imaginary planes of a padded grid).
 3. **Fold** (:func:`_fold_rows`): padded planar rows back onto periodic interleaved fine grids,
    which :func:`speckle.imaging.nufft.fine_to_pixels` turns into pixels.
 
@@ -47,11 +48,10 @@ import math
 import numba
 import numpy as np
 
-from .carrier import carrier_and_position
+from ._kernels import LANES, axpy8, bucket_sort, carrier_and_position, es_kernel_values, fold_padded
 
 __all__ = [
     "ROW_MAX_B",
-    "bucket_offsets",
     "row_fine_grids",
     "row_lines",
     "row_weight_error",
@@ -62,8 +62,6 @@ __all__ = [
 ROW_MAX_B = 64.0
 #: Scatterers per vectorised chunk of the spreading.
 _CH = 128
-#: Kernel slots per register group (zero-padded to a multiple).
-_LANES = 8
 #: Depth bins per line bucket (cache locality of the spreading).
 _NBINS = 8
 #: Scatterers per vectorised carrier chunk of the sort.
@@ -136,84 +134,83 @@ def _exp_into(out, factor, d, square, n, scale, nsq):
             out[t] = out[t] * out[t]
 
 
-@numba.njit(cache=True)
-def bucket_offsets(counts):
-    """Offsets of a parallel counting sort: ``counts`` (chunks, buckets) -> ``starts``
-    (buckets + 1) of every bucket and ``offset`` (chunks, buckets) where each chunk writes its
-    scatterers of each bucket (chunks in input order within a bucket)."""
-    n_chunks, nb = counts.shape
-    starts = np.zeros(nb + 1, dtype=np.int64)
-    offset = np.empty((n_chunks, nb), dtype=np.int64)
-    total = 0
-    for k in range(nb):
-        starts[k] = total
-        for c in range(n_chunks):
-            offset[c, k] = total
-            total += counts[c, k]
-    starts[nb] = total
-    return starts, offset
+@numba.njit(parallel=True, cache=True)
+def _row_keys(x, y, origin, pitch, reach, size, h, two_d):
+    """Bucket of every scatterer, ``(floor(s_o) + h_o + 1) * nb_i + floor(s_i) + h_i + 1``,
+    or -1 beyond the reach (see :func:`_sort_rows`)."""
+    m = x.size
+    nbo = size[0] + 2 * h[0] + 1
+    nbi = size[1] + 2 * h[1] + 1 if two_d else 1
+    key = np.empty(m, dtype=np.int64)
+    inv_o = 1.0 / pitch[0]
+    inv_i = 1.0 / pitch[1]
+    for j in numba.prange(m):
+        so = (x[j] - origin[0]) * inv_o
+        si = (y[j] - origin[1]) * inv_i if two_d else 0.0
+        if (
+            so < -reach[0]
+            or so > size[0] - 1 + reach[0]
+            or (two_d and (si < -reach[1] or si > size[1] - 1 + reach[1]))
+        ):
+            key[j] = -1
+            continue
+        k = min(max(np.int64(math.floor(so)) + h[0] + 1, 0), nbo - 1) * nbi
+        if two_d:
+            k += min(max(np.int64(math.floor(si)) + h[1] + 1, 0), nbi - 1)
+        key[j] = k
+    return key
 
 
 @numba.njit(parallel=True, cache=True)
+def _row_records(order, x, y, z, a, k0, depth, nf, origin, pitch, two_d, rec):
+    """``rec[t] = (Re c, Im c, u, s_o[, s_i])`` of scatterer ``order[t]`` (carriers
+    vectorised over runs of :data:`_SUB` records)."""
+    total = order.size
+    n_chunks = max(1, min(64, total // 16384))
+    chunk = (total + n_chunks - 1) // n_chunks
+    inv_o = 1.0 / pitch[0]
+    inv_i = 1.0 / pitch[1]
+    for c in numba.prange(n_chunks):
+        bz = np.empty(_SUB)
+        ba = np.empty(_SUB, dtype=np.complex128)
+        bcr = np.empty(_SUB)
+        bci = np.empty(_SUB)
+        bu = np.empty(_SUB)
+        hi = min(total, (c + 1) * chunk)
+        for t0 in range(c * chunk, hi, _SUB):
+            n = min(hi, t0 + _SUB) - t0
+            for t in range(n):
+                j = order[t0 + t]
+                bz[t] = z[j]
+                ba[t] = a[j]
+            carrier_and_position(bz[:n], ba[:n], k0, depth, nf, bcr, bci, bu)
+            for t in range(n):
+                j = order[t0 + t]
+                r = rec[t0 + t]
+                r[0] = bcr[t]
+                r[1] = bci[t]
+                r[2] = bu[t]
+                r[3] = (x[j] - origin[0]) * inv_o
+                if two_d:
+                    r[4] = (y[j] - origin[1]) * inv_i
+
+
 def _sort_rows(x, y, z, a, k0, depth, nf, origin, pitch, reach, size, h, two_d, rec):
     """Records ``(Re c, Im c, u, s_o[, s_i])`` of the scatterers within reach, by bucket.
 
     Lateral positions in pitches along the outer axis, ``s_o = (x_o - X_o)/p_o`` (``x`` holds
     the outer coordinate, ``y`` the inner one, used when ``two_d``: a raster of lines); bucket
     ``(floor(s_o) + h_o + 1) * nb_i + floor(s_i) + h_i + 1`` with ``nb = size + 2h + 1`` per
-    axis, for ``s`` in ``[-reach, size - 1 + reach]`` on both axes; others are dropped. A
-    parallel counting sort over a fixed chunking of the input (each chunk writes at its own
-    offsets), so the order within a bucket is the input order whatever the number of threads.
-    Fills the first ``starts[-1]`` rows of ``rec`` (M, 4 or 5) and returns the offsets.
+    axis, for ``s`` in ``[-reach, size - 1 + reach]`` on both axes; others are dropped. The
+    stable parallel counting sort of :func:`speckle.imaging._kernels.bucket_sort`: the order
+    within a bucket is the input order whatever the number of threads. Fills the first
+    ``starts[-1]`` rows of ``rec`` (M, 4 or 5) and returns the offsets.
     """
-    m = z.size
     nbo = size[0] + 2 * h[0] + 1
     nbi = size[1] + 2 * h[1] + 1 if two_d else 1
-    nb = nbo * nbi
-    n_chunks = max(1, min(64, m // 16384))
-    chunk = (m + n_chunks - 1) // n_chunks
-    key = np.empty(m, dtype=np.int32)
-    counts = np.zeros((n_chunks, nb), dtype=np.int64)
-    inv_o = 1.0 / pitch[0]
-    inv_i = 1.0 / pitch[1]
-    for c in numba.prange(n_chunks):
-        for j in range(c * chunk, min(m, (c + 1) * chunk)):
-            so = (x[j] - origin[0]) * inv_o
-            si = (y[j] - origin[1]) * inv_i if two_d else 0.0
-            if (
-                so < -reach[0]
-                or so > size[0] - 1 + reach[0]
-                or (two_d and (si < -reach[1] or si > size[1] - 1 + reach[1]))
-            ):
-                key[j] = -1
-                continue
-            k = min(max(np.int64(math.floor(so)) + h[0] + 1, 0), nbo - 1) * nbi
-            if two_d:
-                k += min(max(np.int64(math.floor(si)) + h[1] + 1, 0), nbi - 1)
-            key[j] = k
-            counts[c, k] += 1
-    starts, offset = bucket_offsets(counts)
-    for c in numba.prange(n_chunks):
-        pos = offset[c]
-        bcr = np.empty(_SUB)
-        bci = np.empty(_SUB)
-        bu = np.empty(_SUB)
-        hi = min(m, (c + 1) * chunk)
-        for j0 in range(c * chunk, hi, _SUB):
-            j1 = min(hi, j0 + _SUB)
-            carrier_and_position(z[j0:j1], a[j0:j1], k0, depth, nf, bcr, bci, bu)
-            for j in range(j0, j1):
-                k = key[j]
-                if k < 0:
-                    continue
-                t = pos[k]
-                pos[k] += 1
-                rec[t, 0] = bcr[j - j0]
-                rec[t, 1] = bci[j - j0]
-                rec[t, 2] = bu[j - j0]
-                rec[t, 3] = (x[j] - origin[0]) * inv_o
-                if two_d:
-                    rec[t, 4] = (y[j] - origin[1]) * inv_i
+    key = _row_keys(x, y, origin, pitch, reach, size, h, two_d)
+    starts, order = bucket_sort(key, int(nbo * nbi))
+    _row_records(order, x, y, z, a, k0, depth, nf, origin, pitch, two_d, rec)
     return starts
 
 
@@ -268,9 +265,8 @@ def _spread_rows(rec, starts, size, h, b, two_d, w, coef, nf, pad, block, g):
     Blocks of ``block >= 2h_o + 2`` outer buckets: even blocks in parallel, then odd ones (their
     rows never overlap in a phase).
     """
-    deg1 = coef.shape[0]
     half = 0.5 * w
-    ngrp = coef.shape[1] // _LANES
+    ngrp = coef.shape[1] // LANES
     ko_n = 2 * h[0] + 2
     ki_n = 2 * h[1] + 2 if two_d else 1
     nbo = size[0] + 2 * h[0] + 1
@@ -300,6 +296,7 @@ def _spread_rows(rec, starts, size, h, b, two_d, w, coef, nf, pad, block, g):
             lci = np.empty(_CH, dtype=coef.dtype)
             base = np.empty(_CH, dtype=np.uint64)
             xk = np.empty(_CH, dtype=coef.dtype)  # Horner in the working precision
+            ker = np.empty((coef.shape[1], _CH), dtype=coef.dtype)
             for ko in range(blk * block, min(nbo, (blk + 1) * block)):
                 for ki in range(nbi):
                     kb = ko * nbi + ki
@@ -336,50 +333,26 @@ def _spread_rows(rec, starts, size, h, b, two_d, w, coef, nf, pad, block, g):
                         _weights(wd, wo, e2, ld, nc, b[0], h[0], ko_n, up_o, dn_o, nsq_o)
                         if two_d:
                             _weights(wd, wi, e2, li, nc, b[1], h[1], ki_n, up_i, dn_i, nsq_i)
+                        es_kernel_values(xk[:nc], coef, ker)
                         for t in range(nc):
-                            _spread_one(gf, base[t], xk[t], lcr[t], lci[t], wo, wi, t, coef,
-                                        deg1, ngrp, ko_n, ki_n, n_i * rowlen, plane,
-                                        rowlen)  # fmt: skip
+                            _spread_one(gf, base[t], lcr[t], lci[t], wo, wi, ker, t, ngrp,
+                                        ko_n, ki_n, n_i * rowlen, plane, rowlen)  # fmt: skip
 
 
 @numba.njit(fastmath=True, inline="always")
-def _axpy8(gf, p, v, k0, k1, k2, k3, k4, k5, k6, k7):
-    """``gf[p:p + 8] += v * k`` written out (flat unsigned index ``p``: no wrap-around
-    checks; LLVM's SLP vectoriser packs the eight updates)."""
-    gf[p] += v * k0
-    gf[p + np.uint64(1)] += v * k1
-    gf[p + np.uint64(2)] += v * k2
-    gf[p + np.uint64(3)] += v * k3
-    gf[p + np.uint64(4)] += v * k4
-    gf[p + np.uint64(5)] += v * k5
-    gf[p + np.uint64(6)] += v * k6
-    gf[p + np.uint64(7)] += v * k7
-
-
-@numba.njit(fastmath=True, inline="always")
-def _spread_one(gf, base, x, c_r, c_i, wo, wi, t, coef, deg1, ngrp, ko_n, ki_n, ostride,
-                plane, rowlen):  # fmt: skip
-    """One scatterer: kernel values by Horner across 8 slots (registers; the SLP vectoriser
-    packs them), then two 8-wide axpys per line. Flat unsigned indices: no wrap-around checks."""
+def _spread_one(gf, base, c_r, c_i, wo, wi, ker, t, ngrp, ko_n, ki_n, ostride, plane, rowlen):
+    """One scatterer ``t`` of the chunk: per group of 8 kernel slots (``ker``, slot-major),
+    two 8-wide axpys per line. Flat unsigned indices: no wrap-around checks."""
     for gi in range(ngrp):
-        o = gi * _LANES
-        k0 = coef[deg1 - 1, o]
-        k1 = coef[deg1 - 1, o + 1]
-        k2 = coef[deg1 - 1, o + 2]
-        k3 = coef[deg1 - 1, o + 3]
-        k4 = coef[deg1 - 1, o + 4]
-        k5 = coef[deg1 - 1, o + 5]
-        k6 = coef[deg1 - 1, o + 6]
-        k7 = coef[deg1 - 1, o + 7]
-        for k in range(deg1 - 2, -1, -1):
-            k0 = k0 * x + coef[k, o]
-            k1 = k1 * x + coef[k, o + 1]
-            k2 = k2 * x + coef[k, o + 2]
-            k3 = k3 * x + coef[k, o + 3]
-            k4 = k4 * x + coef[k, o + 4]
-            k5 = k5 * x + coef[k, o + 5]
-            k6 = k6 * x + coef[k, o + 6]
-            k7 = k7 * x + coef[k, o + 7]
+        o = gi * LANES
+        k0 = ker[o, t]
+        k1 = ker[o + 1, t]
+        k2 = ker[o + 2, t]
+        k3 = ker[o + 3, t]
+        k4 = ker[o + 4, t]
+        k5 = ker[o + 5, t]
+        k6 = ker[o + 6, t]
+        k7 = ker[o + 7, t]
         po = base + np.uint64(o)
         for mo in range(ko_n):
             p0 = po
@@ -387,8 +360,8 @@ def _spread_one(gf, base, x, c_r, c_i, wo, wi, t, coef, deg1, ngrp, ko_n, ki_n, 
             for mi in range(ki_n):
                 p1 = p0 + np.uint64(plane)
                 wm = wm_o * wi[mi, t]
-                _axpy8(gf, p0, c_r * wm, k0, k1, k2, k3, k4, k5, k6, k7)
-                _axpy8(gf, p1, c_i * wm, k0, k1, k2, k3, k4, k5, k6, k7)
+                axpy8(gf, p0, c_r * wm, k0, k1, k2, k3, k4, k5, k6, k7)
+                axpy8(gf, p1, c_i * wm, k0, k1, k2, k3, k4, k5, k6, k7)
                 p0 += np.uint64(rowlen)
             po += np.uint64(ostride)
 
@@ -398,22 +371,12 @@ def _fold_rows(g, src, nf, pad, out):
     """Padded planar rows ``src`` of ``g`` -> periodic interleaved fine grids ``out``
     (len(src), 2 nf)."""
     for o in numba.prange(src.size):
-        re = g[src[o], 0]
-        im = g[src[o], 1]
-        ob = out[o]
-        for i in range(nf):
-            ob[2 * i] = re[i + pad]
-            ob[2 * i + 1] = im[i + pad]
-        for i in range(pad):
-            ob[2 * (nf - pad + i)] += re[i]
-            ob[2 * (nf - pad + i) + 1] += im[i]
-            ob[2 * i] += re[nf + pad + i]
-            ob[2 * i + 1] += im[nf + pad + i]
+        fold_padded(g[src[o], 0], g[src[o], 1], nf, pad, out[o])
 
 
 def _padded(coef: np.ndarray) -> np.ndarray:
     """The Horner table with zero slots up to a whole number of groups of 8."""
-    wp = _LANES * -(-coef.shape[1] // _LANES)
+    wp = LANES * -(-coef.shape[1] // LANES)
     out = np.zeros((coef.shape[0], wp), dtype=coef.dtype)
     out[:, : coef.shape[1]] = coef
     return out

@@ -13,7 +13,8 @@ import xarray as xr
 from .._validate import check_choice
 from ..provenance import provenance_attrs
 from ..scene.scatterers import AMPLITUDE_MODELS
-from .aline import METHODS, _check_tol, ascan, pixel_depths
+from ._rules import check_tol
+from .aline import METHODS, ascan, pixel_depths
 
 __all__ = ["NORMALISATIONS", "bscan", "expected_intensity"]
 
@@ -77,7 +78,7 @@ def bscan(
     h = float(source.attrs["depth"])
     k0 = float(source.attrs["k0"])
     check_choice(method, "method", METHODS)
-    _check_tol(tol)
+    check_tol(tol)
     for var in ("z", "amplitude"):
         if "scatterer" not in scene[var].dims:
             raise ValueError(

@@ -23,101 +23,25 @@ numba has no vectorised ``sin``/``cos`` without SVML.
 from __future__ import annotations
 
 import math
-import threading
 
-import numba
 import numpy as np
+
+from ..system.source import spectral_index
+from ._kernels import C2, INV_TWO_PI, carrier_and_position
 
 __all__ = [
     "MAX_CARRIER_TURNS",
-    "PARALLEL_LOCK",
     "carrier_and_position",
     "float64_error_estimate",
     "naive_float32_phase_error",
     "naive_float32_phase_error_estimate",
 ]
 
-#: Held around every numba-parallel kernel call: each call already uses every core (prange over
-#: A-lines), and numba's fallback "workqueue" threading layer aborts on concurrent calls (e.g.
-#: from dask threads in :func:`speckle.bscan`); serialising costs nothing and is always safe.
-PARALLEL_LOCK = threading.Lock()
-
-# 2 pi = _C1 + _C2 + _C3 with _C1 = 201/32 exact in 8 bits, so n * _C1 is exact for n < 2**45
-_C1 = 6.28125
-_C2 = 0.001935307179586477
-_C3 = -1.0033115225336665e-19
-_INV_TWO_PI = 0.15915494309189535
 _EPS64 = float(np.finfo(np.float64).eps)
-#: Largest carrier phase ``|2 k0 z|`` in turns (units of 2 pi) that :func:`_wrap_phase` reduces
-#: with the error of :func:`float64_error_estimate` (``n * _C1`` is exact for ``n < 2**45``).
+#: Largest carrier phase ``|2 k0 z|`` in turns (units of 2 pi) that the float64 reduction of
+#: :func:`carrier_and_position` handles with the error of :func:`float64_error_estimate`
+#: (``n * C1`` is exact for ``n < 2**45``).
 MAX_CARRIER_TURNS = 2.0**45
-
-
-@numba.njit(fastmath=False, cache=True)
-def _wrap_phase(ph):
-    """``ph`` mod 2 pi into [-pi, pi] in float64 (three-term Cody-Waite reduction, no fastmath)."""
-    n = np.floor(ph * _INV_TWO_PI + 0.5)
-    return ((ph - n * _C1) - n * _C2) - n * _C3
-
-
-@numba.njit(fastmath=True, cache=True)
-def carrier_and_position(z, a, k0, depth, grid, cr, ci, u):
-    """Fill ``cr + 1j*ci = a * exp(2i k0 z)`` and ``u = frac(z/depth) * grid`` for one line.
-
-    ``z`` (float64, µm) and ``a`` (complex128) have shape (M,); outputs are float64 arrays of
-    shape (M,). ``u`` lies in ``[0, grid)``.
-    """
-    inv_h = 1.0 / depth
-    two_k0 = 2.0 * k0
-    for j in range(z.shape[0]):
-        zj = z[j]
-        ph = _wrap_phase(two_k0 * zj)
-        y = 0.25 * ph
-        y2 = y * y
-        # Taylor series of cos and sin at |y| <= pi/4 (truncation < 1e-17)
-        c = 1.0 + y2 * (
-            -1 / 2
-            + y2
-            * (
-                1 / 24
-                + y2
-                * (
-                    -1 / 720
-                    + y2
-                    * (1 / 40320 + y2 * (-1 / 3628800 + y2 * (1 / 479001600 - y2 / 87178291200)))
-                )
-            )
-        )
-        s = y * (
-            1.0
-            + y2
-            * (
-                -1 / 6
-                + y2
-                * (
-                    1 / 120
-                    + y2
-                    * (
-                        -1 / 5040
-                        + y2
-                        * (
-                            1 / 362880
-                            + y2 * (-1 / 39916800 + y2 * (1 / 6227020800 - y2 / 1307674368000))
-                        )
-                    )
-                )
-            )
-        )
-        # (c + i s)^4 by two squarings
-        c, s = c * c - s * s, 2.0 * c * s
-        c, s = c * c - s * s, 2.0 * c * s
-        ar = a[j].real
-        ai = a[j].imag
-        cr[j] = ar * c - ai * s
-        ci[j] = ar * s + ai * c
-        f = zj * inv_h
-        f = (f - np.floor(f)) * grid
-        u[j] = f if f < grid else f - grid
 
 
 def float64_error_estimate(
@@ -131,11 +55,11 @@ def float64_error_estimate(
     method reduces ``z mod H`` exactly). Spectral component ``n`` then carries a phase error
     ``2 pi n df``, i.e. a relative field error ``2 pi n_rms df`` with
     ``n_rms^2 = sum n^2 S_n^2 / sum S_n^2``. The carrier phase ``2 k0 z`` is reduced modulo
-    ``2 pi`` with a three-term constant: the rounding of ``m * _C2`` (``m`` turns) adds an rms
-    phase error ``eps/(2 sqrt 3) |m _C2|``. Both grow with depth; summed in quadrature over
+    ``2 pi`` with a three-term constant: the rounding of ``m * C2`` (``m`` turns) adds an rms
+    phase error ``eps/(2 sqrt 3) |m C2|``. Both grow with depth; summed in quadrature over
     scatterers weighted by ``|a|^2``:
 
-        e^2 = (2 pi n_rms eps z_rms / (sqrt(6) H))^2 + (eps z_rms 2 k0 _C2 / (4 pi sqrt 3))^2,
+        e^2 = (2 pi n_rms eps z_rms / (sqrt(6) H))^2 + (eps z_rms 2 k0 C2 / (4 pi sqrt 3))^2,
 
     ``z_rms^2 = sum |a|^2 z^2 / sum |a|^2`` (µm). It is ~1e-14 for scatterers within a few
     ``H`` and reaches 1e-2 at ``|z| ~ 1e15`` µm (``H`` ~ 2 mm, ``N`` = 256): then no
@@ -153,8 +77,6 @@ def float64_error_estimate(
     spectrum : numpy.ndarray
         ``N`` spectral weights.
     """
-    from ..system.source import spectral_index  # local: source imports nothing from here
-
     w = np.abs(np.asarray(amplitude))
     peak = float(np.max(w, initial=0.0))
     if peak == 0.0:
@@ -162,14 +84,14 @@ def float64_error_estimate(
     w = (w / peak) ** 2  # scaled: no overflow for huge amplitudes
     total = float(np.sum(w))
     zz = np.asarray(z, dtype=float)
-    if 2.0 * k0 * float(np.max(np.abs(zz))) * _INV_TWO_PI >= MAX_CARRIER_TURNS:
+    if 2.0 * k0 * float(np.max(np.abs(zz))) * INV_TWO_PI >= MAX_CARRIER_TURNS:
         return math.inf
     z_rms = math.sqrt(float(np.sum(w * zz**2)) / total)
     s = np.asarray(spectrum, dtype=float)
     n = spectral_index(s.size)
     n_rms = math.sqrt(float(np.sum(n**2 * s**2)) / float(np.sum(s**2)))
     position = 2.0 * math.pi * n_rms * _EPS64 * z_rms / (math.sqrt(6.0) * depth)
-    carrier = _EPS64 * z_rms * 2.0 * k0 * _C2 / (4.0 * math.pi * math.sqrt(3.0))
+    carrier = _EPS64 * z_rms * 2.0 * k0 * C2 / (4.0 * math.pi * math.sqrt(3.0))
     return math.hypot(position, carrier)
 
 

@@ -43,26 +43,32 @@ import numpy as np
 import scipy.fft
 
 from ..system.source import index_shift_phase, spectral_index
-from .aline import register_method
-from .carrier import PARALLEL_LOCK, carrier_and_position, float64_error_estimate
+from ._kernels import carrier_and_position, es_kernel_values, fold_padded, parallel_section
+from ._rules import (
+    DEFAULT_TOL,
+    NUFFT_TOL_FLOOR,
+    refuse_below_floor,
+    refuse_float32,
+    resolve_tol,
+)
+from .carrier import float64_error_estimate
 
 __all__ = [
     "DEFAULT_TOL",
     "NUFFT_TOL_FLOOR",
     "FineGridPlan",
+    "check_float64_placement",
     "es_kernel",
     "fine_grid_plan",
     "fine_to_pixels",
     "finufft_ascan",
+    "finufft_method",
     "float32_error_estimate",
     "kernel_width",
+    "nufft32_method",
     "nufft_ascan",
+    "nufft_method",
 ]
-
-#: Tolerance used by approximate methods when ``tol`` is None (close to float64 exactness).
-DEFAULT_TOL = 1e-12
-#: Tightest tolerance the NUFFT kernels reach (kernel width cap 16); below it use "direct".
-NUFFT_TOL_FLOOR = 1e-13
 #: FINUFFT ``eps`` per unit ``tol`` for method "finufft" (FINUFFT's error reaches ~9 eps).
 FINUFFT_EPS_FACTOR = 0.05
 #: Fine-grid upsampling factor.
@@ -132,7 +138,6 @@ def _spread(z, a, k0, depth, nf, w, coef, out):
     store into arrays of that type.
     """
     nlines, m = z.shape
-    deg1 = coef.shape[0]
     half = 0.5 * w
     pad = w
     for b in numba.prange(nlines):
@@ -152,15 +157,7 @@ def _spread(z, a, k0, depth, nf, w, coef, out):
             vr[j] = cr[j]
             vi[j] = ci[j]
         ker = np.empty((w, m), dtype=coef.dtype)
-        for i in range(w):
-            kv = ker[i]
-            c = coef[deg1 - 1, i]
-            for j in range(m):
-                kv[j] = c
-            for k in range(deg1 - 2, -1, -1):
-                c = coef[k, i]
-                for j in range(m):
-                    kv[j] = kv[j] * x[j] + c
+        es_kernel_values(x, coef, ker)
         g = np.zeros(2 * (nf + 2 * pad), dtype=coef.dtype)
         for j in range(m):
             pr = vr[j]
@@ -173,12 +170,7 @@ def _spread(z, a, k0, depth, nf, w, coef, out):
                 g[s + 2 * i] += pr * kk
                 g[s + 2 * i + 1] += pi * kk
         # fold the padded grid back onto the periodic fine grid
-        ob = out[b]
-        for i in range(2 * nf):
-            ob[i] = g[i + 2 * pad]
-        for i in range(2 * pad):
-            ob[2 * nf - 2 * pad + i] += g[i]
-            ob[i] += g[2 * nf + 2 * pad + i]
+        fold_padded(g[0::2], g[1::2], nf, pad, out[b])
 
 
 def fine_grid_size(n_pixels: int, w: int) -> int:
@@ -251,7 +243,7 @@ def nufft_ascan(
         sl = slice(b0, min(nlines, b0 + step))
         nb = sl.stop - sl.start
         g = np.empty((nb, plan.nf), dtype=plan.cplx)
-        with PARALLEL_LOCK:
+        with parallel_section():
             _spread(
                 z[sl],
                 amplitude[sl],
@@ -352,19 +344,6 @@ def finufft_ascan(
     return scipy.fft.fft(field * spectrum, axis=-1, workers=-1) * _pixel_phase(n_pixels)
 
 
-def _tol(tol):
-    return DEFAULT_TOL if tol is None else tol
-
-
-def _check_floor(tol, method):
-    if tol < NUFFT_TOL_FLOOR:
-        raise ValueError(
-            f"method={method!r} reaches tol >= {NUFFT_TOL_FLOOR:g} only, got tol={tol:g}; "
-            "use method='direct' (exact) or method='auto'"
-        )
-    return tol
-
-
 #: Share of ``tol`` left to float64 placement errors by "nufft" (its kernel takes ``tol/2``,
 #: measured worst 0.56 ``tol``).
 FLOAT64_SHARE = 0.25
@@ -393,22 +372,18 @@ def check_float64_placement(z, amplitude, depth, k0, spectrum, budget, tol, meth
     return err
 
 
-@register_method("nufft")
-def _nufft_method(z, amplitude, n_pixels, depth, k0, spectrum, tol):
-    tolv = _check_floor(_tol(tol), "nufft")
+def nufft_method(z, amplitude, n_pixels, depth, k0, spectrum, tol):
+    """``ascan(..., method="nufft")`` on validated arrays (``tol`` None: the default)."""
+    tolv = refuse_below_floor(resolve_tol(tol), "nufft")
     check_float64_placement(z, amplitude, depth, k0, spectrum, FLOAT64_SHARE * tolv, tolv, "nufft")
     return nufft_ascan(z, amplitude, n_pixels, depth, k0, spectrum, tol=tolv)
 
 
-@register_method("nufft32")
-def _nufft32_method(z, amplitude, n_pixels, depth, k0, spectrum, tol):
-    tolv = _tol(tol)
+def nufft32_method(z, amplitude, n_pixels, depth, k0, spectrum, tol):
+    """``ascan(..., method="nufft32")`` on validated arrays."""
+    tolv = resolve_tol(tol)
     floor = float32_error_estimate(z.shape[1], n_pixels, kernel_width(0.5 * tolv))
-    if floor > 0.5 * tolv:
-        raise ValueError(
-            f"method='nufft32' cannot reach tol={tolv:g} here: its float32 rounding error is "
-            f"~{floor:.1e}; use tol >= {2 * floor:.1e} or method='nufft'"
-        )
+    refuse_float32(floor, tolv)
     check_float64_placement(z, amplitude, depth, k0, spectrum, 0.5 * tolv - floor, tolv, "nufft32")
     # half of tol for the kernel, half for rounding
     return nufft_ascan(
@@ -416,7 +391,7 @@ def _nufft32_method(z, amplitude, n_pixels, depth, k0, spectrum, tol):
     )
 
 
-@register_method("finufft")
-def _finufft_method(z, amplitude, n_pixels, depth, k0, spectrum, tol):
-    tolv = _check_floor(_tol(tol), "finufft")
+def finufft_method(z, amplitude, n_pixels, depth, k0, spectrum, tol):
+    """``ascan(..., method="finufft")`` on validated arrays."""
+    tolv = refuse_below_floor(resolve_tol(tol), "finufft")
     return finufft_ascan(z, amplitude, n_pixels, depth, k0, spectrum, tol=tolv)

@@ -32,11 +32,18 @@ import numba
 import numpy as np
 
 from ..system.source import index_shift_phase, spectral_index
-from .aline import register_method
-from .carrier import PARALLEL_LOCK, carrier_and_position
-from .nufft import DEFAULT_TOL, check_float64_placement
+from ._kernels import carrier_and_position, parallel_section
+from ._rules import psf_slots, resolve_tol
+from .nufft import check_float64_placement
 
-__all__ = ["MAX_ROWS", "half_width", "psf_ascan", "psf_error_estimate", "tail_error"]
+__all__ = [
+    "MAX_ROWS",
+    "half_width",
+    "psf_ascan",
+    "psf_error_estimate",
+    "psf_method",
+    "tail_error",
+]
 
 #: Largest number of interpolation rows per pixel (bounds table memory; sets the error floor).
 MAX_ROWS = 1 << 14
@@ -115,17 +122,6 @@ def psf_error_estimate(spectrum: np.ndarray, tol: float) -> tuple[float, int, in
     rows = _rows(s, tol)
     err = math.sqrt(tail[min(hw, tail.size - 1)]) + _interp_error(s, rows)
     return WORST_CASE * err, hw, rows
-
-
-def _slots(n_pixels: int, hw: int) -> tuple[int, int]:
-    """``(lo, nk)``: pixels ``p0 - lo ... p0 - lo + nk - 1`` receive a scatterer nearest ``p0``.
-
-    ``2 hw + 1`` symmetric slots, or exactly the ``N`` pixels of the A-line once ``hw`` reaches
-    ``N//2`` (no pixel written twice).
-    """
-    if 2 * hw + 1 >= n_pixels:
-        return n_pixels // 2, n_pixels
-    return hw, 2 * hw + 1
 
 
 def _table(spectrum: np.ndarray, lo: int, nk: int, rows: int) -> np.ndarray:
@@ -227,12 +223,12 @@ def psf_ascan(
     s = np.asarray(spectrum, dtype=float)
     if hw is None:
         hw = half_width(s, tol)
-    lo, nk = _slots(n_pixels, int(hw))
+    lo, nk = psf_slots(n_pixels, int(hw))
     if rows is None:
         rows = _rows(s, tol if tol is not None else 1e-6)
     table = _table(s, lo, nk, int(rows))
     out = np.zeros((z.shape[0], n_pixels), dtype=np.complex128)
-    with PARALLEL_LOCK:
+    with parallel_section():
         _psf_lines(
             z,
             amplitude,
@@ -248,9 +244,9 @@ def psf_ascan(
     return out
 
 
-@register_method("psf")
-def _psf_method(z, amplitude, n_pixels, depth, k0, spectrum, tol):
-    tolv = DEFAULT_TOL if tol is None else tol
+def psf_method(z, amplitude, n_pixels, depth, k0, spectrum, tol):
+    """``ascan(..., method="psf")`` on validated arrays (``tol`` None: the default)."""
+    tolv = resolve_tol(tol)
     err, hw, rows = psf_error_estimate(spectrum, tolv)
     if err > tolv:
         raise ValueError(

@@ -23,12 +23,12 @@ import dask.array as da
 import numpy as np
 import xarray as xr
 
-import speckle
-
 from .._validate import as_finite_array, check_int, check_real
 from ..conventions import coord, spacing
 from ..provenance import provenance_attrs
 from ..scene.shared import check_scene, scene_window, shared_scene
+from .aline import pixel_depths
+from .beam import beam_scan
 
 __all__ = ["REACH_EPS", "beam_reach", "image", "image_regions", "scan_lines"]
 
@@ -110,9 +110,9 @@ def _lines_field(
         z, x, a = part[:3]
     kw = {"waist": waist, "method": method, "tol": tol, **src, **optics}
     if ys is None:
-        return speckle.beam_scan(z, x, a, lines=xs, **kw).T
+        return beam_scan(z, x, a, lines=xs, **kw).T
     grid = np.stack(np.meshgrid(xs, ys, indexing="ij"), axis=-1).reshape(-1, 2)
-    out = speckle.beam_scan(z, x, a, y=part[3], lines=grid, **kw)
+    out = beam_scan(z, x, a, y=part[3], lines=grid, **kw)
     return out.reshape(xs.size, ys.size, -1).transpose(2, 0, 1)
 
 
@@ -149,7 +149,7 @@ def _dataset(
 ) -> xr.Dataset:
     dims = ("depth", "x") if ys is None else ("depth", "x", "y")
     coords = {
-        "depth": coord("depth", speckle.pixel_depths(src["n_pixels"], src["depth"])),
+        "depth": coord("depth", pixel_depths(src["n_pixels"], src["depth"])),
         "x": coord("x", xs),
     }
     if ys is not None:

@@ -49,20 +49,11 @@ import math
 
 import numpy as np
 
-from .._validate import check_int
-from .aline import METHODS, register_method
-from .carrier import float64_error_estimate
-from .nufft import (
-    DEFAULT_TOL,
-    FLOAT64_SHARE,
-    NUFFT_TOL_FLOOR,
-    fine_grid_size,
-    float32_error_estimate,
-    kernel_width,
-)
-from .psf import _slots, psf_error_estimate
+from ._rules import NUFFT_TOL_FLOOR, choose, estimate_table, psf_slots, resolve_tol
+from .nufft import FLOAT64_SHARE, fine_grid_size, float32_error_estimate, kernel_width
+from .psf import psf_error_estimate
 
-__all__ = ["AUTO_CANDIDATES", "choose_method", "method_estimates", "stream_ascans"]
+__all__ = ["AUTO_CANDIDATES", "choose_method", "method_estimates"]
 
 #: Methods ``"auto"`` chooses from (``"finufft"`` is always slower than ``"nufft"``: benchmark).
 AUTO_CANDIDATES = ("direct", "nufft", "nufft32", "psf")
@@ -96,7 +87,7 @@ def _estimate(
         err += e64
         if err > tol:
             return math.inf, math.inf
-        _, nk = _slots(n, hw)
+        _, nk = psf_slots(n, hw)
         table = 40.0 * rows * nk
         return err, table + b * (5000.0 + 10.0 * n) + b * m * (20.0 + 3.0 * nk)
     raise ValueError(f"no error/cost model for method {method!r}")
@@ -131,13 +122,13 @@ def method_estimates(
     dict
         ``{method: {"error": e, "cost_ns": t, "admissible": e <= tol}}``.
     """
-    tolv = DEFAULT_TOL if tol is None else float(tol)
+    tolv = resolve_tol(tol)
     s = np.ones(n_pixels) if spectrum is None else np.asarray(spectrum, dtype=float)
-    out = {}
-    for name in AUTO_CANDIDATES:
-        err, cost = _estimate(name, n_lines, n_scatterers, n_pixels, s, tolv, float64_error)
-        out[name] = {"error": err, "cost_ns": cost, "admissible": bool(err <= tolv)}
-    return out
+
+    def estimate(name):
+        return _estimate(name, n_lines, n_scatterers, n_pixels, s, tolv, float64_error)
+
+    return estimate_table(AUTO_CANDIDATES, estimate, tolv)
 
 
 def _psf_floor_ns(n_lines: int, n_scat: int, n_pix: int) -> float:
@@ -155,107 +146,12 @@ def choose_method(
     float64_error: float = 0.0,
 ) -> str:
     """Name of the fastest admissible method (see :func:`method_estimates`); never runs one."""
-    tolv = DEFAULT_TOL if tol is None else float(tol)
+    tolv = resolve_tol(tol)
     s = np.ones(n_pixels) if spectrum is None else np.asarray(spectrum, dtype=float)
-    ok = {}
-    for name in AUTO_CANDIDATES:
-        if name == "psf" and _psf_floor_ns(n_lines, n_scatterers, n_pixels) >= min(ok.values()):
-            continue  # cannot win whatever its half-width: no need to estimate it
-        err, cost = _estimate(name, n_lines, n_scatterers, n_pixels, s, tolv, float64_error)
-        if err <= tolv:
-            ok[name] = cost
-    return min(ok, key=ok.get)
 
+    def estimate(name):
+        return _estimate(name, n_lines, n_scatterers, n_pixels, s, tolv, float64_error)
 
-@register_method("auto")
-def _auto(z, amplitude, n_pixels, depth, k0, spectrum, tol):
-    e64 = float64_error_estimate(z, amplitude, depth, k0, spectrum)
-    name = choose_method(z.shape[0], z.shape[1], n_pixels, spectrum, tol, float64_error=e64)
-    return METHODS[name](z, amplitude, n_pixels, depth, k0, spectrum, tol)
-
-
-def stream_ascans(
-    n_alines: int,
-    density: float,
-    *,
-    n_pixels: int,
-    depth: float,
-    k0: float,
-    seed: int,
-    spectrum: np.ndarray | None = None,
-    method: str = "auto",
-    tol: float | None = None,
-    amplitude: str = "equal",
-    count: str = "fixed",
-    chunk_lines: int = 256,
-    lines: object | None = None,
-) -> np.ndarray:
-    """Random-scene A-scans generated and imaged ``chunk_lines`` lines at a time.
-
-    Scatterers of lines ``i ... i + chunk_lines - 1`` are drawn with
-    :func:`speckle.random_scatterers` (``first_aline=i``, so the result does not
-    depend on ``chunk_lines``) and imaged with :func:`speckle.ascan`; only one chunk of
-    scatterers is alive at a time, so peak memory is the output plus one chunk whatever
-    ``n_alines`` (measured in ``benchmarks/bench_ascan.py``).
-
-    Parameters
-    ----------
-    n_alines, density, n_pixels, depth, seed, amplitude, count
-        Scene of :func:`speckle.random_scatterers` (``depth`` in µm).
-    k0, spectrum, method, tol
-        Imaging, as in :func:`speckle.ascan` (``k0`` in rad/µm).
-    chunk_lines : int
-        A-lines generated and imaged at once (>= 1).
-    lines : sequence of int, optional
-        Only these A-line indices (each in ``[0, n_alines)``) are generated and imaged, in the
-        given order; the values equal the same rows of the full scene.
-
-    Returns
-    -------
-    numpy.ndarray
-        complex128 (n_alines, n_pixels), or (len(lines), n_pixels) with ``lines``.
-    """
-    from ..scene.scatterers import random_scatterers
-    from .aline import ascan
-
-    nl_total = check_int(n_alines, "n_alines", low=1)
-    step = check_int(chunk_lines, "chunk_lines", low=1)
-    if lines is None:
-        wanted = np.arange(nl_total)
-    else:
-        wanted = np.asarray(lines)
-        if wanted.ndim != 1 or not np.issubdtype(wanted.dtype, np.integer):
-            raise TypeError("lines must be a 1-D sequence of integer A-line indices")
-        if wanted.size and (wanted.min() < 0 or wanted.max() >= nl_total):
-            raise ValueError(f"lines must lie in [0, {nl_total - 1}]")
-    out = np.empty((wanted.size, n_pixels), dtype=np.complex128)
-    order = np.argsort(wanted, kind="stable")
-    sorted_lines = wanted[order]
-    # consecutive runs of requested lines, each drawn in chunks of at most `step` lines
-    breaks = np.flatnonzero(np.diff(sorted_lines) != 1) + 1
-    pos = 0
-    for run in np.split(sorted_lines, breaks):
-        for c0 in range(0, run.size, step):
-            first, nl = int(run[c0]), min(step, run.size - c0)
-            scene = random_scatterers(
-                nl,
-                density,
-                n_pixels=n_pixels,
-                depth=depth,
-                seed=seed,
-                amplitude=amplitude,
-                count=count,
-                first_aline=first,
-            )
-            out[order[pos : pos + nl]] = ascan(
-                scene["z"].values,
-                scene["amplitude"].values,
-                n_pixels=n_pixels,
-                depth=depth,
-                k0=k0,
-                spectrum=spectrum,
-                method=method,
-                tol=tol,
-            )
-            pos += nl
-    return out
+    # psf cannot win when its floor (one slot per scatterer) is beaten: not estimated then
+    floor = {"psf": _psf_floor_ns(n_lines, n_scatterers, n_pixels)}
+    return choose(AUTO_CANDIDATES, estimate, tolv, cost_floor=floor)

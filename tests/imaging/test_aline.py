@@ -8,7 +8,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import speckle
-from speckle.imaging import aline
+from speckle.imaging import direct
 from speckle.imaging.aline import ascan
 
 N, H = 32, 256.0  # 8 µm pixels
@@ -164,7 +164,7 @@ def test_direct_result_does_not_depend_on_chunking(monkeypatch):
     rng = np.random.default_rng(5)
     z, a = rng.uniform(0, H, (9, 40)), rng.normal(size=(9, 40))
     full = ascan(z, a, n_pixels=N, depth=H, k0=1.0)
-    monkeypatch.setattr(aline, "DIRECT_CHUNK_ELEMENTS", 1)
+    monkeypatch.setattr(direct, "DIRECT_CHUNK_ELEMENTS", 1)
     np.testing.assert_array_equal(ascan(z, a, n_pixels=N, depth=H, k0=1.0), full)
 
 

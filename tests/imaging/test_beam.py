@@ -11,9 +11,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import speckle
-from speckle.imaging import beam_nufft
-from speckle.imaging.beam import _validate, beam_weight
+from speckle.imaging.beam import beam_problem, beam_weight
 from speckle.imaging.beam_nufft import choose_beam_method, line_grid, uses_row_path
+from speckle.imaging.methods import BEAM_METHODS
 
 N, H = 32, 256.0  # pixels, depth (µm): 8 µm pixels
 K0 = 10 * N * np.pi / H  # k0/delta_k = 10
@@ -262,14 +262,12 @@ def test_row_path_stays_within_tol_and_agrees_with_the_general_path(waist_pitch,
     a = rng.normal(size=m) + 1j * rng.normal(size=m)
     kw = dict(lines=lines, waist=w0, n_pixels=N, depth=H, k0=K0)
     ref = speckle.beam_scan(z, x, a, **kw)
-    sc, beam, _ = _validate(z, x, a, None, lines, w0, N, H, K0, None, "nufft", tol, None, None)
+    sc, beam, _ = beam_problem(z, x, a, lines=lines, waist=w0, n_pixels=N, depth=H, k0=K0)
     assert uses_row_path(beam, line_grid(sc.lines, w0), 0.5 * tol) is row
     fast = speckle.beam_scan(z, x, a, method="nufft", tol=tol, **kw)
     assert rel_err(fast, ref) <= tol
     if row:  # the same scene on the general path
-        with pytest.MonkeyPatch.context() as mp:
-            mp.setattr(beam_nufft, "uses_row_path", lambda *args: False)
-            general = speckle.beam_scan(z, x, a, method="nufft", tol=tol, **kw)
+        general = BEAM_METHODS["nufft"](sc, beam, tol, path="general")
         assert rel_err(general, ref) <= tol
         assert rel_err(fast, general) <= 2 * tol
 
@@ -293,14 +291,13 @@ def test_raster_row_path_stays_within_tol_and_agrees_with_the_general_path(n_y, 
     a = rng.normal(size=m) + 1j * rng.normal(size=m)
     kw = dict(y=y, lines=lines, waist=w0, n_pixels=N, depth=H, k0=K0)
     ref = speckle.beam_scan(z, x, a, **kw)
-    sc, beam, _ = _validate(z, x, a, y, lines, w0, N, H, K0, None, method, tol, None, None)
+    sc, beam, _ = beam_problem(z, x, a, y=y, lines=lines, waist=w0, n_pixels=N, depth=H, k0=K0)
     assert uses_row_path(beam, line_grid(sc.lines, w0), 0.25 * tol)
     fast = speckle.beam_scan(z, x, a, method=method, tol=tol, **kw)
     assert rel_err(fast, ref) <= tol
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(beam_nufft, "uses_row_path", lambda *args: False)
-        general = speckle.beam_scan(z, x, a, method=method, tol=tol, **kw)
+    general = BEAM_METHODS[method](sc, beam, tol, path="general")
     assert rel_err(general, ref) <= tol
+    np.testing.assert_array_equal(BEAM_METHODS[method](sc, beam, tol, path="row"), fast)
 
 
 def test_finufft_reference_within_tol():
@@ -320,8 +317,7 @@ def test_irregular_lines_fall_back_to_direct_or_are_refused():
     a = rng.normal(size=100) + 0j
     lines = np.array([0.0, 1.0, 2.5, 7.3])  # no uniform grid holds them
     kw = dict(lines=lines, waist=2.0, n_pixels=N, depth=H, k0=K0)
-    sc, beam, _ = _validate(z, x, a, None, lines, 2.0, N, H, K0, None, "direct", None, None,
-                            None)  # fmt: skip
+    sc, beam, _ = beam_problem(z, x, a, **kw)
     assert line_grid(sc.lines, 2.0) is None
     assert choose_beam_method(sc, beam, 1e-6) == "direct"
     np.testing.assert_array_equal(
@@ -336,11 +332,11 @@ def test_auto_picks_a_fast_method_on_a_large_scan_and_direct_on_a_tiny_one():
     m = 4 * 512 * 512
     x, z = rng.uniform(0, 511, m), rng.uniform(0, 4096, m)
     lines = np.arange(512.0)
-    big = _validate(z, x, np.ones(m), None, lines, 2.0, 512, 4096.0, 3.9, None, "auto", 1e-6,
-                    None, None)  # fmt: skip
+    big = beam_problem(z, x, np.ones(m), lines=lines, waist=2.0, n_pixels=512, depth=4096.0,
+                       k0=3.9, tol=1e-6)  # fmt: skip
     assert choose_beam_method(*big) in ("nufft", "nufft32")
-    tiny = _validate(z[:3], x[:3], np.ones(3), None, [0.0], 2.0, 16, 128.0, 3.9, None, "auto",
-                     1e-6, None, None)  # fmt: skip
+    tiny = beam_problem(z[:3], x[:3], np.ones(3), lines=[0.0], waist=2.0, n_pixels=16,
+                        depth=128.0, k0=3.9, tol=1e-6)  # fmt: skip
     assert choose_beam_method(*tiny) == "direct"
 
 

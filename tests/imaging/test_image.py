@@ -10,6 +10,7 @@ import xarray as xr
 
 import speckle
 from speckle.analysis.beam import axial_correlation, lateral_correlation
+from speckle.imaging import scan
 from speckle.io import open_dataset, stream_to_netcdf
 from speckle.scene import regions as R
 
@@ -85,7 +86,7 @@ def test_lazy_until_computed(monkeypatch):
             calls.append(1)
         return real(*args, **kw)
 
-    monkeypatch.setattr(speckle, "beam_scan", counting)
+    monkeypatch.setattr(scan, "beam_scan", counting)  # the function the chunks' tasks call
     reg = speckle.make_regions(R.background(density=0.05))
     ds = speckle.image_regions(reg, SRC, seed=1, waist=6.0, x=speckle.scan_lines(12, 4.0), chunk=4)
     ds2 = speckle.image(_scene(), SRC, waist=6.0, x=speckle.scan_lines(12, 4.0), chunk=4)

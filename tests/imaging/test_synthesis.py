@@ -8,14 +8,13 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 import speckle.imaging.aline as aline
-from speckle.imaging.aline import METHODS, ascan
+from speckle.imaging.aline import METHODS, ascan, stream_ascans
 from speckle.imaging.nufft import float32_error_estimate, kernel_width
 from speckle.imaging.psf import half_width
 from speckle.imaging.synthesis import (
     AUTO_CANDIDATES,
     choose_method,
     method_estimates,
-    stream_ascans,
 )
 from speckle.scene.scatterers import random_scatterers
 
