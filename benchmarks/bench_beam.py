@@ -15,7 +15,9 @@ over the scan (the exact direct reference costs seconds per line here).
 
 ``beam_scan`` rows: the row path (:mod:`speckle.imaging.beam_row`, taken by a row or raster of
 lines without focus) and, as its baseline in the same run, the general code of
-:mod:`speckle.imaging.beam_nufft` (``(general path)``, as before the row path existed).
+:mod:`speckle.imaging.beam_nufft` (``(general path)``: the method of
+:data:`speckle.imaging.methods.BEAM_METHODS` called with ``path="general"``, as before the row
+path existed).
 
 FINUFFT baseline: the depth-independent beam is a Gaussian in ``x - X_i``, so one 2-D type-1
 transform of the scene (depth frequency x lateral frequency over a lateral period padded by the
@@ -28,7 +30,6 @@ upsampling factors 2 and 1.25; the fastest of these is the baseline of the ratio
 from __future__ import annotations
 
 import argparse
-import contextlib
 import functools
 import platform
 import time
@@ -39,9 +40,9 @@ import numpy as np
 from _common import best_time, cpu_model, rel_err
 
 import speckle
-from speckle.imaging import beam_nufft
-from speckle.imaging.beam import _validate
+from speckle.imaging.beam import beam_problem
 from speckle.imaging.beam_nufft import choose_beam_method, finufft_beam_scan, line_grid
+from speckle.imaging.methods import BEAM_METHODS
 
 
 def scene(n_pixels, n_lines, density, pitch, seed=1):
@@ -102,8 +103,7 @@ def main():
     ref = speckle.beam_scan(z, x, a, **{**kw, "lines": lines[ref_idx]})
     print(f"direct reference on {ref_idx.size} lines: {time.perf_counter() - t0:.1f} s")
 
-    sc, beam, _ = _validate(z, x, a, None, lines, w0, n_pix, depth, k0, None, "auto", tol, None,
-                            None)  # fmt: skip
+    sc, beam, _ = beam_problem(z, x, a, tol=tol, **kw)
     grid = line_grid(sc.lines, w0)
     ways = {}
     for threads in (1, 2):
@@ -128,11 +128,8 @@ def main():
         numba.set_num_threads(nthr)
         for name, path in (("nufft", "general"), ("nufft", "row"), ("nufft32", "row"),
                            ("auto", "row")):  # fmt: skip
-            with general_path(path == "general"):
-                t, c, out = best_time(
-                    lambda name=name: speckle.beam_scan(z, x, a, method=name, tol=tol, **kw),
-                    args.repeat,
-                )
+            run = functools.partial(scan, z, x, a, name, path, tol, kw)
+            t, c, out = best_time(run, args.repeat)
             extra = f"(auto -> {choose_beam_method(sc, beam, tol)})" if name == "auto" else ""
             label = f"beam_scan {name}{' (general path)' if path == 'general' else ''}, {nthr} thr"
             row(label, t, c, rel_err(out[ref_idx], ref), n_scat, base, base_cpu, extra)
@@ -140,17 +137,13 @@ def main():
     print("  * fastest FINUFFT call (wall): the baseline of both ratio columns")
 
 
-@contextlib.contextmanager
-def general_path(on: bool):
-    """Run the scans inside on the general code of ``beam_nufft`` (no row path): the
-    baseline of the row path (:mod:`speckle.imaging.beam_row`) in the same run."""
-    orig = beam_nufft.uses_row_path
-    if on:
-        beam_nufft.uses_row_path = lambda *args: False
-    try:
-        yield
-    finally:
-        beam_nufft.uses_row_path = orig
+def scan(z, x, a, name, path, tol, kw):
+    """``speckle.beam_scan(method=name)``, or on ``path="general"`` the same validation and
+    method on the general code of ``beam_nufft`` (no row path): the baseline of the row path
+    (:mod:`speckle.imaging.beam_row`) in the same run."""
+    if path == "general":
+        return BEAM_METHODS[name](*beam_problem(z, x, a, tol=tol, **kw), path="general")
+    return speckle.beam_scan(z, x, a, method=name, tol=tol, **kw)
 
 
 def tile_3d(n_tile, tol, repeat, n_pix=512, pitch=4.0):
@@ -181,11 +174,7 @@ def tile_3d(n_tile, tol, repeat, n_pix=512, pitch=4.0):
     )
     for name in ("nufft", "nufft32"):
         for path in ("general", "row"):
-            with general_path(path == "general"):
-                t, c, out = best_time(
-                    lambda name=name: speckle.beam_scan(z, x, a, method=name, tol=tol, **kw),
-                    repeat,
-                )
+            t, c, out = best_time(functools.partial(scan, z, x, a, name, path, tol, kw), repeat)
             pick = [0, n_tile * n_tile // 2 + n_tile // 2]
             err = rel_err(out[pick], ref)
             print(
