@@ -11,10 +11,12 @@ from .._lazy import attach
 __getattr__, __dir__, __all__ = attach(
     __name__,
     {
-        "aline": ["METHODS", "ascan", "pixel_depths"],
+        "aline": ["METHODS", "ascan", "pixel_depths", "stream_ascans"],
         "beam": ["beam_scan"],
         "bscan": ["bscan", "expected_intensity"],
         "scan": ["image", "image_regions", "scan_lines"],
-        "synthesis": ["choose_method", "stream_ascans"],
+        "gaussian_beam": ["Beam"],
+        "methods": ["BEAM_METHODS"],
+        "synthesis": ["choose_method"],
     },
 )
