@@ -22,6 +22,7 @@ __all__ = [
     "check_tol",
     "choose",
     "estimate_table",
+    "memory_limit",
     "psf_slots",
     "refuse_below_floor",
     "refuse_float32",
@@ -78,12 +79,17 @@ def refuse_float32(rounding: float, tol: float) -> None:
         )
 
 
+def memory_limit() -> float:
+    """:data:`speckle._validate.MAX_BYTES`, read at call time (tests lower it)."""
+    return float(_validate.MAX_BYTES)
+
+
 def refuse_memory(method: str, parts: dict[str, float], advice: dict[str, str]) -> float:
     """Total of the peak-memory estimate ``parts`` (bytes per use), or ``ValueError`` when it
     exceeds :data:`speckle._validate.MAX_BYTES`, naming the estimate, its largest part and
     ``advice[part]``: the parameter to change."""
     total = float(sum(parts.values()))
-    cap = _validate.MAX_BYTES
+    cap = memory_limit()
     if total > cap:
         big = max(parts, key=parts.get)
         detail = ", ".join(

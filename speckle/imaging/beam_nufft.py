@@ -70,11 +70,20 @@ from ._rules import (
     NUFFT_TOL_FLOOR,
     choose,
     estimate_table,
+    memory_limit,
     refuse_below_floor,
     refuse_float32,
+    refuse_memory,
     resolve_tol,
 )
-from .beam_row import ROW_MAX_B, row_fine_grids, row_lines, row_weight_error, weight_rate
+from .beam_row import (
+    ROW_MAX_B,
+    row_fine_grids,
+    row_lines,
+    row_path_bytes,
+    row_weight_error,
+    weight_rate,
+)
 from .gaussian_beam import Beam, BeamScene
 from .nufft import (
     fine_grid_plan,
@@ -440,6 +449,95 @@ def uses_row_path(beam: Beam, grid: LineGrid, tol: float) -> bool:
     )
 
 
+class _Layout(NamedTuple):
+    """Buckets and blocks of the general path (:func:`beam_nufft_scan`)."""
+
+    gam: np.ndarray  # gamma per scatterer, or [1]
+    wmax: float  # widest beam over the scene (µm)
+    three_d: bool
+    o_ax: int
+    i_ax: int
+    n_outer: int
+    n_inner: int
+    r_o: float  # reach in outer / inner pitches
+    r_i: float
+    halo: int
+    bli: int
+    nbi: int
+    block: int
+    kmax_i: int
+
+
+def _general_layout(scene: BeamScene, beam: Beam, grid: LineGrid, ln_cut: float) -> _Layout:
+    gam = beam.gamma(scene.z)
+    gam = np.ones(1, dtype=np.complex128) if gam is None else np.ascontiguousarray(gam)
+    # widest beam on the scene: sets the bucket halo and the weight buffers
+    wmax = beam.waist / math.sqrt(float(np.min(gam.real)))
+    reach = wmax * math.sqrt(ln_cut / 2.0)  # µm
+    three_d = len(grid.size) == 2
+    o_ax = grid.outer
+    i_ax = 1 - o_ax if three_d else 0
+    n_outer = grid.size[o_ax]
+    n_inner = grid.size[i_ax] if three_d else 1
+    r_o = reach / grid.pitch[o_ax]
+    r_i = reach / grid.pitch[i_ax]
+    halo = math.ceil(r_o) + 1
+    bli = math.ceil(r_i) + 1
+    nbi = n_inner + 2 * bli if three_d else _DEPTH_BINS
+    # blocks of outer lines: independent of the thread count, so results are bitwise the same
+    # on any number of threads (the vectorised loops would round differently per blocking)
+    block = min(n_outer, max(_BLOCK, 2 * halo))
+    kmax_i = int(2 * r_i) + 2 if three_d else 1
+    return _Layout(gam, wmax, three_d, o_ax, i_ax, n_outer, n_inner, r_o, r_i, halo, bli, nbi,
+                   block, kmax_i)  # fmt: skip
+
+
+def _peak_bytes(scene, beam, grid, ln_cut, nf, w, precision, row):
+    """Peak-memory estimate (bytes, by part) of :func:`beam_nufft_scan` and, per part, the
+    parameter to change (for :func:`speckle.imaging._rules.refuse_memory`)."""
+    rs = 8 if precision == "double" else 4
+    m = scene.z.size
+    n_rows = math.prod(grid.size)
+    lines = (
+        "reduce the number of lines per call (scan in parts, e.g. speckle.image with a "
+        "smaller chunk) or n_pixels"
+    )
+    advice = {
+        "grids": lines,
+        "pixels": lines,
+        "scatterers": "reduce the number of scatterers per call (scan in parts)",
+    }
+    # fine_to_pixels: field, its FFT and the complex128 result, per fine-grid row
+    pixels = 3.0 * n_rows * scene.n_pixels * 16
+    if row:
+        axes = (grid.outer, 1 - grid.outer) if len(grid.size) == 2 else (0,)
+        parts = row_path_bytes(
+            tuple(grid.size[k] for k in axes), tuple(grid.pitch[k] for k in axes), beam.waist,
+            ln_cut, n_scatterers=m, nf=nf, w=w, itemsize=rs,
+        )  # fmt: skip
+        advice["buckets"] = lines
+        return {**parts, "pixels": pixels}, advice
+    lay = _general_layout(scene, beam, grid, ln_cut)
+    nb = (lay.n_outer + 2 * lay.halo) * lay.nbi
+    n_chunks = max(1, min(64, m // 16384))
+    wp = LANES * -(-w // LANES)
+    # scatterers one block reads: those of its block plus twice the halo of buckets
+    m_block = m * min(1.0, (lay.block + 2 * lay.halo) / (lay.n_outer + 2 * lay.halo))
+    per_thread = lay.block * lay.n_inner * 2 * (nf + 2 * wp) * rs + m_block * (32 + w * rs)
+    parts = {
+        "grids": float(n_rows * nf * 2 * rs),
+        "pixels": pixels,
+        "scatterers": float(m) * (16 + 56),
+        "buckets": 16.0 * n_chunks * nb + numba.get_num_threads() * per_thread,
+    }
+    advice["buckets"] = (
+        f"the beam's reach on this scene (widest beam {lay.wmax:.3g} µm over the scatterers' "
+        f"depths, {lay.halo} pitches) sets buckets and blocks; use method='direct', or image "
+        "depths nearer the focus (or a longer rayleigh_range)"
+    )
+    return parts, advice
+
+
 def _row_path(beam: Beam, grid: LineGrid, tol: float, path: str) -> bool:
     """Whether ``path`` (one of :data:`PATHS`) runs the row path; ``ValueError`` for
     ``path="row"`` where the row path does not apply."""
@@ -476,7 +574,11 @@ def beam_nufft_scan(
     plan = fine_grid_plan(scene.n_pixels, scene.spectrum, tol, precision)
     ln_cut = math.log(2.0 / tol)
     w0 = beam.waist
-    if _row_path(beam, grid, tol, path):
+    row = _row_path(beam, grid, tol, path)
+    method = "nufft" if precision == "double" else "nufft32"
+    parts, advice = _peak_bytes(scene, beam, grid, ln_cut, plan.nf, plan.w, precision, row)
+    refuse_memory(method, parts, advice)
+    if row:
         # the grid's axes, outer first (the row path splits blocks of outer lines over threads)
         axes = (grid.outer, 1 - grid.outer) if len(grid.size) == 2 else (0,)
         coords = (scene.x, scene.y)
@@ -491,28 +593,12 @@ def beam_nufft_scan(
                 depth=scene.depth, plan=plan, ln_cut=ln_cut,
             )  # fmt: skip
         return fine_to_pixels(g, plan)[grid.rows]
-    gam = beam.gamma(scene.z)
-    gam = np.ones(1, dtype=np.complex128) if gam is None else np.ascontiguousarray(gam)
-    # widest beam on the scene: sets the bucket halo and the weight buffers
-    wmax = w0 / math.sqrt(float(np.min(gam.real)))
-    reach = wmax * math.sqrt(ln_cut / 2.0)  # µm
-    three_d = len(grid.size) == 2
-    o_ax = grid.outer
-    i_ax = 1 - o_ax if three_d else 0
-    n_outer = grid.size[o_ax]
-    n_inner = grid.size[i_ax] if three_d else 1
-    p_o = grid.pitch[o_ax]
-    p_i = grid.pitch[i_ax]
-    r_o = reach / p_o
-    r_i = reach / p_i
-    halo = math.ceil(r_o) + 1
-    bli = math.ceil(r_i) + 1
-    nbi = n_inner + 2 * bli if three_d else _DEPTH_BINS
+    lay = _general_layout(scene, beam, grid, ln_cut)
+    gam, three_d, o_ax, i_ax = lay.gam, lay.three_d, lay.o_ax, lay.i_ax
+    n_outer, n_inner, r_o, r_i = lay.n_outer, lay.n_inner, lay.r_o, lay.r_i
+    halo, bli, nbi, block, kmax_i = lay.halo, lay.bli, lay.nbi, lay.block, lay.kmax_i
+    p_o, p_i = grid.pitch[o_ax], grid.pitch[i_ax]
     y = scene.y if three_d else np.zeros(1)
-    # blocks of outer lines: independent of the thread count, so results are bitwise the same
-    # on any number of threads (the vectorised loops would round differently per blocking)
-    block = min(n_outer, max(_BLOCK, 2 * halo))
-    kmax_i = int(2 * r_i) + 2 if three_d else 1
     g = np.zeros((n_outer * n_inner, plan.nf), dtype=plan.cplx)
     # small scans run on one thread: waking the pool costs more than it saves
     small = scene.z.size * (2 * r_o + 1) * ((2 * r_i + 1) if three_d else 1) < SERIAL_BELOW
@@ -586,6 +672,17 @@ def _estimate(method: str, scene: BeamScene, beam: Beam, tol: float, setup: _Set
     if grid_err > tol / 8:
         return math.inf, math.inf
     slots = setup.terms_per_row * setup.n_rows  # scatterer-line weights written
+    if method in ("nufft", "nufft32"):
+        # a method whose peak memory (with the beam's widest reach) exceeds MAX_BYTES is not
+        # admissible: it would be refused (beam_nufft_scan)
+        arg = 0.5 * tol if method == "nufft" else 0.25 * tol
+        w = kernel_width(arg)
+        precision = "double" if method == "nufft" else "single"
+        row = uses_row_path(beam, setup.grid, arg)
+        parts, _ = _peak_bytes(scene, beam, setup.grid, math.log(2.0 / arg),
+                               fine_grid_size(n, w), w, precision, row)  # fmt: skip
+        if sum(parts.values()) > memory_limit():
+            return math.inf, math.inf
     if method == "nufft":
         w = kernel_width(0.5 * tol)
         nf = fine_grid_size(n, w)
@@ -709,10 +806,22 @@ def finufft_beam_scan(
     lp = scipy.fft.next_fast_len(n_lines + math.ceil(2 * reach / p) + 1)
     period = lp * p
     s = (scene.x - grid.origin[0]) / p
-    keep = (s >= -reach / p) & (s <= n_lines - 1 + reach / p)
-    z, a, s = scene.z[keep], scene.amplitude[keep], s[keep]
     kmax = math.sqrt(8.0 * math.log(4.0 / tol)) / w0
     n_modes = 2 * math.ceil(kmax * period / (2 * math.pi)) + 2
+    # FINUFFT's upsampled grid (2x per axis), its modes, the folded modes and the lines
+    parts = {
+        "modes": 16.0 * scene.n_pixels * (4 * n_modes + n_modes + lp),
+        "pixels": 3.0 * 16 * scene.n_pixels * n_lines,
+    }
+    refuse_memory("finufft", parts, {
+        "modes": f"the beam's lateral modes ({n_modes} for waist {w0:g} µm over a period of "
+        f"{period:.3g} µm) set it: use fewer lines per call or method='nufft'",
+        "pixels": "reduce the number of lines per call or n_pixels",
+    })  # fmt: skip
+    keep = (s >= -reach / p) & (s <= n_lines - 1 + reach / p)
+    if not np.any(keep):  # every scatterer beyond the reach of every line: a dark image
+        return np.zeros((grid.rows.size, scene.n_pixels), dtype=np.complex128)
+    z, a, s = scene.z[keep], scene.amplitude[keep], s[keep]
     c = a * np.exp(2j * scene.k0 * z)
     t = np.mod(z, scene.depth) * (2 * np.pi / scene.depth)
     phi = s * (2 * np.pi / lp)

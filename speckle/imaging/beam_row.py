@@ -54,6 +54,7 @@ __all__ = [
     "ROW_MAX_B",
     "row_fine_grids",
     "row_lines",
+    "row_path_bytes",
     "row_weight_error",
     "weight_rate",
 ]
@@ -94,6 +95,36 @@ def row_lines(waist: float, pitches: tuple[float, ...], ln_cut: float) -> int:
     """Lines written per scatterer on the row path: ``2h + 2`` per axis of the line grid
     (pitches in µm; module docstring), multiplied over the axes."""
     return math.prod(2 * _reach(waist, p, ln_cut)[2] + 2 for p in pitches)
+
+
+def row_path_bytes(
+    size: tuple[int, ...],
+    pitch: tuple[float, ...],
+    waist: float,
+    ln_cut: float,
+    *,
+    n_scatterers: int,
+    nf: int,
+    w: int,
+    itemsize: int,
+) -> dict[str, float]:
+    """Peak memory (bytes) of :func:`row_fine_grids` by part: ``"grids"`` (the padded planar
+    grid and the fine grids it folds into), ``"scatterers"`` (records, keys and order) and
+    ``"buckets"`` (the counting sort's counts and offsets). ``size``/``pitch`` per axis of the
+    line grid, ``nf`` and ``w`` of the plan, ``itemsize`` of its real type (8 or 4)."""
+    hs = [_reach(waist, p, ln_cut)[2] for p in pitch]
+    nb = [n + 2 * h + 1 for n, h in zip(size, hs, strict=True)]
+    k_n = [2 * h + 2 for h in hs]
+    if len(size) == 1:
+        nb, k_n = [*nb, 1], [*k_n, 1]
+    pad = LANES * -(-w // LANES)
+    padded_rows = (nb[0] + k_n[0] - 1) * (nb[1] + k_n[1] - 1)
+    n_chunks = max(1, min(64, n_scatterers // 16384))
+    return {
+        "grids": float(padded_rows * 2 * (nf + 2 * pad) + math.prod(size) * 2 * nf) * itemsize,
+        "scatterers": float(n_scatterers) * (8 * (len(size) + 3) + 16),
+        "buckets": 16.0 * n_chunks * nb[0] * nb[1],
+    }
 
 
 def row_weight_error(pitch: float, waist: float) -> float:

@@ -268,8 +268,12 @@ def image(
     ------
     TypeError, ValueError
         On a scene that is not a non-empty shared scene, a 3-D scene without ``y`` (or a 2-D
-        one with it), a non-positive waist, lines that are not 1-D, increasing and uniform.
+        one with it), a non-positive waist, lines that are not 1-D, increasing and uniform, a
+        ``wrap`` that is not a bool, and a ``method``/``tol`` pair (or geometry) the method
+        refuses whatever the scene: at call, not at compute.
     """
+    if not isinstance(wrap, bool | np.bool_):  # "False" would be true
+        raise TypeError(f"wrap must be True or False, got {wrap!r} ({type(wrap).__name__})")
     src, w0, xs, ys, c, attrs, kernel, optics = _prepare(
         source, waist, x, y, chunk, method, tol, bool(wrap), focus, rayleigh_range
     )
