@@ -83,7 +83,9 @@ sphinx_gallery_conf = {
     "abort_on_example_error": True,
     "matplotlib_animations": False,
     "image_scrapers": ("matplotlib",),
-    "reset_modules": ("matplotlib",),
+    # no rcParams reset between examples: the figure modules apply their shared style
+    # (speckle.figures._style.STYLE: fonts, tight bounding box) once, on import
+    "reset_modules": (),
     "show_memory": False,
     "write_computation_times": True,
 }

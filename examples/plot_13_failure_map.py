@@ -1,0 +1,44 @@
+"""
+Failure maps of the strain estimators
+=====================================
+
+Where each strain estimator fails: rms error relative to the strain (top) and the fraction of
+pixels answered (bottom), sweeping one parameter at a time around a base strain of 0.2 %:
+the interframe strain, the SNR, the depth window, k0/Δk, the spectral width and the density.
+Vertical lines are the predicted limits (phase wrapping, decorrelation, displacement of a
+speckle half-width). Reduced here to 128 pixels x 16 A-lines, two estimators and short sweeps;
+the pipeline target is ``results/elastography/failure_maps.png``.
+"""
+
+import tempfile
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import yaml
+
+import speckle
+from speckle.figures import elastography
+
+ROOT = Path(speckle.__file__).resolve().parents[1]  # the repository (editable install)
+config = yaml.safe_load((ROOT / "workflow/config/config.yaml").read_text())
+cfg = {**config["elastography"], "n_pixels": 128, "n_alines": 16, "methods": ["vector", "wls"]}
+cfg["failure"] = {
+    **cfg["failure"],
+    "strain": [1.0e-4, 1.0e-3, 3.0e-3, 1.0e-2, 3.0e-2],
+    "snr_db": [10.0, 30.0, None],
+    "windows": [16, 32],
+    "k0_dk": [3.0, 10.0],
+    "fwhm_fraction": [0.5, 1.0],
+    "density": [1.0, 4.0],
+}
+
+ds = elastography.failure_data(cfg, config["seed"])
+print({k: v for k, v in ds.attrs.items() if k.startswith("limit_")})
+
+# failure_figure writes a PNG (as the pipeline rule does); show that file here
+with tempfile.TemporaryDirectory() as tmp:
+    elastography.failure_figure(ds, f"{tmp}/failure_maps.png")
+    picture = plt.imread(f"{tmp}/failure_maps.png")
+fig, ax = plt.subplots(figsize=(picture.shape[1] / 100, picture.shape[0] / 100))
+ax.imshow(picture)
+ax.set_axis_off()
