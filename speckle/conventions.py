@@ -95,6 +95,8 @@ def attrs(name: str, long_name: str | None = None) -> dict[str, str]:
     ValueError
         If ``name`` is in neither table.
 
+    Examples
+    --------
     >>> attrs("level")
     {'units': 'dB', 'long_name': 'level 20 log10 |A|'}
     """
@@ -116,6 +118,8 @@ def coord(
     ``dims`` defaults to ``name`` (a dimension coordinate); give it for a coordinate along
     another dim, e.g. ``coords={"z0": coord("z", z0, dims="position")}``.
 
+    Examples
+    --------
     >>> coord("depth", [0.0, 8.0])[2]["units"]
     'um'
     """

@@ -139,7 +139,7 @@ def single_scatterer(
 
 
 def plot_single_scatterer(ds: xr.Dataset) -> Figure:
-    """Fig. 1: pixel images |A(q)| (left) and spectral components (right) per position.
+    """Fig. 1: pixel images ``|A(q)|`` (left) and spectral components (right) per position.
 
     One row per scatterer position; the right-hand columns show ``Re`` and ``Im`` of the
     spectral components for each ``k0/delta_k`` in ``ds`` (``k0 = 0``: formal Fourier
