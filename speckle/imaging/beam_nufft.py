@@ -58,6 +58,7 @@ import numpy as np
 import scipy.fft
 
 from ._kernels import (
+    C2,
     LANES,
     axpy8,
     bucket_sort,
@@ -84,8 +85,11 @@ from .beam_row import (
     row_weight_error,
     weight_rate,
 )
+from .carrier import float64_error_estimate
 from .gaussian_beam import Beam, BeamScene
 from .nufft import (
+    FLOAT64_SHARE,
+    check_float64_placement,
     fine_grid_plan,
     fine_grid_size,
     fine_to_pixels,
@@ -672,6 +676,10 @@ def _estimate(method: str, scene: BeamScene, beam: Beam, tol: float, setup: _Set
     if grid_err > tol / 8:
         return math.inf, math.inf
     slots = setup.terms_per_row * setup.n_rows  # scatterer-line weights written
+    if method == "nufft" and _placement_bound(scene) > FLOAT64_SHARE * tol:
+        if float64_error_estimate(scene.z, scene.amplitude, scene.depth, scene.k0,
+                                  scene.spectrum) > FLOAT64_SHARE * tol:  # fmt: skip
+            return math.inf, math.inf
     if method in ("nufft", "nufft32"):
         # a method whose peak memory (with the beam's widest reach) exceeds MAX_BYTES is not
         # admissible: it would be refused (beam_nufft_scan)
@@ -697,6 +705,11 @@ def _estimate(method: str, scene: BeamScene, beam: Beam, tol: float, setup: _Set
         rounding = float32_error_estimate(int(setup.weighted_terms), n, w)
         if rounding > 0.5 * tol:
             return math.inf, math.inf
+        if _placement_bound(scene) > 0.5 * tol - rounding:
+            e64 = float64_error_estimate(scene.z, scene.amplitude, scene.depth, scene.k0,
+                                         scene.spectrum)  # fmt: skip
+            if e64 > 0.5 * tol - rounding:
+                return math.inf, math.inf
         nf = fine_grid_size(n, w)
         if uses_row_path(beam, setup.grid, 0.25 * tol):
             cost = _row_cost(setup, beam, m, nf, w, 0.25 * tol, per_cell=12.0, per_slot=0.28)
@@ -728,6 +741,25 @@ def choose_beam_method(scene: BeamScene, beam: Beam, tol: float | None) -> str:
     return choose(BEAM_AUTO_CANDIDATES, _estimator(scene, beam, tolv), tolv)
 
 
+def _placement_bound(scene: BeamScene) -> float:
+    """Upper bound of :func:`speckle.imaging.carrier.float64_error_estimate` from the deepest
+    scatterer alone (``z_rms <= max |z|``, ``n_rms <= N/2``; one pass over the depths)."""
+    zmax = float(np.max(np.abs(scene.z), initial=0.0))
+    eps = float(np.finfo(np.float64).eps)
+    position = math.pi * scene.n_pixels * eps * zmax / (math.sqrt(6.0) * scene.depth)
+    carrier = eps * zmax * 2.0 * scene.k0 * C2 / (4.0 * math.pi * math.sqrt(3.0))
+    return math.hypot(position, carrier) if 2.0 * scene.k0 * zmax < 2.0**47 else math.inf
+
+
+def _check_placement(scene: BeamScene, budget: float, tol: float, method: str) -> None:
+    """The float64 carrier/position refusal of the A-scan methods
+    (:func:`speckle.imaging.nufft.check_float64_placement`), on a beam scene; skipped when
+    the deepest scatterer's bound is within the budget."""
+    if _placement_bound(scene) > budget:
+        check_float64_placement(scene.z, scene.amplitude, scene.depth, scene.k0,
+                                scene.spectrum, budget, tol, method)  # fmt: skip
+
+
 def _grid_or_refuse(scene: BeamScene, beam: Beam, tol: float, method: str) -> LineGrid:
     refuse_below_floor(tol, method)
     grid = line_grid(scene.lines, beam.waist)
@@ -740,8 +772,9 @@ def _grid_or_refuse(scene: BeamScene, beam: Beam, tol: float, method: str) -> Li
     if 4.0 * grid.deviation / beam.waist > tol / 8:
         raise ValueError(
             f"method={method!r}: lines deviate from a uniform grid by up to "
-            f"{grid.deviation:.2e} µm, a weight error ~{4 * grid.deviation / beam.waist:.1e} "
-            f"above tol/8 = {tol / 8:.1e}; use method='direct' or a looser tol"
+            f"{grid.deviation:.2e} µm, a weight error 4 deviation/waist = "
+            f"{4 * grid.deviation / beam.waist:.1e} (waist {beam.waist:g} µm) above tol/8 = "
+            f"{tol / 8:.1e}; use method='direct', a wider waist or a looser tol"
         )
     return grid
 
@@ -754,6 +787,7 @@ def beam_nufft_method(
     :func:`beam_nufft_scan`."""
     tolv = resolve_tol(tol)
     grid = _grid_or_refuse(scene, beam, tolv, "nufft")
+    _check_placement(scene, FLOAT64_SHARE * tolv, tolv, "nufft")
     # kernel at tol/2 (fine_grid_plan halves again internally), weights cut at tol/4
     return beam_nufft_scan(scene, beam, grid, tol=0.5 * tolv, path=path)
 
@@ -769,6 +803,7 @@ def beam_nufft32_method(
     rounding = float32_error_estimate(int(setup.weighted_terms), scene.n_pixels,
                                       kernel_width(0.25 * tolv))  # fmt: skip
     refuse_float32(rounding, tolv)
+    _check_placement(scene, 0.5 * tolv - rounding, tolv, "nufft32")
     # kernel at tol/4 and weights cut at tol/4 (beam_nufft_scan halves), rounding <= tol/2
     return beam_nufft_scan(scene, beam, grid, tol=0.25 * tolv, precision="single", path=path)
 

@@ -16,7 +16,10 @@ from .._validate import as_finite_array, check_int, check_real
 from ..system.source import check_weights
 from ._rules import check_carrier_phase, check_tol
 
-__all__ = ["Beam", "BeamScene", "beam_problem", "beam_weight"]
+__all__ = ["MAX_WAIST", "Beam", "BeamScene", "beam_problem", "beam_weight"]
+
+#: Widest waist accepted (µm): its square, and the Rayleigh range, stay finite in float64.
+MAX_WAIST = 1e100
 
 
 class Beam(NamedTuple):
@@ -62,7 +65,7 @@ def beam_weight(
     ``gamma = 1/(1 + i (z - z_f)/z_R)``, with one (see the module docstring). All lengths in µm;
     arrays broadcast. Returns complex128.
     """
-    w0 = check_real(waist, "waist", low=0, low_inclusive=False)
+    w0 = check_real(waist, "waist", low=0, high=MAX_WAIST, low_inclusive=False)
     r2 = np.asarray(dx, dtype=float) ** 2 + np.asarray(dy, dtype=float) ** 2
     if focus is None:
         return np.exp(-2.0 * r2 / w0**2) + 0j * np.asarray(z, dtype=float)
@@ -108,7 +111,7 @@ def beam_problem(
     n = check_int(n_pixels, "n_pixels", low=2)
     h = check_real(depth, "depth", low=0, low_inclusive=False)
     k0v = check_real(k0, "k0", low=0)
-    w0 = check_real(waist, "waist", low=0, low_inclusive=False)
+    w0 = check_real(waist, "waist", low=0, high=MAX_WAIST, low_inclusive=False)
     tolv = check_tol(tol)
     zz = _vector(z, "z")
     xx = _vector(x, "x")

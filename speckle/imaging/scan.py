@@ -27,8 +27,10 @@ from .._validate import as_finite_array, check_int, check_real
 from ..conventions import coord, spacing
 from ..provenance import provenance_attrs
 from ..scene.shared import check_scene, scene_window, shared_scene
+from ._rules import check_tol
 from .aline import pixel_depths
 from .beam import beam_scan
+from .gaussian_beam import MAX_WAIST
 
 __all__ = ["REACH_EPS", "beam_reach", "image", "image_regions", "scan_lines"]
 
@@ -43,7 +45,7 @@ def beam_reach(waist: float, eps: float = REACH_EPS, *, widening: float = 1.0) -
     ``w * sqrt(ln(1/eps)/2)`` with ``w = widening * w0`` the widest beam over the imaged depths
     (``widening = 1`` without focus): 4.43 w for the default ``eps = 1e-17``.
     """
-    w0 = check_real(waist, "waist", low=0, low_inclusive=False)
+    w0 = check_real(waist, "waist", low=0, high=MAX_WAIST, low_inclusive=False)
     e = check_real(eps, "eps", low=0, high=1, low_inclusive=False, high_inclusive=False)
     g = check_real(widening, "widening", low=1.0)
     return g * w0 * math.sqrt(math.log(1.0 / e) / 2.0)
@@ -166,8 +168,9 @@ def _dataset(
 
 def _prepare(source, waist, x, y, chunk, method, tol, wrap, focus, rayleigh_range):
     """Checked arguments, the per-chunk kernel and the attrs shared by both entry points."""
+    tol = check_tol(tol)
     src = _source(source)
-    w0 = check_real(waist, "waist", low=0, low_inclusive=False)
+    w0 = check_real(waist, "waist", low=0, high=MAX_WAIST, low_inclusive=False)
     optics = {}
     if focus is not None:
         optics["focus"] = check_real(focus, "focus", low=0, high=src["depth"], high_inclusive=False)

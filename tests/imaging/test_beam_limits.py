@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import speckle
@@ -169,7 +169,7 @@ def _named(param: str, message: str) -> bool:
     return any(n in message for n in names)
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
     target=st.sampled_from(
         [("beam_scan", p) for p in BEAM_PARAMS] + [("image", p) for p in IMAGE_PARAMS]
@@ -177,6 +177,15 @@ def _named(param: str, message: str) -> bool:
     value=BAD_VALUES,
     method=st.sampled_from(METHODS),
 )
+# found by an exhaustive sweep of these values (fixed): tol unchecked before image's attrs, a
+# waist whose square overflows, a grid-deviation refusal not naming the waist, a carrier
+# phase beyond float64's reduction on the fast beam methods (NaN)
+@example(target=("image", "tol"), value=[1, 2, 3], method="direct")
+@example(target=("beam_scan", "waist"), value=1e300, method="direct")
+@example(target=("image", "waist"), value=1e300, method="finufft")
+@example(target=("beam_scan", "waist"), value=1e-20, method="nufft")
+@example(target=("beam_scan", "k0"), value=1e300, method="nufft")
+@example(target=("beam_scan", "k0"), value=1e300, method="nufft32")
 def test_malformed_beam_and_scan_inputs_raise_naming_a_parameter_or_give_finite_results(
     target, value, method
 ):
