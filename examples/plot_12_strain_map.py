@@ -6,8 +6,8 @@ A stiff circular inclusion (40 vs 10 kPa, Poisson ratio 0.45) in a block compres
 with a sliding probe, solved by plane-strain finite elements (``speckle.compress``). The
 scatterers move with the FE displacement; each strain estimator reads the strain from the two
 complex images. Top: modulus, FE strain and each method's strain map; bottom: error maps.
-Reduced here to 128 pixels x 24 A-lines and two estimators; the pipeline target is
-``results/elastography/inclusion.png``.
+Reduced here to 128 pixels x 32 A-lines (x: A-line index, 8 µm apart; radius 80 µm) and
+two estimators; the pipeline target is ``results/elastography/inclusion.png``.
 """
 
 import tempfile
@@ -22,7 +22,7 @@ from speckle.figures import elastography
 ROOT = Path(speckle.__file__).resolve().parents[1]  # the repository (editable install)
 config = yaml.safe_load((ROOT / "workflow/config/config.yaml").read_text())
 cfg = {**config["elastography"], "n_pixels": 128, "methods": ["vector", "wls"]}
-cfg["inclusion"] = {**cfg["inclusion"], "n_alines": 24, "radius": 40.0}
+cfg["inclusion"] = {**cfg["inclusion"], "n_alines": 32, "radius": 80.0}
 
 ds = elastography.inclusion_data(cfg, config["seed"])
 print(ds)
@@ -31,6 +31,7 @@ print(ds)
 with tempfile.TemporaryDirectory() as tmp:
     elastography.inclusion_figure(ds, f"{tmp}/inclusion.png")
     picture = plt.imread(f"{tmp}/inclusion.png")
-fig, ax = plt.subplots(figsize=(picture.shape[1] / 100, picture.shape[0] / 100))
-ax.imshow(picture)
+fig = plt.figure(figsize=(picture.shape[1] / 150, picture.shape[0] / 150), dpi=150)
+ax = fig.add_axes((0, 0, 1, 1))  # the whole figure: pixel for pixel, as the pipeline's PNG
+ax.imshow(picture, interpolation="none")
 ax.set_axis_off()

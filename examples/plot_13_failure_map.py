@@ -39,6 +39,7 @@ print({k: v for k, v in ds.attrs.items() if k.startswith("limit_")})
 with tempfile.TemporaryDirectory() as tmp:
     elastography.failure_figure(ds, f"{tmp}/failure_maps.png")
     picture = plt.imread(f"{tmp}/failure_maps.png")
-fig, ax = plt.subplots(figsize=(picture.shape[1] / 100, picture.shape[0] / 100))
-ax.imshow(picture)
+fig = plt.figure(figsize=(picture.shape[1] / 150, picture.shape[0] / 150), dpi=150)
+ax = fig.add_axes((0, 0, 1, 1))  # the whole figure: pixel for pixel, as the pipeline's PNG
+ax.imshow(picture, interpolation="none")
 ax.set_axis_off()
