@@ -123,11 +123,20 @@ def _skimage(func: Callable[[np.ndarray], np.ndarray]) -> Callable[[np.ndarray],
     return run
 
 
+def _sigma(u: np.ndarray) -> float:
+    """Noise sigma of ``u`` (skimage's wavelet estimate); 0 for a flat image."""
+    from skimage.restoration import estimate_sigma
+
+    if np.ptp(u) == 0:
+        return 0.0
+    return float(estimate_sigma(u))
+
+
 def _nlm(a, *, h=0.8, patch_size=5, patch_distance=6, log=False):
-    from skimage.restoration import denoise_nl_means, estimate_sigma
+    from skimage.restoration import denoise_nl_means
 
     def f(u):
-        s = float(estimate_sigma(u))
+        s = _sigma(u)
         return denoise_nl_means(u, h=h * s, sigma=s, patch_size=patch_size,
                                 patch_distance=patch_distance, fast_mode=True)  # fmt: skip
 
@@ -141,10 +150,10 @@ def _tv(a, *, weight=0.1, log=False):
 
 
 def _wavelet(a, *, sigma_scale=1.0, wavelet="db2", log=False):
-    from skimage.restoration import denoise_wavelet, estimate_sigma
+    from skimage.restoration import denoise_wavelet
 
     def f(u):
-        s = float(estimate_sigma(u)) * sigma_scale
+        s = _sigma(u) * sigma_scale
         return denoise_wavelet(u, sigma=s, wavelet=wavelet, mode="soft", method="BayesShrink",
                                rescale_sigma=True)  # fmt: skip
 
@@ -166,10 +175,9 @@ def _median(a, *, size=5, log=False):
 
 def _bm3d(a, *, sigma_scale=1.0, log=False):
     import bm3d  # optional extra: non-commercial licence
-    from skimage.restoration import estimate_sigma
 
     def f(u):
-        return bm3d.bm3d(u, sigma_psd=float(estimate_sigma(u)) * sigma_scale)
+        return bm3d.bm3d(u, sigma_psd=_sigma(u) * sigma_scale)
 
     return _skimage(f)(a)
 
