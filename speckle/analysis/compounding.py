@@ -43,7 +43,6 @@ import xarray as xr
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
 from ..imaging.scan import image
-from ..system.noise import add_complex_noise
 from ..system.polarization import depolarize
 
 __all__ = [
@@ -313,25 +312,51 @@ def compound(looks: xr.DataArray, mode: str = "intensity") -> xr.DataArray:
     )
 
 
-def noisy_looks(looks: xr.DataArray, snr_db: float, *, seed: int) -> xr.DataArray:
-    """Each look plus its own white receiver noise (:func:`speckle.add_complex_noise`).
+def noisy_looks(
+    looks: xr.DataArray,
+    snr_db: float,
+    *,
+    seed: int,
+    signal_intensity: float | None = None,
+) -> xr.DataArray:
+    """Each look plus its own white receiver noise, circular complex Gaussian.
 
-    The noise power is set from each look's own mean intensity at ``snr_db``; look ``i`` uses
-    the seed ``SeedSequence(seed, spawn_key=(i,))``. Looks must be 2-D images ``(depth, lateral)``.
+    Parameters
+    ----------
+    looks : xarray.DataArray
+        Complex looks with a ``look`` dim.
+    snr_db : float
+        Signal intensity over noise intensity per pixel, in dB.
+    seed : int
+        Look ``i`` draws from ``SeedSequence(seed, spawn_key=(i,))``.
+    signal_intensity : float, optional
+        The signal intensity the SNR refers to (> 0), the same for every look (one receiver:
+        e.g. the single look's mean intensity); default: each look's own mean intensity.
+
+    Returns
+    -------
+    xarray.DataArray
+        The looks plus noise (attrs ``snr_db``, ``noise_intensity`` of the first look).
     """
-    if not isinstance(looks, xr.DataArray) or looks.dims[0] != "look" or looks.ndim != 3:
-        raise TypeError("looks must be a DataArray (look, depth, lateral)")
-    check_real(snr_db, "snr_db")
+    if not isinstance(looks, xr.DataArray) or "look" not in looks.dims:
+        raise TypeError("looks must be a DataArray with a 'look' dim")
+    snr = check_real(snr_db, "snr_db")
     sd = check_int(seed, "seed", low=0)
-    seeds = np.random.SeedSequence(sd).spawn(looks.sizes["look"])
-    data = np.stack([
-        add_complex_noise(looks.isel(look=i).transpose("depth", ...).values, snr_db,
-                          seed=int(s.generate_state(1)[0]))
-        for i, s in enumerate(seeds)
-    ])  # fmt: skip
-    d = [looks.dims[0], "depth", next(x for x in looks.dims[1:] if x != "depth")]
-    out = xr.DataArray(data, dims=d, coords={k: looks.coords[k] for k in looks.coords})
-    return out.transpose(*looks.dims).assign_attrs(looks.attrs, snr_db=float(snr_db))
+    ref = None if signal_intensity is None else check_real(
+        signal_intensity, "signal_intensity", low=0, low_inclusive=False
+    )  # fmt: skip
+    lk = looks.transpose("look", ...)
+    out = np.empty(lk.shape, dtype=np.complex128)
+    sigma2 = []
+    for i in range(lk.shape[0]):
+        v = lk.values[i]
+        s2 = (float(np.mean(np.abs(v) ** 2)) if ref is None else ref) / 10 ** (snr / 10)
+        rng = np.random.default_rng(np.random.SeedSequence(sd, spawn_key=(i,)))
+        e = rng.standard_normal((2, *v.shape))
+        out[i] = v + np.sqrt(s2 / 2) * (e[0] + 1j * e[1])
+        sigma2.append(s2)
+    res = lk.copy(data=out).transpose(*looks.dims)
+    return res.assign_attrs(looks.attrs, snr_db=snr, noise_intensity=sigma2[0])
 
 
 def _image_kw(waist, x, method, tol, chunk) -> dict:

@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Callable
 
 import numpy as np
@@ -159,10 +160,12 @@ def edge_width(profile: object, spacing: float = 1.0) -> float:
 
     lo, hi = y[: y.size // 4].mean(), y[-(y.size // 4) :].mean()
     x0 = x[int(np.argmax(np.abs(np.gradient(y))))]
-    try:
-        p, _ = opt.curve_fit(model, x, y, p0=[lo, hi - lo, x0, dx], maxfev=5000)
-    except (RuntimeError, opt.OptimizeWarning):
-        return np.nan
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", opt.OptimizeWarning)  # no covariance: not used
+        try:
+            p, _ = opt.curve_fit(model, x, y, p0=[lo, hi - lo, x0, dx], maxfev=5000)
+        except RuntimeError:
+            return np.nan
     return float(EDGE_10_90 * abs(p[3]))
 
 
