@@ -127,15 +127,18 @@ def build_phantom(geo: Mapping, *, seed: int, density: float | None = None,
     rows, cols = np.mgrid[0:n, 0:nl]
     d_inc = np.hypot(rows - inc["row"], cols - inc["line"])
     a, lr = int(geo["air_rows"]), int(geo["layer_row"])
+    gap = max(1, min(6, (lr - a) // 4))  # rows kept clear of the layer-1 boundaries
+    half = max(2, min(12, (lr - a) // 2, (n - lr) // 2))  # half-height of the edge window
     masks = {
-        "uniform": (rows >= a + 6) & (rows < lr - 6),
-        "inclusion": d_inc <= max(0.5 * r_inc, 0.75),
+        "uniform": (rows >= a + gap) & (rows < lr - gap),
+        "inclusion": d_inc <= max(0.5 * r_inc, 1.0),
         "background": (d_inc >= r_inc + 4) & (d_inc <= r_inc + 10) & (rows > lr + 4),
     }
     ref = float(truth[masks["uniform"]].mean())
     return {"geo": geo, "source": src, "scene": sc, "x": x, "truth": truth, "labels": labels,
             "masks": masks, "ref": ref, "kw": kw, "pixel": p, "points": pts,
-            "edge_rows": (lr - 12, lr + 12), "regions": regions}  # fmt: skip
+            "edge_rows": (lr - half, lr + half), "regions": regions,
+            "edge_lines": np.abs(np.arange(nl) - inc["line"]) > r_inc + 2}  # fmt: skip
 
 
 def _point_fwhm(img: np.ndarray, ph: dict) -> tuple[float, float]:
@@ -148,7 +151,13 @@ def _point_fwhm(img: np.ndarray, ph: dict) -> tuple[float, float]:
         i, j = np.unravel_index(np.argmax(win), win.shape)
         ax.append(iq.peak_fwhm(win[:, j], p))
         lat.append(iq.peak_fwhm(win[i, :], p))
-    return float(np.nanmean(ax)), float(np.nanmean(lat))
+    return _finite_mean(ax), _finite_mean(lat)
+
+
+def _finite_mean(values: list[float]) -> float:
+    v = np.asarray(values, float)
+    v = v[np.isfinite(v)]
+    return float(v.mean()) if v.size else np.nan
 
 
 def quality(intensity: np.ndarray, ph: dict) -> dict:
@@ -160,7 +169,7 @@ def quality(intensity: np.ndarray, ph: dict) -> dict:
     tdb = iq.to_db(ph["truth"], ph["ref"])
     fa, fl = _point_fwhm(img, ph)
     e0, e1 = ph["edge_rows"]
-    edge = iq.edge_width(img[e0:e1].mean(axis=1), ph["pixel"])
+    edge = iq.edge_width(img[e0:e1, ph["edge_lines"]].mean(axis=1), ph["pixel"])
     inc = db[m["inclusion"]].mean() - db[m["background"]].mean()
     tinc = tdb[m["inclusion"]].mean() - tdb[m["background"]].mean()
     return {
@@ -282,12 +291,12 @@ def _table(rows: list[dict], extra: Mapping | None = None) -> xr.Dataset:
     labels = [r["method"] for r in rows]
     data = {}
     for k, (units, long) in {**METRICS, **(extra or {})}.items():
-        data[k] = ("method", np.array([r.get(k, np.nan) for r in rows], float),
+        data[k] = ("technique", np.array([r.get(k, np.nan) for r in rows], float),
                    {"units": units, "long_name": long})  # fmt: skip
-    coords = {"method": ("method", labels)}
+    coords = {"technique": ("technique", labels)}
     for k in ("family", "parameters", "averaging", "domain"):
-        coords[k] = ("method", [str(r.get(k, "")) for r in rows])
-    coords["noise"] = ("method", np.array([int(r.get("noise", 1)) for r in rows], np.int8),
+        coords[k] = ("technique", [str(r.get(k, "")) for r in rows])
+    coords["noise"] = ("technique", np.array([int(r.get("noise", 1)) for r in rows], np.int8),
                        {"long_name": "receiver noise in the looks (1) or not (0)"})  # fmt: skip
     return xr.Dataset(data, coords=coords)
 
@@ -340,8 +349,8 @@ def methods_data(cfg: Mapping, seed: int) -> tuple[xr.Dataset, xr.Dataset]:
     extra = {"acquisitions": ("1", "acquisitions (looks acquired)"),
              "time_per_mpx": ("s", "processing time per megapixel")}  # fmt: skip
     ds = _table(rows, extra)
-    i_ref = int(np.flatnonzero(ds.method.values == "single look + noise")[0])
-    ref = {k: float(v) for k, v in ds.isel(method=i_ref).data_vars.items()}
+    i_ref = int(np.flatnonzero(ds.technique.values == "single look + noise")[0])
+    ref = {k: float(v) for k, v in ds.isel(technique=i_ref).data_vars.items()}
     ds["speckle_reduction"] = (ref["contrast"] / ds.contrast).assign_attrs(
         units="1", long_name="single-look contrast over the method's")
     ratios = []
@@ -394,7 +403,8 @@ def _colours(fams) -> dict:
 def plot_methods(ds: xr.Dataset):
     """Pareto charts: speckle reduction vs resolution loss, and vs time per megapixel."""
     fig, axes = new_figure(1, 2, width=9.0, height=3.8)
-    sel = ds.where(ds.noise == 1, drop=True)
+    axes = axes[0]
+    sel = ds.isel(technique=np.flatnonzero(ds.noise.values == 1))
     fams = list(dict.fromkeys(sel.family.values.tolist()))
     col = _colours(fams)
     for ax, xv, xl in ((axes[0], "resolution_loss", "resolution loss (ratio to single look)"),
@@ -518,13 +528,13 @@ def failure_data(cfg: Mapping, seed: int) -> xr.Dataset:
                 res["resolution_loss"][i, j] = np.nanmax(
                     [m["fwhm_axial"] / loss_ref[0], m["fwhm_lateral"] / loss_ref[1], m["edge_width"] / loss_ref[2]])
         for k, arr in res.items():
-            out[f"{k}_{axis}"] = (("method", axis), arr)
+            out[f"{k}_{axis}"] = (("technique", axis), arr)
         sr, fr = res["speckle_reduction"], res["feature_retained"]
-        out[f"helps_{axis}"] = (("method", axis), (sr >= HELPS).astype(np.int8))
-        out[f"erases_{axis}"] = (("method", axis), (fr < ERASES).astype(np.int8))
+        out[f"helps_{axis}"] = (("technique", axis), (sr >= HELPS).astype(np.int8))
+        out[f"erases_{axis}"] = (("technique", axis), (fr < ERASES).astype(np.int8))
     ds = xr.Dataset(out, coords={
-        "method": ("method", names),
-        "family": ("method", [specs[n]["family"] for n in names]),
+        "technique": ("technique", names),
+        "family": ("technique", [specs[n]["family"] for n in names]),
         "density": ("density", np.asarray(fc["density"], float), {"units": "1", "long_name": "scatterers per pixel"}),
         "snr_db": ("snr_db", np.asarray(fc["snr_db"], float), {"units": "dB", "long_name": "receiver SNR"}),
         "feature_radius": ("feature_radius", np.asarray(fc["feature_radius"], float), {"units": "1", "long_name": "inclusion radius (pixels)"}),
@@ -541,18 +551,20 @@ def plot_failure(ds: xr.Dataset):
     """Speckle reduction and feature retained against density, SNR and feature size."""
     axes_names = ("density", "snr_db", "feature_radius")
     fig, axes = new_figure(2, 3, width=10.0, height=5.5)
-    methods = [m for m in ds.method.values if m != "single"]
+    names = [str(m) for m in ds.technique.values]
+    methods = [m for m in names if m != "single"]
     col = _colours(methods)
     for c, axis in enumerate(axes_names):
         xv = ds[axis].values
         for m in methods:
-            sr = ds[f"speckle_reduction_{axis}"].sel(method=m).values
-            fr = ds[f"feature_retained_{axis}"].sel(method=m).values
+            i = names.index(m)
+            sr = ds[f"speckle_reduction_{axis}"].values[i]
+            fr = ds[f"feature_retained_{axis}"].values[i]
             axes[0, c].plot(xv, sr, "-o", ms=3, color=col[m], label=m)
             axes[1, c].plot(xv, fr, "-o", ms=3, color=col[m])
-            bad = ds[f"helps_{axis}"].sel(method=m).values == 0
+            bad = ds[f"helps_{axis}"].values[i] == 0
             axes[0, c].plot(xv[bad], sr[bad], "x", color="k", ms=6)
-            er = ds[f"erases_{axis}"].sel(method=m).values == 1
+            er = ds[f"erases_{axis}"].values[i] == 1
             axes[1, c].plot(xv[er], fr[er], "x", color="r", ms=6)
         axes[0, c].axhline(ds.attrs["helps_threshold"], color="k", lw=0.6, ls="--")
         axes[1, c].axhline(ds.attrs["erases_threshold"], color="r", lw=0.6, ls="--")
@@ -614,3 +626,86 @@ def frequency_compounding_data(cfg: Mapping, seed: int) -> xr.Dataset:
     )  # fmt: skip
     return ds
 
+
+
+# --------------------------------------------------------------------------- config checks
+def _key(path: str, check) -> None:
+    try:
+        check()
+    except (ValueError, TypeError) as err:
+        raise ValueError(f"config key despeckle.{path}: {err}") from None
+
+
+def _check_geometry(geo: Mapping, path: str) -> None:
+    n, nl = int(geo["n_pixels"]), int(geo["n_lines"])
+    a, lr = int(geo["air_rows"]), int(geo["layer_row"])
+    inc, pts = geo["inclusion"], geo["points"]
+    if not (0 < a and a + 4 <= lr and lr + 4 <= n):
+        raise ValueError(f"config key despeckle.{path}: need 0 < air_rows ({a}), air_rows + 4 "
+                         f"<= layer_row ({lr}), layer_row + 4 <= n_pixels ({n})")  # fmt: skip
+    if not (lr < inc["row"] < n and 0 <= inc["line"] < nl):
+        raise ValueError(f"config key despeckle.{path}.inclusion: centre (row {inc['row']}, line "
+                         f"{inc['line']}) must lie in layer 2 (rows {lr}..{n}) and lines 0..{nl}")  # fmt: skip
+    if not pts["row"] < a or any(not 0 <= v < nl for v in pts["lines"]):
+        raise ValueError(f"config key despeckle.{path}.points: row must be < air_rows ({a}) and "
+                         f"lines in [0, n_lines={nl})")  # fmt: skip
+
+
+def _check_spec(spec: Mapping, n: int, path: str) -> None:
+    fam = spec["family"]
+    if fam == "frequency":
+        _key(path, lambda: cp.subband_windows(n, spec["looks"], window=spec["window"],
+                                              overlap=spec["overlap"]))  # fmt: skip
+    elif fam in dsp.FILTERS:
+        _key(path, lambda: dsp.check_filter(fam, spec.get("params"), spec.get("domain", "linear")))
+    elif fam == "temporal":
+        _key(path, lambda: cp.brownian_frames(
+            xr.Dataset({"z": ("scatterer", [0.0])}), spec["frames"], diffusion=spec["diffusion"],
+            interval=spec["interval"], seed=0))  # fmt: skip
+
+
+def check_despeckle_config(cfg: Mapping) -> None:
+    """What the schema cannot say about the ``despeckle`` section (``ValueError`` naming it).
+
+    Geometry inside the image; sub-bands: ``looks`` at most the spectrum's samples, the
+    windows and overlaps valid, ``frequency_compounding.n_pixels`` a multiple of every
+    ``looks`` (equal sub-bands); subsets no larger than their sets; every filter parameter in
+    its range (:func:`speckle.analysis.despeckle.check_filter`); failure methods complete.
+    """
+    geo = cfg["phantom"]
+    _check_geometry(geo, "phantom")
+    fgeo = {**geo, **cfg["failure"]["phantom"]}
+    _check_geometry(fgeo, "failure.phantom")
+    n = int(geo["n_pixels"])
+    fr = cfg["physical"]["frequency"]
+    for nl in fr["looks"]:
+        for w in fr["windows"]:
+            for ov in fr["overlap"]:
+                _key("physical.frequency", lambda nl=nl, w=w, ov=ov: cp.subband_windows(
+                    n, nl, window=w, overlap=ov))  # fmt: skip
+    phys = cfg["physical"]
+    for fam, key in (("angular", "angles"), ("spatial", "offsets")):
+        size = len(phys[fam][key])
+        for m in phys[fam]["sets"]:
+            if m > size or (size - m) % 2:
+                raise ValueError(
+                    f"config key despeckle.physical.{fam}.sets: {m} central {key} of {size} "
+                    f"(need sets <= {size} with the same parity)"
+                )
+    tm = phys["temporal"]
+    if max(tm["sets"]) > tm["frames"]:
+        raise ValueError(f"config key despeckle.physical.temporal.sets must be <= frames "
+                         f"({tm['frames']}); got {tm['sets']}")  # fmt: skip
+    for name, params in cfg["filters"].items():
+        for p in _grid(params):
+            _key(f"filters.{name}", lambda name=name, p=p: dsp.check_filter(name, p))
+    for name, spec in cfg["failure"]["methods"].items():
+        _check_spec(spec, int(fgeo["n_pixels"]), f"failure.methods.{name}")
+    fc = cfg["frequency_compounding"]
+    for nl in fc["looks"]:
+        _key("frequency_compounding.looks", lambda nl=nl: cp.subband_windows(fc["n_pixels"], nl))
+        if fc["n_pixels"] % nl:
+            raise ValueError(
+                f"config key despeckle.frequency_compounding.looks: {nl} equal sub-bands need "
+                f"n_pixels ({fc['n_pixels']}) to be a multiple of it"
+            )
