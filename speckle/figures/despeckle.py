@@ -36,7 +36,7 @@ import numpy as np
 import xarray as xr
 
 from ..analysis import compounding as cp
-from ..analysis import despeckle as dsp
+from ..analysis import filters as dsp
 from ..analysis import image_quality as iq
 from ..imaging.aline import ascan
 from ..imaging.bscan import bscan
@@ -670,7 +670,7 @@ def check_despeckle_config(cfg: Mapping) -> None:
     Geometry inside the image; sub-bands: ``looks`` at most the spectrum's samples, the
     windows and overlaps valid, ``frequency_compounding.n_pixels`` a multiple of every
     ``looks`` (equal sub-bands); subsets no larger than their sets; every filter parameter in
-    its range (:func:`speckle.analysis.despeckle.check_filter`); failure methods complete.
+    its range (:func:`speckle.analysis.filters.check_filter`); failure methods complete.
     """
     geo = cfg["phantom"]
     _check_geometry(geo, "phantom")

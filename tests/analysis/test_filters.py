@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from speckle.analysis import despeckle as ds
+from speckle.analysis import filters as ds
 
 RUNNABLE = [f for f in ds.FILTERS if ds.filter_available(f)]
 
