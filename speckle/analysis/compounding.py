@@ -173,9 +173,7 @@ def compounded_contrast(mu: object) -> float:
     return float(np.sqrt(np.sum(np.abs(m) ** 2)) / m.shape[0])
 
 
-def split_spectrum_contrast(
-    weights: object, density: float, *, kurtosis: float = 1.0
-) -> float:
+def split_spectrum_contrast(weights: object, density: float, *, kurtosis: float = 1.0) -> float:
     """Exact contrast of intensity-averaged looks of independent A-lines, Poisson scatterers.
 
     Look ``i`` has spectral weights ``G_i = S W_i``. For Poisson scatterers, ``rho`` per pixel,
@@ -241,9 +239,7 @@ def _field(img: xr.Dataset | xr.DataArray) -> xr.DataArray:
     return f
 
 
-def frequency_looks(
-    img: xr.Dataset | xr.DataArray, windows: object
-) -> xr.DataArray:
+def frequency_looks(img: xr.Dataset | xr.DataArray, windows: object) -> xr.DataArray:
     """Split-spectrum looks of a complex image: the depth spectrum times each window.
 
     Parameters
@@ -266,8 +262,7 @@ def frequency_looks(
     w = as_finite_array(windows, "windows")
     if w.ndim != 2 or w.shape[1] != n:
         raise ValueError(
-            f"windows must have shape (looks, {n}) for an image of {n} depth pixels, "
-            f"got {w.shape}"
+            f"windows must have shape (looks, {n}) for an image of {n} depth pixels, got {w.shape}"
         )
     idx = np.arange(n) - n // 2  # spectral index n of sample position 0 ... N-1
     wrapped = np.zeros_like(w)
@@ -278,15 +273,20 @@ def frequency_looks(
         return np.fft.fft(spec * wrapped, axis=-1)  # (..., look, depth)
 
     looks = xr.apply_ufunc(
-        split, f, input_core_dims=[["depth"]], output_core_dims=[["look", "depth"]],
+        split,
+        f,
+        input_core_dims=[["depth"]],
+        output_core_dims=[["look", "depth"]],
         dask="forbidden",
-    )  # fmt: skip
+    )
     return _looks(looks.transpose("look", *f.dims), "frequency")
 
 
 def _looks(looks: xr.DataArray, kind: str, **attrs: object) -> xr.DataArray:
-    return looks.assign_coords(look=np.arange(looks.sizes["look"])).rename("looks").assign_attrs(
-        units="1", long_name=f"complex {kind} looks", compounding=kind, **attrs
+    return (
+        looks.assign_coords(look=np.arange(looks.sizes["look"]))
+        .rename("looks")
+        .assign_attrs(units="1", long_name=f"complex {kind} looks", compounding=kind, **attrs)
     )
 
 
@@ -307,7 +307,8 @@ def compound(looks: xr.DataArray, mode: str = "intensity") -> xr.DataArray:
     else:
         out = abs(looks.mean("look")) ** 2
     return out.rename("intensity").assign_attrs(
-        units="1", long_name=f"{mode}-averaged intensity of {looks.sizes['look']} looks",
+        units="1",
+        long_name=f"{mode}-averaged intensity of {looks.sizes['look']} looks",
         averaging=mode,
     )
 
@@ -342,9 +343,11 @@ def noisy_looks(
         raise TypeError("looks must be a DataArray with a 'look' dim")
     snr = check_real(snr_db, "snr_db")
     sd = check_int(seed, "seed", low=0)
-    ref = None if signal_intensity is None else check_real(
-        signal_intensity, "signal_intensity", low=0, low_inclusive=False
-    )  # fmt: skip
+    ref = (
+        None
+        if signal_intensity is None
+        else check_real(signal_intensity, "signal_intensity", low=0, low_inclusive=False)
+    )
     lk = looks.transpose("look", ...)
     out = np.empty(lk.shape, dtype=np.complex128)
     sigma2 = []
@@ -401,20 +404,25 @@ def angular_looks(
     for a in np.deg2rad(ang):
         c, s = np.cos(a), np.sin(a)
         z, xv = scene.z.values - zc, scene.x.values - xc
-        rot = scene.assign(z=("scatterer", zc + c * z + s * xv), x=("scatterer", xc - s * z + c * xv))
+        rot = scene.assign(
+            z=("scatterer", zc + c * z + s * xv), x=("scatterer", xc - s * z + c * xv)
+        )
         order = np.argsort(rot.x.values, kind="stable")
         f = image(rot.isel(scatterer=order), source, **_image_kw(waist, xs, method, tol, chunk))
         f = f.field.values
         # object point (z, x) sits at the rotated position in the look's image
         zr, xr_ = zc + c * zz + s * xx, xc - s * zz + c * xx
         coords = np.stack([zr / p, (xr_ - xs[0]) / pitch])
-        part = [ndi.map_coordinates(comp, coords, order=3, mode="constant", cval=0.0)
-                for comp in (f.real, f.imag)]  # fmt: skip
+        part = [
+            ndi.map_coordinates(comp, coords, order=3, mode="constant", cval=0.0)
+            for comp in (f.real, f.imag)
+        ]
         out.append(part[0] + 1j * part[1])
     looks = xr.DataArray(
-        np.stack(out), dims=("look", "depth", "x"),
+        np.stack(out),
+        dims=("look", "depth", "x"),
         coords={"angle": ("look", ang, {"units": "degree", "long_name": "beam angle"})},
-    )  # fmt: skip
+    )
     return _looks(looks, "angular")
 
 
@@ -442,12 +450,17 @@ def spatial_looks(
     if off.ndim != 1 or off.size == 0:
         raise ValueError("offsets must be a non-empty 1-D list of lateral offsets in µm")
     xs = np.asarray(x, dtype=float)
-    out = [image(scene, source, **_image_kw(waist, xs + d, method, tol, chunk)).field.values
-           for d in off]  # fmt: skip
+    out = [
+        image(scene, source, **_image_kw(waist, xs + d, method, tol, chunk)).field.values
+        for d in off
+    ]
     looks = xr.DataArray(
-        np.stack(out), dims=("look", "depth", "x"),
-        coords={"offset": ("look", off, {"units": "um", "long_name": "lateral offset of the lines"})},
-    )  # fmt: skip
+        np.stack(out),
+        dims=("look", "depth", "x"),
+        coords={
+            "offset": ("look", off, {"units": "um", "long_name": "lateral offset of the lines"})
+        },
+    )
     return _looks(looks, "spatial")
 
 
@@ -558,10 +571,14 @@ def temporal_looks(
     for i in range(frames.sizes["frame"]):
         fr = frames.isel(frame=i).drop_vars("time")
         order = np.argsort(fr.x.values, kind="stable")
-        out.append(image(fr.isel(scatterer=order), source,
-                         **_image_kw(waist, xs, method, tol, chunk)).field.values)  # fmt: skip
+        out.append(
+            image(
+                fr.isel(scatterer=order), source, **_image_kw(waist, xs, method, tol, chunk)
+            ).field.values
+        )
     looks = xr.DataArray(
-        np.stack(out), dims=("look", "depth", "x"),
+        np.stack(out),
+        dims=("look", "depth", "x"),
         coords={"time": ("look", frames.time.values, frames.time.attrs)},
-    )  # fmt: skip
+    )
     return _looks(looks, "temporal", diffusion=float(diffusion), frame_interval=float(interval))

@@ -137,8 +137,14 @@ def _nlm(a, *, h=0.8, patch_size=5, patch_distance=6, log=False):
 
     def f(u):
         s = _sigma(u)
-        return denoise_nl_means(u, h=h * s, sigma=s, patch_size=patch_size,
-                                patch_distance=patch_distance, fast_mode=True)  # fmt: skip
+        return denoise_nl_means(
+            u,
+            h=h * s,
+            sigma=s,
+            patch_size=patch_size,
+            patch_distance=patch_distance,
+            fast_mode=True,
+        )
 
     return _skimage(f)(a)
 
@@ -154,8 +160,9 @@ def _wavelet(a, *, sigma_scale=1.0, wavelet="db2", log=False):
 
     def f(u):
         s = _sigma(u) * sigma_scale
-        return denoise_wavelet(u, sigma=s, wavelet=wavelet, mode="soft", method="BayesShrink",
-                               rescale_sigma=True)  # fmt: skip
+        return denoise_wavelet(
+            u, sigma=s, wavelet=wavelet, mode="soft", method="BayesShrink", rescale_sigma=True
+        )
 
     return _skimage(f)(a)
 
@@ -164,8 +171,9 @@ def _bilateral(a, *, sigma_color=0.1, sigma_spatial=2.0, log=False):
     from skimage.restoration import denoise_bilateral
 
     return _skimage(
-        lambda u: denoise_bilateral(u, sigma_color=sigma_color, sigma_spatial=sigma_spatial,
-                                    mode="reflect")  # fmt: skip
+        lambda u: denoise_bilateral(
+            u, sigma_color=sigma_color, sigma_spatial=sigma_spatial, mode="reflect"
+        )
     )(a)
 
 
@@ -271,8 +279,10 @@ def despeckle(
     """
     p = check_filter(name, params, domain)
     if name == "bm3d" and not filter_available("bm3d"):
-        raise ImportError("filter 'bm3d' needs the optional package: pip install bm3d "
-                          "(licence: non-commercial use only)")  # fmt: skip
+        raise ImportError(
+            "filter 'bm3d' needs the optional package: pip install bm3d "
+            "(licence: non-commercial use only)"
+        )
     a = np.asarray(intensity.values if isinstance(intensity, xr.DataArray) else intensity)
     if a.ndim != 2:
         raise ValueError(f"intensity must be a 2-D image, got shape {a.shape}")

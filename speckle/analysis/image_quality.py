@@ -112,7 +112,7 @@ def bandlimited(field: object, factor: int, axis: int = -1) -> np.ndarray:
     n = f.shape[-1]
     g = np.fft.ifft(f, axis=-1)
     idx = np.arange(n) - n // 2
-    big = np.zeros(f.shape[:-1] + (k * n,), dtype=np.complex128)
+    big = np.zeros((*f.shape[:-1], k * n), dtype=np.complex128)
     big[..., idx % (k * n)] = g[..., idx % n]
     return np.moveaxis(np.fft.fft(big, axis=-1), -1, axis)
 

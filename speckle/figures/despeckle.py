@@ -51,6 +51,7 @@ from ._style import new_figure
 __all__ = [
     "FAMILIES",
     "build_phantom",
+    "check_despeckle_config",
     "failure_data",
     "frequency_compounding_data",
     "methods_data",
@@ -61,9 +62,7 @@ __all__ = [
 ]
 
 #: Method families, physical then digital.
-FAMILIES = ("frequency", "angular", "spatial", "polarization", "temporal") + tuple(
-    f for f in dsp.FILTERS
-)
+FAMILIES = ("frequency", "angular", "spatial", "polarization", "temporal", *dsp.FILTERS)
 #: dB window of PSNR/SSIM, relative to the truth's mean in the uniform region.
 DB_TOP, DB_RANGE = 15.0, 45.0
 #: "Stops helping": speckle reduction (single-look contrast / contrast) below this.
@@ -73,8 +72,14 @@ ERASES = 0.5
 
 
 # --------------------------------------------------------------------------- the phantom
-def build_phantom(geo: Mapping, *, seed: int, density: float | None = None,
-                  radius: float | None = None, margin_angle: float = 0.0) -> dict:  # fmt: skip
+def build_phantom(
+    geo: Mapping,
+    *,
+    seed: int,
+    density: float | None = None,
+    radius: float | None = None,
+    margin_angle: float = 0.0,
+) -> dict:
     """The phantom of a ``despeckle`` geometry section: scene, source, lines, truth, masks.
 
     ``geo`` keys: ``n_pixels``, ``n_lines``, ``pixel_size`` (µm; the line pitch too),
@@ -101,12 +106,23 @@ def build_phantom(geo: Mapping, *, seed: int, density: float | None = None,
         rg.background(density=0.0, name="air"),
         rg.layer(z_air, zmax, density=dens, backscatter=b1, name="layer 1"),
         rg.layer(z_layer, zmax, density=dens, backscatter=b2, name="layer 2"),
-        rg.circle(inc["row"] * p, inc["line"] * p, r_inc * p, density=dens,
-                  backscatter=float(inc["backscatter"]), name="inclusion"),  # fmt: skip
+        rg.circle(
+            inc["row"] * p,
+            inc["line"] * p,
+            r_inc * p,
+            density=dens,
+            backscatter=float(inc["backscatter"]),
+            name="inclusion",
+        ),
     )
     reach = beam_reach(w0) + h * sin
-    sc = shared_scene(regions, z_range=(0.0, zmax), x_range=(x[0] - reach, x[-1] + reach + p),
-                      seed=seed, tile=64.0 * p)  # fmt: skip
+    sc = shared_scene(
+        regions,
+        z_range=(0.0, zmax),
+        x_range=(x[0] - reach, x[-1] + reach + p),
+        seed=seed,
+        tile=64.0 * p,
+    )
     # point targets: peak intensity `db` above the layer-1 mean rho N sum S^2 w0 sqrt(pi)/(2 p)
     s2 = float(np.sum(src.values**2))
     mean1 = b1 * rho * n * s2 * w0 * np.sqrt(np.pi) / (2 * p)
@@ -115,11 +131,21 @@ def build_phantom(geo: Mapping, *, seed: int, density: float | None = None,
     zp = np.full(len(pts["lines"]), (pts["row"] + 0.3) * p)
     xp = np.asarray(pts["lines"], float) * p + 0.2 * p
     sc = xr.concat(
-        [sc, xr.Dataset({"z": ("scatterer", zp), "x": ("scatterer", xp),
-                         "amplitude": ("scatterer", np.full(zp.size, amp + 0j)),
-                         "region": ("scatterer", np.full(zp.size, -1, sc.region.dtype))})],
-        dim="scatterer", data_vars="all", combine_attrs="override",
-    )  # fmt: skip
+        [
+            sc,
+            xr.Dataset(
+                {
+                    "z": ("scatterer", zp),
+                    "x": ("scatterer", xp),
+                    "amplitude": ("scatterer", np.full(zp.size, amp + 0j)),
+                    "region": ("scatterer", np.full(zp.size, -1, sc.region.dtype)),
+                }
+            ),
+        ],
+        dim="scatterer",
+        data_vars="all",
+        combine_attrs="override",
+    )
     sc = sc.isel(scatterer=np.argsort(sc.x.values, kind="stable"))
     kw = {"waist": w0, "x": x, "method": geo["method"], "tol": geo["tol"]}
     truth = speckle_free_image(sc, src, **kw).values
@@ -135,10 +161,22 @@ def build_phantom(geo: Mapping, *, seed: int, density: float | None = None,
         "background": (d_inc >= r_inc + 4) & (d_inc <= r_inc + 10) & (rows > lr + 4),
     }
     ref = float(truth[masks["uniform"]].mean())
-    return {"geo": geo, "source": src, "scene": sc, "x": x, "truth": truth, "labels": labels,
-            "masks": masks, "ref": ref, "kw": kw, "pixel": p, "points": pts,
-            "edge_rows": (lr - half, lr + half), "regions": regions,
-            "edge_lines": np.abs(np.arange(nl) - inc["line"]) > r_inc + 2}  # fmt: skip
+    return {
+        "geo": geo,
+        "source": src,
+        "scene": sc,
+        "x": x,
+        "truth": truth,
+        "labels": labels,
+        "masks": masks,
+        "ref": ref,
+        "kw": kw,
+        "pixel": p,
+        "points": pts,
+        "edge_rows": (lr - half, lr + half),
+        "regions": regions,
+        "edge_lines": np.abs(np.arange(nl) - inc["line"]) > r_inc + 2,
+    }
 
 
 def _point_fwhm(img: np.ndarray, ph: dict) -> tuple[float, float]:
@@ -216,11 +254,17 @@ def _physical_looks(ph: dict, cfg: Mapping, seed: int, snr_db: float) -> dict:
         sc, src, phys["polarization"]["depolarization"], seed=seed + 1, **kw
     )
     tm = phys["temporal"]
-    out["temporal"] = cp.temporal_looks(sc, src, tm["frames"], diffusion=tm["diffusion"],
-                                        interval=tm["interval"], seed=seed + 2, **kw)  # fmt: skip
+    out["temporal"] = cp.temporal_looks(
+        sc,
+        src,
+        tm["frames"],
+        diffusion=tm["diffusion"],
+        interval=tm["interval"],
+        seed=seed + 2,
+        **kw,
+    )
     for fam in ("angular", "spatial", "polarization", "temporal"):
-        out[fam + "_noisy"] = cp.noisy_looks(out[fam], snr_db, seed=seed + 3,
-                                             signal_intensity=ref)  # fmt: skip
+        out[fam + "_noisy"] = cp.noisy_looks(out[fam], snr_db, seed=seed + 3, signal_intensity=ref)
     out["ref_intensity"] = ref
     return out
 
@@ -258,11 +302,16 @@ def _physical_methods(lk: dict, ph: dict, cfg: Mapping):
                     out = cp.frequency_looks(xr.DataArray(f, dims=("depth", "x")), w)
                     return out, time.perf_counter() - t
 
-                yield ("frequency", f"L={nlook} {win} overlap={ov:g}",
-                       {"looks": nlook, "window": win, "overlap": ov}, 1, fn)  # fmt: skip
-    for fam, key, unit in (("angular", "sets", "deg"), ("spatial", "sets", "um"),
-                           ("temporal", "sets", "frames")):  # fmt: skip
-        for m in phys[fam][key]:
+                yield (
+                    "frequency",
+                    f"L={nlook} {win} overlap={ov:g}",
+                    {"looks": nlook, "window": win, "overlap": ov},
+                    1,
+                    fn,
+                )
+    for fam in ("angular", "spatial", "temporal"):
+        for m in phys[fam]["sets"]:
+
             def fn(noisy, fam=fam, m=m):
                 t = time.perf_counter()
                 out = _central(lk[fam + ("_noisy" if noisy else "")], m)
@@ -273,8 +322,13 @@ def _physical_methods(lk: dict, ph: dict, cfg: Mapping):
     def pol(noisy):
         return lk["polarization" + ("_noisy" if noisy else "")], 0.0
 
-    yield ("polarization", "co+cross",
-           {"depolarization": phys["polarization"]["depolarization"]}, 1, pol)  # fmt: skip
+    yield (
+        "polarization",
+        "co+cross",
+        {"depolarization": phys["polarization"]["depolarization"]},
+        1,
+        pol,
+    )
 
 
 def _grid(params: Mapping) -> list[dict]:
@@ -291,20 +345,29 @@ def _table(rows: list[dict], extra: Mapping | None = None) -> xr.Dataset:
     labels = [r["method"] for r in rows]
     data = {}
     for k, (units, long) in {**METRICS, **(extra or {})}.items():
-        data[k] = ("technique", np.array([r.get(k, np.nan) for r in rows], float),
-                   {"units": units, "long_name": long})  # fmt: skip
+        data[k] = (
+            "technique",
+            np.array([r.get(k, np.nan) for r in rows], float),
+            {"units": units, "long_name": long},
+        )
     coords = {"technique": ("technique", labels)}
     for k in ("family", "parameters", "averaging", "domain"):
         coords[k] = ("technique", [str(r.get(k, "")) for r in rows])
-    coords["noise"] = ("technique", np.array([int(r.get("noise", 1)) for r in rows], np.int8),
-                       {"long_name": "receiver noise in the looks (1) or not (0)"})  # fmt: skip
+    coords["noise"] = (
+        "technique",
+        np.array([int(r.get("noise", 1)) for r in rows], np.int8),
+        {"long_name": "receiver noise in the looks (1) or not (0)"},
+    )
     return xr.Dataset(data, coords=coords)
 
 
 def methods_data(cfg: Mapping, seed: int) -> tuple[xr.Dataset, xr.Dataset]:
     """Every method by every metric on the phantom; returns (methods, phantom) datasets."""
-    ph = build_phantom(cfg["phantom"], seed=seed,
-                       margin_angle=max(abs(a) for a in cfg["physical"]["angular"]["angles"]))  # fmt: skip
+    ph = build_phantom(
+        cfg["phantom"],
+        seed=seed,
+        margin_angle=max(abs(a) for a in cfg["physical"]["angular"]["angles"]),
+    )
     snr = float(cfg["phantom"]["snr_db"])
     rows = []
     best: dict[str, tuple[float, np.ndarray, str]] = {}
@@ -320,19 +383,37 @@ def methods_data(cfg: Mapping, seed: int) -> tuple[xr.Dataset, xr.Dataset]:
     single, methods = physical_methods(ph, cfg, seed, snr)
     for noisy in (0, 1):
         img = np.abs(single["single_noisy" if noisy else "single"]) ** 2
-        add({"method": f"single look{' + noise' if noisy else ''}", "family": "single",
-             "parameters": "", "averaging": "", "noise": noisy, "acquisitions": 1,
-             "time_per_mpx": 0.0}, img)  # fmt: skip
-    for fam, label, params, acq, fn in methods:
+        add(
+            {
+                "method": f"single look{' + noise' if noisy else ''}",
+                "family": "single",
+                "parameters": "",
+                "averaging": "",
+                "noise": noisy,
+                "acquisitions": 1,
+                "time_per_mpx": 0.0,
+            },
+            img,
+        )
+    for fam, label, _params, acq, fn in methods:
         for noisy in (0, 1):
             looks, secs = fn(bool(noisy))
             for mode in cfg["physical"]["averaging"]:
                 t = time.perf_counter()
                 img = cp.compound(looks, mode).values
                 secs_all = secs + time.perf_counter() - t
-                add({"method": f"{fam} {label} {mode}{' + noise' if noisy else ''}",
-                     "family": fam, "parameters": label, "averaging": mode, "noise": noisy,
-                     "acquisitions": acq, "time_per_mpx": secs_all * 1e6 / npx}, img)  # fmt: skip
+                add(
+                    {
+                        "method": f"{fam} {label} {mode}{' + noise' if noisy else ''}",
+                        "family": fam,
+                        "parameters": label,
+                        "averaging": mode,
+                        "noise": noisy,
+                        "acquisitions": acq,
+                        "time_per_mpx": secs_all * 1e6 / npx,
+                    },
+                    img,
+                )
     noisy_img = np.abs(single["single_noisy"]) ** 2
     for name, params in cfg["filters"].items():
         if not dsp.filter_available(name):
@@ -343,43 +424,95 @@ def methods_data(cfg: Mapping, seed: int) -> tuple[xr.Dataset, xr.Dataset]:
                 img = dsp.despeckle(noisy_img, name, p, domain=domain)
                 secs = time.perf_counter() - t
                 label = " ".join(f"{k}={v}" for k, v in p.items())
-                add({"method": f"{name} {domain} {label}", "family": name, "parameters": label,
-                     "domain": domain, "noise": 1, "acquisitions": 1,
-                     "time_per_mpx": secs * 1e6 / npx}, img)  # fmt: skip
-    extra = {"acquisitions": ("1", "acquisitions (looks acquired)"),
-             "time_per_mpx": ("s", "processing time per megapixel")}  # fmt: skip
+                add(
+                    {
+                        "method": f"{name} {domain} {label}",
+                        "family": name,
+                        "parameters": label,
+                        "domain": domain,
+                        "noise": 1,
+                        "acquisitions": 1,
+                        "time_per_mpx": secs * 1e6 / npx,
+                    },
+                    img,
+                )
+    extra = {
+        "acquisitions": ("1", "acquisitions (looks acquired)"),
+        "time_per_mpx": ("s", "processing time per megapixel"),
+    }
     ds = _table(rows, extra)
     i_ref = int(np.flatnonzero(ds.technique.values == "single look + noise")[0])
     ref = {k: float(v) for k, v in ds.isel(technique=i_ref).data_vars.items()}
     ds["speckle_reduction"] = (ref["contrast"] / ds.contrast).assign_attrs(
-        units="1", long_name="single-look contrast over the method's")
+        units="1", long_name="single-look contrast over the method's"
+    )
     ratios = []
     for k in ("fwhm_axial", "fwhm_lateral", "edge_width"):
-        ds[k + "_ratio"] = (ds[k] / ref[k]).assign_attrs(units="1", long_name=f"{k} over the single look's")
+        ds[k + "_ratio"] = (ds[k] / ref[k]).assign_attrs(
+            units="1", long_name=f"{k} over the single look's"
+        )
         ratios.append(ds[k + "_ratio"])
-    ds["resolution_loss"] = xr.concat(ratios, "r").max("r").assign_attrs(
-        units="1", long_name="largest resolution ratio to the single look (axial, lateral, edge)")
-    ds.attrs.update(snr_db=snr, helps_threshold=HELPS, erases_threshold=ERASES,
-                    db_window=f"[{DB_TOP - DB_RANGE}, {DB_TOP}] dB re the truth's uniform mean")
+    ds["resolution_loss"] = (
+        xr.concat(ratios, "r")
+        .max("r")
+        .assign_attrs(
+            units="1",
+            long_name="largest resolution ratio to the single look (axial, lateral, edge)",
+        )
+    )
+    ds.attrs.update(
+        snr_db=snr,
+        helps_threshold=HELPS,
+        erases_threshold=ERASES,
+        db_window=f"[{DB_TOP - DB_RANGE}, {DB_TOP}] dB re the truth's uniform mean",
+    )
     fams = [f for f in FAMILIES if f in best]
     x = ph["x"]
     depth = np.arange(ph["geo"]["n_pixels"]) * ph["pixel"]
-    coords = {"depth": ("depth", depth, {"units": "um", "long_name": "depth"}),
-              "x": ("x", x, {"units": "um", "long_name": "lateral position x"})}  # fmt: skip
+    coords = {
+        "depth": ("depth", depth, {"units": "um", "long_name": "depth"}),
+        "x": ("x", x, {"units": "um", "long_name": "lateral position x"}),
+    }
     phantom = xr.Dataset(
         {
-            "labels": (("depth", "x"), ph["labels"].values, {"long_name": "region label", "units": "1"}),
-            "truth": (("depth", "x"), ph["truth"], {"units": "1", "long_name": "speckle-free intensity E|A|^2"}),
-            "single_look": (("depth", "x"), noisy_img, {"units": "1", "long_name": "single look with noise"}),
-            "best": (("family", "depth", "x"), np.stack([best[f][1] for f in fams]),
-                     {"units": "1", "long_name": "best method of each family (highest SSIM)"}),
+            "labels": (
+                ("depth", "x"),
+                ph["labels"].values,
+                {"long_name": "region label", "units": "1"},
+            ),
+            "truth": (
+                ("depth", "x"),
+                ph["truth"],
+                {"units": "1", "long_name": "speckle-free intensity E|A|^2"},
+            ),
+            "single_look": (
+                ("depth", "x"),
+                noisy_img,
+                {"units": "1", "long_name": "single look with noise"},
+            ),
+            "best": (
+                ("family", "depth", "x"),
+                np.stack([best[f][1] for f in fams]),
+                {"units": "1", "long_name": "best method of each family (highest SSIM)"},
+            ),
         },
-        coords={**coords, "family": ("family", fams),
-                "best_method": ("family", [best[f][2] for f in fams])},
-        attrs={"region_names": ", ".join(str(v) for v in ph["regions"]["name"].values),
-               "reference_intensity": ph["ref"], "snr_db": snr},
-    )  # fmt: skip
+        coords={
+            **coords,
+            "family": ("family", fams),
+            "best_method": ("family", [best[f][2] for f in fams]),
+        },
+        attrs={
+            "region_names": ", ".join(str(v) for v in ph["regions"]["name"].values),
+            "reference_intensity": ph["ref"],
+            "snr_db": snr,
+        },
+    )
     return ds, phantom
+
+
+def phantom_data(cfg: Mapping, seed: int) -> xr.Dataset:
+    """The phantom dataset alone (:func:`methods_data` computes it with the table)."""
+    return methods_data(cfg, seed)[1]
 
 
 def _pareto(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -407,8 +540,10 @@ def plot_methods(ds: xr.Dataset):
     sel = ds.isel(technique=np.flatnonzero(ds.noise.values == 1))
     fams = list(dict.fromkeys(sel.family.values.tolist()))
     col = _colours(fams)
-    for ax, xv, xl in ((axes[0], "resolution_loss", "resolution loss (ratio to single look)"),
-                       (axes[1], "time_per_mpx", "processing time per megapixel (s)")):  # fmt: skip
+    for ax, xv, xl in (
+        (axes[0], "resolution_loss", "resolution loss (ratio to single look)"),
+        (axes[1], "time_per_mpx", "processing time per megapixel (s)"),
+    ):
         x = sel[xv].values.astype(float)
         y = sel.speckle_reduction.values.astype(float)
         if xv == "time_per_mpx":
@@ -473,8 +608,9 @@ def _method_image(spec: Mapping, ph: dict, seed: int, snr_db: float, cache: dict
     if fam == "single":
         return np.abs(noisy(single).values[0]) ** 2
     if fam == "frequency":
-        w = cp.subband_windows(ph["geo"]["n_pixels"], spec["looks"], window=spec["window"],
-                               overlap=spec["overlap"])  # fmt: skip
+        w = cp.subband_windows(
+            ph["geo"]["n_pixels"], spec["looks"], window=spec["window"], overlap=spec["overlap"]
+        )
         f = noisy(single).isel(look=0)
         return cp.compound(cp.frequency_looks(f, w), mode).values
     if fam in dsp.FILTERS:
@@ -488,8 +624,15 @@ def _method_image(spec: Mapping, ph: dict, seed: int, snr_db: float, cache: dict
         elif fam == "polarization":
             cache[fam] = cp.polarization_looks(sc, src, spec["depolarization"], seed=seed + 1, **kw)
         elif fam == "temporal":
-            cache[fam] = cp.temporal_looks(sc, src, spec["frames"], diffusion=spec["diffusion"],
-                                           interval=spec["interval"], seed=seed + 2, **kw)  # fmt: skip
+            cache[fam] = cp.temporal_looks(
+                sc,
+                src,
+                spec["frames"],
+                diffusion=spec["diffusion"],
+                interval=spec["interval"],
+                seed=seed + 2,
+                **kw,
+            )
         else:
             raise ValueError(f"unknown method family {fam!r}; allowed: {FAMILIES}")
     return cp.compound(noisy(cache[fam]), mode).values
@@ -503,10 +646,17 @@ def failure_data(cfg: Mapping, seed: int) -> xr.Dataset:
     names = list(specs)
     angle = max([abs(a) for s in specs.values() for a in s.get("angles", [0.0])])
     base_snr = float(geo["snr_db"])
-    sweeps = {"density": fc["density"], "snr_db": fc["snr_db"], "feature_radius": fc["feature_radius"]}
+    sweeps = {
+        "density": fc["density"],
+        "snr_db": fc["snr_db"],
+        "feature_radius": fc["feature_radius"],
+    }
     out = {}
     for axis, values in sweeps.items():
-        res = {k: np.full((len(names), len(values)), np.nan) for k in ("speckle_reduction", "feature_retained", "ssim", "resolution_loss")}
+        res = {
+            k: np.full((len(names), len(values)), np.nan)
+            for k in ("speckle_reduction", "feature_retained", "ssim", "resolution_loss")
+        }
         base_cache: dict = {}
         base_ph = None
         for j, v in enumerate(values):
@@ -516,8 +666,15 @@ def failure_data(cfg: Mapping, seed: int) -> xr.Dataset:
                 ph, cache, snr = base_ph, base_cache, float(v)
             else:
                 kwargs = {"density": float(v)} if axis == "density" else {"radius": float(v)}
-                ph, cache, snr = build_phantom(geo, seed=seed, margin_angle=angle, **kwargs), {}, base_snr
-            q = {name: quality(_method_image(specs[name], ph, seed, snr, cache), ph) for name in names}
+                ph, cache, snr = (
+                    build_phantom(geo, seed=seed, margin_angle=angle, **kwargs),
+                    {},
+                    base_snr,
+                )
+            q = {
+                name: quality(_method_image(specs[name], ph, seed, snr, cache), ph)
+                for name in names
+            }
             s = q["single"]
             loss_ref = [s["fwhm_axial"], s["fwhm_lateral"], s["edge_width"]]
             for i, name in enumerate(names):
@@ -526,24 +683,47 @@ def failure_data(cfg: Mapping, seed: int) -> xr.Dataset:
                 res["feature_retained"][i, j] = m["feature_retained"]
                 res["ssim"][i, j] = m["ssim"]
                 res["resolution_loss"][i, j] = np.nanmax(
-                    [m["fwhm_axial"] / loss_ref[0], m["fwhm_lateral"] / loss_ref[1], m["edge_width"] / loss_ref[2]])
+                    [
+                        m["fwhm_axial"] / loss_ref[0],
+                        m["fwhm_lateral"] / loss_ref[1],
+                        m["edge_width"] / loss_ref[2],
+                    ]
+                )
         for k, arr in res.items():
             out[f"{k}_{axis}"] = (("technique", axis), arr)
         sr, fr = res["speckle_reduction"], res["feature_retained"]
         out[f"helps_{axis}"] = (("technique", axis), (sr >= HELPS).astype(np.int8))
         out[f"erases_{axis}"] = (("technique", axis), (fr < ERASES).astype(np.int8))
-    ds = xr.Dataset(out, coords={
-        "technique": ("technique", names),
-        "family": ("technique", [specs[n]["family"] for n in names]),
-        "density": ("density", np.asarray(fc["density"], float), {"units": "1", "long_name": "scatterers per pixel"}),
-        "snr_db": ("snr_db", np.asarray(fc["snr_db"], float), {"units": "dB", "long_name": "receiver SNR"}),
-        "feature_radius": ("feature_radius", np.asarray(fc["feature_radius"], float), {"units": "1", "long_name": "inclusion radius (pixels)"}),
-    })  # fmt: skip
+    ds = xr.Dataset(
+        out,
+        coords={
+            "technique": ("technique", names),
+            "family": ("technique", [specs[n]["family"] for n in names]),
+            "density": (
+                "density",
+                np.asarray(fc["density"], float),
+                {"units": "1", "long_name": "scatterers per pixel"},
+            ),
+            "snr_db": (
+                "snr_db",
+                np.asarray(fc["snr_db"], float),
+                {"units": "dB", "long_name": "receiver SNR"},
+            ),
+            "feature_radius": (
+                "feature_radius",
+                np.asarray(fc["feature_radius"], float),
+                {"units": "1", "long_name": "inclusion radius (pixels)"},
+            ),
+        },
+    )
     for v in ds.data_vars:
         ds[v].attrs["units"] = "1"
-    ds.attrs.update(helps_threshold=HELPS, erases_threshold=ERASES,
-                    helps="speckle_reduction >= helps_threshold",
-                    erases="feature_retained < erases_threshold")  # fmt: skip
+    ds.attrs.update(
+        helps_threshold=HELPS,
+        erases_threshold=ERASES,
+        helps="speckle_reduction >= helps_threshold",
+        erases="feature_retained < erases_threshold",
+    )
     return ds
 
 
@@ -571,8 +751,13 @@ def plot_failure(ds: xr.Dataset):
         for r in range(2):
             if axis == "density":
                 axes[r, c].set_xscale("log")
-            axes[r, c].set_xlabel({"density": "scatterers per pixel", "snr_db": "SNR (dB)",
-                                   "feature_radius": "inclusion radius (pixels)"}[axis])  # fmt: skip
+            axes[r, c].set_xlabel(
+                {
+                    "density": "scatterers per pixel",
+                    "snr_db": "SNR (dB)",
+                    "feature_radius": "inclusion radius (pixels)",
+                }[axis]
+            )
         axes[0, c].set_ylabel("speckle reduction (x: stops helping)")
         axes[1, c].set_ylabel("feature contrast kept (x: erased)")
     axes[0, 0].legend(fontsize=5, ncol=2)
@@ -613,19 +798,63 @@ def frequency_compounding_data(cfg: Mapping, seed: int) -> xr.Dataset:
         ft.append(cp.subband_fwhm(n, n // nlk) * p)
     ds = xr.Dataset(
         {
-            "contrast": ("looks", c, {"units": "1", "long_name": "measured intensity contrast of the compounded image"}),
-            "contrast_standard_error": ("looks", se, {"units": "1", "long_name": "SE of the contrast (16 blocks of lines)"}),
-            "contrast_theory": ("looks", ct, {"units": "1", "long_name": "exact Poisson theory, finite density"}),
-            "contrast_dense": ("looks", cd, {"units": "1", "long_name": "dense limit 1/sqrt(looks)"}),
-            "axial_fwhm": ("looks", fw, {"units": "um", "long_name": "axial FWHM of the compounded intensity PSF (band-limited interpolation)"}),
-            "axial_fwhm_theory": ("looks", ft, {"units": "um", "long_name": "FWHM of |sin(pi M x/N)/(M sin(pi x/N))|^2, M = N/looks"}),
+            "contrast": (
+                "looks",
+                c,
+                {"units": "1", "long_name": "measured intensity contrast of the compounded image"},
+            ),
+            "contrast_standard_error": (
+                "looks",
+                se,
+                {"units": "1", "long_name": "SE of the contrast (16 blocks of lines)"},
+            ),
+            "contrast_theory": (
+                "looks",
+                ct,
+                {"units": "1", "long_name": "exact Poisson theory, finite density"},
+            ),
+            "contrast_dense": (
+                "looks",
+                cd,
+                {"units": "1", "long_name": "dense limit 1/sqrt(looks)"},
+            ),
+            "axial_fwhm": (
+                "looks",
+                fw,
+                {
+                    "units": "um",
+                    "long_name": "axial FWHM of the compounded intensity PSF (band-limited "
+                    "interpolation)",
+                },
+            ),
+            "axial_fwhm_theory": (
+                "looks",
+                ft,
+                {
+                    "units": "um",
+                    "long_name": "FWHM of |sin(pi M x/N)/(M sin(pi x/N))|^2, M = N/looks",
+                },
+            ),
         },
-        coords={"looks": ("looks", looks, {"units": "1", "long_name": "sub-bands (non-overlapping, rectangular)"})},
-        attrs={"n_pixels": n, "n_lines": nl, "density": rho, "pixel_size": p, "k0_dk": float(cfg["k0_dk"]),
-               "spectrum": "rectangular", "windows": "rectangular, no overlap", "count": "poisson"},
-    )  # fmt: skip
+        coords={
+            "looks": (
+                "looks",
+                looks,
+                {"units": "1", "long_name": "sub-bands (non-overlapping, rectangular)"},
+            )
+        },
+        attrs={
+            "n_pixels": n,
+            "n_lines": nl,
+            "density": rho,
+            "pixel_size": p,
+            "k0_dk": float(cfg["k0_dk"]),
+            "spectrum": "rectangular",
+            "windows": "rectangular, no overlap",
+            "count": "poisson",
+        },
+    )
     return ds
-
 
 
 # --------------------------------------------------------------------------- config checks
@@ -641,27 +870,44 @@ def _check_geometry(geo: Mapping, path: str) -> None:
     a, lr = int(geo["air_rows"]), int(geo["layer_row"])
     inc, pts = geo["inclusion"], geo["points"]
     if not (0 < a and a + 4 <= lr and lr + 4 <= n):
-        raise ValueError(f"config key despeckle.{path}: need 0 < air_rows ({a}), air_rows + 4 "
-                         f"<= layer_row ({lr}), layer_row + 4 <= n_pixels ({n})")  # fmt: skip
+        raise ValueError(
+            f"config key despeckle.{path}: need 0 < air_rows ({a}), air_rows + 4 "
+            f"<= layer_row ({lr}), layer_row + 4 <= n_pixels ({n})"
+        )
     if not (lr < inc["row"] < n and 0 <= inc["line"] < nl):
-        raise ValueError(f"config key despeckle.{path}.inclusion: centre (row {inc['row']}, line "
-                         f"{inc['line']}) must lie in layer 2 (rows {lr}..{n}) and lines 0..{nl}")  # fmt: skip
+        raise ValueError(
+            f"config key despeckle.{path}.inclusion: centre (row {inc['row']}, line "
+            f"{inc['line']}) must lie in layer 2 (rows {lr}..{n}) and lines 0..{nl}"
+        )
     if not pts["row"] < a or any(not 0 <= v < nl for v in pts["lines"]):
-        raise ValueError(f"config key despeckle.{path}.points: row must be < air_rows ({a}) and "
-                         f"lines in [0, n_lines={nl})")  # fmt: skip
+        raise ValueError(
+            f"config key despeckle.{path}.points: row must be < air_rows ({a}) and "
+            f"lines in [0, n_lines={nl})"
+        )
 
 
 def _check_spec(spec: Mapping, n: int, path: str) -> None:
     fam = spec["family"]
     if fam == "frequency":
-        _key(path, lambda: cp.subband_windows(n, spec["looks"], window=spec["window"],
-                                              overlap=spec["overlap"]))  # fmt: skip
+        _key(
+            path,
+            lambda: cp.subband_windows(
+                n, spec["looks"], window=spec["window"], overlap=spec["overlap"]
+            ),
+        )
     elif fam in dsp.FILTERS:
         _key(path, lambda: dsp.check_filter(fam, spec.get("params"), spec.get("domain", "linear")))
     elif fam == "temporal":
-        _key(path, lambda: cp.brownian_frames(
-            xr.Dataset({"z": ("scatterer", [0.0])}), spec["frames"], diffusion=spec["diffusion"],
-            interval=spec["interval"], seed=0))  # fmt: skip
+        _key(
+            path,
+            lambda: cp.brownian_frames(
+                xr.Dataset({"z": ("scatterer", [0.0])}),
+                spec["frames"],
+                diffusion=spec["diffusion"],
+                interval=spec["interval"],
+                seed=0,
+            ),
+        )
 
 
 def check_despeckle_config(cfg: Mapping) -> None:
@@ -681,8 +927,10 @@ def check_despeckle_config(cfg: Mapping) -> None:
     for nl in fr["looks"]:
         for w in fr["windows"]:
             for ov in fr["overlap"]:
-                _key("physical.frequency", lambda nl=nl, w=w, ov=ov: cp.subband_windows(
-                    n, nl, window=w, overlap=ov))  # fmt: skip
+                _key(
+                    "physical.frequency",
+                    lambda nl=nl, w=w, ov=ov: cp.subband_windows(n, nl, window=w, overlap=ov),
+                )
     phys = cfg["physical"]
     for fam, key in (("angular", "angles"), ("spatial", "offsets")):
         size = len(phys[fam][key])
@@ -694,8 +942,10 @@ def check_despeckle_config(cfg: Mapping) -> None:
                 )
     tm = phys["temporal"]
     if max(tm["sets"]) > tm["frames"]:
-        raise ValueError(f"config key despeckle.physical.temporal.sets must be <= frames "
-                         f"({tm['frames']}); got {tm['sets']}")  # fmt: skip
+        raise ValueError(
+            f"config key despeckle.physical.temporal.sets must be <= frames "
+            f"({tm['frames']}); got {tm['sets']}"
+        )
     for name, params in cfg["filters"].items():
         for p in _grid(params):
             _key(f"filters.{name}", lambda name=name, p=p: dsp.check_filter(name, p))

@@ -57,7 +57,6 @@ def intensity_spectrum(weights: object) -> np.ndarray:
     """
     s = np.asarray(weights, dtype=float)
     s = check_weights(s, s.size)
-    n = s.size
     r = np.correlate(s, s, mode="full")  # lags -(N-1) ... N-1
     return np.concatenate([[0.0], np.clip(r, 0.0, None)])  # tiny negative rounding -> 0
 
@@ -92,9 +91,15 @@ def speckle_free_lines(
     s = np.ones(n) if spectrum is None else check_weights(spectrum, n)
     a2 = np.abs(np.asarray(amplitude)) ** 2
     out = ascan(
-        z, a2, n_pixels=2 * n, depth=depth, k0=0.0, spectrum=intensity_spectrum(s),
-        method=method, tol=tol,
-    )  # fmt: skip
+        z,
+        a2,
+        n_pixels=2 * n,
+        depth=depth,
+        k0=0.0,
+        spectrum=intensity_spectrum(s),
+        method=method,
+        tol=tol,
+    )
     return np.ascontiguousarray(out[..., ::2].real)
 
 
@@ -168,12 +173,17 @@ def speckle_free_image(
             scene.amplitude,
             input_core_dims=[["scatterer"], ["scatterer"]],
             output_core_dims=[["depth"]],
-            kwargs={"n_pixels": n, "depth": h, "spectrum": source.values, "method": method,
-                    "tol": tol},
+            kwargs={
+                "n_pixels": n,
+                "depth": h,
+                "spectrum": source.values,
+                "method": method,
+                "tol": tol,
+            },
             dask="parallelized",
             output_dtypes=[np.float64],
             dask_gufunc_kwargs={"output_sizes": {"depth": n}},
-        )  # fmt: skip
+        )
         truth = truth.assign_coords(depth=coord("depth", pixel_depths(n, h)))
         lateral = "aline"
     dims = [d for d in truth.dims if d not in ("depth", lateral)] + ["depth", lateral]

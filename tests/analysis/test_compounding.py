@@ -57,7 +57,10 @@ def test_truth_is_the_incoherent_sum_exactly():
     truth = speckle_free_image(sc, src, waist=12.0, x=x).values
     kw = dict(lines=x, waist=12.0, n_pixels=n, depth=h, k0=src.attrs["k0"], spectrum=src.values)
     ref = sum(
-        np.abs(speckle.beam_scan([sc.z.values[j]], [sc.x.values[j]], [sc.amplitude.values[j]], **kw)) ** 2
+        np.abs(
+            speckle.beam_scan([sc.z.values[j]], [sc.x.values[j]], [sc.amplitude.values[j]], **kw)
+        )
+        ** 2
         for j in range(m)
     ).T
     np.testing.assert_allclose(truth, ref, rtol=1e-9, atol=1e-12 * ref.max())
@@ -65,8 +68,20 @@ def test_truth_is_the_incoherent_sum_exactly():
     z = rng.uniform(0, h, (3, m))
     a = rng.rayleigh(1, (3, m)) + 0j
     lines = speckle_free_lines(z, a, n_pixels=n, depth=h, spectrum=src.values)
-    ref = sum(np.abs(speckle.ascan(z[:, j : j + 1], a[:, j : j + 1], n_pixels=n, depth=h,
-                                   k0=src.attrs["k0"], spectrum=src.values)) ** 2 for j in range(m))
+    ref = sum(
+        np.abs(
+            speckle.ascan(
+                z[:, j : j + 1],
+                a[:, j : j + 1],
+                n_pixels=n,
+                depth=h,
+                k0=src.attrs["k0"],
+                spectrum=src.values,
+            )
+        )
+        ** 2
+        for j in range(m)
+    )
     np.testing.assert_allclose(lines, ref, rtol=1e-9, atol=1e-12 * ref.max())
 
 
@@ -84,13 +99,23 @@ def test_truth_is_the_mean_over_phase_realisations():
     """
     n, h = 32, 256.0
     src = speckle.spectrum(n, h, k0_dk=10, shape="gaussian", fwhm_fraction=0.3)
-    reg = speckle.make_regions(speckle.regions.background(density=speckle.regions.cell_density(4, 8, 8)))
+    reg = speckle.make_regions(
+        speckle.regions.background(density=speckle.regions.cell_density(4, 8, 8))
+    )
     sc = speckle.shared_scene(reg, z_range=(0, h), x_range=(-80, 330.0), seed=1)
     x = speckle.scan_lines(32, 8.0)
     truth = speckle_free_image(sc, src, waist=16.0, x=x, method="finufft", tol=1e-10).values
     rng = np.random.default_rng(0)
-    kw = dict(lines=x, waist=16.0, n_pixels=n, depth=h, k0=src.attrs["k0"], spectrum=src.values,
-              method="finufft", tol=1e-10)
+    kw = dict(
+        lines=x,
+        waist=16.0,
+        n_pixels=n,
+        depth=h,
+        k0=src.attrs["k0"],
+        spectrum=src.values,
+        method="finufft",
+        tol=1e-10,
+    )
     total, stats = 0.0, {}
     for r in range(1, 257):
         a = sc.amplitude.values * np.exp(2j * np.pi * rng.random(sc.sizes["scatterer"]))
@@ -191,10 +216,19 @@ def test_brownian_g1():
     dt = 1 / (4 * k0**2 * d) / 4  # q^2 D dt = 1/4
     sc = speckle.random_scatterers(128, 32.0, n_pixels=N, depth=H, seed=2, count="poisson")
     frames = cp.brownian_frames(sc, 9, diffusion=d, interval=dt, seed=5)
-    img = speckle.bscan(frames, src, method="finufft", tol=1e-10).field.transpose("frame", "depth", "aline").values
+    img = (
+        speckle.bscan(frames, src, method="finufft", tol=1e-10)
+        .field.transpose("frame", "depth", "aline")
+        .values
+    )
     for m in (1, 2, 4, 8):
+
         def g(b, m=m):
-            return np.real(np.sum(b[0] * b[1].conj()) / np.sqrt(np.sum(np.abs(b[0]) ** 2) * np.sum(np.abs(b[1]) ** 2)))
+            return np.real(
+                np.sum(b[0] * b[1].conj())
+                / np.sqrt(np.sum(np.abs(b[0]) ** 2) * np.sum(np.abs(b[1]) ** 2))
+            )
+
         pair = np.stack([img[0], img[m]])
         est, se = _blocked(g, pair)
         theory = cp.brownian_g1(m * dt, d, k0)
@@ -241,8 +275,14 @@ def test_complex_averaging():
 def test_spatial_and_angular_looks_register_a_point():
     n, h, p = 64, 512.0, 8.0
     src = speckle.spectrum(n, h, k0_dk=10)
-    sc = xr.Dataset({"z": ("scatterer", [200.0]), "x": ("scatterer", [256.0]),
-                     "amplitude": ("scatterer", [1.0 + 0j]), "region": ("scatterer", [0])})
+    sc = xr.Dataset(
+        {
+            "z": ("scatterer", [200.0]),
+            "x": ("scatterer", [256.0]),
+            "amplitude": ("scatterer", [1.0 + 0j]),
+            "region": ("scatterer", [0]),
+        }
+    )
     x = speckle.scan_lines(64, p)
     looks = cp.angular_looks(sc, src, [-3.0, 0.0, 3.0], waist=16.0, x=x, method="direct")
     peaks = [np.unravel_index(np.argmax(np.abs(lk)), lk.shape) for lk in looks.values]
@@ -259,11 +299,22 @@ def test_spatial_and_angular_looks_register_a_point():
         (lambda: cp.subband_windows(16, 4, overlap=1.0), "overlap"),
         (lambda: cp.subband_windows(16, 4, window="kaiser"), "window"),
         (lambda: cp.brownian_g1(1.0, -1.0, 5.0), "diffusion"),
-        (lambda: cp.brownian_frames(xr.Dataset({"z": ("scatterer", [1.0])}), 3, diffusion=-0.1,
-                                    interval=0.1, seed=0), "diffusion"),
-        (lambda: cp.brownian_frames(xr.Dataset({"z": ("scatterer", [1.0])}), 3, diffusion=0.1,
-                                    interval=0.0, seed=0), "interval"),
-        (lambda: cp.compound(xr.DataArray(np.ones((2, 2)), dims=["look", "depth"]), "geometric"), "mode"),
+        (
+            lambda: cp.brownian_frames(
+                xr.Dataset({"z": ("scatterer", [1.0])}), 3, diffusion=-0.1, interval=0.1, seed=0
+            ),
+            "diffusion",
+        ),
+        (
+            lambda: cp.brownian_frames(
+                xr.Dataset({"z": ("scatterer", [1.0])}), 3, diffusion=0.1, interval=0.0, seed=0
+            ),
+            "interval",
+        ),
+        (
+            lambda: cp.compound(xr.DataArray(np.ones((2, 2)), dims=["look", "depth"]), "geometric"),
+            "mode",
+        ),
     ],
 )
 def test_bad_input_names_the_parameter(call, name):

@@ -25,19 +25,43 @@ pytestmark = [pytest.mark.pipeline, pytest.mark.slow]
 
 CI_CONFIG = "workflow/config/ci.yaml"
 TARGETS = [
-    "phantom.nc", "phantom.png", "methods.nc", "methods.png", "failure.nc", "failure.png",
+    "phantom.nc",
+    "phantom.png",
+    "methods.nc",
+    "methods.png",
+    "failure.nc",
+    "failure.png",
     "frequency_compounding.nc",
-]  # fmt: skip
+]
 IGNORE = shutil.ignore_patterns(
-    ".git", ".snakemake", "results", "__pycache__", ".pytest_cache", ".hypothesis",
-    "*.egg-info", ".benchmarks", "report.html", ".ruff_cache",
-)  # fmt: skip
+    ".git",
+    ".snakemake",
+    "results",
+    "__pycache__",
+    ".pytest_cache",
+    ".hypothesis",
+    "*.egg-info",
+    ".benchmarks",
+    "report.html",
+    ".ruff_cache",
+)
 
 
 def snakemake(repo: Path, *args: str) -> subprocess.CompletedProcess:
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(repo), os.environ.get("PYTHONPATH", "")])}
-    cmd = [sys.executable, "-m", "snakemake", "--directory", str(repo), "--snakefile",
-           str(repo / "Snakefile"), *args]  # fmt: skip
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join([str(repo), os.environ.get("PYTHONPATH", "")]),
+    }
+    cmd = [
+        sys.executable,
+        "-m",
+        "snakemake",
+        "--directory",
+        str(repo),
+        "--snakefile",
+        str(repo / "Snakefile"),
+        *args,
+    ]
     proc = subprocess.run(cmd, cwd=repo, env=env, capture_output=True, text=True)
     proc.stdout += proc.stderr
     return proc
@@ -88,8 +112,19 @@ def test_methods_table_has_every_family_and_metric(results):
     assert set(ds.averaging.values.tolist()) >= {"intensity", "magnitude", "complex"}
     assert set(ds.domain.values.tolist()) >= {"linear", "log"}
     assert set(ds.noise.values.tolist()) == {0, 1}
-    for v in ("contrast", "enl", "cnr", "psnr", "ssim", "fwhm_axial", "fwhm_lateral", "edge_width",
-              "resolution_loss", "speckle_reduction", "time_per_mpx"):
+    for v in (
+        "contrast",
+        "enl",
+        "cnr",
+        "psnr",
+        "ssim",
+        "fwhm_axial",
+        "fwhm_lateral",
+        "edge_width",
+        "resolution_loss",
+        "speckle_reduction",
+        "time_per_mpx",
+    ):
         assert np.isfinite(ds[v].values).mean() > 0.9, v
     # complex averaging of one realisation removes no speckle
     names = ds.technique.values.tolist()

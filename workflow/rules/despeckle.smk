@@ -28,7 +28,10 @@ rule despeckle_methods:
             f"{RESULTS}/despeckle/phantom.png",
             caption="../report/despeckle_phantom.rst",
             category="Speckle suppression",
-            labels={"figure": "phantom", "panel": "truth, single look, best of each family"},
+            labels={
+                "figure": "phantom",
+                "panel": "truth, single look, best of each family",
+            },
         ),
         data=f"{RESULTS}/despeckle/methods.nc",
         figure=report(
@@ -64,7 +67,9 @@ rule despeckle_failure:
     conda:
         "../envs/speckle.yaml"
     params:
-        despeckle=section_without("despeckle", "frequency_compounding", "physical", "filters"),
+        despeckle=section_without(
+            "despeckle", "frequency_compounding", "physical", "filters"
+        ),
         seed=config["seed"],
     script:
         "../scripts/despeckle_failure.py"

@@ -9,7 +9,9 @@ from speckle.provenance import provenance_attrs
 def main(snakemake) -> None:
     cfg, seed = snakemake.params.frequency, snakemake.params.seed
     ds = despeckle.frequency_compounding_data(cfg, seed)
-    ds.attrs.update(provenance_attrs(config={"despeckle": {"frequency_compounding": cfg}}, seed=seed))
+    ds.attrs.update(
+        provenance_attrs(config={"despeckle": {"frequency_compounding": cfg}}, seed=seed)
+    )
     to_netcdf(ds, snakemake.output.data)
     print(f"wrote {snakemake.output.data}")
 
