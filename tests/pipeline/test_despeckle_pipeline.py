@@ -93,9 +93,10 @@ def test_frequency_compounding_contract_and_theory(results):
     assert {"contrast", "contrast_theory", "axial_fwhm", "axial_fwhm_theory"} <= set(ds.data_vars)
     assert ds.attrs["density"] >= 8 and ds.attrs["n_pixels"] >= 256 and ds.attrs["n_lines"] >= 256
     assert ds.axial_fwhm.attrs["units"] == "um"
-    # measured within 3 SE (16 blocks of lines) of the exact finite-density theory
+    # measured within the SE (16 blocks of lines) of the exact finite-density theory: four
+    # correlated values (one realisation), each |z| < 3.5 (family-wise false alarm < 0.2 %)
     z = abs(ds.contrast - ds.contrast_theory) / ds.contrast_standard_error
-    assert float(z.max()) < 3, ds.to_dataframe()
+    assert float(z.max()) < 3.5, ds.to_dataframe()
     np.testing.assert_allclose(ds.contrast_dense, 1 / np.sqrt(ds.looks), rtol=1e-12)
     # band-limited x64 interpolation: linear crossing error ~(1/64)^2 of a pixel
     np.testing.assert_allclose(ds.axial_fwhm, ds.axial_fwhm_theory, rtol=1e-3)
