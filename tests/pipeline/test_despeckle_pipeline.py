@@ -77,7 +77,7 @@ def repo(tmp_path_factory, repo_root) -> Path:
 @pytest.fixture(scope="module")
 def results(repo) -> Path:
     targets = [f"results/despeckle/{t}" for t in TARGETS]
-    proc = snakemake(repo, "--cores", "2", "--configfile", CI_CONFIG, *targets)
+    proc = snakemake(repo, "--cores", "2", *targets, "--configfile", CI_CONFIG)
     assert proc.returncode == 0, proc.stdout[-5000:]
     return repo / "results" / "despeckle"
 
