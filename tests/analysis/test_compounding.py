@@ -320,3 +320,18 @@ def test_spatial_and_angular_looks_register_a_point():
 def test_bad_input_names_the_parameter(call, name):
     with pytest.raises(ValueError, match=name):
         call()
+
+
+def test_truth_carries_the_polarization_channels():
+    """Each channel's truth is its intensity fraction of the total (1 - f, f)."""
+    n, h = 32, 256.0
+    src = speckle.spectrum(n, h, k0_dk=10)
+    sc = speckle.random_scatterers(8, 4.0, n_pixels=n, depth=h, seed=3)
+    f = 0.3
+    both = speckle_free_image(speckle.depolarize(sc, f, seed=2), src)
+    total = speckle_free_image(sc, src)
+    assert both.dims == ("channel", "depth", "aline")
+    np.testing.assert_allclose(both.sel(channel="co"), (1 - f) * total, rtol=1e-10)
+    np.testing.assert_allclose(both.sel(channel="cross"), f * total, rtol=1e-10)
+    with pytest.raises(ValueError, match="waist"):
+        speckle_free_image(sc, src, waist=10.0, x=[0.0])
