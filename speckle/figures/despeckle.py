@@ -175,7 +175,9 @@ def build_phantom(
         "points": pts,
         "edge_rows": (lr - half, lr + half),
         "regions": regions,
-        "edge_lines": np.abs(np.arange(nl) - inc["line"]) > r_inc + 2,
+        # lines clear of the inclusion where it reaches into the edge window
+        "edge_lines": (np.abs(np.arange(nl) - inc["line"]) > r_inc + 2)
+        | (inc["row"] - r_inc - 2 >= lr + half),
     }
 
 
@@ -207,7 +209,10 @@ def quality(intensity: np.ndarray, ph: dict) -> dict:
     tdb = iq.to_db(ph["truth"], ph["ref"])
     fa, fl = _point_fwhm(img, ph)
     e0, e1 = ph["edge_rows"]
-    edge = iq.edge_width(img[e0:e1, ph["edge_lines"]].mean(axis=1), ph["pixel"])
+    band = img[e0:e1, ph["edge_lines"]]
+    edge = iq.edge_width(band.mean(axis=1), ph["pixel"])
+    blocks = [iq.edge_width(b.mean(axis=1), ph["pixel"]) for b in np.array_split(band, 4, axis=1)]
+    edge_se = float(np.nanstd(blocks, ddof=1) / 2) if np.isfinite(blocks).sum() > 1 else np.nan
     inc = db[m["inclusion"]].mean() - db[m["background"]].mean()
     tinc = tdb[m["inclusion"]].mean() - tdb[m["background"]].mean()
     return {
@@ -219,6 +224,7 @@ def quality(intensity: np.ndarray, ph: dict) -> dict:
         "fwhm_axial": fa,
         "fwhm_lateral": fl,
         "edge_width": edge,
+        "edge_width_se": edge_se,
         "feature_retained": float(inc / tinc) if tinc != 0 else np.nan,
     }
 
@@ -232,6 +238,7 @@ METRICS = {
     "fwhm_axial": ("um", "axial FWHM of the point targets"),
     "fwhm_lateral": ("um", "lateral FWHM of the point targets"),
     "edge_width": ("um", "10-90 % width of the layer step edge"),
+    "edge_width_se": ("um", "standard error of edge_width (4 blocks of lines)"),
     "feature_retained": ("1", "inclusion contrast (dB) kept, over the truth's"),
 }
 
