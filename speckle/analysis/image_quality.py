@@ -158,12 +158,17 @@ def edge_width(profile: object, spacing: float = 1.0) -> float:
     def model(x, a, b, x0, s):
         return a + b * sp.ndtr((x - x0) / s)
 
+    def jac(x, a, b, x0, s):
+        u = (x - x0) / s
+        g = b * np.exp(-0.5 * u * u) / np.sqrt(2 * np.pi) / s
+        return np.stack([np.ones_like(x), sp.ndtr(u), -g, -g * u], axis=-1)
+
     lo, hi = y[: y.size // 4].mean(), y[-(y.size // 4) :].mean()
     x0 = x[int(np.argmax(np.abs(np.gradient(y))))]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", opt.OptimizeWarning)  # no covariance: not used
         try:
-            p, _ = opt.curve_fit(model, x, y, p0=[lo, hi - lo, x0, dx], maxfev=5000)
+            p, _ = opt.curve_fit(model, x, y, p0=[lo, hi - lo, x0, dx], jac=jac, maxfev=5000)
         except RuntimeError:
             return np.nan
     return float(EDGE_10_90 * abs(p[3]))
