@@ -26,8 +26,9 @@ ALLOWED = {
     "scene": {"numpy", "xarray", "dask", "scipy", "skfem"},  # geometry, FEM mechanics
     "system": {"numpy", "xarray", "scipy", "finufft"},  # spectra, noise, fast camera model
     "imaging": {"numpy", "xarray", "dask", "scipy", "numba", "finufft"},  # fast synthesis
-    # statistics, registration (skimage), reading PNG measured images (matplotlib.image)
-    "analysis": {"numpy", "xarray", "scipy", "skimage", "matplotlib"},
+    # statistics, registration and filters (skimage), reading PNG measured images
+    # (matplotlib.image), the optional BM3D filter (bm3d: non-commercial licence, not required)
+    "analysis": {"numpy", "xarray", "scipy", "skimage", "matplotlib", "bm3d"},
     "figures": {"numpy", "xarray", "scipy", "matplotlib", "dask"},  # drawing
 }
 STDLIB = set(sys.stdlib_module_names)

@@ -4,7 +4,9 @@
 two images with and without displacement compensation; ``tracking`` and ``strain`` estimate
 displacement and strain (OCT elastography); ``autocorrelation``, ``beam`` and ``phase`` measure
 the resolution cell and noise; ``measured`` and ``realism`` compare a measured image with the
-model. Names load on first use (SPEC 1, ``lazy_loader``).
+model; ``compounding`` (physical compounding looks), ``filters`` (digital despeckling) and
+``image_quality`` (metrics against a known truth) test speckle suppression.
+Names load on first use (SPEC 1, ``lazy_loader``).
 """
 
 from .._lazy import attach
@@ -12,7 +14,25 @@ from .._lazy import attach
 __getattr__, __dir__, __all__ = attach(
     __name__,
     {
+        "compounding": [
+            "angular_looks",
+            "brownian_frames",
+            "brownian_g1",
+            "compound",
+            "compounded_contrast",
+            "frequency_looks",
+            "noisy_looks",
+            "polarization_looks",
+            "spatial_looks",
+            "split_spectrum_contrast",
+            "subband_fwhm",
+            "subband_windows",
+            "temporal_looks",
+            "window_correlation",
+        ],
         "correlation": ["compensate", "correlation_map", "expected_correlation", "pearson"],
+        "filters": ["FILTERS", "despeckle", "frost", "kuan", "lee"],
+        "image_quality": ["cnr", "edge_width", "enl", "peak_fwhm", "psnr_db", "ssim_db"],
         "measured": ["compare_measured", "load_measured"],
         "statistics": ["contrast_theory", "fit_exponential", "fit_rayleigh", "speckle_contrast"],
         "strain": ["accumulate_strain", "estimate_displacement", "estimate_strain"],

@@ -153,6 +153,10 @@ def check_config(config: Mapping, schema: Mapping | None = None) -> None:
         _memory(figure_bytes(images, int(lines), n, float(rho)), key)
     measured = config["fig4"]["measured"]
     _measured_roi(measured.get("path"), measured.get("roi") or {})
+    if "despeckle" in config:
+        from .despeckle import check_despeckle_config
+
+        check_despeckle_config(config["despeckle"])
 
 
 def _measured_roi(path: str | None, roi: Mapping) -> None:

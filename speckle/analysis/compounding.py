@@ -1,0 +1,584 @@
+"""Physical speckle compounding: looks of one scene, how they are averaged, and their theory.
+
+A *look* is one complex image of the same scene acquired differently; averaging ``L`` looks
+whose speckle patterns are (partly) independent lowers the speckle contrast. Every look function
+returns a complex ``DataArray`` with a leading dim ``look`` on the pixel grid of the reference
+image, so any of :data:`AVERAGING` applies (:func:`compound`).
+
+* **frequency** (split spectrum, :func:`frequency_looks`): the complex image is exactly
+  band-limited to the ``N`` components ``k_n`` of Eq. 4, so its spectrum is the inverse DFT
+  along depth; look ``i`` keeps ``W_i(k_n)`` of it (:func:`subband_windows`: rectangular,
+  Gaussian or Hann windows of ``L`` sub-bands with a fractional ``overlap``). Exact: the same
+  as imaging with the spectrum ``S W_i``.
+* **angular** (:func:`angular_looks`): the scene is rotated by each angle about the image centre
+  (the beam tilted the other way), imaged, and the complex image resampled back onto the
+  reference grid (cubic spline, registration as in a scanner).
+* **spatial** (:func:`spatial_looks`): lines offset laterally by each offset, kept at the
+  reference line positions (averaging them is a lateral blur).
+* **polarization** (:func:`polarization_looks`): the co and cross channels of
+  :func:`speckle.depolarize`.
+* **temporal** (:func:`brownian_frames`, :func:`temporal_looks`): frames ``interval`` s apart
+  between which every scatterer makes a Brownian step of variance ``2 D interval`` per axis;
+  a dense scene's field autocorrelation is ``g1(tau) = exp(-q^2 D tau)``, ``q = 2 k0``
+  (:func:`brownian_g1`), to ``O((step/Lc)^2)`` from the PSF.
+
+Theory (dense scene, equal mean intensities; tested): ``L`` uncorrelated looks give contrast
+``1/sqrt(L)``; partially correlated ones ``C_L = sqrt(sum_ij |mu_ij|^2)/L``
+(:func:`compounded_contrast`) with ``mu_ij`` the field correlation of looks ``i, j``, for split
+spectrum the overlap of the windows weighted by ``|S|^2`` (:func:`window_correlation`;
+``int W_i W_j* dk / sqrt(int |W_i|^2 int |W_j|^2)`` for a rectangular spectrum).
+:func:`split_spectrum_contrast` adds the finite-density (Poisson) term exactly. A sub-band of
+``M`` of the ``N`` samples has the intensity PSF ``|sin(pi M x/N)/(M sin(pi x/N))|^2``, ``N/M``
+times wider (:func:`subband_fwhm`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import scipy.ndimage as ndi
+import scipy.optimize as opt
+import xarray as xr
+
+from .._validate import as_finite_array, check_choice, check_int, check_real
+from ..imaging.scan import image
+from ..system.polarization import depolarize
+
+__all__ = [
+    "AVERAGING",
+    "WINDOWS",
+    "angular_looks",
+    "brownian_frames",
+    "brownian_g1",
+    "compound",
+    "compounded_contrast",
+    "frequency_looks",
+    "noisy_looks",
+    "polarization_looks",
+    "spatial_looks",
+    "split_spectrum_contrast",
+    "subband_fwhm",
+    "subband_windows",
+    "temporal_looks",
+    "window_correlation",
+]
+
+#: Sub-band window shapes of :func:`subband_windows`.
+WINDOWS = ("rectangular", "gaussian", "hann")
+#: How looks are averaged (:func:`compound`).
+AVERAGING = ("intensity", "magnitude", "complex")
+
+
+def subband_windows(
+    n_samples: int, n_looks: int, *, window: str = "rectangular", overlap: float = 0.0
+) -> np.ndarray:
+    """Split-spectrum windows ``W_i(k_n)``, ``i = 0 ... L-1``, over ``N`` spectral samples.
+
+    Sub-bands of width ``w = N/(L - (L-1) overlap)`` samples, centred at
+    ``w/2 + i w (1 - overlap)``, tile the band; sample ``n`` sits at ``n + 1/2``.
+    ``"rectangular"``: 1 inside the sub-band; ``"hann"``: ``sin^2`` over the sub-band;
+    ``"gaussian"``: FWHM ``w`` (tails over the whole band).
+
+    Parameters
+    ----------
+    n_samples : int
+        Spectral samples ``N`` (the spectrum's ``n_pixels``), >= 1.
+    n_looks : int
+        Sub-bands ``L``, ``1 <= L <= N`` (and each sub-band must hold one sample at least).
+    window : {"rectangular", "gaussian", "hann"}
+        Window shape.
+    overlap : float
+        Fraction of a sub-band shared with the next, in ``[0, 1)``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (L, N)
+        Non-negative real windows (maximum 1), low to high wavenumber.
+
+    Raises
+    ------
+    ValueError
+        ``n_looks`` outside ``[1, N]``, ``overlap`` outside ``[0, 1)``, an unknown window, or a
+        sub-band narrower than one sample.
+    """
+    n = check_int(n_samples, "n_samples", low=1)
+    if isinstance(n_looks, int | np.integer) and not isinstance(n_looks, bool) and n_looks > n:
+        raise ValueError(
+            f"n_looks must be at most the spectrum's {n} samples (one sample per sub-band at "
+            f"least), got {n_looks}"
+        )
+    nl = check_int(n_looks, "n_looks", low=1, high=n)
+    ov = check_real(overlap, "overlap", low=0.0, high=1.0, high_inclusive=False)
+    check_choice(window, "window", WINDOWS)
+    w = n / (nl - (nl - 1) * ov)
+    if w < 1.0:
+        raise ValueError(
+            f"n_looks={nl} with overlap={ov} gives sub-bands of {w:.3g} < 1 sample; "
+            "use fewer looks or less overlap"
+        )
+    t = np.arange(n) + 0.5
+    centres = w / 2 + np.arange(nl) * w * (1 - ov)
+    u = (t[None, :] - centres[:, None]) / w  # position in sub-band widths from the centre
+    if window == "rectangular":
+        win = ((u >= -0.5) & (u < 0.5)).astype(float)
+    elif window == "hann":
+        win = np.where(np.abs(u) < 0.5, np.cos(np.pi * u) ** 2, 0.0)
+    else:
+        win = np.exp(-4 * np.log(2) * u**2)
+    if np.any(win.max(axis=1) <= 0):
+        raise ValueError(f"a sub-band of n_looks={nl}, overlap={ov} holds no spectral sample")
+    return win
+
+
+def window_correlation(windows: object, spectrum: object | None = None) -> np.ndarray:
+    """Field correlation ``mu_ij`` of split-spectrum looks: the windows' weighted overlap.
+
+    ``mu_ij = sum_n S_n^2 W_i W_j* / sqrt(sum S^2 |W_i|^2 sum S^2 |W_j|^2)`` (Parseval: the
+    complex correlation of two looks of a dense scene), i.e. the overlap integral of the
+    windows for a rectangular spectrum (``spectrum=None``).
+
+    Parameters
+    ----------
+    windows : array_like, shape (L, N)
+        Windows from :func:`subband_windows`.
+    spectrum : array_like, shape (N,), optional
+        Source weights ``S_n``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (L, L)
+        Hermitian, unit diagonal.
+    """
+    w = as_finite_array(windows, "windows", dtype=np.complex128)
+    if w.ndim != 2:
+        raise ValueError(f"windows must be 2-D (looks, samples), got shape {w.shape}")
+    s2 = np.ones(w.shape[1]) if spectrum is None else np.asarray(spectrum, float) ** 2
+    if s2.shape != (w.shape[1],):
+        raise ValueError(f"spectrum must hold {w.shape[1]} weights, got shape {s2.shape}")
+    g = (w * s2) @ w.conj().T
+    d = np.sqrt(np.real(np.diag(g)))
+    return g / np.outer(d, d)
+
+
+def compounded_contrast(mu: object) -> float:
+    """Contrast of the intensity average of ``L`` looks of equal mean: ``sqrt(sum |mu_ij|^2)/L``.
+
+    Dense-scene (Gaussian speckle) result; ``mu`` the (L, L) field correlations (identity:
+    ``1/sqrt(L)``).
+    """
+    m = as_finite_array(mu, "mu", dtype=np.complex128)
+    if m.ndim != 2 or m.shape[0] != m.shape[1]:
+        raise ValueError(f"mu must be a square (L, L) matrix, got shape {m.shape}")
+    return float(np.sqrt(np.sum(np.abs(m) ** 2)) / m.shape[0])
+
+
+def split_spectrum_contrast(weights: object, density: float, *, kurtosis: float = 1.0) -> float:
+    """Exact contrast of intensity-averaged looks of independent A-lines, Poisson scatterers.
+
+    Look ``i`` has spectral weights ``G_i = S W_i``. For Poisson scatterers, ``rho`` per pixel,
+    uniform over the depth (``2 k0 H`` a multiple of ``2 pi``), ``E|a|^2 = 1``,
+    ``E|a|^4 = kurtosis``, Campbell's theorem gives per pixel ``E I_i = rho N sum |G_i|^2`` and
+    ``Cov(I_i, I_j) = (rho N)^2 |sum G_i G_j*|^2 + rho kurtosis N sum_l R_i(l) R_j(l)*``,
+    ``R_i`` the autocorrelation of ``G_i``; the contrast is
+    ``sqrt(sum_ij Cov_ij) / sum_i E I_i``. ``density -> inf`` gives :func:`compounded_contrast`.
+
+    Parameters
+    ----------
+    weights : array_like, shape (L, N)
+        Spectral weights of the looks (window times spectrum).
+    density : float
+        Mean scatterers per pixel (> 0; ``inf`` for the dense limit).
+    kurtosis : float
+        ``E|a|^4 / (E|a|^2)^2`` of the amplitudes (1 for equal amplitudes).
+
+    Returns
+    -------
+    float
+    """
+    g = as_finite_array(weights, "weights", dtype=np.complex128)
+    if g.ndim != 2:
+        raise ValueError(f"weights must be 2-D (looks, samples), got shape {g.shape}")
+    rho = float(density)
+    if not rho > 0 or np.isnan(rho):
+        raise ValueError(f"density must be > 0 scatterers per pixel, got {density!r}")
+    kap = check_real(kurtosis, "kurtosis", low=0)
+    n = g.shape[1]
+    cross = g @ g.conj().T  # sum_n G_i G_j*
+    mean = np.real(np.diag(cross))
+    cov = np.abs(cross) ** 2
+    if np.isfinite(rho):
+        # autocorrelations via FFT (lags -(N-1)..N-1), then sum_l R_i(l) R_j(l)*
+        f = np.fft.fft(g, 2 * n, axis=1)
+        r = np.fft.ifft(np.abs(f) ** 2, axis=1)
+        cov = cov + kap / (rho * n) * np.real(r @ r.conj().T)
+    return float(np.sqrt(np.sum(cov)) / np.sum(mean))
+
+
+def subband_fwhm(n_pixels: int, n_samples: int) -> float:
+    """FWHM in pixels of the intensity PSF of a rectangular band of ``M`` of ``N`` samples.
+
+    The root of ``|sin(pi M x/N) / (M sin(pi x/N))|^2 = 1/2`` (times two); about
+    ``0.886 N/M`` pixels (the continuum sinc^2), so ``N/M`` times the full band's.
+    """
+    n = check_int(n_pixels, "n_pixels", low=1)
+    m = check_int(n_samples, "n_samples", low=1, high=n)
+    if m == 1:
+        return float("inf")
+
+    def f(x: float) -> float:
+        return (np.sin(np.pi * m * x / n) / (m * np.sin(np.pi * x / n))) ** 2 - 0.5
+
+    return 2.0 * opt.brentq(f, 1e-9, n / m)
+
+
+def _field(img: xr.Dataset | xr.DataArray) -> xr.DataArray:
+    f = img.field if isinstance(img, xr.Dataset) else img
+    if not isinstance(f, xr.DataArray) or not np.iscomplexobj(f) or "depth" not in f.dims:
+        raise TypeError("image must be a complex field DataArray (or Dataset 'field') with 'depth'")
+    return f
+
+
+def frequency_looks(img: xr.Dataset | xr.DataArray, windows: object) -> xr.DataArray:
+    """Split-spectrum looks of a complex image: the depth spectrum times each window.
+
+    Parameters
+    ----------
+    img : xarray.Dataset or DataArray
+        Complex image (``field``) with a ``depth`` dim of ``N`` pixels, from any imaging
+        function of the package (its depth spectrum holds the components ``k_n``,
+        ``n = -(N//2) ... N-1-(N//2)``).
+    windows : array_like, shape (L, N)
+        From :func:`subband_windows` (low to high wavenumber).
+
+    Returns
+    -------
+    xarray.DataArray
+        Complex looks over ``(look, ...)``; look ``i`` equals the image formed with the spectrum
+        ``S W_i`` (exact).
+    """
+    f = _field(img)
+    n = f.sizes["depth"]
+    w = as_finite_array(windows, "windows")
+    if w.ndim != 2 or w.shape[1] != n:
+        raise ValueError(
+            f"windows must have shape (looks, {n}) for an image of {n} depth pixels, got {w.shape}"
+        )
+    idx = np.arange(n) - n // 2  # spectral index n of sample position 0 ... N-1
+    wrapped = np.zeros_like(w)
+    wrapped[:, idx % n] = w  # window on the FFT's bin order
+
+    def split(a: np.ndarray) -> np.ndarray:
+        spec = np.fft.ifft(a, axis=-1)[..., None, :]  # G_n at bin n mod N (A = fft(G))
+        return np.fft.fft(spec * wrapped, axis=-1)  # (..., look, depth)
+
+    looks = xr.apply_ufunc(
+        split,
+        f,
+        input_core_dims=[["depth"]],
+        output_core_dims=[["look", "depth"]],
+        dask="forbidden",
+    )
+    return _looks(looks.transpose("look", *f.dims), "frequency")
+
+
+def _looks(looks: xr.DataArray, kind: str, **attrs: object) -> xr.DataArray:
+    return (
+        looks.assign_coords(look=np.arange(looks.sizes["look"]))
+        .rename("looks")
+        .assign_attrs(units="1", long_name=f"complex {kind} looks", compounding=kind, **attrs)
+    )
+
+
+def compound(looks: xr.DataArray, mode: str = "intensity") -> xr.DataArray:
+    """Average looks (dim ``look``) into one intensity image.
+
+    ``"intensity"``: ``mean |A_i|^2``; ``"magnitude"``: ``(mean |A_i|)^2`` (the squared mean
+    amplitude, in intensity units); ``"complex"``: ``|mean A_i|^2`` (removes no speckle of one
+    realisation; raises the SNR of noisy looks).
+    """
+    check_choice(mode, "mode", AVERAGING)
+    if not isinstance(looks, xr.DataArray) or "look" not in looks.dims:
+        raise TypeError("looks must be a DataArray with a 'look' dim (see frequency_looks)")
+    if mode == "intensity":
+        out = (abs(looks) ** 2).mean("look")
+    elif mode == "magnitude":
+        out = abs(looks).mean("look") ** 2
+    else:
+        out = abs(looks.mean("look")) ** 2
+    return out.rename("intensity").assign_attrs(
+        units="1",
+        long_name=f"{mode}-averaged intensity of {looks.sizes['look']} looks",
+        averaging=mode,
+    )
+
+
+def noisy_looks(
+    looks: xr.DataArray,
+    snr_db: float,
+    *,
+    seed: int,
+    signal_intensity: float | None = None,
+) -> xr.DataArray:
+    """Each look plus its own white receiver noise, circular complex Gaussian.
+
+    Parameters
+    ----------
+    looks : xarray.DataArray
+        Complex looks with a ``look`` dim.
+    snr_db : float
+        Signal intensity over noise intensity per pixel, in dB.
+    seed : int
+        Look ``i`` draws from ``SeedSequence(seed, spawn_key=(i,))``.
+    signal_intensity : float, optional
+        The signal intensity the SNR refers to (> 0), the same for every look (one receiver:
+        e.g. the single look's mean intensity); default: each look's own mean intensity.
+
+    Returns
+    -------
+    xarray.DataArray
+        The looks plus noise (attrs ``snr_db``, ``noise_intensity`` of the first look).
+    """
+    if not isinstance(looks, xr.DataArray) or "look" not in looks.dims:
+        raise TypeError("looks must be a DataArray with a 'look' dim")
+    snr = check_real(snr_db, "snr_db")
+    sd = check_int(seed, "seed", low=0)
+    ref = (
+        None
+        if signal_intensity is None
+        else check_real(signal_intensity, "signal_intensity", low=0, low_inclusive=False)
+    )
+    lk = looks.transpose("look", ...)
+    out = np.empty(lk.shape, dtype=np.complex128)
+    sigma2 = []
+    for i in range(lk.shape[0]):
+        v = lk.values[i]
+        s2 = (float(np.mean(np.abs(v) ** 2)) if ref is None else ref) / 10 ** (snr / 10)
+        rng = np.random.default_rng(np.random.SeedSequence(sd, spawn_key=(i,)))
+        e = rng.standard_normal((2, *v.shape))
+        out[i] = v + np.sqrt(s2 / 2) * (e[0] + 1j * e[1])
+        sigma2.append(s2)
+    res = lk.copy(data=out).transpose(*looks.dims)
+    return res.assign_attrs(looks.attrs, snr_db=snr, noise_intensity=sigma2[0])
+
+
+def _image_kw(waist, x, method, tol, chunk) -> dict:
+    return {"waist": waist, "x": x, "method": method, "tol": tol, "chunk": chunk}
+
+
+def angular_looks(
+    scene: xr.Dataset,
+    source: xr.DataArray,
+    angles: Sequence[float],
+    *,
+    waist: float,
+    x: object,
+    method: str = "direct",
+    tol: float | None = None,
+    chunk: int = 64,
+) -> xr.DataArray:
+    """Looks at beam angles ``angles`` (degrees): rotated scene, image resampled back.
+
+    The scene is rotated by ``-angle`` about the centre of the image (depths ``[0, H)``, the
+    lines ``x``), so the beam crosses it at ``angle`` to the depth axis; the complex image is
+    then sampled at the rotated pixel positions (cubic spline of its real and imaginary parts)
+    onto the reference grid. Draw the scene with a margin of ``H |sin(angle)|`` in x (and the
+    beam reach), or the corners come from empty space.
+
+    Returns
+    -------
+    xarray.DataArray
+        Complex looks ``(look, depth, x)``; coordinate ``angle`` (degrees) along ``look``.
+    """
+    ang = as_finite_array(angles, "angles")
+    if ang.ndim != 1 or ang.size == 0 or np.any(np.abs(ang) >= 90):
+        raise ValueError("angles must be a non-empty 1-D list of degrees in (-90, 90)")
+    n = int(source.attrs["n_pixels"])
+    h = float(source.attrs["depth"])
+    xs = np.asarray(x, dtype=float)
+    p = h / n
+    pitch = xs[1] - xs[0] if xs.size > 1 else p
+    zc, xc = (n - 1) / 2 * p, (xs[0] + xs[-1]) / 2
+    zz, xx = np.meshgrid(np.arange(n) * p - zc, xs - xc, indexing="ij")
+    out = []
+    for a in np.deg2rad(ang):
+        c, s = np.cos(a), np.sin(a)
+        z, xv = scene.z.values - zc, scene.x.values - xc
+        rot = scene.assign(
+            z=("scatterer", zc + c * z + s * xv), x=("scatterer", xc - s * z + c * xv)
+        )
+        order = np.argsort(rot.x.values, kind="stable")
+        f = image(rot.isel(scatterer=order), source, **_image_kw(waist, xs, method, tol, chunk))
+        f = f.field.values
+        # object point (z, x) sits at the rotated position in the look's image
+        zr, xr_ = zc + c * zz + s * xx, xc - s * zz + c * xx
+        coords = np.stack([zr / p, (xr_ - xs[0]) / pitch])
+        part = [
+            ndi.map_coordinates(comp, coords, order=3, mode="constant", cval=0.0)
+            for comp in (f.real, f.imag)
+        ]
+        out.append(part[0] + 1j * part[1])
+    looks = xr.DataArray(
+        np.stack(out),
+        dims=("look", "depth", "x"),
+        coords={"angle": ("look", ang, {"units": "degree", "long_name": "beam angle"})},
+    )
+    return _looks(looks, "angular")
+
+
+def spatial_looks(
+    scene: xr.Dataset,
+    source: xr.DataArray,
+    offsets: Sequence[float],
+    *,
+    waist: float,
+    x: object,
+    method: str = "direct",
+    tol: float | None = None,
+    chunk: int = 64,
+) -> xr.DataArray:
+    """Looks of A-lines offset laterally by ``offsets`` (µm), kept at the lines ``x``.
+
+    The complex correlation of two looks ``d`` apart is ``exp(-d^2/w0^2)`` (dense scene).
+
+    Returns
+    -------
+    xarray.DataArray
+        Complex looks ``(look, depth, x)``; coordinate ``offset`` (µm) along ``look``.
+    """
+    off = as_finite_array(offsets, "offsets")
+    if off.ndim != 1 or off.size == 0:
+        raise ValueError("offsets must be a non-empty 1-D list of lateral offsets in µm")
+    xs = np.asarray(x, dtype=float)
+    out = [
+        image(scene, source, **_image_kw(waist, xs + d, method, tol, chunk)).field.values
+        for d in off
+    ]
+    looks = xr.DataArray(
+        np.stack(out),
+        dims=("look", "depth", "x"),
+        coords={
+            "offset": ("look", off, {"units": "um", "long_name": "lateral offset of the lines"})
+        },
+    )
+    return _looks(looks, "spatial")
+
+
+def polarization_looks(
+    scene: xr.Dataset,
+    source: xr.DataArray,
+    depolarization: float,
+    *,
+    seed: int,
+    waist: float,
+    x: object,
+    method: str = "direct",
+    tol: float | None = None,
+    chunk: int = 64,
+) -> xr.DataArray:
+    """The co and cross channels of :func:`speckle.depolarize` as two looks.
+
+    Intensity-averaged they give the polarization-insensitive image, contrast
+    ``sqrt((1 + P^2)/2)``, ``P = |1 - 2 f|`` (dense scene).
+    """
+    dep = depolarize(scene, depolarization, seed=seed)
+    f = image(dep, source, **_image_kw(waist, np.asarray(x, float), method, tol, chunk)).field
+    looks = f.rename(channel="look").transpose("look", "depth", "x")
+    looks = looks.assign_coords(channel=("look", looks.look.values)).drop_vars("look")
+    return _looks(looks, "polarization", depolarization=float(depolarization))
+
+
+def brownian_g1(tau: object, diffusion: float, k0: float) -> np.ndarray:
+    """Field autocorrelation ``exp(-q^2 D tau)``, ``q = 2 k0`` (rad/µm, in the medium).
+
+    ``tau`` in s (>= 0), ``diffusion`` ``D`` in µm^2/s (>= 0).
+    """
+    t = as_finite_array(tau, "tau")
+    if np.any(t < 0):
+        raise ValueError("tau must be >= 0 s")
+    d = check_real(diffusion, "diffusion", low=0)
+    k = check_real(k0, "k0", low=0)
+    return np.exp(-((2 * k) ** 2) * d * t)
+
+
+def brownian_frames(
+    scene: xr.Dataset, n_frames: int, *, diffusion: float, interval: float, seed: int
+) -> xr.Dataset:
+    """The scene at ``n_frames`` times ``interval`` s apart, scatterers in Brownian motion.
+
+    Between frames every scatterer moves by independent Gaussian steps of variance
+    ``2 D interval`` (µm^2) along each axis it has (``z``, and ``x``, ``y`` of a shared scene).
+
+    Parameters
+    ----------
+    scene : xarray.Dataset
+        Shared scene or independent A-lines (only ``z`` moves there).
+    n_frames : int
+        Frames (>= 1); frame 0 is ``scene``.
+    diffusion : float
+        Diffusion coefficient ``D`` in µm^2/s, >= 0.
+    interval : float
+        Time between frames in s, > 0.
+    seed : int
+        Seed of the steps (non-negative).
+
+    Returns
+    -------
+    xarray.Dataset
+        The positions with a new leading dim ``frame`` (coordinate ``time`` in s).
+    """
+    nf = check_int(n_frames, "n_frames", low=1)
+    d = check_real(diffusion, "diffusion", low=0)
+    dt = check_real(interval, "interval", low=0, low_inclusive=False)
+    sd = check_int(seed, "seed", low=0)
+    if not isinstance(scene, xr.Dataset) or "z" not in scene:
+        raise TypeError("scene must be a scatterer Dataset with a variable 'z'")
+    rng = np.random.default_rng(np.random.SeedSequence(sd))
+    step = np.sqrt(2 * d * dt)
+    moved = {}
+    for ax in ("z", "x", "y"):
+        if ax not in scene.data_vars:
+            continue
+        v = scene[ax]
+        steps = rng.standard_normal((nf, *v.shape)) * step
+        steps[0] = 0.0
+        moved[ax] = (("frame", *v.dims), v.values[None] + np.cumsum(steps, axis=0), v.attrs)
+    out = scene.assign(moved)
+    times = np.arange(nf) * dt
+    return out.assign_coords(
+        time=("frame", times, {"units": "s", "long_name": "time of the frame"})
+    ).assign_attrs(diffusion=d, diffusion_units="um^2/s", frame_interval=dt, brownian_seed=sd)
+
+
+def temporal_looks(
+    scene: xr.Dataset,
+    source: xr.DataArray,
+    n_frames: int,
+    *,
+    diffusion: float,
+    interval: float,
+    seed: int,
+    waist: float,
+    x: object,
+    method: str = "direct",
+    tol: float | None = None,
+    chunk: int = 64,
+) -> xr.DataArray:
+    """Frames of a shared scene in Brownian motion (:func:`brownian_frames`) as looks."""
+    frames = brownian_frames(scene, n_frames, diffusion=diffusion, interval=interval, seed=seed)
+    xs = np.asarray(x, dtype=float)
+    out = []
+    for i in range(frames.sizes["frame"]):
+        fr = frames.isel(frame=i).drop_vars("time")
+        order = np.argsort(fr.x.values, kind="stable")
+        out.append(
+            image(
+                fr.isel(scatterer=order), source, **_image_kw(waist, xs, method, tol, chunk)
+            ).field.values
+        )
+    looks = xr.DataArray(
+        np.stack(out),
+        dims=("look", "depth", "x"),
+        coords={"time": ("look", frames.time.values, frames.time.attrs)},
+    )
+    return _looks(looks, "temporal", diffusion=float(diffusion), frame_interval=float(interval))

@@ -1,0 +1,201 @@
+"""The speckle-free image: the expected intensity over scatterer phases.
+
+For scatterers ``j`` with amplitudes ``a_j`` imaged through a linear system (spectrum, beam,
+every effect that acts on the scatterers), the field is ``A = sum_j a_j h_j`` and, averaged
+over independent uniform phases of the ``a_j`` (positions fixed), the intensity is
+
+    E|A|^2 = sum_j |a_j|^2 |h_j|^2,
+
+the incoherent sum. Both factors of ``|h_j|^2`` are images of the same kind again:
+
+* depth: with ``P(x) = sum_n S_n exp(-2i pi n x/N)`` the spectral PSF (Eq. 4),
+  ``|P(x)|^2 = sum_l R_l exp(-2i pi l x/N)``, ``R_l = sum_m S_(m+l) S_m``, ``|l| < N``: an
+  Eq. 4 A-scan with the *intensity spectrum* ``R`` at ``k0 = 0``. Its ``2N - 1`` frequencies
+  need ``2N`` samples: it is evaluated on the half-pixel grid (``2N`` pixels over the same
+  ``H``, spectral step ``pi/H`` unchanged) and every second sample is kept -- exact, no
+  interpolation;
+* laterally: the double-pass beam weight ``W = exp(-2 r^2/w0^2)`` squares to
+  ``exp(-4 r^2/w0^2)``, the weight of a beam of waist ``w0/sqrt(2)``.
+
+So the truth is :func:`speckle.imaging.scan.image` (or :func:`speckle.ascan` for independent
+A-lines) of the scatterers' intensities ``|a_j|^2`` with the intensity spectrum and the
+narrower beam: the same code, methods and chunking as the speckled image. Effects on the
+scatterers (attenuation, roll-off, backscatter, depolarization channels) are in the ``a_j``
+and so in the truth; phase effects (a phase screen) change no ``|a_j|``; receiver noise is
+not part of the signal. A focused beam (depth-dependent complex waist) has no such form and is
+refused.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from .._validate import check_real
+from ..conventions import coord
+from ..provenance import provenance_attrs
+from ..system.source import check_weights, spectrum
+from ._rules import check_tol
+from .aline import METHODS, ascan, pixel_depths
+from .scan import image
+
+__all__ = ["intensity_spectrum", "speckle_free_image", "speckle_free_lines"]
+
+
+def intensity_spectrum(weights: object) -> np.ndarray:
+    """Autocorrelation ``R_l = sum_m S_(m+l) S_m`` of ``N`` spectral weights, on ``2N`` samples.
+
+    Parameters
+    ----------
+    weights : array_like, shape (N,)
+        Non-negative spectral weights ``S(k_n)`` (low to high wavenumber).
+
+    Returns
+    -------
+    numpy.ndarray, shape (2N,)
+        ``R_l`` for ``l = -N ... N-1`` (``R_(-N) = 0``): the spectrum whose Eq. 4 A-scan on
+        ``2N`` half pixels is ``|P|^2`` (see the module docstring). Non-negative.
+    """
+    s = np.asarray(weights, dtype=float)
+    s = check_weights(s, s.size)
+    r = np.correlate(s, s, mode="full")  # lags -(N-1) ... N-1
+    return np.concatenate([[0.0], np.clip(r, 0.0, None)])  # tiny negative rounding -> 0
+
+
+def speckle_free_lines(
+    z: object,
+    amplitude: object,
+    *,
+    n_pixels: int,
+    depth: float,
+    spectrum: object | None = None,
+    method: str = "direct",
+    tol: float | None = None,
+) -> np.ndarray:
+    """Expected intensity ``sum_j |a_j|^2 |P(q - z_j N/H)|^2`` of independent A-lines.
+
+    Parameters
+    ----------
+    z, amplitude : array_like, shape (..., M)
+        Scatterer depths (µm) and amplitudes, batch dims as in :func:`speckle.ascan`.
+    n_pixels, depth, spectrum
+        As in :func:`speckle.ascan` (``k0`` does not enter the truth).
+    method, tol
+        Passed to :func:`speckle.ascan`.
+
+    Returns
+    -------
+    numpy.ndarray
+        Float64, shape ``(..., n_pixels)``: the speckle-free intensity (no normalisation).
+    """
+    n = int(n_pixels)
+    s = np.ones(n) if spectrum is None else check_weights(spectrum, n)
+    a2 = np.abs(np.asarray(amplitude)) ** 2
+    out = ascan(
+        z,
+        a2,
+        n_pixels=2 * n,
+        depth=depth,
+        k0=0.0,
+        spectrum=intensity_spectrum(s),
+        method=method,
+        tol=tol,
+    )
+    return np.ascontiguousarray(out[..., ::2].real)
+
+
+def speckle_free_image(
+    scene: xr.Dataset,
+    source: xr.DataArray,
+    *,
+    waist: float | None = None,
+    x: object | None = None,
+    chunk: int = 64,
+    method: str = "direct",
+    tol: float | None = None,
+) -> xr.DataArray:
+    """The speckle-free image ``E|A|^2`` of a scene, through the same spectrum and beam.
+
+    Parameters
+    ----------
+    scene : xarray.Dataset
+        Independent A-lines (dims ``(..., aline, scatterer)``, :func:`speckle.random_scatterers`)
+        imaged as by :func:`speckle.bscan`; or a shared scene (:func:`speckle.shared_scene`)
+        imaged as by :func:`speckle.image` with ``waist`` and ``x``. Extra dims (``channel``
+        of :func:`speckle.depolarize`, ``frame``, ...) are carried through.
+    source : xarray.DataArray
+        Spectrum from :func:`speckle.spectrum`.
+    waist : float, optional
+        Beam waist in µm (shared scenes only; required there).
+    x : array_like, optional
+        Lateral positions of the lines in µm (shared scenes only; required there).
+    chunk, method, tol
+        As in :func:`speckle.image` / :func:`speckle.bscan`.
+
+    Returns
+    -------
+    xarray.DataArray
+        ``truth`` over ``(..., depth, aline)`` or ``(..., depth, x)``: real, non-negative, in
+        the units of ``|A|^2`` of the unnormalised image (``normalise="none"``).
+
+    Raises
+    ------
+    TypeError, ValueError
+        On a scene or source of the wrong kind, a shared scene without ``waist``/``x`` (or a
+        line scene with them), and the errors of the imaging functions.
+    """
+    if not isinstance(source, xr.DataArray) or "n_pixels" not in source.attrs:
+        raise TypeError("source must be a DataArray from speckle.spectrum")
+    if not isinstance(scene, xr.Dataset) or not {"z", "amplitude"} <= set(scene.data_vars):
+        raise TypeError("scene must be an xarray.Dataset with variables 'z' and 'amplitude'")
+    n = int(source.attrs["n_pixels"])
+    h = float(source.attrs["depth"])
+    r = intensity_spectrum(source.values)
+    shared = "x" in scene.data_vars
+    if shared:
+        if waist is None or x is None:
+            raise ValueError("a shared scene needs waist= (µm) and x= (line positions, µm)")
+        w0 = check_real(waist, "waist", low=0, low_inclusive=False)
+        src2 = spectrum(2 * n, h, k0=0.0, shape="array", weights=r)
+        sc2 = scene.assign(amplitude=(abs(scene.amplitude) ** 2).astype(np.complex128))
+        img = image(sc2, src2, waist=w0 / np.sqrt(2.0), x=x, chunk=chunk, method=method, tol=tol)
+        truth = img.field.isel(depth=slice(0, None, 2)).real
+        truth = truth.assign_coords(depth=coord("depth", pixel_depths(n, h)))
+        lateral = "x"
+    else:
+        if waist is not None or x is not None:
+            raise ValueError("waist and x are for shared scenes; independent A-lines take none")
+        if method not in METHODS:
+            raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+        check_tol(tol)
+        truth = xr.apply_ufunc(
+            speckle_free_lines,
+            scene.z,
+            scene.amplitude,
+            input_core_dims=[["scatterer"], ["scatterer"]],
+            output_core_dims=[["depth"]],
+            kwargs={
+                "n_pixels": n,
+                "depth": h,
+                "spectrum": source.values,
+                "method": method,
+                "tol": tol,
+            },
+            dask="parallelized",
+            output_dtypes=[np.float64],
+            dask_gufunc_kwargs={"output_sizes": {"depth": n}},
+        )
+        truth = truth.assign_coords(depth=coord("depth", pixel_depths(n, h)))
+        lateral = "aline"
+    dims = [d for d in truth.dims if d not in ("depth", lateral)] + ["depth", lateral]
+    truth = truth.transpose(*[d for d in dims if d in truth.dims])
+    truth = truth.rename("truth").assign_attrs(
+        units="1",
+        long_name="speckle-free intensity E|A|^2 (incoherent sum)",
+        k0=float(source.attrs["k0"]),
+        n_pixels=n,
+        depth_range=h,
+        **({"waist": float(waist), "waist_units": "um"} if shared else {}),
+        **provenance_attrs(),
+    )
+    return truth
