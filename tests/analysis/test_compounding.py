@@ -100,7 +100,7 @@ def test_truth_is_the_mean_over_phase_realisations():
     n, h = 32, 256.0
     src = speckle.spectrum(n, h, k0_dk=10, shape="gaussian", fwhm_fraction=0.3)
     reg = speckle.make_regions(
-        speckle.regions.background(density=speckle.regions.cell_density(4, 8, 8))
+        speckle.scene.regions.background(density=speckle.scene.regions.cell_density(4, 8, 8))
     )
     sc = speckle.shared_scene(reg, z_range=(0, h), x_range=(-80, 330.0), seed=1)
     x = speckle.scan_lines(32, 8.0)
