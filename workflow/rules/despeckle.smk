@@ -14,6 +14,7 @@ DESPECKLE_TARGETS = [
 ]
 DESPECKLE_CODE = [
     "speckle.figures.despeckle",
+    "speckle.imaging.beam",  # reached through speckle.beam_scan (scan.py), not an import
     "speckle.io",
     "speckle.provenance",
 ]
