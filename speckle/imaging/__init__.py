@@ -15,11 +15,12 @@ __getattr__, __dir__, __all__ = attach(
     {
         "aline": ["METHODS", "ascan", "pixel_depths", "stream_ascans"],
         "beam": ["beam_scan"],
+        "beam_nufft": ["beam_estimates", "choose_beam_method"],
         "bscan": ["bscan", "expected_intensity"],
-        "scan": ["image", "image_regions", "scan_lines"],
-        "gaussian_beam": ["Beam"],
-        "methods": ["BEAM_METHODS"],
-        "synthesis": ["choose_method"],
+        "gaussian_beam": ["Beam", "BeamScene", "beam_problem", "beam_weight"],
+        "methods": ["ASCAN_METHODS", "BEAM_METHODS"],
+        "scan": ["beam_reach", "image", "image_regions", "scan_lines"],
+        "synthesis": ["choose_method", "method_estimates"],
         "truth": ["intensity_spectrum", "speckle_free_image", "speckle_free_lines"],
     },
 )
