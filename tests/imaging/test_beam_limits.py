@@ -11,7 +11,7 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import speckle
-import speckle._validate
+import speckle._validate  # private: the shared checks (MAX_BYTES) the tests lower
 from speckle.imaging.beam import beam_problem
 from speckle.imaging.beam_nufft import choose_beam_method
 from speckle.scene import regions as R
