@@ -10,15 +10,14 @@ error of a moment comes from its spread over 16 blocks of 32 A-lines (speckle is
 
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
 import xarray as xr
 from scipy import integrate, special, stats
 
 import speckle
-from speckle.data import sample_path as sample_file
 from speckle.analysis import measured
+from speckle.data import sample_path as sample_file
 from speckle.system.detection import add_floor, log_compress
 
 TOL_SE = 3.0

@@ -9,7 +9,7 @@ from __future__ import annotations
 from importlib import resources
 from pathlib import Path
 
-__all__ = ["SAMPLES", "SAMPLE_PIXEL_SIZE", "SAMPLE_PITCH", "sample_path"]
+__all__ = ["SAMPLES", "SAMPLE_PITCH", "SAMPLE_PIXEL_SIZE", "sample_path"]
 
 #: Short name -> file of the measured sample (two 512 x 512 uint8 crops, (depth, aline)).
 SAMPLES = {
