@@ -37,6 +37,7 @@ include: "workflow/rules/elastography.smk"
 include: "workflow/rules/system.smk"
 include: "workflow/rules/realism.smk"
 include: "workflow/rules/beam.smk"
+include: "workflow/rules/twin.smk"
 
 
 rule all:
@@ -50,4 +51,5 @@ rule all:
         + ELASTOGRAPHY_TARGETS
         + SYSTEM_TARGETS
         + REALISM_TARGETS
-        + BEAM_TARGETS,
+        + BEAM_TARGETS
+        + TWIN_TARGETS,
