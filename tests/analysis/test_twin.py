@@ -5,13 +5,16 @@ Closed loop: the project images a shared scene of Poisson-like scatterers of uni
 band) and a scanned Gaussian beam (waist ``w`` pitches, optionally focused) with
 ``speckle.beam_scan``, adds white circular Gaussian noise at a known SNR over the signal rows,
 and leaves signal-free rows above the sample (which still hold the tails of the point-spread
-function of the sample, known exactly from the noise-free image). ``fit_system`` must give back each parameter
-within 2 of its own (jackknife) standard errors: ``gaussian_fwhm_fraction = f`` (and the
-Gaussian shape chosen for ``f <= 0.5``), ``waist_pitch = w``,
-``snr_db``, ``inverse_density = 1/rho``, no attenuation, and the focus when there is one.
-Then the twin must reproduce the image's statistics: every autocorrelation lag and the two
-log moments within ``Z_TWIN`` combined standard errors (the largest of ~16 comparisons: 3.5
-is the two-sided 1 % family threshold for 20 normal deviates).
+function of the sample, known exactly from the noise-free image). ``fit_system`` must give back
+each parameter within 2 of its own (jackknife, 16 A-line blocks) standard errors:
+``gaussian_fwhm_fraction = f`` (and the Gaussian shape chosen for ``f <= 0.5``),
+``waist_pitch = w``, ``snr_db``, ``inverse_density = 1/rho``, no attenuation, and the focus when
+there is one. With fixed seeds a single pull beyond 2 SE happens 5 % of the time, so each point
+is held to ``TOL_ONE`` = 3 SE and the full grid to the 2-SE coverage itself: at least
+``MIN_WITHIN`` of all pulls within 2 SE. Then the twin must reproduce the image's statistics:
+every autocorrelation lag and the two log moments within ``Z_TWIN`` combined standard errors
+(the largest of ~16 comparisons: 3.5 is the two-sided 1 % family threshold for 20 normal
+deviates).
 """
 
 from __future__ import annotations
@@ -34,8 +37,10 @@ NOISE_ROWS = [16, 32]  # 16 rows from the sample and from its wrapped-around end
 REGION_ROWS = [56, 120]
 N_LINES = 256
 TOL_SE = 2.0
+TOL_ONE = 3.0  # one pull at one seed: |t| > 3 has probability < 1 % for t with 15 dof
+MIN_WITHIN = 0.88  # share of grid pulls within 2 SE: 95 % expected, 1 % binomial quantile
 Z_TWIN = 3.5
-FIT_KW = {"n_pixels": N, "max_lag": 6, "n_blocks": 8, "n_bands": 0}
+FIT_KW = {"n_pixels": N, "max_lag": 6, "n_blocks": 16, "n_bands": 0}
 
 
 def known_image(fwhm, waist, snr_db, density, *, focus=None, rayleigh=None, seed=0):
@@ -115,7 +120,7 @@ def check_point(point):
     if point[0] <= 0.5:  # a truncated Gaussian filling the band is close to a rectangle
         assert p.attrs["spectrum_shape"] == "gaussian", point
     assert bool(p.attrs["focused"]) == point[4], (point, float(p.focus_p_value))
-    bad = {k: round(v, 2) for k, v in pull.items() if abs(v) > TOL_SE}
+    bad = {k: round(v, 2) for k, v in pull.items() if abs(v) > TOL_ONE}
     assert not bad, (point, bad)
     z = {k: float(cmp_[k]) for k in ("z_autocorrelation", "z_skewness", "z_excess_kurtosis")}
     assert max(z.values()) < Z_TWIN, (point, z)
@@ -129,10 +134,9 @@ def test_closed_loop_fast(point):
 
 @pytest.mark.slow
 def test_closed_loop_full_grid():
-    """Every grid point, and the pulls over the grid are standard normal in spread."""
-    done = [p for p in GRID if p not in FAST]
-    all_pulls = np.concatenate([list(check_point(p).values()) for p in done])
-    assert np.sqrt(np.mean(all_pulls**2)) < 1.5  # SEs not underestimated
+    """Every grid point; over the grid the fits are within 2 SE as often as they should be."""
+    all_pulls = np.concatenate([list(check_point(p).values()) for p in GRID])
+    assert np.mean(np.abs(all_pulls) < TOL_SE) >= MIN_WITHIN, all_pulls.round(2)
 
 
 def test_twin_keeps_kind_dims_and_coordinates():
