@@ -121,8 +121,8 @@ def plot_failure(ds: xr.Dataset):
     fig, axes = new_figure(2, 1, width=4.0, height=5.0)
     s = ds.strain.values
     for m in ds.method.values:
-        axes[0, 0].plot(s, ds.rms_error.sel(method=m) / np.abs(s), "o-", ms=3, lw=0.8, label=m)
-        axes[1, 0].plot(s, ds.answered.sel(method=m), "o-", ms=3, lw=0.8)
+        axes[0, 0].plot(s, ds.rms_error.sel({"method": m}) / np.abs(s), "o-", ms=3, lw=0.8, label=m)
+        axes[1, 0].plot(s, ds.answered.sel({"method": m}), "o-", ms=3, lw=0.8)
     axes[0, 0].axhline(1.0, color="k", ls=":", lw=0.7, label="error = strain")
     axes[0, 0].set(xscale="log", yscale="log", title="twin: rms error / strain vs strain")
     axes[1, 0].set(xscale="log", xlabel="interframe strain", ylabel="fraction answered")

@@ -171,7 +171,7 @@ def test_pdms_fit_through_load_image_and_failure_maps():
     fm = f.failure_maps(strains=[1e-3, 1e-2], methods=["vector", "wls"], shape=(64, 16))
     assert fm.rms_error.dims == ("strain", "method") and fm.sizes["strain"] == 2
     assert np.all((fm.answered >= 0) & (fm.answered <= 1))
-    assert float(fm.answered.sel(strain=1e-3, method="vector")) > 0.5
+    assert float(fm.answered.sel({"strain": 1e-3, "method": "vector"})) > 0.5
 
 
 @pytest.fixture(scope="module")
