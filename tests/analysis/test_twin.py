@@ -36,6 +36,7 @@ Z0 = 48  # no scatterer above this row
 NOISE_ROWS = [16, 32]  # 16 rows from the sample and from its wrapped-around end
 REGION_ROWS = [56, 120]
 N_LINES = 256
+FOCUS_WAIST = 12.0  # µm
 TOL_SE = 2.0
 TOL_ONE = 3.0  # one pull at one seed: |t| > 3 has probability < 1 % for t with 15 dof
 MIN_WITHIN = 0.88  # share of grid pulls within 2 SE: 95 % expected, 1 % binomial quantile
@@ -43,18 +44,18 @@ Z_TWIN = 3.5
 FIT_KW = {"n_pixels": N, "max_lag": 6, "n_blocks": 16, "n_bands": 0}
 
 
-def known_image(fwhm, waist, snr_db, density, *, focus=None, rayleigh=None, seed=0):
+def known_image(fwhm, waist, snr_db, density, *, focus=None, pitch=PITCH, seed=0):
     """Intensity image (depth, x) of known system parameters (module docstring)."""
     h = N * PIXEL
     src = speckle.spectrum(N, h, k0_dk=10.0, shape="gaussian", fwhm_fraction=fwhm)
-    w0 = waist * PITCH
-    lines = np.arange(N_LINES) * PITCH
+    w0 = waist * pitch
+    lines = np.arange(N_LINES) * pitch
     x0, x1 = -4.5 * w0, lines[-1] + 4.5 * w0
     z0 = Z0 * PIXEL
     rng = np.random.default_rng(seed)
-    m = rng.poisson(density * (h - z0) / PIXEL * (x1 - x0) / PITCH)
+    m = rng.poisson(density * (h - z0) / PIXEL * (x1 - x0) / pitch)
     z, x = rng.uniform(z0, h, m), rng.uniform(x0, x1, m)
-    kw = {} if focus is None else {"focus": focus, "rayleigh_range": rayleigh}
+    kw = {} if focus is None else {"focus": focus}  # Rayleigh range k0 w0^2/2
     a = speckle.beam_scan(
         z, x, np.ones(m, complex), lines=lines, waist=w0, n_pixels=N, depth=h,
         k0=src.attrs["k0"], spectrum=src.values, method="nufft", tol=1e-8, **kw,
@@ -67,7 +68,7 @@ def known_image(fwhm, waist, snr_db, density, *, focus=None, rayleigh=None, seed
         np.abs(a) ** 2,
         dims=("depth", "x"),
         coords={"depth": np.arange(N) * PIXEL, "x": lines},
-        attrs={"kind": "intensity", "pixel_size": PIXEL, "pitch": PITCH, "leak": leak},
+        attrs={"kind": "intensity", "pixel_size": PIXEL, "pitch": pitch, "leak": leak},
     )
 
 
@@ -83,7 +84,13 @@ def pulls(f: SystemFit, truth: dict) -> dict[str, float]:
 
 
 def closed_loop(fwhm, waist, snr_db, density, focus=False, seed=0):
-    kw = {"focus": (REGION_ROWS[0] + 20) * PIXEL + 3.0, "rayleigh": 60.0} if focus else {}
+    # a focus shows in the region when z_R = k0 w0^2/2 is comparable to its depth (368 µm):
+    # w0 = FOCUS_WAIST µm (z_R = 393 µm), the pitch set by the waist in pitches
+    kw = (
+        {"focus": (REGION_ROWS[0] + 30) * PIXEL + 3.0, "pitch": FOCUS_WAIST / waist}
+        if focus
+        else {}
+    )
     img = known_image(fwhm, waist, snr_db, density, seed=seed, **kw)
     f = fit(img)
     # the air rows hold noise N plus the PSF tails L of the sample: E[SNR estimate] =
@@ -93,7 +100,9 @@ def closed_loop(fwhm, waist, snr_db, density, focus=False, seed=0):
     truth = {"gaussian_fwhm_fraction": fwhm, "waist_pitch": waist, "snr_db": snr_rows}
     if focus:
         # depth below the region's first row (row 32)
-        truth.update(focus_depth=kw["focus"] - REGION_ROWS[0] * PIXEL, rayleigh_range=60.0)
+        k0 = 10.0 * np.pi / PIXEL  # k0/delta_k = 10
+        rayleigh = k0 * FOCUS_WAIST**2 / 2
+        truth.update(focus_depth=kw["focus"] - REGION_ROWS[0] * PIXEL, rayleigh_range=rayleigh)
     else:
         truth.update(inverse_density=1 / density, attenuation=0.0)
     cmp_ = f.compare(img, seed=seed + 100)
@@ -196,7 +205,7 @@ def test_bad_inputs_refused_before_fitting(small, change, kw, match):
     if change == "kind":
         img.attrs["kind"] = "decibel"
     elif change == "nan":
-        img[40, 3] = np.nan
+        img[REGION_ROWS[0] + 4, 3] = np.nan
     elif change == "constant":
         img[:] = 1.0
     args = {"region": {"depth": REGION_ROWS}, **FIT_KW, **kw}
