@@ -773,17 +773,22 @@ def _data(image: xr.DataArray, noise: xr.DataArray | None, n_medium: float) -> _
         return v.astype(float)
 
     sig = values(image)
-    dz = float(image.attrs.get("pixel_size", np.nan))
-    if not np.isfinite(dz):
+    dz, pitch = (_step(image, k, d) for k, d in (("pixel_size", "depth"), ("pitch", "x")))
+    noise_values = None if noise is None else values(noise)
+    return _Data(kind, sig, noise_values, dz / n_medium, pitch)
+
+
+def _step(image: xr.DataArray, attr: str, dim: str) -> float:
+    """Pixel size or pitch in µm: the attribute of :func:`load_image`, else the coordinate."""
+    if attr in image.attrs:
+        return check_real(image.attrs[attr], f"image.attrs[{attr!r}]", low=0, low_inclusive=False)
+    if dim in image.coords:
         from ..conventions import spacing
 
-        dz = spacing(image, "depth")
-    return _Data(
-        kind,
-        sig,
-        None if noise is None else values(noise),
-        dz / n_medium,
-        float(image.attrs.get("pitch", 1.0)),
+        return spacing(image, dim)
+    raise ValueError(
+        f"image has no {attr} attribute and no {dim!r} coordinate; load it with "
+        f"speckle.load_image(..., {attr}=...)"
     )
 
 

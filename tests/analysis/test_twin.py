@@ -180,7 +180,10 @@ def test_pdms_fit_through_load_image_and_failure_maps():
     fm = f.failure_maps(strains=[1e-3, 1e-2], methods=["vector", "wls"], shape=(64, 16))
     assert fm.rms_error.dims == ("strain", "method") and fm.sizes["strain"] == 2
     assert np.all((fm.answered >= 0) & (fm.answered <= 1))
-    assert float(fm.answered.sel({"strain": 1e-3, "method": "vector"})) > 0.5
+    # at 0.1 % strain the phase methods measure it (rms error well below the strain) where their
+    # window fits (the default 32-pixel depth window leaves the edges of 64 rows unanswered)
+    small = {"strain": 1e-3}
+    assert np.all(fm.rms_error.sel(small) < 0.5e-3) and np.all(fm.answered.sel(small) > 0.2)
 
 
 @pytest.fixture(scope="module")
