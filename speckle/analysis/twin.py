@@ -33,10 +33,12 @@ statistics that the model's system parameters set, and inverts their theory:
   (skewness, excess kurtosis) are compared between the image and its twin in
   :meth:`SystemFit.compare`, where a too-low density shows.
 
-Standard errors: delete-one-block jackknife over ``n_blocks`` contiguous blocks of A-lines
-(speckle is correlated over a few lines, blocks are nearly independent): every quantity above
-is re-estimated without each block (statistics pooled over the remaining blocks, no pair
-across a removed block) and ``SE^2 = (n - 1)/n sum (theta_i - mean theta)^2``. The focus fit
+Estimates use every pixel pair of the region (the autocorrelation is then that of
+:func:`~speckle.analysis.autocorrelation.intensity_autocorrelation`). Standard errors:
+delete-one-block jackknife over ``n_blocks`` contiguous blocks of A-lines (speckle is
+correlated over a few lines, blocks are nearly independent): every quantity above is
+re-estimated without each block (statistics pooled over the remaining blocks, no pair across a
+block edge) and ``SE^2 = (n - 1)/n sum (theta_i - mean theta)^2``. The focus fit
 takes its errors from the weighted least-squares covariance of the row means (their SE from
 the same blocks).
 
@@ -562,7 +564,7 @@ class SystemFit:
                 "profile": lg.mean(axis=1) / g,
             }
 
-        whole = one(blocks)
+        whole = one([np.arange(image.sizes["x"])])
         se = _jackknife(
             [one(blocks[:i] + blocks[i + 1 :]) for i in range(len(blocks))], list(whole)
         )
@@ -916,7 +918,7 @@ def fit_system(
             )
     blocks = np.array_split(np.arange(nx), nb)
     kw = {"n_pixels": npx, "max_lag": ml, "n_bands": nbands, "snr_db": snr_db}
-    whole = _estimate(data, blocks, **kw)
+    whole = _estimate(data, [np.arange(nx)], **kw)  # every pair of the region
     jack = [_estimate(data, blocks[:i] + blocks[i + 1 :], **kw) for i in range(nb)]
     keys = [k for k, v in whole.items()]
     se = _jackknife(jack, keys)
