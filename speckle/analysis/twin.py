@@ -39,8 +39,8 @@ delete-one-block jackknife over ``n_blocks`` contiguous blocks of A-lines (speck
 correlated over a few lines, blocks are nearly independent): every quantity above is
 re-estimated without each block (statistics pooled over the remaining blocks, no pair across a
 block edge) and ``SE^2 = (n - 1)/n sum (theta_i - mean theta)^2``. The focus fit
-takes its errors from the weighted least-squares covariance of the row means (their SE from
-the same blocks).
+is repeated on each jackknife sample too (rows are correlated along depth by the point-spread
+function, so the least-squares covariance of the row means would understate its errors).
 
 :meth:`SystemFit.simulate` images a shared scene of the fitted density through the fitted
 spectrum and scanned (focused) beam (:func:`speckle.beam_scan`), attenuated, with white noise
@@ -256,6 +256,18 @@ def _jackknife(values: list[dict], keys: Sequence[str]) -> dict[str, np.ndarray]
 
 def _confocal(z, a, mu, zf, zr, noise):
     return a * np.exp(-2 * mu * z) * (1 + ((z - zf) / zr) ** 2) ** -1.5 + noise
+
+
+def _refit_focus(z, rows, rows_se, noise_level, p0):
+    """The focused profile fitted from ``p0`` (the whole region's fit) to other row means."""
+    span = z[-1] - z[0] + (z[1] - z[0])
+    p, _ = optimize.curve_fit(
+        lambda zz, a, mu, zf, zr: _confocal(zz, a, mu, zf, zr, noise_level),
+        z, rows, p0=p0, sigma=rows_se, absolute_sigma=True,
+        bounds=([0, -1, z[0] - 2 * span, span / 50], [np.inf, 1, z[-1] + 2 * span, 20 * span]),
+        maxfev=20000,
+    )  # fmt: skip
+    return p
 
 
 def _fit_focus(z, rows, rows_se, noise_level):
@@ -938,8 +950,14 @@ def fit_system(
         )
         if best is not None and p_focus < FOCUS_P_VALUE:
             focused = True
-            _, p, cov = best
-            pse = np.sqrt(np.diag(cov))
+            _, p, _ = best
+            # errors: the same fit on each jackknife sample (rows are correlated along depth
+            # by the point-spread function, so the least-squares covariance would be too small)
+            refits = [
+                {"p": _refit_focus(z, np.asarray(j["row_mean_intensity"]), rows_se, noise_level, p)}
+                for j in jack
+            ]
+            pse = _jackknife(refits, ["p"])["p"]
             params["attenuation"] = ((), float(p[1]), params["attenuation"][2])
             params["attenuation_se"] = ((), float(pse[1]), params["attenuation"][2])
             for name, i, ln in (
