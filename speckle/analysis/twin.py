@@ -7,7 +7,12 @@ statistics that the model's system parameters set, and inverts their theory:
   :func:`~speckle.analysis.autocorrelation.axial_correlation_theory` of a Gaussian spectrum
   (FWHM as a fraction of the pixel band ``delta_k``) and of a rectangular one (full width as a
   fraction of the band, edge components weighted by their fractional overlap so the width is a
-  continuous parameter); the shape with the smaller rms residual is kept;
+  continuous parameter); the shape with the smaller rms residual is kept. At finite density
+  the Pearson correlation is ``(|gamma(m)|^2 + x d(m)) / ((1 + 1/r)^2 + x)`` (``x`` the
+  contrast excess below, ``d`` the normalised autocorrelation of the intensity PSF, ``r`` the
+  SNR): the scatterers' own intensities correlate neighbouring pixels even where ``gamma`` is
+  0; across A-lines ``d = |gamma|^2``, so only the denominator changes. ``x <= 0`` is the dense
+  limit (:func:`~speckle.analysis.autocorrelation.fit_spectral_width`, ``fit_waist``);
 * **beam waist** ``w0``: the lateral autocorrelation against ``exp(-2 m^2 p^2/w0^2)`` (A-line
   pitch ``p``), and the same per depth band (``band_waist``), with a chi-square test of a
   depth-independent waist (``waist_depth_p_value``; the model's focused beam keeps the lateral
@@ -109,11 +114,62 @@ def _weights(shape: str, width: float, n: int) -> np.ndarray:
     return _gaussian_weights(width, n) if shape == "gaussian" else rectangular_weights(width, n)
 
 
-def _fit_rectangular(acf: np.ndarray, n: int, snr_db: float | None) -> tuple[float, float]:
+def _intensity_psf(weights: np.ndarray) -> np.ndarray:
+    """``|P(u)|^2`` of the depth PSF over one period, 8 samples per pixel."""
+    n = weights.size
+    u = np.arange(8 * n) / 8.0
+    return np.abs(np.exp(2j * np.pi * np.outer(u, np.arange(n) - n // 2) / n) @ weights) ** 2
+
+
+def _depth_theory(lags, weights, snr_db, excess):
+    """Pearson intensity autocorrelation along depth at finite density (module docstring).
+
+    ``(|gamma(m)|^2 + x d(m)) / ((1 + 1/r)^2 + x)`` with ``d`` the normalised autocorrelation of
+    the intensity PSF; ``x <= 0`` is the dense limit of
+    :func:`~speckle.analysis.autocorrelation.axial_correlation_theory`.
+    """
+    if excess <= 0:
+        return ac.axial_correlation_theory(lags, weights, snr_db)
+    g2 = ac.axial_correlation_theory(lags, weights, None)
+    p2 = _intensity_psf(weights)
+    d = np.array([np.sum(p2 * np.roll(p2, 8 * int(m))) for m in lags]) / np.sum(p2**2)
+    inv_r = 0.0 if snr_db is None else 10 ** (-snr_db / 10)
+    out = (g2 + excess * d) / ((1 + inv_r) ** 2 + excess)
+    return np.where(np.asarray(lags) == 0, 1.0, out)
+
+
+def _fit_gaussian(acf, n, snr_db, excess) -> tuple[float, float]:
+    if excess <= 0:
+        return ac.fit_spectral_width(acf, n, snr_db)
     lags = np.arange(1, acf.size)
 
     def residual(p):
-        return ac.axial_correlation_theory(lags, rectangular_weights(p[0], n), snr_db) - acf[1:]
+        return _depth_theory(lags, _gaussian_weights(p[0], n), snr_db, excess) - acf[1:]
+
+    res = optimize.least_squares(residual, 0.5, bounds=(0.02, 5.0))
+    return float(res.x[0]), float(np.sqrt(np.mean(res.fun**2)))
+
+
+def _fit_waist(acf, snr_db, excess) -> tuple[float, float]:
+    """Lateral: the incoherent term has the same shape, so only the denominator changes."""
+    if excess <= 0:
+        return ac.fit_waist(acf, snr_db)
+    lags = np.arange(1, acf.size)
+    inv_r = 0.0 if snr_db is None else 10 ** (-snr_db / 10)
+    scale = (1 + excess) / ((1 + inv_r) ** 2 + excess)
+
+    def residual(p):
+        return scale * ac.lateral_correlation_theory(lags, p[0], 1.0) - acf[1:]
+
+    res = optimize.least_squares(residual, 2.0, bounds=(0.05, 100.0))
+    return float(res.x[0]), float(np.sqrt(np.mean(res.fun**2)))
+
+
+def _fit_rectangular(acf, n, snr_db, excess) -> tuple[float, float]:
+    lags = np.arange(1, acf.size)
+
+    def residual(p):
+        return _depth_theory(lags, rectangular_weights(p[0], n), snr_db, excess) - acf[1:]
 
     best = min(np.linspace(0.1, 1.0, 19), key=lambda f: np.sum(residual([f]) ** 2))
     res = optimize.least_squares(residual, best, bounds=(2.0 / n, 1.0))
@@ -122,9 +178,7 @@ def _fit_rectangular(acf: np.ndarray, n: int, snr_db: float | None) -> tuple[flo
 
 def _psf_excess(shape: str, width: float, waist_pitch: float, n: int) -> float:
     """``A4/A^2`` of the model's point-spread function, per pixel x pitch (module docstring)."""
-    s = _weights(shape, width, n)
-    u = np.arange(8 * n) / 8.0  # one period of the depth PSF, 8 samples per pixel (exact)
-    p2 = np.abs(np.exp(2j * np.pi * np.outer(u, np.arange(n) - n // 2) / n) @ s) ** 2
+    p2 = _intensity_psf(_weights(shape, width, n))  # one period, 8 samples per pixel (exact)
     depth = np.sum(p2**2) / 8.0 / (np.sum(p2) / 8.0) ** 2
     lateral = np.sqrt(2 / np.pi) / waist_pitch  # int exp(-8x^2/w^2) / (int exp(-4x^2/w^2))^2
     return float(depth * lateral)
@@ -218,26 +272,29 @@ def _estimate(
     depth_acf = _acf(inten, max_lag, "depth")
     lat_acf = _acf(inten, max_lag, "lateral")
     out["depth_autocorrelation"], out["lateral_autocorrelation"] = depth_acf, lat_acf
-    out["gaussian_fwhm_fraction"], out["gaussian_rms"] = ac.fit_spectral_width(
-        depth_acf, n_pixels, snr
+    # contrast excess x (noise and floor removed): the low-density term of every correlation
+    r = 10 ** (snr / 10) if snr is not None else np.inf
+    s_mean = i_all.mean() / (1 + fl["floor"] + 1 / r)
+    excess = float((i_all.var() - (s_mean * (1 + 1 / r)) ** 2) / s_mean**2)
+    out["contrast_excess"] = excess
+    out["gaussian_fwhm_fraction"], out["gaussian_rms"] = _fit_gaussian(
+        depth_acf, n_pixels, snr, excess
     )
     out["rectangular_width_fraction"], out["rectangular_rms"] = _fit_rectangular(
-        depth_acf, n_pixels, snr
+        depth_acf, n_pixels, snr, excess
     )
-    out["waist_pitch"], out["waist_rms"] = ac.fit_waist(lat_acf, snr)
+    out["waist_pitch"], out["waist_rms"] = _fit_waist(lat_acf, snr, excess)
     bands = np.array_split(np.arange(i_all.shape[0]), n_bands) if n_bands >= 2 else []
     out["band_waist_pitch"] = np.array(
-        [ac.fit_waist(_acf([b[r] for b in inten], max_lag, "lateral"), snr)[0] for r in bands]
+        [
+            _fit_waist(_acf([b[rb] for b in inten], max_lag, "lateral"), snr, excess)[0]
+            for rb in bands
+        ]
     )
     rows = np.mean(log_i, axis=1) / g
     z = np.arange(rows.size) * data.dz
     out["attenuation"] = float(-np.polyfit(z, rows, 1)[0] / 2)
     out["row_mean_intensity"] = i_all.mean(axis=1)
-    # contrast excess x and inverse density (noise and floor removed)
-    r = 10 ** (snr / 10) if snr is not None else np.inf
-    s_mean = i_all.mean() / (1 + fl["floor"] + 1 / r)
-    excess = (i_all.var() - (s_mean * (1 + 1 / r)) ** 2) / s_mean**2
-    out["contrast_excess"] = float(excess)
     shape = "gaussian" if out["gaussian_rms"] <= out["rectangular_rms"] else "rectangular"
     width = out[f"{shape}_{'fwhm' if shape == 'gaussian' else 'width'}_fraction"]
     psf = _psf_excess(shape, float(width), float(out["waist_pitch"]), n_pixels)
