@@ -38,6 +38,7 @@ include: "workflow/rules/system.smk"
 include: "workflow/rules/realism.smk"
 include: "workflow/rules/beam.smk"
 include: "workflow/rules/despeckle.smk"
+include: "workflow/rules/twin.smk"
 
 
 rule all:
@@ -52,4 +53,5 @@ rule all:
         + SYSTEM_TARGETS
         + REALISM_TARGETS
         + BEAM_TARGETS
-        + DESPECKLE_TARGETS,
+        + DESPECKLE_TARGETS
+        + TWIN_TARGETS,

@@ -5,7 +5,8 @@ two images with and without displacement compensation; ``tracking`` and ``strain
 displacement and strain (OCT elastography); ``autocorrelation``, ``beam`` and ``phase`` measure
 the resolution cell and noise; ``measured`` and ``realism`` compare a measured image with the
 model; ``compounding`` (physical compounding looks), ``filters`` (digital despeckling) and
-``image_quality`` (metrics against a known truth) test speckle suppression.
+``image_quality`` (metrics against a known truth) test speckle suppression; ``image_files``
+reads a user's own image and ``twin`` fits the model's system to it.
 Names load on first use (SPEC 1, ``lazy_loader``).
 """
 
@@ -32,6 +33,7 @@ __getattr__, __dir__, __all__ = attach(
         ],
         "correlation": ["compensate", "correlation_map", "expected_correlation", "pearson"],
         "filters": ["FILTERS", "despeckle", "filter_available", "frost", "kuan", "lee"],
+        "image_files": ["IMAGE_KINDS", "load_image"],
         "image_quality": [
             "bandlimited",
             "cnr",
@@ -45,5 +47,6 @@ __getattr__, __dir__, __all__ = attach(
         "statistics": ["contrast_theory", "fit_exponential", "fit_rayleigh", "speckle_contrast"],
         "strain": ["accumulate_strain", "estimate_displacement", "estimate_strain"],
         "tracking": ["track"],
+        "twin": ["SystemFit", "fit_system"],
     },
 )

@@ -195,6 +195,7 @@ def split_spectrum_contrast(weights: object, density: float, *, kurtosis: float 
     Returns
     -------
     float
+        The contrast (std / mean) of the intensity averaged over the looks.
     """
     g = as_finite_array(weights, "weights", dtype=np.complex128)
     if g.ndim != 2:

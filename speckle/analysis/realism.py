@@ -43,8 +43,16 @@ from ..system.phase import phase_perturb
 from ..system.source import spectrum
 from . import autocorrelation as ac
 from . import measured as ms
+from .twin import SystemFit, fit_system
 
-__all__ = ["EFFECTS", "NEEDED_INCREASE", "fit_parameters", "image_statistics", "realism_study"]
+__all__ = [
+    "EFFECTS",
+    "NEEDED_INCREASE",
+    "effect_parameters",
+    "fit_parameters",
+    "image_statistics",
+    "realism_study",
+]
 
 #: Effects in the order they are added; each is off in the pure model.
 EFFECTS = ("spectral_width", "beam", "noise", "floor", "attenuation", "quantisation", "phase")
@@ -80,32 +88,52 @@ def fit_parameters(
     n_blocks: int,
     snr_db: float | None = None,
 ) -> dict[str, float]:
-    """Fit the effect parameters to a measured log-scale region (module docstring).
+    """Fit the effect parameters to a measured log-scale region: one use of :func:`fit_system`.
 
-    ``air`` (log-scale rows of air) sets the SNR; without it ``snr_db`` (or no noise) is used in
-    the autocorrelation fits.
+    ``air`` (log-scale rows of air over the same A-lines) sets the SNR; without it ``snr_db``
+    (or no noise) is used in the autocorrelation fits. The air rows are stacked above the
+    region into one image, fitted with ``noise_rows`` = the air rows and ``region`` = the rest.
     """
     dz = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
-    fl = ms.fit_floor(roi)
-    g, c = float(fl["gain"]), float(fl["offset"])
-    meas = image_statistics(roi, max_lag=max_lag, n_blocks=n_blocks)
-    if air is not None:
-        snr_db = 10 * np.log10(float(np.exp(roi / g).mean() / np.exp(air / g).mean()))
-    depth_acf = meas.autocorrelation.sel(axis="depth").values
-    fwhm, fwhm_rms = ac.fit_spectral_width(depth_acf, n_pixels, snr_db)
-    waist, waist_rms = ac.fit_waist(meas.autocorrelation.sel(axis="lateral").values, snr_db)
-    rows = roi.mean("aline").values
-    slope = np.polyfit(np.arange(rows.size) * dz, rows, 1)[0]  # data units per µm
+    parts = [roi.values] if air is None else [air.values, roi.values]
+    n_air = 0 if air is None else air.shape[0]
+    values = np.vstack(parts)
+    image = xr.DataArray(
+        values,
+        dims=("depth", "x"),
+        attrs={"kind": "log", "pixel_size": dz, "pitch": 1.0, **_clip_attrs(roi)},
+    )
+    fit = fit_system(
+        image,
+        region={"depth": [n_air, values.shape[0]]},
+        noise_rows=None if air is None else [0, n_air],
+        snr_db=snr_db,
+        n_pixels=n_pixels,
+        max_lag=max_lag,
+        n_blocks=n_blocks,
+        n_bands=0,
+    )
+    return effect_parameters(fit)
+
+
+def _clip_attrs(da: xr.DataArray) -> dict:
+    return {k: da.attrs[k] for k in ("clip_low", "clip_high") if k in da.attrs}
+
+
+def effect_parameters(fit: SystemFit) -> dict[str, float]:
+    """The realism study's effect parameters from a :class:`SystemFit` (module docstring)."""
+    p = fit.parameters
+    snr = float(p.snr_db)
     return {
-        "fwhm_fraction": fwhm,
-        "fwhm_fraction_rms": fwhm_rms,
-        "waist": waist,
-        "waist_rms": waist_rms,
-        "snr_db": np.nan if snr_db is None else snr_db,
-        "floor": float(fl["floor"]),
-        "attenuation": max(0.0, -slope / (2 * g)),
-        "gain": g,
-        "offset": c,
+        "fwhm_fraction": float(p.gaussian_fwhm_fraction),
+        "fwhm_fraction_rms": float(p.gaussian_rms_residual),
+        "waist": float(p.waist_pitch),
+        "waist_rms": float(p.get("waist_rms_residual", np.nan)),
+        "snr_db": snr,
+        "floor": float(p.floor),
+        "attenuation": max(0.0, float(p.attenuation)),
+        "gain": float(p.gain),
+        "offset": float(p.offset),
     }
 
 
@@ -189,8 +217,12 @@ def realism_study(
     phase: dict,
     fallback: dict,
     seed: int,
+    fit: SystemFit | None = None,
 ) -> xr.Dataset:
     """Measured against model, effect by effect (module docstring).
+
+    ``fit`` (:func:`speckle.analysis.twin.fit_system` of the measured image) gives the effect
+    parameters; without it they are fitted here (:func:`fit_parameters`).
 
     ``measured`` is the log-scale region of interest (``None``: no measured image; the model is
     drawn with the ``fallback`` parameters and no comparison is made) and ``air`` the log-scale
@@ -207,7 +239,10 @@ def realism_study(
         "phase": phase,
         "seed": seed,
     }
-    if measured is not None:
+    if measured is not None and fit is not None:
+        fit = effect_parameters(fit)
+        meas = image_statistics(measured, max_lag=ml, n_blocks=nb)
+    elif measured is not None:
         fit = fit_parameters(
             measured,
             air,

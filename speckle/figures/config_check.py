@@ -27,7 +27,7 @@ import numpy as np
 
 from .._validate import MAX_BYTES
 
-__all__ = ["check_config", "check_scan_table", "figure_bytes"]
+__all__ = ["check_config", "check_scan_table", "check_twin", "figure_bytes"]
 
 #: Bytes per scatterer slot (z, amplitude as drawn and as complex128) and per image pixel
 #: (complex field, amplitude, intensity).
@@ -157,6 +157,8 @@ def check_config(config: Mapping, schema: Mapping | None = None) -> None:
         from .despeckle import check_despeckle_config
 
         check_despeckle_config(config["despeckle"])
+    if "twin" in config:
+        check_twin(config["twin"])
 
 
 def _measured_roi(path: str | None, roi: Mapping) -> None:
@@ -172,6 +174,83 @@ def _measured_roi(path: str | None, roi: Mapping) -> None:
                     f"config key fig4.measured.roi.{dim} = {bounds} lies outside the measured "
                     f"image of shape {tuple(shape)} (depth, aline)"
                 )
+
+
+def _image_shape(cfg: Mapping) -> tuple[int, int]:
+    """``(depth, x)`` pixels of the twin's image (an ``.npy`` is memory-mapped, not read)."""
+    path = cfg["image"]
+    if not os.path.exists(path):
+        raise ValueError(
+            f"config key twin.image = {path!r}: no such file (relative to the repository root)"
+        )
+    dims = cfg.get("dims")
+    if str(path).endswith(".npy") and dims is not None:
+        shape = np.load(path, mmap_mode="r").shape
+        names = ["x" if d == "aline" else d for d in dims]
+        if len(names) != len(shape):
+            raise ValueError(
+                f"config key twin.dims = {list(dims)} does not name the {len(shape)} axes of "
+                f"{path} (shape {shape})"
+            )
+        return shape[names.index("depth")], shape[names.index("x")]
+    from ..analysis.image_files import load_image
+
+    da = load_image(
+        path,
+        kind=cfg["kind"],
+        pixel_size=cfg.get("pixel_size"),
+        pitch=cfg.get("pitch"),
+        dims=None if dims is None else tuple(dims),
+        variable=cfg.get("variable"),
+    )
+    return da.sizes["depth"], da.sizes["x"]
+
+
+def check_twin(cfg: Mapping) -> None:
+    """The twin section: region and noise rows inside the image, sizes fit the lags and windows.
+
+    Raises
+    ------
+    ValueError
+        Naming the key (``twin.region.depth``, ...) and the allowed range.
+    """
+    nz, nx = _image_shape(cfg)
+    region = cfg.get("region") or {}
+    size = {}
+    for dim, n in (("depth", nz), ("x", nx)):
+        lo, hi = region.get(dim) or [None, None]
+        lo, hi = (0 if lo is None else lo), (n if hi is None else hi)
+        if not 0 <= lo < hi <= n:
+            raise ValueError(
+                f"config key twin.region.{dim} = {region.get(dim)} lies outside the image ({dim}: "
+                f"0..{n}); need 0 <= start < stop <= {n}"
+            )
+        size[dim] = hi - lo
+    ml, nb = cfg["max_lag"], cfg["n_blocks"]
+    if size["depth"] < ml + 4 or size["x"] < nb * (ml + 2):
+        raise ValueError(
+            f"config key twin.region ({size['depth']} x {size['x']} pixels) is too small for "
+            f"twin.max_lag = {ml} and twin.n_blocks = {nb}: need depth >= max_lag + 4 and "
+            "x >= n_blocks * (max_lag + 2)"
+        )
+    if cfg.get("n_bands") and size["depth"] // cfg["n_bands"] < 2:
+        raise ValueError(
+            f"config key twin.n_bands = {cfg['n_bands']} leaves fewer than 2 rows per band of "
+            "twin.region"
+        )
+    rows = cfg.get("noise_rows")
+    if rows is not None and not 0 <= rows[0] < rows[1] - 1 < nz:
+        raise ValueError(
+            f"config key twin.noise_rows = {rows} must hold 2 or more rows inside the image "
+            f"(0..{nz})"
+        )
+    fc = cfg["failure"]
+    window = fc.get("window")
+    if window is not None and (window[0] > fc["shape"][0] or window[1] > fc["shape"][1]):
+        raise ValueError(
+            f"config key twin.failure.window = {window} does not fit in twin.failure.shape = "
+            f"{fc['shape']}"
+        )
 
 
 def check_scan_table(rows: Sequence[Mapping], n_pixels: int) -> None:

@@ -14,6 +14,7 @@ import numpy as np
 import xarray as xr
 
 from ..analysis.realism import EFFECTS, realism_study
+from ..analysis.twin import SystemFit
 from ..imaging.beam import beam_scan
 from ..scene.regions import cell_density, ellipse, layer, make_regions, rasterize
 from ..scene.shared import shared_scene
@@ -36,9 +37,18 @@ REGIONS = ("top", "bottom", "inclusion")
 
 
 def realism_dataset(
-    measured: xr.DataArray | None, air: xr.DataArray | None, cfg: Mapping, seed: int, reason: str
+    measured: xr.DataArray | None,
+    air: xr.DataArray | None,
+    cfg: Mapping,
+    seed: int,
+    reason: str,
+    fit: SystemFit | None = None,
 ) -> xr.Dataset:
-    """Run the realism study from the pipeline's ``realism`` config section."""
+    """Run the realism study from the pipeline's ``realism`` config section.
+
+    ``fit``: the measured image's :func:`speckle.analysis.twin.fit_system` (its effect
+    parameters are used; ``None``: fitted from ``measured`` and ``air``).
+    """
     ds = realism_study(
         measured,
         air,
@@ -52,6 +62,7 @@ def realism_dataset(
         phase=dict(cfg["phase"]),
         fallback=dict(cfg["fallback"]),
         seed=seed,
+        fit=fit,
     )
     ds.attrs["measured"] = (
         measured.attrs.get("source", "yes") if measured is not None else f"none: {reason}"

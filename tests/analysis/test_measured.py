@@ -1,8 +1,7 @@
 """Measured B-scans: loading, gain/offset-free log statistics, and the measured departure.
 
-The real sample lives outside the repository (``../shared/data/oct_mit_sample``, MIT-licensed,
-never copied in). CI always has it: with ``CI=true`` a missing file fails the tests; on other
-machines they skip.
+The real sample ships with the package (``speckle.data.sample_path("pdms")``, MIT-licensed, see
+``speckle/data/oct_mit_sample/README.md``), so these tests run on every clone.
 
 Statistical tolerances are ``TOL_SE`` standard errors; for the measured image the standard
 error of a moment comes from its spread over 16 blocks of 32 A-lines (speckle is correlated over
@@ -11,8 +10,6 @@ error of a moment comes from its spread over 16 blocks of 32 A-lines (speckle is
 
 from __future__ import annotations
 
-import os
-
 import numpy as np
 import pytest
 import xarray as xr
@@ -20,21 +17,16 @@ from scipy import integrate, special, stats
 
 import speckle
 from speckle.analysis import measured
+from speckle.data import sample_path as sample_file
 from speckle.system.detection import add_floor, log_compress
 
 TOL_SE = 3.0
-SAMPLE = "../shared/data/oct_mit_sample/pdms_thick_rel_001_crop.npy"
 ROI = {"depth": [95, 135], "aline": [0, 512]}
 
 
 @pytest.fixture(scope="module")
-def sample_path(repo_root):
-    path = (repo_root / SAMPLE).resolve()
-    if not path.is_file():
-        if os.environ.get("CI", "").lower() == "true":
-            pytest.fail(f"CI must provide the measured sample at {path}")
-        pytest.skip(f"measured sample not on this machine: {path}")
-    return path
+def sample_path():
+    return sample_file("pdms")
 
 
 @pytest.fixture(scope="module")

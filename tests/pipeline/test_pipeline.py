@@ -70,9 +70,6 @@ def run(tmp_path_factory, repo_root) -> tuple[Path, subprocess.CompletedProcess]
     """A repository copy in which the whole pipeline ran (``--keep-going``) on the CI config."""
     repo = tmp_path_factory.mktemp("pipeline") / "repo"
     shutil.copytree(repo_root, repo, ignore=IGNORE)
-    shared = repo_root.parent / "shared"
-    if shared.is_dir():  # the layout of a CI clone: ../shared beside the repository
-        (repo.parent / "shared").symlink_to(shared, target_is_directory=True)
     proc = snakemake(repo, "--cores", "2", "--keep-going", "--configfile", CI_CONFIG, check=False)
     return repo, proc
 

@@ -3,7 +3,9 @@
 import logging
 
 from speckle._workflow import run
+from speckle.analysis.image_files import load_image
 from speckle.analysis.measured import load_measured
+from speckle.analysis.twin import fit_system
 from speckle.figures import realism
 from speckle.figures._style import save
 from speckle.io import to_netcdf
@@ -15,7 +17,7 @@ STEP_STATS = ("score", "ks_distance", "skewness", "excess_kurtosis")
 def main(snakemake) -> None:
     cfg, seed = snakemake.params.realism, snakemake.params.seed
     meas_cfg = cfg["measured"]
-    roi = air = None
+    roi = air = fit = None
     reason = ""
     if not meas_cfg["path"]:
         reason = "not configured (realism.measured.path is null)"
@@ -26,9 +28,24 @@ def main(snakemake) -> None:
         roi = load_measured(path, scale=scale, roi=meas_cfg["roi"])
         if meas_cfg.get("air_rows"):
             air = load_measured(path, scale=scale, roi={"depth": meas_cfg["air_rows"]})
+        # the effect parameters: one use of the twin's fit (speckle.analysis.twin)
+        image = load_image(
+            path, kind=scale, pixel_size=cfg["pixel_size"], pitch=1.0, dims=("depth", "x")
+        )
+        roi_cfg = meas_cfg.get("roi") or {}
+        fit = fit_system(
+            image,
+            region={"depth": roi_cfg.get("depth"), "x": roi_cfg.get("aline")},
+            noise_rows=meas_cfg.get("air_rows"),
+            snr_db=None if meas_cfg.get("air_rows") else cfg["fallback"]["snr_db"],
+            n_pixels=cfg["n_pixels"],
+            max_lag=cfg["max_lag"],
+            n_blocks=cfg["n_blocks"],
+            n_bands=0,
+        )
     if roi is None:
         logging.getLogger("realism").warning("measured image %s; drawing the model only", reason)
-    ds = realism.realism_dataset(roi, air, cfg, seed, reason)
+    ds = realism.realism_dataset(roi, air, cfg, seed, reason, fit=fit)
     ds.attrs.update(provenance_attrs(config={"realism": cfg}, seed=seed))
     to_netcdf(ds, snakemake.output.data)
     save(realism.plot_realism(ds), snakemake.output.figure)

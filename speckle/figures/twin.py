@@ -1,0 +1,130 @@
+"""The scanner's twin (results/twin/): fit, measured against twin, predicted failure maps.
+
+:func:`twin_datasets` runs :func:`speckle.analysis.twin.fit_system` on the image named in the
+pipeline's ``twin`` config section and returns the three datasets the rule writes;
+:func:`plot_compare` and :func:`plot_failure` draw them (the failure maps as the elastography
+failure maps' strain column: rms error over strain, and the answered fraction).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+import xarray as xr
+
+from ..analysis.image_files import load_image
+from ..analysis.twin import SystemFit, fit_system
+from ._style import new_figure
+
+__all__ = ["fit_from_config", "plot_compare", "plot_failure", "twin_datasets"]
+
+
+def fit_from_config(cfg: Mapping) -> tuple[xr.DataArray, SystemFit]:
+    """Load ``cfg["image"]`` and fit it (keys as in the config's ``twin`` section)."""
+    image = load_image(
+        cfg["image"],
+        kind=cfg["kind"],
+        pixel_size=cfg.get("pixel_size"),
+        pitch=cfg.get("pitch"),
+        dims=None if cfg.get("dims") is None else tuple(cfg["dims"]),
+        variable=cfg.get("variable"),
+    )
+    fit = fit_system(
+        image,
+        k0=cfg.get("k0"),
+        refractive_index=cfg.get("refractive_index", 1.0),
+        region=cfg.get("region"),
+        noise_rows=cfg.get("noise_rows"),
+        snr_db=cfg.get("snr_db"),
+        n_pixels=cfg["n_pixels"],
+        max_lag=cfg["max_lag"],
+        n_blocks=cfg["n_blocks"],
+        n_bands=cfg["n_bands"],
+    )
+    return image, fit
+
+
+def twin_datasets(cfg: Mapping, seed: int) -> tuple[xr.Dataset, xr.Dataset, xr.Dataset]:
+    """``(fit, compare, failure)`` datasets of the config's image (module docstring)."""
+    image, fit = fit_from_config(cfg)
+    fc = cfg["failure"]
+    failure = fit.failure_maps(
+        strains=[float(s) for s in fc["strains"]],
+        methods=list(fc["methods"]),
+        shape=tuple(fc["shape"]),
+        window=None if fc.get("window") is None else tuple(fc["window"]),
+        seed=seed,
+    )
+    return fit.parameters, fit.compare(image, seed=seed), failure
+
+
+def plot_compare(ds: xr.Dataset):
+    """Image panels, autocorrelations (2 SE bars) and log-data histograms: measured vs twin."""
+    fig, axes = new_figure(2, 3, width=10.0, height=5.6)
+    for ax, name in zip(axes[0, :2], ("measured", "twin"), strict=True):
+        img = ds[f"{name}_image"]
+        lo, hi = np.percentile(ds["measured_image"], [1, 99])
+        ax.imshow(
+            img,
+            cmap="gray",
+            vmin=lo,
+            vmax=hi,
+            aspect="auto",
+            extent=[ds.x.values[0], ds.x.values[-1], ds.depth.values[-1], ds.depth.values[0]],
+        )
+        ax.set(title=f"{name} region", xlabel="x (µm)", ylabel="depth (µm)")
+    ax = axes[0, 2]
+    for name, style in (("measured", "ko"), ("twin", "r-")):
+        ax.plot(ds.bin, ds[f"{name}_log_histogram"], style, ms=2, lw=1, label=name)
+    ax.set(
+        xlabel="standardised log intensity",
+        ylabel="density",
+        title=f"log data: skewness z = {float(ds.z_skewness):.1f}, "
+        f"kurtosis z = {float(ds.z_excess_kurtosis):.1f}",
+    )
+    ax.legend(fontsize=6)
+    for ax, axis in zip(axes[1, :2], ("depth", "lateral"), strict=True):
+        for name, fmt in (("measured", "ko"), ("twin", "rs")):
+            ax.errorbar(
+                ds.lag + (0.1 if name == "twin" else 0.0),
+                ds.autocorrelation.sel(source=name, axis=axis),
+                yerr=2 * ds.autocorrelation_se.sel(source=name, axis=axis),
+                fmt=fmt,
+                ms=3,
+                label=f"{name} (2 SE)",
+            )
+        ax.axhline(0, color="0.7", lw=0.5)
+        ax.set(
+            xlabel="lag (pixels)" if axis == "depth" else "lag (A-lines)",
+            ylabel="intensity autocorrelation",
+            title=f"{axis} autocorrelation",
+        )
+        ax.legend(fontsize=6)
+    ax = axes[1, 2]
+    for name, fmt in (("measured", "ko"), ("twin", "rs")):
+        ax.errorbar(
+            ds.row,
+            ds.mean_log_profile.sel(source=name),
+            yerr=2 * ds.mean_log_profile_se.sel(source=name),
+            fmt=fmt,
+            ms=2,
+            label=name,
+        )
+    ax.set(xlabel="row of the region", ylabel="mean ln I (minus its mean)", title="depth profile")
+    ax.legend(fontsize=6)
+    return fig
+
+
+def plot_failure(ds: xr.Dataset):
+    """rms error / strain and the answered fraction against strain, one line per estimator."""
+    fig, axes = new_figure(2, 1, width=4.0, height=5.0)
+    s = ds.strain.values
+    for m in ds.method.values:
+        axes[0, 0].plot(s, ds.rms_error.sel({"method": m}) / np.abs(s), "o-", ms=3, lw=0.8, label=m)
+        axes[1, 0].plot(s, ds.answered.sel({"method": m}), "o-", ms=3, lw=0.8)
+    axes[0, 0].axhline(1.0, color="k", ls=":", lw=0.7, label="error = strain")
+    axes[0, 0].set(xscale="log", yscale="log", title="twin: rms error / strain vs strain")
+    axes[1, 0].set(xscale="log", xlabel="interframe strain", ylabel="fraction answered")
+    axes[0, 0].legend(fontsize=5)
+    return fig
