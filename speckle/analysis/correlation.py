@@ -52,6 +52,7 @@ __all__ = [
     "carrier_window_factor",
     "compensate",
     "continuum_gamma",
+    "correlation_array",
     "correlation_map",
     "expected_correlation",
     "kernel",
@@ -311,6 +312,64 @@ def pearson(
     return r.assign_attrs(long_name=f"{kind} correlation coefficient", units="1", kind=kind)
 
 
+def correlation_array(
+    x: np.ndarray,
+    y: np.ndarray,
+    window: tuple[int, int],
+    *,
+    axes: tuple[int, int] = (0, 1),
+    modulus: bool = False,
+) -> np.ndarray:
+    """Sliding-window Pearson correlation of two arrays (numpy core of :func:`correlation_map`).
+
+    Parameters
+    ----------
+    x, y : numpy.ndarray
+        Real or complex arrays of the same shape (NaN pixels allowed).
+    window : (int, int)
+        Window (pixels) along ``axes`` (depth, aline).
+    axes : (int, int)
+        Axes of depth and aline.
+    modulus : bool
+        Complex data: modulus of the complex coefficient (else its real part).
+
+    Returns
+    -------
+    numpy.ndarray
+        Coefficient at each window centre (pixel ``c`` holds the window starting at
+        ``c - w//2``); NaN where the window does not fit or holds a NaN pixel of either array.
+    """
+    wz, wx = window
+    size = [1] * x.ndim
+    size[axes[0]], size[axes[1]] = wz, wx
+    xv, yv = x, y
+    bad = ~(np.isfinite(xv) & np.isfinite(yv))
+    if bad.any():  # zero them so that they do not spread through the running sums
+        xv, yv = np.where(bad, 0, xv), np.where(bad, 0, yv)
+
+    def local_mean(v: np.ndarray) -> np.ndarray:
+        if np.iscomplexobj(v):
+            return local_mean(v.real) + 1j * local_mean(v.imag)
+        return ndimage.uniform_filter(v, size=size, mode="nearest")
+
+    mx, my = local_mean(xv), local_mean(yv)
+    cov = local_mean(xv * np.conj(yv)) - mx * np.conj(my)
+    vx = local_mean(np.abs(xv) ** 2) - np.abs(mx) ** 2
+    vy = local_mean(np.abs(yv) ** 2) - np.abs(my) ** 2
+    with np.errstate(invalid="ignore", divide="ignore"):
+        r = (np.abs(cov) if modulus else cov.real) / np.sqrt(vx * vy)
+    valid = np.zeros(x.shape, bool)
+    sl = [slice(None)] * x.ndim
+    sl[axes[0]] = slice(wz // 2, x.shape[axes[0]] - (wz - 1) // 2)
+    sl[axes[1]] = slice(wx // 2, x.shape[axes[1]] - (wx - 1) // 2)
+    valid[tuple(sl)] = True
+    if bad.any():  # windows holding a NaN pixel: their count of NaN pixels is >= 1
+        valid &= ndimage.uniform_filter(bad.astype(float), size=size, mode="constant") < (
+            0.5 / (wz * wx)
+        )
+    return np.where(valid, r, np.nan)
+
+
 def correlation_map(
     reference: xr.Dataset | xr.DataArray,
     deformed: xr.Dataset | xr.DataArray,
@@ -347,34 +406,8 @@ def correlation_map(
         raise ValueError(
             f"window {(wz, wx)} is larger than the image {(x.sizes['depth'], x.sizes['aline'])}"
         )
-    size = [1] * x.ndim
-    size[x.dims.index("depth")], size[x.dims.index("aline")] = wz, wx
-    xv, yv = x.values, y.values
-    bad = ~(np.isfinite(xv) & np.isfinite(yv))
-    if bad.any():  # zero them so that they do not spread through the running sums
-        xv, yv = np.where(bad, 0, xv), np.where(bad, 0, yv)
-
-    def local_mean(v: np.ndarray) -> np.ndarray:
-        if np.iscomplexobj(v):
-            return local_mean(v.real) + 1j * local_mean(v.imag)
-        return ndimage.uniform_filter(v, size=size, mode="nearest")
-
-    mx, my = local_mean(xv), local_mean(yv)
-    cov = local_mean(xv * np.conj(yv)) - mx * np.conj(my)
-    vx = local_mean(np.abs(xv) ** 2) - np.abs(mx) ** 2
-    vy = local_mean(np.abs(yv) ** 2) - np.abs(my) ** 2
-    with np.errstate(invalid="ignore", divide="ignore"):
-        r = (np.abs(cov) if kind == "complex" else cov.real) / np.sqrt(vx * vy)
-    valid = np.zeros(x.shape, bool)
-    sl = [slice(None)] * x.ndim
-    sl[x.dims.index("depth")] = slice(wz // 2, x.sizes["depth"] - (wz - 1) // 2)
-    sl[x.dims.index("aline")] = slice(wx // 2, x.sizes["aline"] - (wx - 1) // 2)
-    valid[tuple(sl)] = True
-    if bad.any():  # windows holding a NaN pixel: their count of NaN pixels is >= 1
-        valid &= ndimage.uniform_filter(bad.astype(float), size=size, mode="constant") < (
-            0.5 / (wz * wx)
-        )
-    r = np.where(valid, r, np.nan)
+    axes = (x.dims.index("depth"), x.dims.index("aline"))
+    r = correlation_array(x.values, y.values, (wz, wx), axes=axes, modulus=kind == "complex")
     return xr.DataArray(
         r,
         dims=x.dims,

@@ -67,10 +67,12 @@ from scipy import ndimage
 from scipy.interpolate import RegularGridInterpolator
 
 from .._validate import check_choice, check_int, check_real
+from ..conventions import coord
 from ..system.source import spectrum
-from .correlation import compensate, correlation_map, expected_correlation
+from ._common import parse_window
+from .correlation import correlation_array, expected_correlation, resample_depth
 from .phase import DEFAULT_MAX_BIAS, choose_lag, depth_autocorrelation
-from .tracking import track
+from .tracking import interpolate_windows, track_array
 
 __all__ = [
     "DEFAULT_METHOD",
@@ -103,9 +105,12 @@ OPTIONS = {
         "align": "auto",
     },
     "wls": {"lag": None, "max_bias": DEFAULT_MAX_BIAS, "min_quality": 0.5, "align": "auto"},
-    "tracking": {"track_window": 32, "step": 4, "upsample": 20, "oversample": 2},
-    "correlation": {"track_window": 32, "step": 4, "upsample": 20, "oversample": 2},
+    "tracking": {"track_window": 32, "step": 8, "upsample": 20, "oversample": 2},
+    "correlation": {"track_window": 32, "step": 8, "upsample": 20, "oversample": 2},
 }
+#: Tracking that aligns the pair for the phase methods (``align``): window (depth, aline)
+#: pixels, step (depth, aline) pixels; the displacement field is smooth, so coarse steps do.
+ALIGN_TRACKING = {"window": (32, 8), "step": (16, 4), "upsample": 20, "oversample": 2}
 
 
 # --------------------------------------------------------------------------------------------
@@ -140,8 +145,12 @@ def _as_images(reference: object, deformed: object) -> tuple[np.ndarray, np.ndar
             )
         if values.ndim != 2:
             raise ValueError(f"{name} must be 2-D (depth, aline), got shape {values.shape}")
-        if not np.all(np.isfinite(values)):
-            raise ValueError(f"{name} holds NaN or infinite values")
+        finite = np.isfinite(values)
+        if not finite.all():
+            raise ValueError(
+                f"{name} holds {int(finite.size - finite.sum())} NaN or infinite pixels of "
+                f"{finite.size}; the phase methods cannot bridge them (crop or fill them first)"
+            )
         arrays.append(values.astype(np.complex128, copy=False))
     if arrays[0].shape != arrays[1].shape:
         raise ValueError(
@@ -158,22 +167,8 @@ def _as_images(reference: object, deformed: object) -> tuple[np.ndarray, np.ndar
 
 
 def _check_window(window: object, default: tuple[int, int], shape: tuple[int, int]):
-    """(depth, aline) window in pixels, checked against the image size."""
-    if window is None:
-        window = default
-    w = np.atleast_1d(np.asarray(window, dtype=object))
-    if w.size == 1:
-        w = np.array([w[0], 1], dtype=object)
-    if w.size != 2:
-        raise ValueError(f"window must be an int or (depth, aline) pixels, got {window!r}")
-    wz = check_int(w[0], "window[depth]", low=2)
-    wx = check_int(w[1], "window[aline]", low=1)
-    if wz > shape[0] or wx > shape[1]:
-        raise ValueError(
-            f"window {(wz, wx)} (depth, aline) is larger than the image {shape}; window must "
-            f"be at most {shape} pixels"
-        )
-    return wz, wx
+    """(depth, aline) window in pixels (an int is square), checked against the image size."""
+    return parse_window(default if window is None else window, shape=shape)
 
 
 def _options(method: str, options: dict) -> dict:
@@ -183,7 +178,20 @@ def _options(method: str, options: dict) -> dict:
         raise TypeError(
             f"method {method!r} takes options {sorted(allowed)}; got unknown {sorted(unknown)}"
         )
-    return {**allowed, **options}
+    opts = {**allowed, **options}
+    if "min_quality" in opts:
+        opts["min_quality"] = check_real(opts["min_quality"], "min_quality", low=0, high=1)
+    if "max_bias" in opts:
+        check_real(
+            opts["max_bias"], "max_bias", low=0, high=1, low_inclusive=False, high_inclusive=False
+        )
+    if "wrap_check" in opts and not isinstance(opts["wrap_check"], (bool, np.bool_)):
+        raise TypeError(f"wrap_check must be True or False, got {opts['wrap_check']!r}")
+    if "align" in opts and not (
+        isinstance(opts["align"], (bool, np.bool_)) or opts["align"] == "auto"
+    ):
+        raise ValueError(f"align must be True, False or 'auto', got {opts['align']!r}")
+    return opts
 
 
 # --------------------------------------------------------------------------------------------
@@ -241,25 +249,27 @@ def _lag(a1: np.ndarray, opts: dict) -> int:
     return check_int(opts["lag"], "lag", low=1, high=a1.shape[0] - 2)
 
 
-def _four_product_sums(a1, a2, lag, wz, wx):
-    """Window sums of ``C_L``, ``|C_L|`` and the two autocorrelation terms, at row centres."""
+def _four_product_sums(a1, a2, lag, wz, wx, terms=("C", "absC", "R1", "R2")):
+    """Window sums of ``C_L`` and, as asked by ``terms``, ``|C_L|`` and the two
+    autocorrelation terms, at row centres."""
     n = a1.shape[0]
     x1, y1, x2, y2 = a1[:-lag], a1[lag:], a2[:-lag], a2[lag:]
     c = x1 * np.conj(x2) * np.conj(y1) * y2
-    sums = {
-        "C": _box(c, wz, wx),
-        "absC": _box(np.abs(c), wz, wx),
-        "R1": _box(x1 * np.conj(y1), wz, wx),
-        "R2": _box(x2 * np.conj(y2), wz, wx),
+    make = {
+        "C": lambda: c,
+        "absC": lambda: np.abs(c),
+        "R1": lambda: x1 * np.conj(y1),
+        "R2": lambda: x2 * np.conj(y2),
     }
+    sums = {k: _box(make[k](), wz, wx) for k in terms}
     count = wz * wx
     return {k: _place(v, lag // 2, n) for k, v in sums.items()}, count
 
 
 def _vector(a1, a2, k0, p, wz, wx, opts):
     lag = _lag(a1, opts)
-    a2 = _aligned(a1, a2, k0, p, opts)
-    s, _ = _four_product_sums(a1, a2, lag, wz, wx)
+    a2 = _aligned(a1, a2, p, opts)
+    s, _ = _four_product_sums(a1, a2, lag, wz, wx, ("C", "absC"))
     phase = np.angle(s["C"])
     with np.errstate(invalid="ignore", divide="ignore"):
         quality = np.abs(s["C"]) / s["absC"]
@@ -267,7 +277,7 @@ def _vector(a1, a2, k0, p, wz, wx, opts):
         # the lag-1 phase wraps only at 1/(2R); scaled by L and by its known low bias
         # 1 + rho(1)^2 (image autocorrelation) it picks the 2 pi branch of the lag-L phase
         # (multi-lag unwrapping); a branch error needs a predictor error > pi
-        s1, _ = _four_product_sums(a1, a2, 1, wz, wx)
+        s1, _ = _four_product_sums(a1, a2, 1, wz, wx, ("C",))
         rho1 = depth_autocorrelation(a1, 1)[1]
         predictor = lag * np.angle(s1["C"]) * (1 + rho1**2)
         phase = phase + 2 * np.pi * np.round((predictor - phase) / (2 * np.pi))
@@ -322,7 +332,7 @@ def _fit_coherence(phase, w, slope, wz, wx):
 
 def _wls(a1, a2, k0, p, wz, wx, opts):
     lag = _lag(a1, opts)
-    a2 = _aligned(a1, a2, k0, p, opts)
+    a2 = _aligned(a1, a2, p, opts)
     phase, _, w = _unwrapped_phase(a1, a2, lag)
     slope = _pooled_slope(phase, w, wz, wx)
     strain = -slope / (2 * k0 * p)
@@ -330,55 +340,51 @@ def _wls(a1, a2, k0, p, wz, wx, opts):
     quality = np.where(np.isfinite(slope), quality, np.nan)
     # unwrapping guard: the fitted phase step per pixel must agree (within pi/4) with the
     # complex-averaged lag-1 step (Gaussian cross term removed), which needs no unwrapping
-    s1, count = _four_product_sums(a1, a2, 1, wz, wx)
+    s1, count = _four_product_sums(a1, a2, 1, wz, wx, ("C", "R1", "R2"))
     step = np.angle(s1["C"] - s1["R1"] * np.conj(s1["R2"]) / count)
     unwrap_failed = np.abs(np.angle(np.exp(1j * (step - slope)))) > np.pi / 4
     strain = np.where((quality >= opts["min_quality"]) & ~unwrap_failed, strain, np.nan)
     return strain, quality, {"lag": lag}
 
 
-def _image(a: np.ndarray, k0: float, p: float) -> xr.DataArray:
-    """A (depth, aline) array as the labelled field speckle.track / compensate expect."""
-    n = a.shape[0]
-    return xr.DataArray(
-        a,
-        dims=("depth", "aline"),
-        coords={"depth": np.arange(n) * p, "aline": np.arange(a.shape[1], dtype=float)},
-        attrs={"n_pixels": n, "depth_range": n * p, "k0": k0},
-    )
+def _tracked(a1, a2, window, step, upsample, oversample, outside="nan"):
+    """Tracked axial displacement (pixels) and 1 - registration error at every pixel.
 
-
-def _tracked(a1, a2, k0, p, wx, opts):
-    """Tracked axial displacement (µm) and 1 - registration error at every pixel (NaN outside)."""
-    tw = check_int(opts["track_window"], "track_window", low=4, high=a1.shape[0])
-    step = check_int(opts["step"], "step", low=1, high=tw)
-    tr = track(
-        _image(a1, k0, p),
-        _image(a2, k0, p),
-        window=(tw, wx),
-        step=(step, 1),
-        upsample=check_int(opts["upsample"], "upsample", low=1),
-        oversample=check_int(opts["oversample"], "oversample", low=1),
+    :func:`speckle.analysis.tracking.track_array` on ``window`` (depth, aline) windows every
+    ``step`` pixels, interpolated bilinearly to every pixel
+    (:func:`speckle.analysis.tracking.interpolate_windows`); beyond the outer window centres
+    NaN (``outside="nan"``) or the nearest centre's value (``"nearest"``).
+    """
+    tr = track_array(
+        a1, a2, window=window, step=step, upsample=upsample, oversample=oversample
     )
-    zc = tr.depth.values / p
-    xc = tr.aline.values
     qz, qx = np.arange(a1.shape[0], dtype=float), np.arange(a1.shape[1], dtype=float)
     out = []
-    for values in (tr["uz"].values, 1.0 - tr["registration_error"].values):
-        if len(xc) == 1:
-            xs, vals = np.array([xc[0] - 0.5, xc[0] + 0.5]), np.repeat(values, 2, axis=1)
-        else:
-            xs, vals = xc, values
-        f = RegularGridInterpolator((zc, xs), vals, bounds_error=False, fill_value=np.nan)
-        pts = np.stack(np.meshgrid(qz, qx, indexing="ij"), axis=-1)
-        out.append(f(pts))
-    return out[0], out[1], tw
+    for values in (tr["uz"], 1.0 - tr["error"]):
+        out.append(
+            interpolate_windows(
+                values, tr["centre_depth"], tr["centre_aline"], qz, qx, outside=outside
+            )
+        )
+    return out[0], out[1], tr
+
+
+def _track_options(a1, wx, opts):
+    tw = check_int(opts["track_window"], "track_window", low=4, high=a1.shape[0])
+    step = check_int(opts["step"], "step", low=1, high=tw)
+    return {
+        "window": (tw, wx),
+        "step": (step, max(1, wx // 2)),
+        "upsample": check_int(opts["upsample"], "upsample", low=1),
+        "oversample": check_int(opts["oversample"], "oversample", low=1),
+    }
 
 
 def _tracking(a1, a2, k0, p, wz, wx, opts):
-    uz, quality, tw = _tracked(a1, a2, k0, p, wx, opts)
-    strain = -_pooled_slope(uz, np.ones_like(uz), wz, 1) / p
-    return strain, quality, {"track_window": tw}
+    kw = _track_options(a1, wx, opts)
+    uz, quality, _ = _tracked(a1, a2, **kw)
+    strain = -_pooled_slope(uz, np.ones_like(uz), wz, 1)
+    return strain, quality, {"track_window": kw["window"][0]}
 
 
 def _measured_spectrum(a1: np.ndarray, k0: float, p: float) -> xr.DataArray:
@@ -407,64 +413,86 @@ def correlation_theory(spectrum: xr.DataArray, num: int = 81) -> xr.DataArray:
     return th.isel(strain=slice(0, stop))
 
 
-def _compensated(a1, a2, k0, p, wx, opts):
-    """Deformed image resampled at the tracked displacement (carrier kept), and coverage."""
-    uz, _, _ = _tracked(a1, a2, k0, p, wx, opts)
-    covered = np.isfinite(uz)
-    filled = np.where(covered, uz, 0.0)
-    for j in range(uz.shape[1]):  # constant extrapolation, only for the compensation
-        col = uz[:, j]
-        ok = np.flatnonzero(np.isfinite(col))
-        if ok.size:
-            filled[:, j] = np.interp(np.arange(col.size), ok, col[ok])
-    ref, dfm = _image(a1, k0, p), _image(a2, k0, p)
-    disp = xr.Dataset({"uz": (("depth", "aline"), filled)}, coords=ref.coords)
-    return compensate(dfm, disp, carrier=False).values, covered
+def _resampled(a2, uz_pixels):
+    """The deformed image taken where each reference pixel's material went,
+    ``A2(q + u(q))`` (envelope only: the carrier ``exp(2i k0 u)`` of the moved scatterers and so
+    the strain phase are kept)."""
+    q = np.arange(a2.shape[0], dtype=float)[:, None]
+    return resample_depth(a2, q + uz_pixels)
 
 
-def _aligned(a1, a2, k0, p, opts):
+def _align_tracking(a1: np.ndarray) -> dict:
+    """:data:`ALIGN_TRACKING` fitted to the image (windows no larger than the image)."""
+    n, m = a1.shape
+    wz = min(ALIGN_TRACKING["window"][0], n)
+    wx = min(ALIGN_TRACKING["window"][1], m)
+    sz = min(ALIGN_TRACKING["step"][0], wz)
+    sx = min(ALIGN_TRACKING["step"][1], wx)
+    return {**ALIGN_TRACKING, "window": (wz, wx), "step": (sz, sx)}
+
+
+def _alignment(a1, a2):
+    """Tracked displacement (pixels) at every pixel for the alignment (nearest-centre values
+    beyond the outer windows; failed windows filled from their neighbours), and the largest
+    row median of its magnitude."""
+    uz, _, tr = _tracked(a1, a2, outside="nearest", **_align_tracking(a1))
+    uz, _ = _alignment_fill(uz)  # windows without texture: filled from their neighbours
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN rows
+        rows = np.nanmedian(np.abs(tr["uz"]), axis=1)
+    reach = float(np.nanmax(rows)) if np.isfinite(rows).any() else 0.0
+    return uz, reach
+
+
+def _aligned(a1, a2, p, opts, alignment=None):
     """With ``align``: the deformed image resampled where the tracked displacement moved each
-    reference pixel (envelope only; the carrier ``exp(2i k0 u)`` and so the strain phase are
-    kept), so displacements beyond the speckle size no longer decorrelate the pair."""
+    reference pixel, so displacements beyond the speckle size no longer decorrelate the pair."""
     if not opts["align"]:
         return a2
-    return _compensated(a1, a2, k0, p, min(8, a1.shape[1]), OPTIONS["tracking"])[0]
+    uz = _alignment(a1, a2)[0] if alignment is None else alignment
+    return _resampled(a2, uz)
 
 
-#: ``align="auto"`` aligns when the displacement implied by a first, unaligned estimate exceeds
-#: this many pixels (the field correlation of a Gaussian-spectrum pair falls to ~0.9 at 0.5 px).
+#: ``align="auto"`` aligns when the tracked displacement (row median of the window estimates)
+#: exceeds this many pixels somewhere (the field correlation of a Gaussian-spectrum pair falls
+#: to ~0.9 at 0.5 px).
 AUTO_ALIGN_PIXELS = 0.5
 
 
 def _auto_aligned(method, a1, a2, k0, p, wz, wx, opts):
-    """Unaligned estimate; if its integrated displacement ``u(z) = -int s dz`` (row medians,
-    from the probe at the top) reaches :data:`AUTO_ALIGN_PIXELS`, re-estimate aligned."""
-    first = _METHOD_FUNCS[method](a1, a2, k0, p, wz, wx, {**opts, "align": False})
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN rows (edges) stay NaN
-        rows = np.nanmedian(first[0], axis=1) if np.isfinite(first[0]).any() else None
-    if rows is not None and np.isfinite(rows).any():
-        q = np.arange(rows.size)
-        ok = np.isfinite(rows)
-        u_pixels = np.abs(np.cumsum(np.interp(q, q[ok], rows[ok])))
-        need = bool(u_pixels.max() > AUTO_ALIGN_PIXELS) or ok.mean() < 0.5
-    else:
-        need = True
-    if not need:
-        return first[0], first[1], {**first[2], "aligned": 0}
-    out = _METHOD_FUNCS[method](a1, a2, k0, p, wz, wx, {**opts, "align": True})
+    """Track once (coarse windows); align only if the displacement reaches
+    :data:`AUTO_ALIGN_PIXELS`, then estimate."""
+    uz, reach = _alignment(a1, a2)
+    if reach <= AUTO_ALIGN_PIXELS:
+        out = _METHOD_FUNCS[method](a1, a2, k0, p, wz, wx, {**opts, "align": False})
+        return out[0], out[1], {**out[2], "aligned": 0}
+    a2 = _resampled(a2, uz)
+    out = _METHOD_FUNCS[method](a1, a2, k0, p, wz, wx, {**opts, "align": False})
     return out[0], out[1], {**out[2], "aligned": 1}
 
 
 def _correlation(a1, a2, k0, p, wz, wx, opts):
-    comp, covered = _compensated(a1, a2, k0, p, wx, opts)
-    ref = _image(a1, k0, p)
-    r = correlation_map(ref, _image(comp, k0, p), window=(wz, wx), kind="amplitude").values
+    uz, _, _ = _tracked(a1, a2, **_track_options(a1, wx, opts))
+    covered = np.isfinite(uz)
+    filled, _ = _alignment_fill(uz)
+    comp = _resampled(a2, filled)
+    r = correlation_array(np.abs(a1), np.abs(comp), (wz, wx))
     th = correlation_theory(_measured_spectrum(a1, k0, p))
     tv, ts = th.values[::-1], th.strain.values[::-1]
     strain = np.interp(r, tv, ts, left=np.nan, right=0.0)
     strain = np.where(covered & np.isfinite(r), strain, np.nan)
     return strain, r, {"theory_min_correlation": float(tv[0])}
+
+
+def _alignment_fill(uz):
+    """NaN displacements (outside the tracked windows) filled by the nearest value along depth
+    (constant extrapolation, only for resampling); and the mask of original values."""
+    ok = np.isfinite(uz)
+    out = uz.copy()
+    for j in np.flatnonzero(~ok.all(axis=0)):
+        col, good = uz[:, j], np.flatnonzero(ok[:, j])
+        out[:, j] = np.interp(np.arange(col.size), good, col[good]) if good.size else 0.0
+    return out, ok
 
 
 _METHOD_FUNCS = {
@@ -610,7 +638,7 @@ def estimate_displacement(
     _, wx = _check_window(window, (2, 1), a1.shape)
     if method == "tracking":
         opts = _options("tracking", options)
-        uz, _, _ = _tracked(a1, a2, k, p, wx, opts)
+        uz = _tracked(a1, a2, **_track_options(a1, wx, opts))[0] * p
     else:
         allowed = {"lag": None, "max_bias": DEFAULT_MAX_BIAS}
         unknown = set(options) - set(allowed)

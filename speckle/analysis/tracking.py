@@ -353,26 +353,28 @@ def interpolate_windows(
     depth: np.ndarray,
     aline: np.ndarray,
     *,
-    extrapolate: bool = True,
+    outside: str = "linear",
 ) -> np.ndarray:
     """Window values interpolated bilinearly to the pixel grid ``depth x aline``.
 
-    Separable linear interpolation along depth then aline (one window column: depth only).
-    Beyond the outer window centres: linear extrapolation (``extrapolate``) or NaN. A NaN window
-    spreads only to the pixels whose interpolation uses it.
+    Separable linear interpolation along depth then aline, in the units of the centres (one
+    window column: depth only, the same for every A-line). Beyond the outer window centres
+    (``outside``): ``"linear"`` extrapolation, the ``"nearest"`` centre's value, or ``"nan"``.
+    A NaN window spreads only to the pixels whose interpolation uses it.
     """
+    check_choice(outside, "outside", ("linear", "nearest", "nan"))
     v = np.asarray(values, float)
-    out = _interp_axis(v, np.asarray(centre_depth, float), np.asarray(depth, float), 0, extrapolate)
+    out = _interp_axis(v, np.asarray(centre_depth, float), np.asarray(depth, float), 0, outside)
     if v.shape[1] == 1:
         return np.repeat(out, len(aline), axis=1)
-    return _interp_axis(
-        out, np.asarray(centre_aline, float), np.asarray(aline, float), 1, extrapolate
-    )
+    return _interp_axis(out, np.asarray(centre_aline, float), np.asarray(aline, float), 1, outside)
 
 
-def _interp_axis(v: np.ndarray, xp: np.ndarray, x: np.ndarray, axis: int, extrapolate: bool):
+def _interp_axis(v: np.ndarray, xp: np.ndarray, x: np.ndarray, axis: int, outside: str):
     if xp.size == 1:
         return np.repeat(np.take(v, [0], axis=axis), x.size, axis=axis)
+    if outside == "nearest":
+        x = np.clip(x, xp[0], xp[-1])
     i = np.clip(np.searchsorted(xp, x) - 1, 0, xp.size - 2)
     t = (x - xp[i]) / (xp[i + 1] - xp[i])
     lo, hi = np.take(v, i, axis=axis), np.take(v, i + 1, axis=axis)
@@ -380,9 +382,9 @@ def _interp_axis(v: np.ndarray, xp: np.ndarray, x: np.ndarray, axis: int, extrap
     shape[axis] = -1
     t = t.reshape(shape)
     out = lo + t * (hi - lo)
-    if not extrapolate:
-        outside = ((x < xp[0]) | (x > xp[-1])).reshape(shape)
-        out = np.where(outside, np.nan, out)
+    if outside == "nan":
+        beyond = ((x < xp[0]) | (x > xp[-1])).reshape(shape)
+        out = np.where(beyond, np.nan, out)
     return out
 
 
