@@ -86,11 +86,13 @@ def choose_lag(image: np.ndarray, *, max_bias: float = DEFAULT_MAX_BIAS, max_lag
     eps = check_real(max_bias, "max_bias", low=0, high=1, low_inclusive=False, high_inclusive=False)
     cap = min(check_int(max_lag, "max_lag", low=1), max(1, image.shape[0] // 4))
     a = np.asarray(image)
-    power = np.abs(a) ** 2
+    rows = np.sum(np.abs(a) ** 2, axis=1)  # power per depth row: each lag's norms from it
+    total, n = rows.sum(), a.shape[0]
+    head = total - np.concatenate([[0.0], np.cumsum(rows[::-1])])  # sum of rows[: n - lag]
+    tail = total - np.concatenate([[0.0], np.cumsum(rows)])  # sum of rows[lag:]
     rho = 1.0
     for lag in range(1, cap + 1):  # the first lag that decorrelates: later lags are not needed
-        num = np.abs(np.vdot(a[lag:], a[: a.shape[0] - lag]))
-        rho = num / np.sqrt(np.sum(power[: a.shape[0] - lag]) * np.sum(power[lag:]))
+        rho = np.abs(np.vdot(a[lag:], a[: n - lag])) / np.sqrt(head[lag] * tail[lag])
         if rho**2 <= eps:
             return lag
     raise ValueError(

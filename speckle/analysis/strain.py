@@ -110,7 +110,13 @@ OPTIONS = {
 }
 #: Tracking that aligns the pair for the phase methods (``align``): window (depth, aline)
 #: pixels, step (depth, aline) pixels; the displacement field is smooth, so coarse steps do.
-ALIGN_TRACKING = {"window": (32, 8), "step": (16, 4), "upsample": 20, "oversample": 2}
+ALIGN_TRACKING = {
+    "window": (32, 8),
+    "step": (16, 8),
+    "upsample": 20,
+    "oversample": 2,
+    "lateral": False,
+}
 
 
 # --------------------------------------------------------------------------------------------
@@ -200,13 +206,26 @@ def _options(method: str, options: dict) -> dict:
 
 
 def _box(x: np.ndarray, wz: int, wx: int) -> np.ndarray:
-    """Sum over the (wz, wx) window starting at ``c - w//2``; NaN where it leaves the image."""
-    if np.iscomplexobj(x):
-        return _box(x.real, wz, wx) + 1j * _box(x.imag, wz, wx)
-    s = ndimage.uniform_filter(x, size=(wz, wx), mode="constant") * (wz * wx)
-    valid = np.zeros(x.shape, bool)
-    valid[wz // 2 : x.shape[0] - (wz - 1) // 2, wx // 2 : x.shape[1] - (wx - 1) // 2] = True
-    return np.where(valid, s, np.nan)
+    """Sum over the (wz, wx) window starting at ``c - w//2``; NaN where it leaves the image.
+
+    A running sum in depth (cumulative sum and one difference: one pass for real and complex
+    data alike), then the ``wx`` shifted columns added.
+    """
+    n, m = x.shape
+    dtype = np.result_type(x.dtype, np.float64)
+    out = np.full(x.shape, np.nan, dtype=dtype)
+    if wz > n or wx > m:
+        return out
+    c = np.empty((n + 1, m), dtype=dtype)
+    c[0] = 0
+    np.cumsum(x, axis=0, out=c[1:])
+    depth = c[wz:] - c[:-wz]  # rows i .. i+wz-1, i = 0 .. n-wz
+    k = m - wx + 1
+    acc = depth[:, :k].copy()
+    for j in range(1, wx):
+        acc += depth[:, j : j + k]
+    out[wz // 2 : wz // 2 + acc.shape[0], wx // 2 : wx // 2 + k] = acc
+    return out
 
 
 def _place(values: np.ndarray, offset: int, n: int) -> np.ndarray:
@@ -347,7 +366,7 @@ def _wls(a1, a2, k0, p, wz, wx, opts):
     return strain, quality, {"lag": lag}
 
 
-def _tracked(a1, a2, window, step, upsample, oversample, outside="nan"):
+def _tracked(a1, a2, window, step, upsample, oversample, lateral=True, outside="nan"):
     """Tracked axial displacement (pixels) and 1 - registration error at every pixel.
 
     :func:`speckle.analysis.tracking.track_array` on ``window`` (depth, aline) windows every
@@ -356,7 +375,13 @@ def _tracked(a1, a2, window, step, upsample, oversample, outside="nan"):
     NaN (``outside="nan"``) or the nearest centre's value (``"nearest"``).
     """
     tr = track_array(
-        a1, a2, window=window, step=step, upsample=upsample, oversample=oversample
+        a1,
+        a2,
+        window=window,
+        step=step,
+        upsample=upsample,
+        oversample=oversample,
+        lateral=lateral,
     )
     qz, qx = np.arange(a1.shape[0], dtype=float), np.arange(a1.shape[1], dtype=float)
     out = []
@@ -508,6 +533,23 @@ _METHOD_FUNCS = {
 # --------------------------------------------------------------------------------------------
 
 
+def _no_answer_reason(method: str, quality: np.ndarray, opts: dict, window) -> str:
+    """Why an estimate has no finite pixel, for the warning."""
+    q = quality[np.isfinite(quality)]
+    head = f"estimate_strain(method={method!r}) has no answer at any pixel: "
+    if "min_quality" in opts and q.size and q.max() < opts["min_quality"]:
+        return head + (
+            f"every window's quality is below min_quality={opts['min_quality']:g} (highest "
+            f"{q.max():.3f}); lower min_quality or use a larger window"
+        )
+    if not q.size:
+        return head + f"no window {tuple(window)} has a finite quality (image too small?)"
+    return head + (
+        "the pair is decorrelated beyond the method's range (correlation below its theory or "
+        "unwrapping failed everywhere); try method='tracking' or align=True"
+    )
+
+
 def _wrap(values: np.ndarray, template, name: str, attrs: dict) -> object:
     if template is None:
         return values
@@ -571,12 +613,12 @@ def estimate_strain(
     check_choice(method, "method", METHODS)
     wz, wx = _check_window(window, DEFAULT_WINDOWS[method], a1.shape)
     opts = _options(method, options)
-    if "align" in opts and opts["align"] not in (True, False, "auto"):
-        raise ValueError(f"align must be True, False or 'auto', got {opts['align']!r}")
     if opts.get("align") == "auto":
         strain, quality, info = _auto_aligned(method, a1, a2, k, p, wz, wx, opts)
     else:
         strain, quality, info = _METHOD_FUNCS[method](a1, a2, k, p, wz, wx, opts)
+    if not np.isfinite(strain).any():
+        warnings.warn(_no_answer_reason(method, quality, opts, (wz, wx)), stacklevel=2)
     attrs = {
         "long_name": "axial strain (compression > 0)"
         if method != "correlation"
