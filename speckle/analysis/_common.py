@@ -17,7 +17,7 @@ __all__ = ["field_of", "grid_spacing", "matched", "parse_window", "same_grid"]
 
 
 def field_of(data: xr.Dataset | xr.DataArray) -> xr.DataArray:
-    """The complex field of a B-scan Dataset (its attrs merged on a copy) or the DataArray itself."""
+    """The complex field of a B-scan Dataset (attrs merged on a copy), or the DataArray itself."""
     if isinstance(data, xr.Dataset):
         if "field" not in data:
             raise TypeError(

@@ -59,15 +59,14 @@ Every method returns NaN where its window does not fit in the image or it has no
 
 from __future__ import annotations
 
+import os
 import warnings
 
 import numpy as np
 import xarray as xr
 from scipy import ndimage
-from scipy.interpolate import RegularGridInterpolator
 
 from .._validate import check_choice, check_int, check_real
-from ..conventions import coord
 from ..system.source import spectrum
 from ._common import parse_window
 from .correlation import correlation_array, expected_correlation, resample_depth
@@ -759,6 +758,76 @@ def predicted_strain_std(
     return _place(std, wz // 2 + big_l // 2, n)
 
 
+def _frames_input(frames: object) -> tuple[object, dict]:
+    """``frames`` as a (frame, depth, aline) array (numpy or Dask) and its coordinates.
+
+    Refused before any work: a wrong type or dims, fewer than two frames, real data, Dask
+    chunks that split depth or aline.
+    """
+    coords: dict = {}
+    if isinstance(frames, xr.DataArray):
+        if set(frames.dims) != {"frame", "depth", "aline"}:
+            raise ValueError(f"frames must have dims (frame, depth, aline), got {frames.dims}")
+        frames = frames.transpose("frame", "depth", "aline")
+        coords = {d: frames[d] for d in ("depth", "aline") if d in frames.coords}
+        data = frames.data
+    elif isinstance(frames, np.ndarray):
+        data = frames
+    else:
+        raise TypeError(f"frames must be a numpy array or DataArray, got {type(frames).__name__}")
+    if data.ndim != 3 or data.shape[0] < 2:
+        raise ValueError(f"frames must be (frame >= 2, depth, aline), got shape {data.shape}")
+    if not np.issubdtype(data.dtype, np.complexfloating):
+        raise TypeError(
+            f"frames must be complex images (the phase carries the strain), got dtype {data.dtype}"
+        )
+    chunks = getattr(data, "chunks", None)
+    if chunks is not None and (len(chunks[1]) > 1 or len(chunks[2]) > 1):
+        raise ValueError(
+            f"frames' Dask chunks split depth or aline (chunks {chunks[1]} x {chunks[2]}): a "
+            "pair needs whole images; rechunk with frames.chunk({'frame': 1, 'depth': -1, "
+            "'aline': -1})"
+        )
+    return data, coords
+
+
+def _pair_fields(f1, f2, k0, p, method, window, options):
+    """Interframe strain, its quality and the tracked displacement (µm) of one pair."""
+    a1, a2 = np.asarray(f1), np.asarray(f2)
+    s, q = estimate_strain(
+        a1, a2, k0=k0, pixel_size=p, method=method, window=window, return_quality=True, **options
+    )
+    u = estimate_displacement(a1, a2, k0=k0, pixel_size=p, method="tracking")
+    return np.stack([s, q, u])
+
+
+def _pair_block(f1, f2, k0, p, method, window, options):
+    return _pair_fields(f1[0], f2[0], k0, p, method, window, options)[None]
+
+
+def _advance(state, fields, p):
+    """One step of the material-point scan: (position, kept length) after pair ``fields``."""
+    y, keep = state
+    s, _, u = fields
+    q = np.arange(y.shape[0], dtype=float)
+    s_at = np.column_stack([np.interp(y[:, j], q, s[:, j]) for j in range(y.shape[1])])
+    u_at = np.column_stack([np.interp(y[:, j], q, u[:, j]) for j in range(y.shape[1])])
+    return y + u_at / p, keep * (1 - s_at)
+
+
+def _check_finite_frames(data) -> None:
+    """ValueError naming the frames holding NaN/inf (computed lazily for Dask input)."""
+    finite = np.isfinite(data).all(axis=(1, 2))
+    if hasattr(finite, "compute"):
+        finite = finite.compute()
+    bad = np.flatnonzero(~np.asarray(finite))
+    if bad.size:
+        raise ValueError(
+            f"frames {bad[:10].tolist()}{' ...' if bad.size > 10 else ''} ({bad.size} of "
+            f"{len(finite)}) hold NaN or infinite pixels; drop or repair them first"
+        )
+
+
 def accumulate_strain(
     frames: np.ndarray | xr.DataArray,
     *,
@@ -766,6 +835,8 @@ def accumulate_strain(
     pixel_size: float,
     method: str = DEFAULT_METHOD,
     window: int | tuple[int, int] | None = None,
+    path: str | None = None,
+    progress: bool = False,
     **options,
 ) -> xr.Dataset:
     """Cumulative strain over a compression sequence, following the material with tracking.
@@ -779,53 +850,141 @@ def accumulate_strain(
     Parameters
     ----------
     frames : numpy.ndarray or xarray.DataArray
-        Complex images ``(frame, depth, aline)``, at least two frames.
+        Complex images ``(frame, depth, aline)``, at least two frames, all finite. A Dask-backed
+        DataArray (e.g. ``speckle.io.open_dataset(path, load=False)["field"]`` or
+        ``xarray.open_zarr(...)``) is processed lazily, one pair per task; its chunks must hold
+        whole images (``frames.chunk({"frame": 1, "depth": -1, "aline": -1})``).
     k0, pixel_size, method, window, **options
         As in :func:`estimate_strain` (``options`` go to the strain estimator).
+    path : str, optional
+        Stream the result to this chunked NetCDF file (one chunk per frame, written atomically
+        by :func:`speckle.io.stream_to_netcdf` on the active Dask scheduler: threads,
+        processes or a ``dask.distributed`` cluster) and return it opened lazily. Memory then
+        holds the pairs in flight, not the sequence. Without ``path`` the result is computed
+        in memory.
+    progress : bool
+        Progress bar while streaming (``path`` given).
 
     Returns
     -------
     xarray.Dataset
         ``interframe`` (``frame`` = pair index, depth, aline; on each earlier frame's grid),
-        ``cumulative`` (strain of frame ``i+1`` relative to frame 0 on frame 0's pixels) and
-        ``position`` (pixel ``y_{i+1}`` of each frame-0 pixel in frame ``i+1``).
+        ``quality`` (of each interframe estimate), ``cumulative`` (strain of frame ``i+1``
+        relative to frame 0 on frame 0's pixels) and ``position`` (pixel ``y_{i+1}`` of each
+        frame-0 pixel in frame ``i+1``). The input's depth and aline coordinates are kept
+        (else depth = pixel index times ``pixel_size``). The numbers do not depend on the
+        scheduler or the number of workers.
+
+    Raises
+    ------
+    TypeError, ValueError
+        Before any work: bad types or dims, real data, chunks splitting depth or aline, frames
+        holding NaN (named), bad estimator parameters.
     """
-    if isinstance(frames, xr.DataArray):
-        if set(frames.dims) != {"frame", "depth", "aline"}:
-            raise ValueError(f"frames must have dims (frame, depth, aline), got {frames.dims}")
-        f = frames.transpose("frame", "depth", "aline").values
-    elif isinstance(frames, np.ndarray):
-        f = frames
-    else:
-        raise TypeError(f"frames must be a numpy array or DataArray, got {type(frames).__name__}")
-    if f.ndim != 3 or f.shape[0] < 2:
-        raise ValueError(f"frames must be (frame >= 2, depth, aline), got shape {f.shape}")
+    data, coords = _frames_input(frames)
     p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
-    n, m = f.shape[1:]
-    q = np.arange(n, dtype=float)
-    y = np.repeat(q[:, None], m, axis=1)
-    keep = np.ones((n, m))
-    inter, cum, pos = [], [], []
-    for i in range(f.shape[0] - 1):
-        s = estimate_strain(
-            f[i], f[i + 1], k0=k0, pixel_size=p, method=method, window=window, **options
-        )
-        u = estimate_displacement(f[i], f[i + 1], k0=k0, pixel_size=p, method="tracking")
-        s_at = np.column_stack([np.interp(y[:, j], q, s[:, j]) for j in range(m)])
-        u_at = np.column_stack([np.interp(y[:, j], q, u[:, j]) for j in range(m)])
-        keep = keep * (1 - s_at)
-        y = y + u_at / p
-        inter.append(s)
-        cum.append(1 - keep)
-        pos.append(y.copy())
+    k = check_real(k0, "k0", low=0, low_inclusive=False)
+    check_choice(method, "method", METHODS)
+    n_frames, n, m = data.shape
+    wz, wx = _check_window(window, DEFAULT_WINDOWS[method], (n, m))
+    _options(method, options)  # unknown or malformed options: refused before any work
+    _check_finite_frames(data)
+    if path is not None and not isinstance(path, (str, bytes)) and not hasattr(path, "__fspath__"):
+        raise TypeError(f"path must be a file path, got {type(path).__name__}")
+    if not isinstance(progress, (bool, np.bool_)):
+        raise TypeError(f"progress must be True or False, got {progress!r}")
+    args = (k, p, method, (wz, wx), options)
     dims = ("frame", "depth", "aline")
-    coords = {"frame": np.arange(1, f.shape[0]), "depth": q * p}
-    return xr.Dataset(
+    depth = coords.get("depth", xr.DataArray(np.arange(n) * p, dims="depth"))
+    out_coords = {"frame": np.arange(1, n_frames), "depth": depth}
+    if "aline" in coords:
+        out_coords["aline"] = coords["aline"]
+    variables = {
+        "interframe": {"units": "1", "long_name": "interframe strain"},
+        "quality": {"units": "1", "long_name": "interframe quality"},
+        "cumulative": {"units": "1", "long_name": "strain to frame 0"},
+        "position": {"units": "pixel", "long_name": "position in frame"},
+    }
+    attrs = {
+        "method": method,
+        "k0": k,
+        "pixel_size": p,
+        "window_depth_pixels": wz,
+        "window_aline_pixels": wx,
+    }
+    frames_out = _scan(data, args, p, batch=_batch_size())
+    if path is None:
+        rows = list(frames_out)
+        return xr.Dataset(
+            {name: (dims, np.array([r[name] for r in rows]), a) for name, a in variables.items()},
+            coords=out_coords,
+            attrs=attrs,
+        )
+    from ..io import open_dataset, write_frames
+
+    template = xr.Dataset(
         {
-            "interframe": (dims, np.array(inter), {"units": "1", "long_name": "interframe"}),
-            "cumulative": (dims, np.array(cum), {"units": "1", "long_name": "strain to frame 0"}),
-            "position": (dims, np.array(pos), {"units": "pixel"}),
+            name: (dims, np.broadcast_to(np.nan, (n_frames - 1, n, m)), a)
+            for name, a in variables.items()
         },
-        coords=coords,
-        attrs={"method": method, "k0": float(k0), "pixel_size": p},
+        coords=out_coords,
+        attrs=attrs,
     )
+    write_frames(path, frames_out, n_frames=n_frames - 1, template=template, progress=progress)
+    return open_dataset(path, load=False)
+
+
+def _batch_size() -> int:
+    """Pairs computed at once: two per Dask worker thread or process (bounded memory)."""
+    import dask
+
+    workers = dask.config.get("num_workers", None) or os.cpu_count() or 1
+    return max(2, 2 * int(workers))
+
+
+def _scan(data, args, p, batch: int):
+    """Yield each pair's interframe strain, quality, cumulative strain and position, in order.
+
+    The pairs are computed ``batch`` at a time on the active Dask scheduler (numpy input: in
+    this process); the scan over material positions runs here, one pair after the other.
+    """
+    import dask
+    import dask.array as da
+
+    n_frames, n, m = data.shape
+    state = _start(n, m)
+    if isinstance(data, da.Array):
+        data = data.rechunk({0: 1})
+        fields = da.map_blocks(
+            _pair_block,
+            data[:-1],
+            data[1:],
+            *args,
+            dtype=float,
+            new_axis=1,
+            chunks=((1,) * (n_frames - 1), (3,), (n,), (m,)),
+        )
+        blocks = list(fields.to_delayed().ravel())
+        for start in range(0, len(blocks), batch):
+            for block in dask.compute(*blocks[start : start + batch]):
+                state = _advance(state, block[0], p)
+                yield _frame(block[0], state)
+    else:
+        for i in range(n_frames - 1):
+            f = _pair_fields(data[i], data[i + 1], *args)
+            state = _advance(state, f, p)
+            yield _frame(f, state)
+
+
+def _frame(fields, state) -> dict:
+    return {
+        "interframe": fields[0],
+        "quality": fields[1],
+        "cumulative": 1 - state[1],
+        "position": state[0],
+    }
+
+
+def _start(n: int, m: int):
+    """Scan state before the first pair: every frame-0 pixel at its own position, unstrained."""
+    return np.repeat(np.arange(n, dtype=float)[:, None], m, axis=1), np.ones((n, m))
