@@ -606,6 +606,14 @@ def estimate_strain(
         Shapes or coordinates that differ, non-positive ``k0`` or ``pixel_size``, a window
         larger than the image, an unknown method.
     """
+    has_frame = [isinstance(x, xr.DataArray) and "frame" in x.dims for x in (reference, deformed)]
+    if any(has_frame):
+        out = _strain_frames(
+            reference, deformed, has_frame, k0, pixel_size, method, window, options
+        )
+        if return_quality:
+            return out, out["quality"].reset_coords(drop=True).rename("quality")
+        return out
     a1, a2, template = _as_images(reference, deformed)
     k = check_real(k0, "k0", low=0, low_inclusive=False)
     p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
@@ -636,6 +644,94 @@ def estimate_strain(
     if return_quality:
         return out, _wrap(quality, template, "quality", {"units": "1", "long_name": "quality"})
     return out
+
+
+def _strain_block(f1, f2, k0, p, method, window, options):
+    s, q = estimate_strain(
+        f1[0],
+        f2[0],
+        k0=k0,
+        pixel_size=p,
+        method=method,
+        window=window,
+        return_quality=True,
+        **options,
+    )
+    return np.stack([s, q])[None]
+
+
+def _strain_frames(reference, deformed, has_frame, k0, pixel_size, method, window, options):
+    """:func:`estimate_strain` frame by frame (pairs ``reference[i]``, ``deformed[i]``), lazily.
+
+    Returns a Dask-backed DataArray (frame, depth, aline) with a lazy ``quality`` coordinate;
+    everything is checked before any work.
+    """
+    import dask.array as da
+
+    if not all(has_frame):
+        which = "reference" if has_frame[0] else "deformed"
+        raise ValueError(
+            f"only {which} has a 'frame' dim: give both inputs a frame dim of the same size "
+            "(pairs reference[i], deformed[i]) or select one frame (.isel(frame=i))"
+        )
+    arrays = []
+    for name, x in (("reference", reference), ("deformed", deformed)):
+        try:
+            data, coords = _frames_input(x)
+        except (TypeError, ValueError) as err:
+            raise type(err)(f"{name}: {err}") from None
+        arrays.append((data, coords))
+    (d1, c1), (d2, c2) = arrays
+    if d1.shape != d2.shape:
+        raise ValueError(
+            f"reference and deformed frames differ in shape: {d1.shape} vs {d2.shape} "
+            "(frame, depth, aline)"
+        )
+    for dim in ("depth", "aline"):
+        if dim in c1 and dim in c2 and not np.array_equal(c1[dim].values, c2[dim].values):
+            raise ValueError(f"reference and deformed have different {dim} coordinates")
+    k = check_real(k0, "k0", low=0, low_inclusive=False)
+    p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
+    check_choice(method, "method", METHODS)
+    n_frames, n, m = d1.shape
+    wz, wx = _check_window(window, DEFAULT_WINDOWS[method], (n, m))
+    _options(method, options)
+    _check_finite_frames(d1)
+    _check_finite_frames(d2)
+    d1 = da.asarray(d1).rechunk({0: 1, 1: -1, 2: -1})
+    d2 = da.asarray(d2).rechunk({0: 1, 1: -1, 2: -1})
+    both = da.map_blocks(
+        _strain_block,
+        d1,
+        d2,
+        k,
+        p,
+        method,
+        (wz, wx),
+        options,
+        dtype=float,
+        new_axis=1,
+        chunks=((1,) * n_frames, (2,), (n,), (m,)),
+    )
+    frame = reference["frame"] if "frame" in reference.coords else np.arange(n_frames)
+    coords = {"frame": frame, **c1}
+    out = xr.DataArray(
+        both[:, 0],
+        dims=("frame", "depth", "aline"),
+        coords=coords,
+        attrs={
+            "long_name": "axial strain (compression > 0)"
+            if method != "correlation"
+            else "axial strain magnitude",
+            "units": "1",
+            "method": method,
+            "window_depth_pixels": wz,
+            "window_aline_pixels": wx,
+        },
+    )
+    return out.assign_coords(
+        quality=(("frame", "depth", "aline"), both[:, 1], {"units": "1", "long_name": "quality"})
+    )
 
 
 def estimate_displacement(
