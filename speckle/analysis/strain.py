@@ -215,10 +215,15 @@ def _box(x: np.ndarray, wz: int, wx: int) -> np.ndarray:
     out = np.full(x.shape, np.nan, dtype=dtype)
     if wz > n or wx > m:
         return out
-    c = np.empty((n + 1, m), dtype=dtype)
-    c[0] = 0
-    np.cumsum(x, axis=0, out=c[1:])
-    depth = c[wz:] - c[:-wz]  # rows i .. i+wz-1, i = 0 .. n-wz
+    if wz == 1:
+        depth = x
+    elif not np.isfinite(x).all():  # a running sum would carry a NaN down the whole column
+        depth = np.lib.stride_tricks.sliding_window_view(x, wz, axis=0).sum(axis=-1)
+    else:
+        c = np.empty((n + 1, m), dtype=dtype)
+        c[0] = 0
+        np.cumsum(x, axis=0, out=c[1:])
+        depth = c[wz:] - c[:-wz]  # rows i .. i+wz-1, i = 0 .. n-wz
     k = m - wx + 1
     acc = depth[:, :k].copy()
     for j in range(1, wx):
