@@ -204,16 +204,18 @@ def _options(method: str, options: dict) -> dict:
 # --------------------------------------------------------------------------------------------
 
 
-def _box(x: np.ndarray, wz: int, wx: int) -> np.ndarray:
+def _box(x: np.ndarray, wz: int, wx: int, n_out: int | None = None, offset: int = 0):
     """Sum over the (wz, wx) window starting at ``c - w//2``; NaN where it leaves the image.
 
     A running sum in depth (cumulative sum and one difference: one pass for real and complex
-    data alike), then the ``wx`` shifted columns added.
+    data alike), then along aline. With ``n_out``, the sums are placed ``offset`` rows lower in
+    an ``n_out``-row array (NaN elsewhere), without a copy.
     """
     n, m = x.shape
     dtype = np.result_type(x.dtype, np.float64)
-    out = np.full(x.shape, np.nan, dtype=dtype)
+    out = np.empty((n if n_out is None else n_out, m), dtype=dtype)
     if wz > n or wx > m:
+        out.fill(np.nan)
         return out
     if wz == 1:
         depth = x
@@ -225,10 +227,22 @@ def _box(x: np.ndarray, wz: int, wx: int) -> np.ndarray:
         np.cumsum(x, axis=0, out=c[1:])
         depth = c[wz:] - c[:-wz]  # rows i .. i+wz-1, i = 0 .. n-wz
     k = m - wx + 1
-    acc = depth[:, :k].copy()
-    for j in range(1, wx):
-        acc += depth[:, j : j + k]
-    out[wz // 2 : wz // 2 + acc.shape[0], wx // 2 : wx // 2 + k] = acc
+    r0 = wz // 2 + offset
+    target = out[r0 : r0 + depth.shape[0], wx // 2 : wx // 2 + k]
+    if wx == 1:
+        target[...] = depth
+    elif wx <= 3 or not np.isfinite(depth).all():
+        np.add(depth[:, :k], depth[:, 1 : 1 + k], out=target)
+        for j in range(2, wx):
+            target += depth[:, j : j + k]
+    else:
+        c = np.cumsum(depth, axis=1)
+        target[:, 0] = c[:, wx - 1]
+        np.subtract(c[:, wx:], c[:, : k - 1], out=target[:, 1:])
+    out[:r0] = np.nan
+    out[r0 + depth.shape[0] :] = np.nan
+    out[r0 : r0 + depth.shape[0], : wx // 2] = np.nan
+    out[r0 : r0 + depth.shape[0], wx // 2 + k :] = np.nan
     return out
 
 
@@ -284,9 +298,8 @@ def _four_product_sums(a1, a2, lag, wz, wx, terms=("C", "absC", "R1", "R2")):
         "R1": lambda: x1 * np.conj(y1),
         "R2": lambda: x2 * np.conj(y2),
     }
-    sums = {k: _box(make[k](), wz, wx) for k in terms}
-    count = wz * wx
-    return {k: _place(v, lag // 2, n) for k, v in sums.items()}, count
+    sums = {k: _box(make[k](), wz, wx, n_out=n, offset=lag // 2) for k in terms}
+    return sums, wz * wx
 
 
 def _vector(a1, a2, k0, p, wz, wx, opts):
@@ -469,8 +482,10 @@ def _alignment(a1, a2):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN rows
         rows = np.nanmedian(np.abs(tr["uz"]), axis=1)
+        grad = np.abs(np.diff(tr["uz"], axis=0) / np.diff(tr["centre_depth"])[:, None])
     reach = float(np.nanmax(rows)) if np.isfinite(rows).any() else 0.0
-    return uz, reach
+    steepest = float(np.nanmax(grad)) if np.isfinite(grad).any() else np.inf
+    return uz, reach, steepest
 
 
 def _aligned(a1, a2, p, opts, alignment=None):
@@ -491,7 +506,13 @@ AUTO_ALIGN_PIXELS = 0.5
 def _auto_aligned(method, a1, a2, k0, p, wz, wx, opts):
     """Track once (coarse windows); align only if the displacement reaches
     :data:`AUTO_ALIGN_PIXELS`, then estimate."""
-    uz, reach = _alignment(a1, a2)
+    uz, reach, steepest = _alignment(a1, a2)
+    if method == "vector" and opts["wrap_check"]:
+        # the lag-L phase wraps at |s| = 1/(2 R L) (R = k0 p / pi); far below it (half, with
+        # the tracked strain's noise of ~1e-3) the multi-lag check cannot change a branch
+        lag = _lag(a1, opts)
+        if steepest < 0.5 * np.pi / (2 * k0 * p * lag):
+            opts = {**opts, "wrap_check": False, "lag": lag}
     if reach <= AUTO_ALIGN_PIXELS:
         out = _METHOD_FUNCS[method](a1, a2, k0, p, wz, wx, {**opts, "align": False})
         return out[0], out[1], {**out[2], "aligned": 0}
