@@ -267,9 +267,9 @@ def track(
     Parameters
     ----------
     reference, deformed : xarray.Dataset or xarray.DataArray
-        Complex fields with dims exactly ``(depth, aline)`` on the same pixel grid
-        (``ValueError`` otherwise). The pixel size and A-line pitch are read from the
-        ``depth`` and ``aline`` coordinates (µm).
+        Complex fields with dims exactly ``(depth, aline)`` on the same pixel grid, finite
+        (``ValueError`` otherwise, with the count of bad pixels). The pixel size and A-line
+        pitch are read from the ``depth`` and ``aline`` coordinates (µm).
     window, step, upsample, oversample, quantity, method
         As in :func:`track_array` (an int window or step means a square one).
     max_error : float
@@ -293,6 +293,13 @@ def track(
             raise ValueError(f"{name} must have dims exactly (depth, aline), got {f.dims}")
     ref, dfm = matched(ref, dfm)
     ref, dfm = ref.transpose("depth", "aline"), dfm.transpose("depth", "aline")
+    for name, f in (("reference", ref), ("deformed", dfm)):
+        bad = int(np.size(f) - np.count_nonzero(np.isfinite(f.values)))
+        if bad:
+            raise ValueError(
+                f"{name} must be finite: {bad} NaN or infinite pixels of {f.size} (crop them, "
+                "or use speckle.analysis.track_array, which gives the windows holding them NaN)"
+            )
     pixel, pitch = grid_spacing(ref)
     res = track_array(
         ref.values,
