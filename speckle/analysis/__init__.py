@@ -7,7 +7,13 @@ from .correlation import (
     sample_field,
 )
 from .strain import accumulate_strain, estimate_displacement, estimate_strain
-from .tracking import TRACK_METHODS, interpolate_displacement, interpolate_windows, track, track_array
+from .tracking import (
+    TRACK_METHODS,
+    interpolate_displacement,
+    interpolate_windows,
+    track,
+    track_array,
+)
 
 __all__ = [
     "TRACK_METHODS",

@@ -38,14 +38,14 @@ the spectrum autocorrelation (a triangle) at lag ``R s``: monotonic for any unim
 from __future__ import annotations
 
 import numpy as np
-import xarray as xr
 import scipy.fft as sfft
+import xarray as xr
 from scipy import ndimage, special
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
 from ..conventions import spacing
-from ._common import field_of, matched, parse_window, same_grid
 from ..system.source import index_shift_phase, spectral_index
+from ._common import field_of, matched, parse_window, same_grid
 
 __all__ = [
     "KINDS",

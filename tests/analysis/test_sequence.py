@@ -73,9 +73,12 @@ def test_lazy_streamed_identical_under_schedulers(frames, in_memory, tmp_path, s
 
 def test_distributed_cluster_gives_the_same_numbers(frames, in_memory, tmp_path):
     distributed = pytest.importorskip("distributed")
-    with distributed.LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
-    ) as cluster, distributed.Client(cluster):
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster),
+    ):
         out = speckle.accumulate_strain(
             frames.chunk({"frame": 1}), path=tmp_path / "seq.nc", **kw(frames)
         )

@@ -68,7 +68,9 @@ def test_subpixel_rigid_shifts(scene, shift):
     moved = speckle.bscan(D.translate(scene, shift * PIXEL, wrap=True), source())
     truth = D.pixel_displacement(lambda z, x: np.full(z.shape, shift * PIXEL), ref.depth, ref.aline)
     fast = speckle.track(ref, moved, window=(32, 16), step=(32, 16), truth=truth)
-    slow = speckle.track(ref, moved, window=(32, 16), step=(32, 16), truth=truth, method="reference")
+    slow = speckle.track(
+        ref, moved, window=(32, 16), step=(32, 16), truth=truth, method="reference"
+    )
     err = fast.uz_residual
     assert abs(float(err.mean())) < 0.05
     rms = float(np.sqrt((err**2).mean()))
@@ -79,9 +81,7 @@ def test_subpixel_rigid_shifts(scene, shift):
 
 def test_uniaxial_strain_and_interpolation(scene, strained):
     ref, dfm = strained
-    truth = D.uniaxial_pixel_displacement([0.01], ref.depth.values, ref.aline.values).isel(
-        strain=0
-    )
+    truth = D.uniaxial_pixel_displacement([0.01], ref.depth.values, ref.aline.values).isel(strain=0)
     tr = speckle.track(ref, dfm, truth=truth)
     assert float(np.sqrt((tr.uz_residual**2).mean())) < 0.1
     # the dense field interpolated back: within the same budget of the exact one
