@@ -164,6 +164,8 @@ def _elastography(el: Mapping) -> None:
     images = {"elastography.n_alines": lines}
     if "inclusion" in el:
         images["elastography.inclusion.n_alines"] = int(el["inclusion"]["n_alines"])
+    if "sequence_large" in el and "n_alines" in el["sequence_large"]:
+        images["elastography.sequence_large.n_alines"] = int(el["sequence_large"]["n_alines"])
     if wz < 2:
         raise ValueError(
             f"config key elastography.window = {[wz, wx]}: the depth window must be >= 2 pixels "
