@@ -692,8 +692,6 @@ def _strain_frames(reference, deformed, has_frame, k0, pixel_size, method, windo
     Returns a Dask-backed DataArray (frame, depth, aline) with a lazy ``quality`` coordinate;
     everything is checked before any work.
     """
-    import dask.array as da
-
     if not all(has_frame):
         which = "reference" if has_frame[0] else "deformed"
         raise ValueError(
@@ -724,21 +722,33 @@ def _strain_frames(reference, deformed, has_frame, k0, pixel_size, method, windo
     _options(method, options)
     _check_finite_frames(d1)
     _check_finite_frames(d2)
-    d1 = da.asarray(d1).rechunk({0: 1, 1: -1, 2: -1})
-    d2 = da.asarray(d2).rechunk({0: 1, 1: -1, 2: -1})
-    both = da.map_blocks(
-        _strain_block,
-        d1,
-        d2,
-        k,
-        p,
-        method,
-        (wz, wx),
-        options,
-        dtype=float,
-        new_axis=1,
-        chunks=((1,) * n_frames, (2,), (n,), (m,)),
-    )
+    if _is_dask(d1) or _is_dask(d2):
+        if not (_is_dask(d1) and _is_dask(d2)):
+            raise TypeError(
+                "reference and deformed must both be Dask-backed or both in memory (use "
+                ".chunk({'frame': 1}) on both)"
+            )
+        d1 = d1.rechunk({0: 1, 1: -1, 2: -1})
+        d2 = d2.rechunk({0: 1, 1: -1, 2: -1})
+        both = d1.map_blocks(
+            _strain_block,
+            d2,
+            k,
+            p,
+            method,
+            (wz, wx),
+            options,
+            dtype=float,
+            new_axis=1,
+            chunks=((1,) * n_frames, (2,), (n,), (m,)),
+        )
+    else:
+        both = np.concatenate(
+            [
+                _strain_block(d1[i : i + 1], d2[i : i + 1], k, p, method, (wz, wx), options)
+                for i in range(n_frames)
+            ]
+        )
     frame = reference["frame"] if "frame" in reference.coords else np.arange(n_frames)
     coords = {"frame": frame, **c1}
     out = xr.DataArray(
@@ -1057,11 +1067,14 @@ def accumulate_strain(
 
 
 def _batch_size() -> int:
-    """Pairs computed at once: two per Dask worker thread or process (bounded memory)."""
-    import dask
+    """Pairs computed at once: two per core (bounded memory)."""
+    return max(2, 2 * (os.cpu_count() or 1))
 
-    workers = dask.config.get("num_workers", None) or os.cpu_count() or 1
-    return max(2, 2 * int(workers))
+
+def _is_dask(data) -> bool:
+    """A Dask array (duck-typed: the analysis group does not import Dask; the user's data
+    brings it)."""
+    return hasattr(data, "dask") and hasattr(data, "map_blocks") and hasattr(data, "rechunk")
 
 
 def _scan(data, args, p, batch: int):
@@ -1070,27 +1083,22 @@ def _scan(data, args, p, batch: int):
     The pairs are computed ``batch`` at a time on the active Dask scheduler (numpy input: in
     this process); the scan over material positions runs here, one pair after the other.
     """
-    import dask
-    import dask.array as da
-
     n_frames, n, m = data.shape
     state = _start(n, m)
-    if isinstance(data, da.Array):
+    if _is_dask(data):
         data = data.rechunk({0: 1})
-        fields = da.map_blocks(
+        fields = data[:-1].map_blocks(
             _pair_block,
-            data[:-1],
             data[1:],
             *args,
             dtype=float,
             new_axis=1,
             chunks=((1,) * (n_frames - 1), (3,), (n,), (m,)),
         )
-        blocks = list(fields.to_delayed().ravel())
-        for start in range(0, len(blocks), batch):
-            for block in dask.compute(*blocks[start : start + batch]):
-                state = _advance(state, block[0], p)
-                yield _frame(block[0], state)
+        for start in range(0, n_frames - 1, batch):  # one compute per batch: frames shared
+            for block in fields[start : start + batch].compute():
+                state = _advance(state, block, p)
+                yield _frame(block, state)
     else:
         for i in range(n_frames - 1):
             f = _pair_fields(data[i], data[i + 1], *args)
