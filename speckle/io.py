@@ -43,6 +43,7 @@ __all__ = [
     "open_dataset",
     "stream_to_netcdf",
     "to_netcdf",
+    "write_frames",
 ]
 
 ENGINE = "netcdf4"
@@ -285,3 +286,74 @@ def _distributed_client():
         return default_client()
     except ValueError:
         return None
+
+
+def write_frames(
+    path: str | os.PathLike,
+    frames: Iterator[Mapping[str, np.ndarray]],
+    *,
+    n_frames: int,
+    template: xr.Dataset,
+    progress: bool = False,
+    complevel: int = 1,
+) -> None:
+    """Write a sequence frame by frame to a chunked NetCDF file (one chunk per frame), atomically.
+
+    Memory holds one frame, not the sequence: ``frames`` yields, for each index along
+    ``frame``, a mapping from variable name to its ``(depth, aline)`` array.
+
+    Parameters
+    ----------
+    path : str or path-like
+        Output file (written to a temporary name beside it and renamed when complete).
+    frames : iterator of mappings
+        One mapping per frame, in order, with every variable of ``template``.
+    n_frames : int
+        Number of frames ``frames`` yields.
+    template : xarray.Dataset
+        Coordinates (``frame``, ``depth``, ``aline``, ...), attrs, and the variables' names,
+        dims ``(frame, depth, aline)`` and attrs (their data is not read).
+    progress : bool
+        A text progress bar on stderr.
+    complevel : int
+        zlib level, 0-9.
+    """
+    import netCDF4
+
+    level = int(complevel)
+    if isinstance(complevel, bool) or not 0 <= level <= 9 or level != complevel:
+        raise ValueError(f"complevel must be an integer in [0, 9], got {complevel!r}")
+    skeleton = template.drop_vars(list(template.data_vars))
+    names = list(template.data_vars)
+    shape = tuple(template.sizes[d] for d in ("depth", "aline"))
+    with atomic_path(path) as tmp:
+        skeleton.to_netcdf(tmp, engine=ENGINE)  # coordinates and attrs, the xarray way
+        with netCDF4.Dataset(tmp, "a") as nc:
+            for d, size in template.sizes.items():  # dims without a coordinate variable
+                if d not in nc.dimensions:
+                    nc.createDimension(d, size)
+            out = {}
+            for name in names:
+                var = template[name]
+                out[name] = nc.createVariable(
+                    name,
+                    "f8",
+                    var.dims,
+                    zlib=level > 0,
+                    complevel=max(level, 1),
+                    chunksizes=(1, *shape),
+                    fill_value=np.nan,
+                )
+                out[name].setncatts(netcdf_safe_attrs(var.attrs, name))
+            done = 0
+            for i, fields in enumerate(frames):
+                for name in names:
+                    out[name][i] = np.asarray(fields[name], dtype=float)
+                done = i + 1
+                if progress:
+                    bar = "#" * (40 * done // n_frames)
+                    print(f"\r[{bar:<40}] {done}/{n_frames} frames", end="", file=_stderr())
+            if progress:
+                print(file=_stderr())
+            if done != n_frames:
+                raise ValueError(f"frames yielded {done} frames, expected n_frames={n_frames}")

@@ -21,10 +21,38 @@ import xarray as xr
 
 from ._validate import check_choice, check_int
 
-__all__ = ["SCHEDULERS", "sweep"]
+__all__ = ["SCHEDULERS", "dask_scheduler", "sweep"]
 
 SCHEDULERS = ("synchronous", "threads", "processes", "distributed")
 log = logging.getLogger(__name__)
+
+
+@contextlib.contextmanager
+def dask_scheduler(
+    scheduler: str = "threads", address: str | None = None, n_workers: int | None = None
+):
+    """Context in which Dask computations run on ``scheduler`` (the config's ``dask`` section).
+
+    ``"distributed"``: a ``dask.distributed`` client of the scheduler at ``address``, or of a
+    local cluster of ``n_workers`` single-threaded processes started (and closed) here.
+    """
+    check_choice(scheduler, "scheduler", SCHEDULERS)
+    workers = None if n_workers is None else check_int(n_workers, "n_workers", low=1)
+    if scheduler != "distributed":
+        with dask.config.set(scheduler=scheduler, num_workers=workers):
+            yield
+        return
+    from dask.distributed import Client, LocalCluster
+
+    with contextlib.ExitStack() as stack:
+        if not address:
+            address = stack.enter_context(
+                LocalCluster(
+                    n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
+                )
+            )
+        stack.enter_context(Client(address))
+        yield
 
 
 def _compute(

@@ -31,7 +31,16 @@ __getattr__, __dir__, __all__ = attach(
             "temporal_looks",
             "window_correlation",
         ],
-        "correlation": ["compensate", "correlation_map", "expected_correlation", "pearson"],
+        "correlation": [
+            "compensate",
+            "correlation_array",
+            "correlation_map",
+            "expected_correlation",
+            "oversample_depth",
+            "pearson",
+            "resample_depth",
+            "sample_field",
+        ],
         "filters": ["FILTERS", "despeckle", "filter_available", "frost", "kuan", "lee"],
         "image_files": ["IMAGE_KINDS", "load_image"],
         "image_quality": [
@@ -46,7 +55,13 @@ __getattr__, __dir__, __all__ = attach(
         "measured": ["compare_measured", "load_measured"],
         "statistics": ["contrast_theory", "fit_exponential", "fit_rayleigh", "speckle_contrast"],
         "strain": ["accumulate_strain", "estimate_displacement", "estimate_strain"],
-        "tracking": ["track"],
+        "tracking": [
+            "TRACK_METHODS",
+            "interpolate_displacement",
+            "interpolate_windows",
+            "track",
+            "track_array",
+        ],
         "twin": ["SystemFit", "fit_system"],
     },
 )

@@ -38,22 +38,27 @@ the spectrum autocorrelation (a triangle) at lag ``R s``: monotonic for any unim
 from __future__ import annotations
 
 import numpy as np
+import scipy.fft as sfft
 import xarray as xr
 from scipy import ndimage, special
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
 from ..conventions import spacing
 from ..system.source import index_shift_phase, spectral_index
+from ._common import field_of, matched, parse_window, same_grid
 
 __all__ = [
     "KINDS",
     "carrier_window_factor",
     "compensate",
     "continuum_gamma",
+    "correlation_array",
     "correlation_map",
     "expected_correlation",
     "kernel",
+    "oversample_depth",
     "pearson",
+    "resample_depth",
     "sample_field",
     "two_peak_weights",
 ]
@@ -97,6 +102,87 @@ def sample_field(field: object, positions: object) -> np.ndarray:
     return np.broadcast_to(out, (spec.shape[0], yy.shape[1])).reshape(*batch, y.shape[-1])
 
 
+def oversample_depth(field: np.ndarray, factor: int, axis: int = 0) -> np.ndarray:
+    """Complex A-scans (depth on ``axis``) at ``factor`` samples per pixel, exactly.
+
+    ``A(y) = sum_n F_n exp(-2i pi n y/N)`` (``n = -(N//2) ... N-1-N//2``, as
+    :func:`sample_field`) at ``y = q/factor``: the spectrum zero-padded to ``factor*N`` points.
+    Equals ``field`` at whole pixels. Computed in complex64 for a complex64 ``field``, in
+    complex128 otherwise.
+    """
+    a = np.asarray(field)
+    a = np.moveaxis(a if a.dtype == np.complex64 else a.astype(np.complex128), axis, 0)
+    f = check_int(factor, "oversample", low=1)
+    if f == 1:
+        return np.moveaxis(a, 0, axis)
+    n = a.shape[0]
+    spec = sfft.fft(a, axis=0)  # spec[m] = N F_{-m}: index -n of the model at m (mod N)
+    pad = np.zeros((f * n, *a.shape[1:]), dtype=a.dtype)
+    neg = n // 2  # model indices -1 ... -(N//2) sit at m = 1 ... N//2
+    pos = n - 1 - neg  # model indices 1 ... N-1-N//2 sit at m = N-1 ... N//2+1
+    pad[: neg + 1] = spec[: neg + 1]
+    if pos:
+        pad[-pos:] = spec[n - pos :]
+    return np.moveaxis(sfft.ifft(pad, axis=0) * f, 0, axis)
+
+
+#: Oversampling and Lagrange taps of :func:`resample_depth`.
+RESAMPLE_OVERSAMPLE, RESAMPLE_TAPS = 4, 6
+
+
+def resample_depth(field: object, positions: object) -> np.ndarray:
+    """Complex image ``(depth, aline)`` evaluated at real depth positions, every A-line at once.
+
+    The band-limited interpolant of :func:`sample_field` (periodic in depth with period
+    ``N``), computed fast: the A-lines are oversampled exactly ``RESAMPLE_OVERSAMPLE`` = 4 times
+    (:func:`oversample_depth`) and interpolated there by a 6-point Lagrange polynomial. The
+    relative error is below ``(pi f/4)^6/(6! ...)``-order: about 1e-4 of the peak amplitude for
+    content at the Nyquist frequency ``f = 1/2`` cycle/pixel, 1e-6 at a quarter of it (tested
+    against :func:`sample_field`). Cost ``O(N M log N)`` instead of ``O(N^2 M)``.
+
+    Parameters
+    ----------
+    field : array_like, shape (N, M)
+        Complex image (axis 0 = depth in pixels).
+    positions : array_like, shape (N, M)
+        Depth position (pixels) at which pixel ``(q, j)`` takes its value from A-line ``j``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, M)
+    """
+    a = np.asarray(field)
+    if a.ndim != 2 or not np.iscomplexobj(a):
+        raise ValueError(f"field must be a complex (depth, aline) image, got shape {a.shape}")
+    y = as_finite_array(positions, "positions")
+    if y.shape != a.shape:
+        raise ValueError(f"positions must have the field's shape {a.shape}, got {y.shape}")
+    f = RESAMPLE_OVERSAMPLE
+    # single precision: 1e-7 relative, far below the interpolation error
+    fine = oversample_depth(np.ascontiguousarray(a.T, dtype=np.complex64), f, axis=1).ravel()
+    nf = f * a.shape[0]
+    yf = np.mod(y.T * f, nf)
+    i0 = np.floor(yf).astype(np.intp)
+    t = (yf - i0).astype(np.float32)
+    start = (np.arange(a.shape[1]) * nf)[:, None]  # flat index of each A-line's first sample
+    nodes = list(range(-(RESAMPLE_TAPS // 2 - 1), RESAMPLE_TAPS // 2 + 1))  # -2 ... 3
+    # Lagrange basis w_k(t) = prod_{m != k} (t - m)/(k - m), from prefix and suffix products
+    d = [t - np.float32(m) for m in nodes]
+    left = [np.ones_like(t)]
+    for x in d[:-1]:
+        left.append(left[-1] * x)
+    right = np.ones_like(t)
+    out = np.zeros(t.shape, dtype=np.complex128)
+    for i in range(len(nodes) - 1, -1, -1):
+        k = nodes[i]
+        scale = 1.0 / np.prod([k - m for m in nodes if m != k])
+        w = left[i] * right * np.float32(scale)
+        out += w * np.take(fine, (i0 + k) % nf + start)  # periodic in depth, as sample_field
+        right = right * d[i]
+    out = out.T
+    return out
+
+
 def _horner(coef: np.ndarray, w: np.ndarray) -> np.ndarray:
     """``sum_m coef[..., m] w^m`` by Horner's rule (stable for ``|w| = 1``).
 
@@ -107,19 +193,6 @@ def _horner(coef: np.ndarray, w: np.ndarray) -> np.ndarray:
         acc *= w
         acc += coef[:, m, None]
     return acc
-
-
-def _field_of(data: xr.Dataset | xr.DataArray) -> xr.DataArray:
-    if isinstance(data, xr.Dataset):
-        if "field" not in data:
-            raise TypeError(
-                "B-scan dataset must hold a complex 'field' (see speckle.imaging.bscan)"
-            )
-        field = data["field"]  # attrs merged on a copy: the caller's dataset is not modified
-        return field.assign_attrs({**data.attrs, **field.attrs})
-    if not isinstance(data, xr.DataArray):
-        raise TypeError(f"expected a B-scan Dataset or DataArray, got {type(data).__name__}")
-    return data
 
 
 def compensate(
@@ -151,7 +224,7 @@ def compensate(
         Complex field ``A'(q + u_z/p)`` (times ``exp(-2i k0 u_z)``); with a lateral displacement
         each pixel is taken from the A-line nearest to ``x + u_x`` (NaN beyond the scan).
     """
-    field = _field_of(deformed)
+    field = field_of(deformed)
     from ..scene.deformation import (
         check_field,  # local import: deformation imports nothing from here
     )
@@ -170,7 +243,7 @@ def compensate(
         )
     for name in ("uz", "ux"):
         if name in displacement:
-            _same_grid(field, displacement[name], ("deformed", f"displacement {name}"))
+            same_grid(field, displacement[name], ("deformed", f"displacement {name}"))
     n = int(field.attrs["n_pixels"])
     h = float(field.attrs["depth_range"])
     k0 = float(field.attrs["k0"])
@@ -205,41 +278,6 @@ def _lateral(field: xr.DataArray, ux: xr.DataArray) -> xr.DataArray:
     return xr.DataArray(taken, dims=dims, coords=field.coords).transpose(*field.dims)
 
 
-def _same_grid(x: xr.DataArray, y: xr.DataArray, names: tuple[str, str]) -> None:
-    """``ValueError`` unless every dim ``x`` and ``y`` share has the same size and coordinates."""
-    a_name, b_name = names
-    for d in [d for d in x.dims if d in y.dims]:
-        if x.sizes[d] != y.sizes[d]:
-            raise ValueError(
-                f"{a_name} and {b_name} differ along {d!r}: {x.sizes[d]} vs {y.sizes[d]} "
-                f"values; put both on the same grid or select the same region of both "
-                f"(e.g. .isel({d}=slice(...)) on each)"
-            )
-        if d in x.coords and d in y.coords:
-            a, b = np.asarray(x[d].values), np.asarray(y[d].values)
-            if not np.array_equal(a, b):
-                i = int(np.flatnonzero(a != b)[0])
-                raise ValueError(
-                    f"{a_name} and {b_name} have different {d!r} coordinates (first difference "
-                    f"at index {i}: {a[i]!r} vs {b[i]!r}); put both on the same grid or select "
-                    "the same region of both"
-                )
-
-
-def _matched(x: xr.DataArray, y: xr.DataArray) -> tuple[xr.DataArray, xr.DataArray]:
-    """Broadcast two images after checking they cover the same pixels (else ``ValueError``).
-
-    Both must have ``depth`` and ``aline`` dims; every dim they share must have the same size
-    and the same coordinate values. Nothing is aligned, padded or cut silently.
-    """
-    for name, f in (("reference", x), ("deformed", y)):
-        missing = [d for d in ("depth", "aline") if d not in f.dims]
-        if missing:
-            raise ValueError(f"{name} must have dims 'depth' and 'aline'; got dims {f.dims}")
-    _same_grid(x, y, ("reference", "deformed"))
-    return xr.broadcast(x, y)
-
-
 def _quantity(field: xr.DataArray, kind: str) -> xr.DataArray:
     if kind == "intensity":
         return abs(field) ** 2
@@ -268,9 +306,9 @@ def pearson(
         Dims averaged over; the others (e.g. ``strain``) are kept.
     """
     check_choice(kind, "kind", KINDS)
-    x = _quantity(_field_of(reference), kind)
-    y = _quantity(_field_of(deformed), kind)
-    x, y = _matched(x, y)
+    x = _quantity(field_of(reference), kind)
+    y = _quantity(field_of(deformed), kind)
+    x, y = matched(x, y)
     ok = np.isfinite(abs(x)) & np.isfinite(abs(y))
     x, y = x.where(ok), y.where(ok)
     dx = x - x.mean(dims)
@@ -282,17 +320,62 @@ def pearson(
     return r.assign_attrs(long_name=f"{kind} correlation coefficient", units="1", kind=kind)
 
 
-def _window(window: object, name: str = "window", low: int = 2) -> tuple[int, int]:
-    """``(depth, aline)`` pixel counts from an int or a pair (depth >= ``low``, aline >= 1)."""
-    w = np.atleast_1d(np.asarray(window, dtype=object))
-    if w.size == 1:
-        w = np.repeat(w, 2)
-    if w.size != 2 or w.ndim != 1:
-        raise ValueError(f"{name} must be an int or (depth, aline) pixels, got {window!r}")
-    return (
-        check_int(w[0], f"{name}[depth]", low=low),
-        check_int(w[1], f"{name}[aline]", low=1),
-    )
+def correlation_array(
+    x: np.ndarray,
+    y: np.ndarray,
+    window: tuple[int, int],
+    *,
+    axes: tuple[int, int] = (0, 1),
+    modulus: bool = False,
+) -> np.ndarray:
+    """Sliding-window Pearson correlation of two arrays (numpy core of :func:`correlation_map`).
+
+    Parameters
+    ----------
+    x, y : numpy.ndarray
+        Real or complex arrays of the same shape (NaN pixels allowed).
+    window : (int, int)
+        Window (pixels) along ``axes`` (depth, aline).
+    axes : (int, int)
+        Axes of depth and aline.
+    modulus : bool
+        Complex data: modulus of the complex coefficient (else its real part).
+
+    Returns
+    -------
+    numpy.ndarray
+        Coefficient at each window centre (pixel ``c`` holds the window starting at
+        ``c - w//2``); NaN where the window does not fit or holds a NaN pixel of either array.
+    """
+    wz, wx = window
+    size = [1] * x.ndim
+    size[axes[0]], size[axes[1]] = wz, wx
+    xv, yv = x, y
+    bad = ~(np.isfinite(xv) & np.isfinite(yv))
+    if bad.any():  # zero them so that they do not spread through the running sums
+        xv, yv = np.where(bad, 0, xv), np.where(bad, 0, yv)
+
+    def local_mean(v: np.ndarray) -> np.ndarray:
+        if np.iscomplexobj(v):
+            return local_mean(v.real) + 1j * local_mean(v.imag)
+        return ndimage.uniform_filter(v, size=size, mode="nearest")
+
+    mx, my = local_mean(xv), local_mean(yv)
+    cov = local_mean(xv * np.conj(yv)) - mx * np.conj(my)
+    vx = local_mean(np.abs(xv) ** 2) - np.abs(mx) ** 2
+    vy = local_mean(np.abs(yv) ** 2) - np.abs(my) ** 2
+    with np.errstate(invalid="ignore", divide="ignore"):
+        r = (np.abs(cov) if modulus else cov.real) / np.sqrt(vx * vy)
+    valid = np.zeros(x.shape, bool)
+    sl = [slice(None)] * x.ndim
+    sl[axes[0]] = slice(wz // 2, x.shape[axes[0]] - (wz - 1) // 2)
+    sl[axes[1]] = slice(wx // 2, x.shape[axes[1]] - (wx - 1) // 2)
+    valid[tuple(sl)] = True
+    if bad.any():  # windows holding a NaN pixel: their count of NaN pixels is >= 1
+        valid &= ndimage.uniform_filter(bad.astype(float), size=size, mode="constant") < (
+            0.5 / (wz * wx)
+        )
+    return np.where(valid, r, np.nan)
 
 
 def correlation_map(
@@ -322,43 +405,17 @@ def correlation_map(
         (of either image), and only there.
     """
     check_choice(kind, "kind", KINDS)
-    wz, wx = _window(window)
-    x = _quantity(_field_of(reference), kind)
-    y = _quantity(_field_of(deformed), kind)
-    x, y = _matched(x, y)
+    wz, wx = parse_window(window)
+    x = _quantity(field_of(reference), kind)
+    y = _quantity(field_of(deformed), kind)
+    x, y = matched(x, y)
     y = y.transpose(*x.dims)
     if x.sizes["depth"] < wz or x.sizes["aline"] < wx:
         raise ValueError(
             f"window {(wz, wx)} is larger than the image {(x.sizes['depth'], x.sizes['aline'])}"
         )
-    size = [1] * x.ndim
-    size[x.dims.index("depth")], size[x.dims.index("aline")] = wz, wx
-    xv, yv = x.values, y.values
-    bad = ~(np.isfinite(xv) & np.isfinite(yv))
-    if bad.any():  # zero them so that they do not spread through the running sums
-        xv, yv = np.where(bad, 0, xv), np.where(bad, 0, yv)
-
-    def local_mean(v: np.ndarray) -> np.ndarray:
-        if np.iscomplexobj(v):
-            return local_mean(v.real) + 1j * local_mean(v.imag)
-        return ndimage.uniform_filter(v, size=size, mode="nearest")
-
-    mx, my = local_mean(xv), local_mean(yv)
-    cov = local_mean(xv * np.conj(yv)) - mx * np.conj(my)
-    vx = local_mean(np.abs(xv) ** 2) - np.abs(mx) ** 2
-    vy = local_mean(np.abs(yv) ** 2) - np.abs(my) ** 2
-    with np.errstate(invalid="ignore", divide="ignore"):
-        r = (np.abs(cov) if kind == "complex" else cov.real) / np.sqrt(vx * vy)
-    valid = np.zeros(x.shape, bool)
-    sl = [slice(None)] * x.ndim
-    sl[x.dims.index("depth")] = slice(wz // 2, x.sizes["depth"] - (wz - 1) // 2)
-    sl[x.dims.index("aline")] = slice(wx // 2, x.sizes["aline"] - (wx - 1) // 2)
-    valid[tuple(sl)] = True
-    if bad.any():  # windows holding a NaN pixel: their count of NaN pixels is >= 1
-        valid &= ndimage.uniform_filter(bad.astype(float), size=size, mode="constant") < (
-            0.5 / (wz * wx)
-        )
-    r = np.where(valid, r, np.nan)
+    axes = (x.dims.index("depth"), x.dims.index("aline"))
+    r = correlation_array(x.values, y.values, (wz, wx), axes=axes, modulus=kind == "complex")
     return xr.DataArray(
         r,
         dims=x.dims,

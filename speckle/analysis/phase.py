@@ -85,11 +85,17 @@ def choose_lag(image: np.ndarray, *, max_bias: float = DEFAULT_MAX_BIAS, max_lag
     """
     eps = check_real(max_bias, "max_bias", low=0, high=1, low_inclusive=False, high_inclusive=False)
     cap = min(check_int(max_lag, "max_lag", low=1), max(1, image.shape[0] // 4))
-    rho = depth_autocorrelation(image, cap)
-    ok = np.flatnonzero(rho[1:] ** 2 <= eps)
-    if ok.size == 0:
-        raise ValueError(
-            f"the field stays correlated (|rho| = {rho[-1]:.3f}) up to lag {cap} pixels; give "
-            "lag= explicitly or a deeper image"
-        )
-    return int(ok[0] + 1)
+    a = np.asarray(image)
+    rows = np.sum(np.abs(a) ** 2, axis=1)  # power per depth row: each lag's norms from it
+    total, n = rows.sum(), a.shape[0]
+    head = total - np.concatenate([[0.0], np.cumsum(rows[::-1])])  # sum of rows[: n - lag]
+    tail = total - np.concatenate([[0.0], np.cumsum(rows)])  # sum of rows[lag:]
+    rho = 1.0
+    for lag in range(1, cap + 1):  # the first lag that decorrelates: later lags are not needed
+        rho = np.abs(np.vdot(a[lag:], a[: n - lag])) / np.sqrt(head[lag] * tail[lag])
+        if rho**2 <= eps:
+            return lag
+    raise ValueError(
+        f"the field stays correlated (|rho| = {rho:.3f}) up to lag {cap} pixels; give "
+        "lag= explicitly or a deeper image"
+    )

@@ -59,18 +59,19 @@ Every method returns NaN where its window does not fit in the image or it has no
 
 from __future__ import annotations
 
+import os
 import warnings
 
 import numpy as np
 import xarray as xr
 from scipy import ndimage
-from scipy.interpolate import RegularGridInterpolator
 
 from .._validate import check_choice, check_int, check_real
 from ..system.source import spectrum
-from .correlation import compensate, correlation_map, expected_correlation
+from ._common import parse_window
+from .correlation import correlation_array, expected_correlation, resample_depth
 from .phase import DEFAULT_MAX_BIAS, choose_lag, depth_autocorrelation
-from .tracking import track
+from .tracking import interpolate_windows, track_array
 
 __all__ = [
     "DEFAULT_METHOD",
@@ -103,8 +104,17 @@ OPTIONS = {
         "align": "auto",
     },
     "wls": {"lag": None, "max_bias": DEFAULT_MAX_BIAS, "min_quality": 0.5, "align": "auto"},
-    "tracking": {"track_window": 32, "step": 4, "upsample": 20, "oversample": 2},
-    "correlation": {"track_window": 32, "step": 4, "upsample": 20, "oversample": 2},
+    "tracking": {"track_window": 32, "step": 8, "upsample": 20, "oversample": 2},
+    "correlation": {"track_window": 32, "step": 8, "upsample": 20, "oversample": 2},
+}
+#: Tracking that aligns the pair for the phase methods (``align``): window (depth, aline)
+#: pixels, step (depth, aline) pixels; the displacement field is smooth, so coarse steps do.
+ALIGN_TRACKING = {
+    "window": (32, 8),
+    "step": (16, 8),
+    "upsample": 20,
+    "oversample": 2,
+    "lateral": False,
 }
 
 
@@ -140,8 +150,12 @@ def _as_images(reference: object, deformed: object) -> tuple[np.ndarray, np.ndar
             )
         if values.ndim != 2:
             raise ValueError(f"{name} must be 2-D (depth, aline), got shape {values.shape}")
-        if not np.all(np.isfinite(values)):
-            raise ValueError(f"{name} holds NaN or infinite values")
+        finite = np.isfinite(values)
+        if not finite.all():
+            raise ValueError(
+                f"{name} holds {int(finite.size - finite.sum())} NaN or infinite pixels of "
+                f"{finite.size}; the phase methods cannot bridge them (crop or fill them first)"
+            )
         arrays.append(values.astype(np.complex128, copy=False))
     if arrays[0].shape != arrays[1].shape:
         raise ValueError(
@@ -158,22 +172,8 @@ def _as_images(reference: object, deformed: object) -> tuple[np.ndarray, np.ndar
 
 
 def _check_window(window: object, default: tuple[int, int], shape: tuple[int, int]):
-    """(depth, aline) window in pixels, checked against the image size."""
-    if window is None:
-        window = default
-    w = np.atleast_1d(np.asarray(window, dtype=object))
-    if w.size == 1:
-        w = np.array([w[0], 1], dtype=object)
-    if w.size != 2:
-        raise ValueError(f"window must be an int or (depth, aline) pixels, got {window!r}")
-    wz = check_int(w[0], "window[depth]", low=2)
-    wx = check_int(w[1], "window[aline]", low=1)
-    if wz > shape[0] or wx > shape[1]:
-        raise ValueError(
-            f"window {(wz, wx)} (depth, aline) is larger than the image {shape}; window must "
-            f"be at most {shape} pixels"
-        )
-    return wz, wx
+    """(depth, aline) window in pixels (an int is square), checked against the image size."""
+    return parse_window(default if window is None else window, shape=shape)
 
 
 def _options(method: str, options: dict) -> dict:
@@ -183,7 +183,20 @@ def _options(method: str, options: dict) -> dict:
         raise TypeError(
             f"method {method!r} takes options {sorted(allowed)}; got unknown {sorted(unknown)}"
         )
-    return {**allowed, **options}
+    opts = {**allowed, **options}
+    if "min_quality" in opts:
+        opts["min_quality"] = check_real(opts["min_quality"], "min_quality", low=0, high=1)
+    if "max_bias" in opts:
+        check_real(
+            opts["max_bias"], "max_bias", low=0, high=1, low_inclusive=False, high_inclusive=False
+        )
+    if "wrap_check" in opts and not isinstance(opts["wrap_check"], (bool, np.bool_)):
+        raise TypeError(f"wrap_check must be True or False, got {opts['wrap_check']!r}")
+    if "align" in opts and not (
+        isinstance(opts["align"], (bool, np.bool_)) or opts["align"] == "auto"
+    ):
+        raise ValueError(f"align must be True, False or 'auto', got {opts['align']!r}")
+    return opts
 
 
 # --------------------------------------------------------------------------------------------
@@ -191,14 +204,46 @@ def _options(method: str, options: dict) -> dict:
 # --------------------------------------------------------------------------------------------
 
 
-def _box(x: np.ndarray, wz: int, wx: int) -> np.ndarray:
-    """Sum over the (wz, wx) window starting at ``c - w//2``; NaN where it leaves the image."""
-    if np.iscomplexobj(x):
-        return _box(x.real, wz, wx) + 1j * _box(x.imag, wz, wx)
-    s = ndimage.uniform_filter(x, size=(wz, wx), mode="constant") * (wz * wx)
-    valid = np.zeros(x.shape, bool)
-    valid[wz // 2 : x.shape[0] - (wz - 1) // 2, wx // 2 : x.shape[1] - (wx - 1) // 2] = True
-    return np.where(valid, s, np.nan)
+def _box(x: np.ndarray, wz: int, wx: int, n_out: int | None = None, offset: int = 0):
+    """Sum over the (wz, wx) window starting at ``c - w//2``; NaN where it leaves the image.
+
+    A running sum in depth (cumulative sum and one difference: one pass for real and complex
+    data alike), then along aline. With ``n_out``, the sums are placed ``offset`` rows lower in
+    an ``n_out``-row array (NaN elsewhere), without a copy.
+    """
+    n, m = x.shape
+    dtype = np.result_type(x.dtype, np.float64)
+    out = np.empty((n if n_out is None else n_out, m), dtype=dtype)
+    if wz > n or wx > m:
+        out.fill(np.nan)
+        return out
+    if wz == 1:
+        depth = x
+    elif not np.isfinite(x).all():  # a running sum would carry a NaN down the whole column
+        depth = np.lib.stride_tricks.sliding_window_view(x, wz, axis=0).sum(axis=-1)
+    else:
+        c = np.empty((n + 1, m), dtype=dtype)
+        c[0] = 0
+        np.cumsum(x, axis=0, out=c[1:])
+        depth = c[wz:] - c[:-wz]  # rows i .. i+wz-1, i = 0 .. n-wz
+    k = m - wx + 1
+    r0 = wz // 2 + offset
+    target = out[r0 : r0 + depth.shape[0], wx // 2 : wx // 2 + k]
+    if wx == 1:
+        target[...] = depth
+    elif wx <= 3 or not np.isfinite(depth).all():
+        np.add(depth[:, :k], depth[:, 1 : 1 + k], out=target)
+        for j in range(2, wx):
+            target += depth[:, j : j + k]
+    else:
+        c = np.cumsum(depth, axis=1)
+        target[:, 0] = c[:, wx - 1]
+        np.subtract(c[:, wx:], c[:, : k - 1], out=target[:, 1:])
+    out[:r0] = np.nan
+    out[r0 + depth.shape[0] :] = np.nan
+    out[r0 : r0 + depth.shape[0], : wx // 2] = np.nan
+    out[r0 : r0 + depth.shape[0], wx // 2 + k :] = np.nan
+    return out
 
 
 def _place(values: np.ndarray, offset: int, n: int) -> np.ndarray:
@@ -241,25 +286,26 @@ def _lag(a1: np.ndarray, opts: dict) -> int:
     return check_int(opts["lag"], "lag", low=1, high=a1.shape[0] - 2)
 
 
-def _four_product_sums(a1, a2, lag, wz, wx):
-    """Window sums of ``C_L``, ``|C_L|`` and the two autocorrelation terms, at row centres."""
+def _four_product_sums(a1, a2, lag, wz, wx, terms=("C", "absC", "R1", "R2")):
+    """Window sums of ``C_L`` and, as asked by ``terms``, ``|C_L|`` and the two
+    autocorrelation terms, at row centres."""
     n = a1.shape[0]
     x1, y1, x2, y2 = a1[:-lag], a1[lag:], a2[:-lag], a2[lag:]
     c = x1 * np.conj(x2) * np.conj(y1) * y2
-    sums = {
-        "C": _box(c, wz, wx),
-        "absC": _box(np.abs(c), wz, wx),
-        "R1": _box(x1 * np.conj(y1), wz, wx),
-        "R2": _box(x2 * np.conj(y2), wz, wx),
+    make = {
+        "C": lambda: c,
+        "absC": lambda: np.abs(c),
+        "R1": lambda: x1 * np.conj(y1),
+        "R2": lambda: x2 * np.conj(y2),
     }
-    count = wz * wx
-    return {k: _place(v, lag // 2, n) for k, v in sums.items()}, count
+    sums = {k: _box(make[k](), wz, wx, n_out=n, offset=lag // 2) for k in terms}
+    return sums, wz * wx
 
 
 def _vector(a1, a2, k0, p, wz, wx, opts):
     lag = _lag(a1, opts)
-    a2 = _aligned(a1, a2, k0, p, opts)
-    s, _ = _four_product_sums(a1, a2, lag, wz, wx)
+    a2 = _aligned(a1, a2, p, opts)
+    s, _ = _four_product_sums(a1, a2, lag, wz, wx, ("C", "absC"))
     phase = np.angle(s["C"])
     with np.errstate(invalid="ignore", divide="ignore"):
         quality = np.abs(s["C"]) / s["absC"]
@@ -267,7 +313,7 @@ def _vector(a1, a2, k0, p, wz, wx, opts):
         # the lag-1 phase wraps only at 1/(2R); scaled by L and by its known low bias
         # 1 + rho(1)^2 (image autocorrelation) it picks the 2 pi branch of the lag-L phase
         # (multi-lag unwrapping); a branch error needs a predictor error > pi
-        s1, _ = _four_product_sums(a1, a2, 1, wz, wx)
+        s1, _ = _four_product_sums(a1, a2, 1, wz, wx, ("C",))
         rho1 = depth_autocorrelation(a1, 1)[1]
         predictor = lag * np.angle(s1["C"]) * (1 + rho1**2)
         phase = phase + 2 * np.pi * np.round((predictor - phase) / (2 * np.pi))
@@ -322,7 +368,7 @@ def _fit_coherence(phase, w, slope, wz, wx):
 
 def _wls(a1, a2, k0, p, wz, wx, opts):
     lag = _lag(a1, opts)
-    a2 = _aligned(a1, a2, k0, p, opts)
+    a2 = _aligned(a1, a2, p, opts)
     phase, _, w = _unwrapped_phase(a1, a2, lag)
     slope = _pooled_slope(phase, w, wz, wx)
     strain = -slope / (2 * k0 * p)
@@ -330,55 +376,57 @@ def _wls(a1, a2, k0, p, wz, wx, opts):
     quality = np.where(np.isfinite(slope), quality, np.nan)
     # unwrapping guard: the fitted phase step per pixel must agree (within pi/4) with the
     # complex-averaged lag-1 step (Gaussian cross term removed), which needs no unwrapping
-    s1, count = _four_product_sums(a1, a2, 1, wz, wx)
+    s1, count = _four_product_sums(a1, a2, 1, wz, wx, ("C", "R1", "R2"))
     step = np.angle(s1["C"] - s1["R1"] * np.conj(s1["R2"]) / count)
     unwrap_failed = np.abs(np.angle(np.exp(1j * (step - slope)))) > np.pi / 4
     strain = np.where((quality >= opts["min_quality"]) & ~unwrap_failed, strain, np.nan)
     return strain, quality, {"lag": lag}
 
 
-def _image(a: np.ndarray, k0: float, p: float) -> xr.DataArray:
-    """A (depth, aline) array as the labelled field speckle.track / compensate expect."""
-    n = a.shape[0]
-    return xr.DataArray(
-        a,
-        dims=("depth", "aline"),
-        coords={"depth": np.arange(n) * p, "aline": np.arange(a.shape[1], dtype=float)},
-        attrs={"n_pixels": n, "depth_range": n * p, "k0": k0},
-    )
+def _tracked(a1, a2, window, step, upsample, oversample, lateral=True, outside="nan"):
+    """Tracked axial displacement (pixels) and 1 - registration error at every pixel.
 
-
-def _tracked(a1, a2, k0, p, wx, opts):
-    """Tracked axial displacement (µm) and 1 - registration error at every pixel (NaN outside)."""
-    tw = check_int(opts["track_window"], "track_window", low=4, high=a1.shape[0])
-    step = check_int(opts["step"], "step", low=1, high=tw)
-    tr = track(
-        _image(a1, k0, p),
-        _image(a2, k0, p),
-        window=(tw, wx),
-        step=(step, 1),
-        upsample=check_int(opts["upsample"], "upsample", low=1),
-        oversample=check_int(opts["oversample"], "oversample", low=1),
+    :func:`speckle.analysis.tracking.track_array` on ``window`` (depth, aline) windows every
+    ``step`` pixels, interpolated bilinearly to every pixel
+    (:func:`speckle.analysis.tracking.interpolate_windows`); beyond the outer window centres
+    NaN (``outside="nan"``) or the nearest centre's value (``"nearest"``).
+    """
+    tr = track_array(
+        a1,
+        a2,
+        window=window,
+        step=step,
+        upsample=upsample,
+        oversample=oversample,
+        lateral=lateral,
     )
-    zc = tr.depth.values / p
-    xc = tr.aline.values
     qz, qx = np.arange(a1.shape[0], dtype=float), np.arange(a1.shape[1], dtype=float)
     out = []
-    for values in (tr["uz"].values, 1.0 - tr["registration_error"].values):
-        if len(xc) == 1:
-            xs, vals = np.array([xc[0] - 0.5, xc[0] + 0.5]), np.repeat(values, 2, axis=1)
-        else:
-            xs, vals = xc, values
-        f = RegularGridInterpolator((zc, xs), vals, bounds_error=False, fill_value=np.nan)
-        pts = np.stack(np.meshgrid(qz, qx, indexing="ij"), axis=-1)
-        out.append(f(pts))
-    return out[0], out[1], tw
+    for values in (tr["uz"], 1.0 - tr["error"]):
+        out.append(
+            interpolate_windows(
+                values, tr["centre_depth"], tr["centre_aline"], qz, qx, outside=outside
+            )
+        )
+    return out[0], out[1], tr
+
+
+def _track_options(a1, wx, opts):
+    tw = check_int(opts["track_window"], "track_window", low=4, high=a1.shape[0])
+    step = check_int(opts["step"], "step", low=1, high=tw)
+    return {
+        "window": (tw, wx),
+        "step": (step, max(1, wx // 2)),
+        "upsample": check_int(opts["upsample"], "upsample", low=1),
+        "oversample": check_int(opts["oversample"], "oversample", low=1),
+    }
 
 
 def _tracking(a1, a2, k0, p, wz, wx, opts):
-    uz, quality, tw = _tracked(a1, a2, k0, p, wx, opts)
-    strain = -_pooled_slope(uz, np.ones_like(uz), wz, 1) / p
-    return strain, quality, {"track_window": tw}
+    kw = _track_options(a1, wx, opts)
+    uz, quality, _ = _tracked(a1, a2, **kw)
+    strain = -_pooled_slope(uz, np.ones_like(uz), wz, 1)
+    return strain, quality, {"track_window": kw["window"][0]}
 
 
 def _measured_spectrum(a1: np.ndarray, k0: float, p: float) -> xr.DataArray:
@@ -407,64 +455,94 @@ def correlation_theory(spectrum: xr.DataArray, num: int = 81) -> xr.DataArray:
     return th.isel(strain=slice(0, stop))
 
 
-def _compensated(a1, a2, k0, p, wx, opts):
-    """Deformed image resampled at the tracked displacement (carrier kept), and coverage."""
-    uz, _, _ = _tracked(a1, a2, k0, p, wx, opts)
-    covered = np.isfinite(uz)
-    filled = np.where(covered, uz, 0.0)
-    for j in range(uz.shape[1]):  # constant extrapolation, only for the compensation
-        col = uz[:, j]
-        ok = np.flatnonzero(np.isfinite(col))
-        if ok.size:
-            filled[:, j] = np.interp(np.arange(col.size), ok, col[ok])
-    ref, dfm = _image(a1, k0, p), _image(a2, k0, p)
-    disp = xr.Dataset({"uz": (("depth", "aline"), filled)}, coords=ref.coords)
-    return compensate(dfm, disp, carrier=False).values, covered
+def _resampled(a2, uz_pixels):
+    """The deformed image taken where each reference pixel's material went,
+    ``A2(q + u(q))`` (envelope only: the carrier ``exp(2i k0 u)`` of the moved scatterers and so
+    the strain phase are kept)."""
+    q = np.arange(a2.shape[0], dtype=float)[:, None]
+    return resample_depth(a2, q + uz_pixels)
 
 
-def _aligned(a1, a2, k0, p, opts):
+def _align_tracking(a1: np.ndarray) -> dict:
+    """:data:`ALIGN_TRACKING` fitted to the image (windows no larger than the image)."""
+    n, m = a1.shape
+    wz = min(ALIGN_TRACKING["window"][0], n)
+    wx = min(ALIGN_TRACKING["window"][1], m)
+    sz = min(ALIGN_TRACKING["step"][0], wz)
+    sx = min(ALIGN_TRACKING["step"][1], wx)
+    return {**ALIGN_TRACKING, "window": (wz, wx), "step": (sz, sx)}
+
+
+def _alignment(a1, a2):
+    """Tracked displacement (pixels) at every pixel for the alignment (nearest-centre values
+    beyond the outer windows; failed windows filled from their neighbours), and the largest
+    row median of its magnitude."""
+    uz, _, tr = _tracked(a1, a2, outside="nearest", **_align_tracking(a1))
+    uz, _ = _alignment_fill(uz)  # windows without texture: filled from their neighbours
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN rows
+        rows = np.nanmedian(np.abs(tr["uz"]), axis=1)
+        grad = np.abs(np.diff(tr["uz"], axis=0) / np.diff(tr["centre_depth"])[:, None])
+    reach = float(np.nanmax(rows)) if np.isfinite(rows).any() else 0.0
+    steepest = float(np.nanmax(grad)) if np.isfinite(grad).any() else np.inf
+    return uz, reach, steepest
+
+
+def _aligned(a1, a2, p, opts, alignment=None):
     """With ``align``: the deformed image resampled where the tracked displacement moved each
-    reference pixel (envelope only; the carrier ``exp(2i k0 u)`` and so the strain phase are
-    kept), so displacements beyond the speckle size no longer decorrelate the pair."""
+    reference pixel, so displacements beyond the speckle size no longer decorrelate the pair."""
     if not opts["align"]:
         return a2
-    return _compensated(a1, a2, k0, p, min(8, a1.shape[1]), OPTIONS["tracking"])[0]
+    uz = _alignment(a1, a2)[0] if alignment is None else alignment
+    return _resampled(a2, uz)
 
 
-#: ``align="auto"`` aligns when the displacement implied by a first, unaligned estimate exceeds
-#: this many pixels (the field correlation of a Gaussian-spectrum pair falls to ~0.9 at 0.5 px).
+#: ``align="auto"`` aligns when the tracked displacement (row median of the window estimates)
+#: exceeds this many pixels somewhere (the field correlation of a Gaussian-spectrum pair falls
+#: to ~0.9 at 0.5 px).
 AUTO_ALIGN_PIXELS = 0.5
 
 
 def _auto_aligned(method, a1, a2, k0, p, wz, wx, opts):
-    """Unaligned estimate; if its integrated displacement ``u(z) = -int s dz`` (row medians,
-    from the probe at the top) reaches :data:`AUTO_ALIGN_PIXELS`, re-estimate aligned."""
-    first = _METHOD_FUNCS[method](a1, a2, k0, p, wz, wx, {**opts, "align": False})
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN rows (edges) stay NaN
-        rows = np.nanmedian(first[0], axis=1) if np.isfinite(first[0]).any() else None
-    if rows is not None and np.isfinite(rows).any():
-        q = np.arange(rows.size)
-        ok = np.isfinite(rows)
-        u_pixels = np.abs(np.cumsum(np.interp(q, q[ok], rows[ok])))
-        need = bool(u_pixels.max() > AUTO_ALIGN_PIXELS) or ok.mean() < 0.5
-    else:
-        need = True
-    if not need:
-        return first[0], first[1], {**first[2], "aligned": 0}
-    out = _METHOD_FUNCS[method](a1, a2, k0, p, wz, wx, {**opts, "align": True})
+    """Track once (coarse windows); align only if the displacement reaches
+    :data:`AUTO_ALIGN_PIXELS`, then estimate."""
+    uz, reach, steepest = _alignment(a1, a2)
+    if method == "vector" and opts["wrap_check"]:
+        # the lag-L phase wraps at |s| = 1/(2 R L) (R = k0 p / pi); far below it (half, with
+        # the tracked strain's noise of ~1e-3) the multi-lag check cannot change a branch
+        lag = _lag(a1, opts)
+        if steepest < 0.5 * np.pi / (2 * k0 * p * lag):
+            opts = {**opts, "wrap_check": False, "lag": lag}
+    if reach <= AUTO_ALIGN_PIXELS:
+        out = _METHOD_FUNCS[method](a1, a2, k0, p, wz, wx, {**opts, "align": False})
+        return out[0], out[1], {**out[2], "aligned": 0}
+    a2 = _resampled(a2, uz)
+    out = _METHOD_FUNCS[method](a1, a2, k0, p, wz, wx, {**opts, "align": False})
     return out[0], out[1], {**out[2], "aligned": 1}
 
 
 def _correlation(a1, a2, k0, p, wz, wx, opts):
-    comp, covered = _compensated(a1, a2, k0, p, wx, opts)
-    ref = _image(a1, k0, p)
-    r = correlation_map(ref, _image(comp, k0, p), window=(wz, wx), kind="amplitude").values
+    uz, _, _ = _tracked(a1, a2, **_track_options(a1, wx, opts))
+    covered = np.isfinite(uz)
+    filled, _ = _alignment_fill(uz)
+    comp = _resampled(a2, filled)
+    r = correlation_array(np.abs(a1), np.abs(comp), (wz, wx))
     th = correlation_theory(_measured_spectrum(a1, k0, p))
     tv, ts = th.values[::-1], th.strain.values[::-1]
     strain = np.interp(r, tv, ts, left=np.nan, right=0.0)
     strain = np.where(covered & np.isfinite(r), strain, np.nan)
     return strain, r, {"theory_min_correlation": float(tv[0])}
+
+
+def _alignment_fill(uz):
+    """NaN displacements (outside the tracked windows) filled by the nearest value along depth
+    (constant extrapolation, only for resampling); and the mask of original values."""
+    ok = np.isfinite(uz)
+    out = uz.copy()
+    for j in np.flatnonzero(~ok.all(axis=0)):
+        col, good = uz[:, j], np.flatnonzero(ok[:, j])
+        out[:, j] = np.interp(np.arange(col.size), good, col[good]) if good.size else 0.0
+    return out, ok
 
 
 _METHOD_FUNCS = {
@@ -478,6 +556,23 @@ _METHOD_FUNCS = {
 # --------------------------------------------------------------------------------------------
 # Public API
 # --------------------------------------------------------------------------------------------
+
+
+def _no_answer_reason(method: str, quality: np.ndarray, opts: dict, window) -> str:
+    """Why an estimate has no finite pixel, for the warning."""
+    q = quality[np.isfinite(quality)]
+    head = f"estimate_strain(method={method!r}) has no answer at any pixel: "
+    if "min_quality" in opts and q.size and q.max() < opts["min_quality"]:
+        return head + (
+            f"every window's quality is below min_quality={opts['min_quality']:g} (highest "
+            f"{q.max():.3f}); lower min_quality or use a larger window"
+        )
+    if not q.size:
+        return head + f"no window {tuple(window)} has a finite quality (image too small?)"
+    return head + (
+        "the pair is decorrelated beyond the method's range (correlation below its theory or "
+        "unwrapping failed everywhere); try method='tracking' or align=True"
+    )
 
 
 def _wrap(values: np.ndarray, template, name: str, attrs: dict) -> object:
@@ -537,18 +632,26 @@ def estimate_strain(
         Shapes or coordinates that differ, non-positive ``k0`` or ``pixel_size``, a window
         larger than the image, an unknown method.
     """
+    has_frame = [isinstance(x, xr.DataArray) and "frame" in x.dims for x in (reference, deformed)]
+    if any(has_frame):
+        out = _strain_frames(
+            reference, deformed, has_frame, k0, pixel_size, method, window, options
+        )
+        if return_quality:
+            return out, out["quality"].reset_coords(drop=True).rename("quality")
+        return out
     a1, a2, template = _as_images(reference, deformed)
     k = check_real(k0, "k0", low=0, low_inclusive=False)
     p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
     check_choice(method, "method", METHODS)
     wz, wx = _check_window(window, DEFAULT_WINDOWS[method], a1.shape)
     opts = _options(method, options)
-    if "align" in opts and opts["align"] not in (True, False, "auto"):
-        raise ValueError(f"align must be True, False or 'auto', got {opts['align']!r}")
     if opts.get("align") == "auto":
         strain, quality, info = _auto_aligned(method, a1, a2, k, p, wz, wx, opts)
     else:
         strain, quality, info = _METHOD_FUNCS[method](a1, a2, k, p, wz, wx, opts)
+    if not np.isfinite(strain).any():
+        warnings.warn(_no_answer_reason(method, quality, opts, (wz, wx)), stacklevel=2)
     attrs = {
         "long_name": "axial strain (compression > 0)"
         if method != "correlation"
@@ -567,6 +670,104 @@ def estimate_strain(
     if return_quality:
         return out, _wrap(quality, template, "quality", {"units": "1", "long_name": "quality"})
     return out
+
+
+def _strain_block(f1, f2, k0, p, method, window, options):
+    s, q = estimate_strain(
+        f1[0],
+        f2[0],
+        k0=k0,
+        pixel_size=p,
+        method=method,
+        window=window,
+        return_quality=True,
+        **options,
+    )
+    return np.stack([s, q])[None]
+
+
+def _strain_frames(reference, deformed, has_frame, k0, pixel_size, method, window, options):
+    """:func:`estimate_strain` frame by frame (pairs ``reference[i]``, ``deformed[i]``), lazily.
+
+    Returns a Dask-backed DataArray (frame, depth, aline) with a lazy ``quality`` coordinate;
+    everything is checked before any work.
+    """
+    if not all(has_frame):
+        which = "reference" if has_frame[0] else "deformed"
+        raise ValueError(
+            f"only {which} has a 'frame' dim: give both inputs a frame dim of the same size "
+            "(pairs reference[i], deformed[i]) or select one frame (.isel(frame=i))"
+        )
+    arrays = []
+    for name, x in (("reference", reference), ("deformed", deformed)):
+        try:
+            data, coords = _frames_input(x)
+        except (TypeError, ValueError) as err:
+            raise type(err)(f"{name}: {err}") from None
+        arrays.append((data, coords))
+    (d1, c1), (d2, c2) = arrays
+    if d1.shape != d2.shape:
+        raise ValueError(
+            f"reference and deformed frames differ in shape: {d1.shape} vs {d2.shape} "
+            "(frame, depth, aline)"
+        )
+    for dim in ("depth", "aline"):
+        if dim in c1 and dim in c2 and not np.array_equal(c1[dim].values, c2[dim].values):
+            raise ValueError(f"reference and deformed have different {dim} coordinates")
+    k = check_real(k0, "k0", low=0, low_inclusive=False)
+    p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
+    check_choice(method, "method", METHODS)
+    n_frames, n, m = d1.shape
+    wz, wx = _check_window(window, DEFAULT_WINDOWS[method], (n, m))
+    _options(method, options)
+    _check_finite_frames(d1)
+    _check_finite_frames(d2)
+    if _is_dask(d1) or _is_dask(d2):
+        if not (_is_dask(d1) and _is_dask(d2)):
+            raise TypeError(
+                "reference and deformed must both be Dask-backed or both in memory (use "
+                ".chunk({'frame': 1}) on both)"
+            )
+        d1 = d1.rechunk({0: 1, 1: -1, 2: -1})
+        d2 = d2.rechunk({0: 1, 1: -1, 2: -1})
+        both = d1.map_blocks(
+            _strain_block,
+            d2,
+            k,
+            p,
+            method,
+            (wz, wx),
+            options,
+            dtype=float,
+            new_axis=1,
+            chunks=((1,) * n_frames, (2,), (n,), (m,)),
+        )
+    else:
+        both = np.concatenate(
+            [
+                _strain_block(d1[i : i + 1], d2[i : i + 1], k, p, method, (wz, wx), options)
+                for i in range(n_frames)
+            ]
+        )
+    frame = reference["frame"] if "frame" in reference.coords else np.arange(n_frames)
+    coords = {"frame": frame, **c1}
+    out = xr.DataArray(
+        both[:, 0],
+        dims=("frame", "depth", "aline"),
+        coords=coords,
+        attrs={
+            "long_name": "axial strain (compression > 0)"
+            if method != "correlation"
+            else "axial strain magnitude",
+            "units": "1",
+            "method": method,
+            "window_depth_pixels": wz,
+            "window_aline_pixels": wx,
+        },
+    )
+    return out.assign_coords(
+        quality=(("frame", "depth", "aline"), both[:, 1], {"units": "1", "long_name": "quality"})
+    )
 
 
 def estimate_displacement(
@@ -610,7 +811,7 @@ def estimate_displacement(
     _, wx = _check_window(window, (2, 1), a1.shape)
     if method == "tracking":
         opts = _options("tracking", options)
-        uz, _, _ = _tracked(a1, a2, k, p, wx, opts)
+        uz = _tracked(a1, a2, **_track_options(a1, wx, opts))[0] * p
     else:
         allowed = {"lag": None, "max_bias": DEFAULT_MAX_BIAS}
         unknown = set(options) - set(allowed)
@@ -689,6 +890,76 @@ def predicted_strain_std(
     return _place(std, wz // 2 + big_l // 2, n)
 
 
+def _frames_input(frames: object) -> tuple[object, dict]:
+    """``frames`` as a (frame, depth, aline) array (numpy or Dask) and its coordinates.
+
+    Refused before any work: a wrong type or dims, fewer than two frames, real data, Dask
+    chunks that split depth or aline.
+    """
+    coords: dict = {}
+    if isinstance(frames, xr.DataArray):
+        if set(frames.dims) != {"frame", "depth", "aline"}:
+            raise ValueError(f"frames must have dims (frame, depth, aline), got {frames.dims}")
+        frames = frames.transpose("frame", "depth", "aline")
+        coords = {d: frames[d] for d in ("depth", "aline") if d in frames.coords}
+        data = frames.data
+    elif isinstance(frames, np.ndarray):
+        data = frames
+    else:
+        raise TypeError(f"frames must be a numpy array or DataArray, got {type(frames).__name__}")
+    if data.ndim != 3 or data.shape[0] < 2:
+        raise ValueError(f"frames must be (frame >= 2, depth, aline), got shape {data.shape}")
+    if not np.issubdtype(data.dtype, np.complexfloating):
+        raise TypeError(
+            f"frames must be complex images (the phase carries the strain), got dtype {data.dtype}"
+        )
+    chunks = getattr(data, "chunks", None)
+    if chunks is not None and (len(chunks[1]) > 1 or len(chunks[2]) > 1):
+        raise ValueError(
+            f"frames' Dask chunks split depth or aline (chunks {chunks[1]} x {chunks[2]}): a "
+            "pair needs whole images; rechunk with frames.chunk({'frame': 1, 'depth': -1, "
+            "'aline': -1})"
+        )
+    return data, coords
+
+
+def _pair_fields(f1, f2, k0, p, method, window, options):
+    """Interframe strain, its quality and the tracked displacement (µm) of one pair."""
+    a1, a2 = np.asarray(f1), np.asarray(f2)
+    s, q = estimate_strain(
+        a1, a2, k0=k0, pixel_size=p, method=method, window=window, return_quality=True, **options
+    )
+    u = estimate_displacement(a1, a2, k0=k0, pixel_size=p, method="tracking")
+    return np.stack([s, q, u])
+
+
+def _pair_block(f1, f2, k0, p, method, window, options):
+    return _pair_fields(f1[0], f2[0], k0, p, method, window, options)[None]
+
+
+def _advance(state, fields, p):
+    """One step of the material-point scan: (position, kept length) after pair ``fields``."""
+    y, keep = state
+    s, _, u = fields
+    q = np.arange(y.shape[0], dtype=float)
+    s_at = np.column_stack([np.interp(y[:, j], q, s[:, j]) for j in range(y.shape[1])])
+    u_at = np.column_stack([np.interp(y[:, j], q, u[:, j]) for j in range(y.shape[1])])
+    return y + u_at / p, keep * (1 - s_at)
+
+
+def _check_finite_frames(data) -> None:
+    """ValueError naming the frames holding NaN/inf (computed lazily for Dask input)."""
+    finite = np.isfinite(data).all(axis=(1, 2))
+    if hasattr(finite, "compute"):
+        finite = finite.compute()
+    bad = np.flatnonzero(~np.asarray(finite))
+    if bad.size:
+        raise ValueError(
+            f"frames {bad[:10].tolist()}{' ...' if bad.size > 10 else ''} ({bad.size} of "
+            f"{len(finite)}) hold NaN or infinite pixels; drop or repair them first"
+        )
+
+
 def accumulate_strain(
     frames: np.ndarray | xr.DataArray,
     *,
@@ -696,6 +967,8 @@ def accumulate_strain(
     pixel_size: float,
     method: str = DEFAULT_METHOD,
     window: int | tuple[int, int] | None = None,
+    path: str | None = None,
+    progress: bool = False,
     **options,
 ) -> xr.Dataset:
     """Cumulative strain over a compression sequence, following the material with tracking.
@@ -709,53 +982,139 @@ def accumulate_strain(
     Parameters
     ----------
     frames : numpy.ndarray or xarray.DataArray
-        Complex images ``(frame, depth, aline)``, at least two frames.
+        Complex images ``(frame, depth, aline)``, at least two frames, all finite. A Dask-backed
+        DataArray (e.g. ``speckle.io.open_dataset(path, load=False)["field"]`` or
+        ``xarray.open_zarr(...)``) is processed lazily, one pair per task; its chunks must hold
+        whole images (``frames.chunk({"frame": 1, "depth": -1, "aline": -1})``).
     k0, pixel_size, method, window, **options
         As in :func:`estimate_strain` (``options`` go to the strain estimator).
+    path : str, optional
+        Stream the result to this chunked NetCDF file (one chunk per frame, written atomically
+        by :func:`speckle.io.stream_to_netcdf` on the active Dask scheduler: threads,
+        processes or a ``dask.distributed`` cluster) and return it opened lazily. Memory then
+        holds the pairs in flight, not the sequence. Without ``path`` the result is computed
+        in memory.
+    progress : bool
+        Progress bar while streaming (``path`` given).
 
     Returns
     -------
     xarray.Dataset
         ``interframe`` (``frame`` = pair index, depth, aline; on each earlier frame's grid),
-        ``cumulative`` (strain of frame ``i+1`` relative to frame 0 on frame 0's pixels) and
-        ``position`` (pixel ``y_{i+1}`` of each frame-0 pixel in frame ``i+1``).
+        ``quality`` (of each interframe estimate), ``cumulative`` (strain of frame ``i+1``
+        relative to frame 0 on frame 0's pixels) and ``position`` (pixel ``y_{i+1}`` of each
+        frame-0 pixel in frame ``i+1``). The input's depth and aline coordinates are kept
+        (else depth = pixel index times ``pixel_size``). The numbers do not depend on the
+        scheduler or the number of workers.
+
+    Raises
+    ------
+    TypeError, ValueError
+        Before any work: bad types or dims, real data, chunks splitting depth or aline, frames
+        holding NaN (named), bad estimator parameters.
     """
-    if isinstance(frames, xr.DataArray):
-        if set(frames.dims) != {"frame", "depth", "aline"}:
-            raise ValueError(f"frames must have dims (frame, depth, aline), got {frames.dims}")
-        f = frames.transpose("frame", "depth", "aline").values
-    elif isinstance(frames, np.ndarray):
-        f = frames
-    else:
-        raise TypeError(f"frames must be a numpy array or DataArray, got {type(frames).__name__}")
-    if f.ndim != 3 or f.shape[0] < 2:
-        raise ValueError(f"frames must be (frame >= 2, depth, aline), got shape {f.shape}")
+    data, coords = _frames_input(frames)
     p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
-    n, m = f.shape[1:]
-    q = np.arange(n, dtype=float)
-    y = np.repeat(q[:, None], m, axis=1)
-    keep = np.ones((n, m))
-    inter, cum, pos = [], [], []
-    for i in range(f.shape[0] - 1):
-        s = estimate_strain(
-            f[i], f[i + 1], k0=k0, pixel_size=p, method=method, window=window, **options
-        )
-        u = estimate_displacement(f[i], f[i + 1], k0=k0, pixel_size=p, method="tracking")
-        s_at = np.column_stack([np.interp(y[:, j], q, s[:, j]) for j in range(m)])
-        u_at = np.column_stack([np.interp(y[:, j], q, u[:, j]) for j in range(m)])
-        keep = keep * (1 - s_at)
-        y = y + u_at / p
-        inter.append(s)
-        cum.append(1 - keep)
-        pos.append(y.copy())
+    k = check_real(k0, "k0", low=0, low_inclusive=False)
+    check_choice(method, "method", METHODS)
+    n_frames, n, m = data.shape
+    wz, wx = _check_window(window, DEFAULT_WINDOWS[method], (n, m))
+    _options(method, options)  # unknown or malformed options: refused before any work
+    _check_finite_frames(data)
+    if path is not None and not isinstance(path, (str, bytes)) and not hasattr(path, "__fspath__"):
+        raise TypeError(f"path must be a file path, got {type(path).__name__}")
+    if not isinstance(progress, (bool, np.bool_)):
+        raise TypeError(f"progress must be True or False, got {progress!r}")
+    args = (k, p, method, (wz, wx), options)
     dims = ("frame", "depth", "aline")
-    coords = {"frame": np.arange(1, f.shape[0]), "depth": q * p}
-    return xr.Dataset(
+    depth = coords.get("depth", xr.DataArray(np.arange(n) * p, dims="depth"))
+    out_coords = {"frame": np.arange(1, n_frames), "depth": depth}
+    if "aline" in coords:
+        out_coords["aline"] = coords["aline"]
+    variables = {
+        "interframe": {"units": "1", "long_name": "interframe strain"},
+        "quality": {"units": "1", "long_name": "interframe quality"},
+        "cumulative": {"units": "1", "long_name": "strain to frame 0"},
+        "position": {"units": "pixel", "long_name": "position in frame"},
+    }
+    attrs = {
+        "method": method,
+        "k0": k,
+        "pixel_size": p,
+        "window_depth_pixels": wz,
+        "window_aline_pixels": wx,
+    }
+    frames_out = _scan(data, args, p, batch=_batch_size())
+    if path is None:
+        rows = list(frames_out)
+        return xr.Dataset(
+            {name: (dims, np.array([r[name] for r in rows]), a) for name, a in variables.items()},
+            coords=out_coords,
+            attrs=attrs,
+        )
+    from ..io import open_dataset, write_frames
+
+    template = xr.Dataset(
         {
-            "interframe": (dims, np.array(inter), {"units": "1", "long_name": "interframe"}),
-            "cumulative": (dims, np.array(cum), {"units": "1", "long_name": "strain to frame 0"}),
-            "position": (dims, np.array(pos), {"units": "pixel"}),
+            name: (dims, np.broadcast_to(np.nan, (n_frames - 1, n, m)), a)
+            for name, a in variables.items()
         },
-        coords=coords,
-        attrs={"method": method, "k0": float(k0), "pixel_size": p},
+        coords=out_coords,
+        attrs=attrs,
     )
+    write_frames(path, frames_out, n_frames=n_frames - 1, template=template, progress=progress)
+    return open_dataset(path, load=False)
+
+
+def _batch_size() -> int:
+    """Pairs computed at once: two per core (bounded memory)."""
+    return max(2, 2 * (os.cpu_count() or 1))
+
+
+def _is_dask(data) -> bool:
+    """A Dask array (duck-typed: the analysis group does not import Dask; the user's data
+    brings it)."""
+    return hasattr(data, "dask") and hasattr(data, "map_blocks") and hasattr(data, "rechunk")
+
+
+def _scan(data, args, p, batch: int):
+    """Yield each pair's interframe strain, quality, cumulative strain and position, in order.
+
+    The pairs are computed ``batch`` at a time on the active Dask scheduler (numpy input: in
+    this process); the scan over material positions runs here, one pair after the other.
+    """
+    n_frames, n, m = data.shape
+    state = _start(n, m)
+    if _is_dask(data):
+        data = data.rechunk({0: 1})
+        fields = data[:-1].map_blocks(
+            _pair_block,
+            data[1:],
+            *args,
+            dtype=float,
+            new_axis=1,
+            chunks=((1,) * (n_frames - 1), (3,), (n,), (m,)),
+        )
+        for start in range(0, n_frames - 1, batch):  # one compute per batch: frames shared
+            for block in fields[start : start + batch].compute():
+                state = _advance(state, block, p)
+                yield _frame(block, state)
+    else:
+        for i in range(n_frames - 1):
+            f = _pair_fields(data[i], data[i + 1], *args)
+            state = _advance(state, f, p)
+            yield _frame(f, state)
+
+
+def _frame(fields, state) -> dict:
+    return {
+        "interframe": fields[0],
+        "quality": fields[1],
+        "cumulative": 1 - state[1],
+        "position": state[0],
+    }
+
+
+def _start(n: int, m: int):
+    """Scan state before the first pair: every frame-0 pixel at its own position, unstrained."""
+    return np.repeat(np.arange(n, dtype=float)[:, None], m, axis=1), np.ones((n, m))

@@ -134,6 +134,8 @@ def check_config(config: Mapping, schema: Mapping | None = None) -> None:
                 f"config key fig6.window = {[wz, wx]} does not fit in the images "
                 f"(source.n_pixels = {n}, {key} = {lines})"
             )
+    if "elastography" in config:
+        _elastography(config["elastography"])
     # memory: the largest image stack each figure holds at once
     sizes = {
         "fig2.n_alines": (
@@ -159,6 +161,40 @@ def check_config(config: Mapping, schema: Mapping | None = None) -> None:
         check_despeckle_config(config["despeckle"])
     if "twin" in config:
         check_twin(config["twin"])
+
+
+def _elastography(el: Mapping) -> None:
+    """Estimator windows inside the images they slide over (depth >= 2 pixels)."""
+    n, lines = int(el["n_pixels"]), int(el["n_alines"])
+    wz, wx = (int(v) for v in el["window"])
+    images = {"elastography.n_alines": lines}
+    if "inclusion" in el:
+        images["elastography.inclusion.n_alines"] = int(el["inclusion"]["n_alines"])
+    if "sequence_large" in el and "n_alines" in el["sequence_large"]:
+        images["elastography.sequence_large.n_alines"] = int(el["sequence_large"]["n_alines"])
+    if wz < 2:
+        raise ValueError(
+            f"config key elastography.window = {[wz, wx]}: the depth window must be >= 2 pixels "
+            "(the estimators fit a gradient over it)"
+        )
+    for key, m in images.items():
+        if wz > n or wx > m:
+            raise ValueError(
+                f"config key elastography.window = {[wz, wx]} does not fit in the images "
+                f"(elastography.n_pixels = {n}, {key} = {m})"
+            )
+    for i, w in enumerate(el.get("failure", {}).get("windows", [])):
+        if not 2 <= int(w) <= n:
+            raise ValueError(
+                f"config key elastography.failure.windows[{i}] = {w} must be in [2, "
+                f"elastography.n_pixels = {n}]"
+            )
+    for i, w in enumerate(el.get("speed", {}).get("windows", [])):
+        if not 2 <= int(w) <= n:
+            raise ValueError(
+                f"config key elastography.speed.windows[{i}] = {w} must be in [2, "
+                f"elastography.n_pixels = {n}]"
+            )
 
 
 def _measured_roi(path: str | None, roi: Mapping) -> None:

@@ -12,6 +12,8 @@ ELASTOGRAPHY_TARGETS = [
     f"{RESULTS}/elastography/speed_accuracy.png",
     f"{RESULTS}/elastography/sequence.nc",
     f"{RESULTS}/elastography/sequence.png",
+    f"{RESULTS}/elastography/sequence_large.nc",
+    f"{RESULTS}/elastography/sequence_large.png",
 ]
 
 
@@ -127,3 +129,27 @@ rule elastography_sequence:
         **section("elastography", "seed"),
     script:
         "../scripts/elastography_sequence.py"
+
+
+# The dask section is read from the config in the script (as the sweeps do): the numbers do not
+# depend on the scheduler, so changing it does not rerun the rule.
+rule elastography_sequence_large:
+    input:
+        code=package_code("speckle.figures.elastography", "speckle.io"),
+    output:
+        data=f"{RESULTS}/elastography/sequence_large.nc",
+        figure=report(
+            f"{RESULTS}/elastography/sequence_large.png",
+            caption="../report/elastography_sequence_large.rst",
+            category="Elastography",
+            labels={"figure": "FE inclusion compression sequence, streamed with Dask"},
+        ),
+    log:
+        f"{RESULTS}/logs/elastography_sequence_large.log",
+    conda:
+        "../envs/speckle.yaml"
+    threads: config["dask"]["n_workers"]
+    params:
+        **section("elastography", "seed"),
+    script:
+        "../scripts/elastography_sequence_large.py"

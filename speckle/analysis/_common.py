@@ -1,0 +1,116 @@
+"""Helpers shared by the analysis modules (private): the field of a B-scan, grid checks, the one
+window parser and the pixel spacing read from coordinates.
+
+``window`` means the same in every analysis function: an int ``w`` is a square window
+``(w, w)`` of (depth, aline) pixels, a pair is ``(depth, aline)`` pixels.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from .._validate import check_int
+from ..conventions import spacing
+
+__all__ = ["field_of", "grid_spacing", "matched", "parse_window", "same_grid"]
+
+
+def field_of(data: xr.Dataset | xr.DataArray) -> xr.DataArray:
+    """The complex field of a B-scan Dataset (attrs merged on a copy), or the DataArray itself."""
+    if isinstance(data, xr.Dataset):
+        if "field" not in data:
+            raise TypeError(
+                "B-scan dataset must hold a complex 'field' (see speckle.imaging.bscan)"
+            )
+        field = data["field"]  # attrs merged on a copy: the caller's dataset is not modified
+        return field.assign_attrs({**data.attrs, **field.attrs})
+    if not isinstance(data, xr.DataArray):
+        raise TypeError(f"expected a B-scan Dataset or DataArray, got {type(data).__name__}")
+    return data
+
+
+def same_grid(x: xr.DataArray, y: xr.DataArray, names: tuple[str, str]) -> None:
+    """``ValueError`` unless every dim ``x`` and ``y`` share has the same size and coordinates."""
+    a_name, b_name = names
+    for d in [d for d in x.dims if d in y.dims]:
+        if x.sizes[d] != y.sizes[d]:
+            raise ValueError(
+                f"{a_name} and {b_name} differ along {d!r}: {x.sizes[d]} vs {y.sizes[d]} "
+                f"values; put both on the same grid or select the same region of both "
+                f"(e.g. .isel({d}=slice(...)) on each)"
+            )
+        if d in x.coords and d in y.coords:
+            a, b = np.asarray(x[d].values), np.asarray(y[d].values)
+            if not np.array_equal(a, b):
+                i = int(np.flatnonzero(a != b)[0])
+                raise ValueError(
+                    f"{a_name} and {b_name} have different {d!r} coordinates (first difference "
+                    f"at index {i}: {a[i]!r} vs {b[i]!r}); put both on the same grid or select "
+                    "the same region of both"
+                )
+
+
+def matched(x: xr.DataArray, y: xr.DataArray) -> tuple[xr.DataArray, xr.DataArray]:
+    """Broadcast two images after checking they cover the same pixels (else ``ValueError``).
+
+    Both must have ``depth`` and ``aline`` dims; every dim they share must have the same size
+    and the same coordinate values. Nothing is aligned, padded or cut silently.
+    """
+    for name, f in (("reference", x), ("deformed", y)):
+        missing = [d for d in ("depth", "aline") if d not in f.dims]
+        if missing:
+            raise ValueError(f"{name} must have dims 'depth' and 'aline'; got dims {f.dims}")
+    same_grid(x, y, ("reference", "deformed"))
+    return xr.broadcast(x, y)
+
+
+def parse_window(
+    window: object,
+    name: str = "window",
+    *,
+    low: int = 2,
+    shape: tuple[int, int] | None = None,
+) -> tuple[int, int]:
+    """``(depth, aline)`` pixel counts from an int (square window) or a pair.
+
+    Parameters
+    ----------
+    window : int or (int, int)
+        An int ``w`` means ``(w, w)``; a pair means ``(depth, aline)`` pixels.
+    name : str
+        Parameter name used in error messages.
+    low : int
+        Smallest depth size (aline: 1).
+    shape : (int, int), optional
+        Image shape ``(depth, aline)``: a window larger than it is refused.
+
+    Raises
+    ------
+    TypeError, ValueError
+        Not an int or a pair of ints, below ``low``, or larger than ``shape``.
+    """
+    if isinstance(window, (str, bytes)):
+        raise TypeError(f"{name} must be an int or (depth, aline) pixels, got {window!r}")
+    w = np.atleast_1d(np.asarray(window, dtype=object))
+    if w.ndim != 1 or w.size not in (1, 2):
+        raise ValueError(f"{name} must be an int or (depth, aline) pixels, got {window!r}")
+    if w.size == 1:
+        w = np.repeat(w, 2)
+    out = (check_int(w[0], f"{name}[depth]", low=low), check_int(w[1], f"{name}[aline]", low=1))
+    if shape is not None and (out[0] > shape[0] or out[1] > shape[1]):
+        raise ValueError(
+            f"{name} {out} (depth, aline) is larger than the image {tuple(shape)}; {name} must "
+            f"be at most {tuple(shape)} pixels"
+        )
+    return out
+
+
+def grid_spacing(field: xr.DataArray | xr.Dataset) -> tuple[float, float]:
+    """Pixel size and A-line pitch (µm) read from the ``depth`` and ``aline`` coordinates.
+
+    Spacing comes only from coordinates (:func:`speckle.conventions.spacing`); with a single
+    A-line the pitch defaults to the pixel size.
+    """
+    dz = spacing(field, "depth")
+    return dz, spacing(field, "aline", default=dz)

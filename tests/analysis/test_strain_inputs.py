@@ -1,0 +1,71 @@
+"""Issue 21's strain cases, each refused with the parameter named (or warned), and the one
+meaning of ``window`` (an int is a square window everywhere)."""
+
+import numpy as np
+import pytest
+
+import speckle
+
+N, LINES, PIXEL = 128, 16, 8.0
+
+
+@pytest.fixture(scope="module")
+def pair():
+    src = speckle.spectrum(N, N * PIXEL, k0_dk=10, shape="gaussian", fwhm=0.5 * np.pi / PIXEL)
+    scene = speckle.deformable_scene(LINES, 4.0, n_pixels=N, depth=N * PIXEL, seed=4, strain=1e-3)
+    b = speckle.bscan(speckle.uniaxial_strain(scene, [0.0, 1e-3]), src)
+    f = b.field.transpose("strain", "depth", "aline").values
+    return f[0], f[1], {"k0": float(src.attrs["k0"]), "pixel_size": PIXEL}
+
+
+def test_min_quality_string_is_a_type_error(pair):
+    ref, dfm, kw = pair
+    with pytest.raises(TypeError, match="min_quality"):
+        speckle.estimate_strain(ref, dfm, min_quality="0.5", **kw)
+
+
+@pytest.mark.parametrize("value", [2.0, -0.1])
+def test_min_quality_outside_0_1_is_refused(pair, value):
+    ref, dfm, kw = pair
+    with pytest.raises(ValueError, match=r"min_quality must be in \[0, 1\]"):
+        speckle.estimate_strain(ref, dfm, min_quality=value, **kw)
+
+
+@pytest.mark.parametrize("value", ["no", "False", 0, 1])
+def test_wrap_check_takes_booleans_only(pair, value):
+    ref, dfm, kw = pair
+    with pytest.raises(TypeError, match="wrap_check"):
+        speckle.estimate_strain(ref, dfm, wrap_check=value, **kw)
+
+
+def test_align_string_other_than_auto_is_refused(pair):
+    ref, dfm, kw = pair
+    with pytest.raises(ValueError, match="align"):
+        speckle.estimate_strain(ref, dfm, align="yes", **kw)
+
+
+def test_all_nan_result_warns_with_the_reason(pair):
+    ref, dfm, kw = pair
+    with pytest.warns(UserWarning, match="quality is below min_quality=1"):
+        out = speckle.estimate_strain(ref, dfm, min_quality=1.0, **kw)
+    assert np.isnan(out).all()
+
+
+def test_nan_pixels_are_counted(pair):
+    ref, dfm, kw = pair
+    bad = ref.copy()
+    bad[3, 4] = bad[7, 1] = np.nan
+    with pytest.raises(ValueError, match="reference holds 2 NaN or infinite pixels"):
+        speckle.estimate_strain(bad, dfm, **kw)
+
+
+def test_window_int_is_square_everywhere(pair):
+    ref, dfm, kw = pair
+    e = speckle.estimate_strain(ref, dfm, window=8, **kw)
+    assert e.shape == ref.shape
+    # the same window as the explicit pair, the same numbers
+    np.testing.assert_array_equal(e, speckle.estimate_strain(ref, dfm, window=(8, 8), **kw))
+    tr = speckle.analysis.track_array(ref, dfm, window=8, step=8)
+    assert tr["uz"].shape == (N // 8, LINES // 8)
+    with pytest.raises(ValueError, match="larger than the image"):
+        speckle.estimate_strain(ref, dfm, window=32, **kw)  # (32, 32) > 16 A-lines

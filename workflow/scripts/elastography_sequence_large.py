@@ -1,0 +1,19 @@
+"""Large elastography sequence (thin): simulate and process lazily on the config's Dask
+scheduler with speckle.figures.elastography, streaming the NetCDF; draw the PNG from it."""
+
+from speckle._workflow import run
+from speckle.figures import elastography
+from speckle.sweep import dask_scheduler
+
+
+def main(snakemake) -> None:
+    cfg = snakemake.params.elastography
+    with dask_scheduler(**snakemake.config["dask"]):
+        ds = elastography.sequence_large_data(cfg, snakemake.params.seed, snakemake.output.data)
+    elastography.sequence_large_figure(
+        ds, snakemake.output.figure, float(cfg["sequence_large"]["strain"])
+    )
+    print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
+
+
+run(main)
