@@ -27,8 +27,19 @@ ALLOWED = {
     "system": {"numpy", "xarray", "scipy", "finufft"},  # spectra, noise, fast camera model
     "imaging": {"numpy", "xarray", "dask", "scipy", "numba", "finufft"},  # fast synthesis
     # statistics, registration and filters (skimage), reading PNG measured images
-    # (matplotlib.image), the optional BM3D filter (bm3d: non-commercial licence, not required)
-    "analysis": {"numpy", "xarray", "scipy", "skimage", "matplotlib", "bm3d"},
+    # (matplotlib.image), the optional BM3D filter (bm3d: non-commercial licence, not required),
+    # reading users' files (h5py: MATLAB v7.3, zarr, tifffile)
+    "analysis": {
+        "numpy",
+        "xarray",
+        "scipy",
+        "skimage",
+        "matplotlib",
+        "bm3d",
+        "h5py",
+        "zarr",
+        "tifffile",
+    },
     "figures": {"numpy", "xarray", "scipy", "matplotlib", "dask"},  # drawing
 }
 STDLIB = set(sys.stdlib_module_names)

@@ -698,7 +698,7 @@ class SystemFit:
             ``median_error``, ``rms_error``, ``answered`` (fraction of pixels with an answer)
             over ``(strain, method)``; the twin's parameters in the attributes.
         """
-        from ..figures.elastography import _method, _scores
+        from .failure import method_options, strain_scores
 
         s_values = [check_real(s, "strains", low=-0.5, high=0.5) for s in strains]
         if not s_values:
@@ -707,7 +707,7 @@ class SystemFit:
         from .strain import METHODS
 
         for lab in labels:
-            check_choice(_method(lab)[0], "methods", METHODS)
+            check_choice(method_options(lab)[0], "methods", METHODS)
         shp = tuple(check_int(v, "shape", low=8) for v in shape)
         m = self._model(shp)
         smax = max(abs(v) for v in s_values)
@@ -729,13 +729,13 @@ class SystemFit:
             dfm = self._field(m, sc, s)[: shp[0]]
             a2 = add_complex_noise(dfm, snr, seed=seed + 2) if np.isfinite(snr) else dfm
             for j, lab in enumerate(labels):
-                method, opts = _method(lab)
+                method, opts = method_options(lab)
                 if method in ("vector", "wls"):
                     opts = {"lag": lag, **opts}
                 est = estimate_strain(
                     a1, a2, k0=m["k0"], pixel_size=m["dz"], method=method, window=window, **opts
                 )
-                res[i, j] = _scores(est, abs(s) if method == "correlation" else s)
+                res[i, j] = strain_scores(est, abs(s) if method == "correlation" else s)
         coords = {
             "strain": (
                 "strain",

@@ -21,6 +21,7 @@ import xarray as xr
 from scipy import ndimage
 
 from ..analysis.correlation import expected_correlation
+from ..analysis.failure import method_options, strain_scores
 from ..analysis.phase import choose_lag, depth_autocorrelation, noise_power
 from ..analysis.strain import accumulate_strain, estimate_strain, predicted_strain_std
 from ..imaging.bscan import bscan
@@ -48,15 +49,6 @@ __all__ = [
 ]
 
 STRAIN = {"units": "1", "long_name": "axial strain (compression > 0)"}
-
-
-def _method(label: str) -> tuple[str, dict]:
-    """Estimator name and options of a pipeline method label."""
-    if label.endswith("_unaligned"):
-        return label.removesuffix("_unaligned"), {"align": False}
-    if label.endswith("_aligned"):
-        return label.removesuffix("_aligned"), {"align": True}
-    return label, {}
 
 
 def _source(cfg: Mapping, k0_dk: float | None = None, fwhm: float | None = None):
@@ -109,17 +101,8 @@ def _window(cfg: Mapping, depth: int | None = None) -> tuple[int, int]:
     return (int(w[0] if depth is None else depth), int(w[1]))
 
 
-def _scores(est: np.ndarray, truth: np.ndarray) -> tuple[float, float, float]:
-    """Median error, rms error and the fraction of pixels with an answer."""
-    ok = np.isfinite(est)
-    if not ok.any():
-        return np.nan, np.nan, 0.0
-    err = est[ok] - np.broadcast_to(truth, est.shape)[ok]
-    return float(np.median(err)), float(np.sqrt(np.mean(err**2))), float(ok.mean())
-
-
 def _estimate(a1, a2, k0, cfg, label, window=None):
-    method, opts = _method(label)
+    method, opts = method_options(label)
     return estimate_strain(
         a1,
         a2,
@@ -276,8 +259,8 @@ def _failure_point(cfg, seed, methods, *, strain, snr_db=None, window=None, **sc
     out = []
     for m in methods:
         est = _estimate(a1, a2, k0, cfg, m, window)
-        truth = abs(strain) if _method(m)[0] == "correlation" else strain
-        out.append(_scores(est, truth))
+        truth = abs(strain) if method_options(m)[0] == "correlation" else strain
+        out.append(strain_scores(est, truth))
     return np.array(out)  # (method, 3)
 
 
@@ -446,7 +429,7 @@ def speed_data(cfg: Mapping, seed: int) -> xr.Dataset:
                 est = _estimate(ref, dfm, k0, cfg, m, _window(cfg, w))
                 best = min(best, time.perf_counter() - t0)
             times[i, j] = best / (ref.size / 1e6)
-            errors[i, j] = _scores(est, s)[1] / s
+            errors[i, j] = strain_scores(est, s)[1] / s
     return xr.Dataset(
         {
             "time_per_megapixel": (("method", "window"), times, {"units": "s"}),
