@@ -216,7 +216,8 @@ def check_scan_table(rows: Sequence[Mapping], n_pixels: int) -> None:
 def _reword(key: str, exc: Exception, names: Sequence[str] = ()) -> ValueError:
     """A ValueError naming ``key`` (and the first of ``names`` the message mentions)."""
     msg = str(exc)
-    hit = next((n for n in names if n in msg), None)
+    found = [(msg.index(n), -len(n), n) for n in names if n in msg]
+    hit = min(found)[2] if found else None  # the parameter the message names first
     full = f"{key}.{hit}" if hit else key
     return ValueError(f"config key {full}: {msg}")
 
@@ -273,7 +274,7 @@ def _datasheet(sheet: Mapping | None, key: str) -> None:
     try:
         system_from_config(sheet)
     except (TypeError, ValueError) as exc:
-        raise _reword(key, exc, sorted(sheet, key=len, reverse=True)) from None
+        raise _reword(key, exc, list(sheet)) from None
 
 
 def _source_pixels(config: Mapping) -> int:

@@ -333,8 +333,11 @@ def datasheet(
                 f"camera range would reach {lo:g} nm"
             )
     if lo > lam - bw / 2 or hi < lam + bw / 2:
+        what = (
+            "camera_range_nm" if camera_range_nm is not None else "imaging_depth (its camera range)"
+        )
         raise ValueError(
-            f"the camera range [{lo:g}, {hi:g}] nm must cover the FWHM band "
+            f"{what} [{lo:g}, {hi:g}] nm must cover the FWHM band "
             f"[{lam - bw / 2:g}, {lam + bw / 2:g}] nm of the source"
         )
     if beam_waist is not None and lateral_resolution is not None:
