@@ -56,9 +56,11 @@ __all__ = [
     "check_dispersion",
     "dispersion_phase",
     "interferogram",
+    "interpolation_gain",
     "linearize",
     "process",
     "resampling_error",
+    "resampling_response",
     "rolloff_power",
     "spectral_window",
     "system_ascan",
@@ -167,32 +169,120 @@ def axial_intensity_correlation(
     return (rho**2 * np.abs(c) ** 2 + rho * kap * d) / (rho**2 * c0**2 + rho * kap * d0)
 
 
+def _b3(x: np.ndarray) -> np.ndarray:
+    """Cubic B-spline ``beta3(x)`` (support ``|x| < 2``)."""
+    a = np.abs(x)
+    return np.where(a < 1, 2 / 3 - a**2 + a**3 / 2, np.where(a < 2, (2 - a) ** 3 / 6, 0.0))
+
+
+def interpolation_gain(theta: object, t: object, method: str) -> np.ndarray:
+    """Complex gain of the interpolation kernel on a tone: the kernel's closed-form response.
+
+    A tone ``exp(i theta j)`` sampled at the integers (``theta`` rad per input sample) and
+    interpolated at ``j0 + t`` (``0 <= t < 1``) gives ``sum_j h(t - j) exp(i theta j)``; divided
+    by the true value ``exp(i theta t)`` this is
+
+    * ``"linear"`` (hat kernel): ``H = (1 - t) exp(-i theta t) + t exp(i theta (1 - t))``;
+      its mean over ``t`` is the hat's Fourier transform ``sinc^2(theta/2)``;
+    * ``"cubic"`` (interpolating cubic spline, the cardinal spline of the not-a-knot spline away
+      from the ends): ``H = sum_{j=-1}^{2} beta3(t - j) exp(i theta (j - t)) / ((2 + cos theta)/3)``
+      (B-spline weights, divided by the B-spline's response at the samples); its mean over
+      ``t`` is ``sinc^4(theta/2) 3/(2 + cos theta)``;
+    * ``"exact"``: 1.
+
+    ``sinc x = sin x / x``. ``H = 1`` at ``t = 0`` (both kernels interpolate).
+
+    Parameters
+    ----------
+    theta : array_like
+        Tone phase per input sample, rad.
+    t : array_like
+        Fractional position of the output point between input samples, in [0, 1]; broadcast
+        with ``theta``.
+    method : {"linear", "cubic", "exact"}
+        The interpolation.
+
+    Returns
+    -------
+    numpy.ndarray
+        Complex gain, the broadcast shape of ``theta`` and ``t``.
+    """
+    th = as_finite_array(theta, "theta")
+    tt = as_finite_array(t, "t")
+    check_choice(method, "method", ("linear", "cubic", "exact"))
+    if tt.size and (tt.min() < 0 or tt.max() > 1):
+        raise ValueError(f"t must lie in [0, 1], got values in [{tt.min():g}, {tt.max():g}]")
+    th, tt = np.broadcast_arrays(th, tt)
+    if method == "exact":
+        return np.ones(th.shape, complex)
+    if method == "linear":
+        return (1 - tt) * np.exp(-1j * th * tt) + tt * np.exp(1j * th * (1 - tt))
+    s = sum(np.exp(1j * th * (j - tt)) * _b3(tt - j) for j in (-1, 0, 1, 2))
+    return s / ((2 + np.cos(th)) / 3)
+
+
 def resampling_error(theta: object, method: str) -> np.ndarray:
     """RMS error of resampling a unit tone, from the interpolation kernel's response.
 
-    A tone advancing ``theta`` rad per input sample, interpolated at a fractional position
-    ``t`` between samples, gives ``sum_j h(t - j) exp(i theta j)`` instead of
-    ``exp(i theta t)``: for ``"linear"`` ``(1 - t) + t exp(i theta)``, for ``"cubic"`` the
-    cardinal cubic spline (B-spline weights divided by ``(2 + cos theta)/3``). Returned is the
-    RMS over ``t`` uniform in [0, 1) (128-point Gauss-Legendre quadrature). For small ``theta``
-    it grows as ``theta^2/(2 sqrt 30)`` (linear) and ``theta^4`` (cubic): with ``theta = 2 z h``
-    (``h`` the camera step in ``k``), errors grow with depth as ``z^2`` and ``z^4``.
+    ``|H(theta, t) - 1|`` (:func:`interpolation_gain`) in RMS over ``t`` uniform in [0, 1)
+    (128-point Gauss-Legendre quadrature). For small ``theta`` it grows as
+    ``theta^2/(2 sqrt 30)`` (linear) and ``theta^4`` (cubic): with ``theta = 2 z h`` (``h`` the
+    camera step in ``k``), errors grow with depth as ``z^2`` and ``z^4``.
     """
     th = as_finite_array(theta, "theta")[..., None]
     check_choice(method, "method", ("linear", "cubic"))
     x, wq = np.polynomial.legendre.leggauss(128)
     t, wq = (x + 1) / 2, wq / 2
-    if method == "linear":
-        s = (1 - t) + t * np.exp(1j * th)
-    else:
-
-        def b3(x):
-            a = np.abs(x)
-            return np.where(a < 1, 2 / 3 - a**2 + a**3 / 2, np.where(a < 2, (2 - a) ** 3 / 6, 0))
-
-        s = sum(np.exp(1j * th * j) * b3(t - j) for j in (-1, 0, 1, 2)) / ((2 + np.cos(th)) / 3)
-    err2 = np.abs(s - np.exp(1j * th * t)) ** 2
+    err2 = np.abs(interpolation_gain(th, t, method) - 1) ** 2
     return np.sqrt(err2 @ wq)
+
+
+def resampling_response(system, depth: object, method: str) -> np.ndarray:
+    """Amplitude factor of the k-linearisation on a reflector's peak, from the kernel's response.
+
+    The processing interpolates the wavelength-linear camera signal onto the linear-``k`` grid.
+    At grid point ``k_n`` between camera pixels ``i`` and ``i + 1`` (step ``h_n``, fractional
+    position ``t_n``) a reflector at depth ``z`` is a tone of ``theta_n = 2 z h_n`` per camera
+    sample, so the interpolated signal is the exact one times :func:`interpolation_gain`
+    ``H(theta_n, t_n)``. The DFT peak (pixel of ``z``) sums the grid samples weighted by the
+    source, hence the factor
+
+        ``F(z) = sum_n S(k_n) H(2 z h_n, t_n) / sum_n S(k_n)``
+
+    (complex; ``|F|^2`` is the power attenuation). It neglects the change of the camera step
+    within the kernel's support and the spline's end conditions (both second order). The
+    fractional positions are the system's own (they drift slowly across the camera, so ``t``
+    is not uniform and the mean response ``sinc^2(theta/2)`` would not do).
+
+    Parameters
+    ----------
+    system : speckle.system.datasheet.System
+        The system (wavelength-linear camera, processing grid).
+    depth : array_like
+        Reflector depths ``z`` in µm (medium).
+    method : {"linear", "cubic", "exact"}
+        The k-linearisation of :func:`system_ascan` (``"exact"``: 1).
+
+    Returns
+    -------
+    numpy.ndarray
+        Complex factor, shape of ``depth``.
+    """
+    z = as_finite_array(depth, "depth")
+    check_choice(method, "method", ("linear", "cubic", "exact"))
+    grid = grid_wavenumbers(system)
+    cam = camera_sampling(system)["wavenumber"]
+    i = np.clip(np.searchsorted(cam, grid, side="right") - 1, 0, cam.size - 2)
+    h = cam[i + 1] - cam[i]
+    t = np.clip((grid - cam[i]) / h, 0.0, 1.0)
+    weights = source_weights(system, grid)
+    out = np.empty(z.shape, complex)
+    flat = z.ravel()
+    for j0 in range(0, flat.size, max(1, CHUNK_ELEMENTS // grid.size)):
+        zz = flat[j0 : j0 + max(1, CHUNK_ELEMENTS // grid.size), None]
+        gain = interpolation_gain(2 * zz * h, t, method)
+        out.ravel()[j0 : j0 + zz.shape[0]] = gain @ weights / weights.sum()
+    return out
 
 
 # --- camera ---------------------------------------------------------------------------------
