@@ -14,6 +14,7 @@ import numpy as np
 __all__ = [
     "MAX_BYTES",
     "as_finite_array",
+    "check_bool",
     "check_choice",
     "check_int",
     "check_memory",
@@ -87,6 +88,22 @@ def check_int(value: object, name: str, *, low: int | None = None, high: int | N
         hi = "inf" if high is None else str(high)
         raise ValueError(f"{name} must be an integer in [{lo}, {hi}], got {v}")
     return v
+
+
+def check_bool(value: object, name: str) -> bool:
+    """Return ``value`` as a ``bool`` after checking it is one (``True``/``False``/numpy bool).
+
+    Strings (``"False"`` is truthy), numbers (``0.5``) and arrays are refused: they would be
+    silently taken as a truth value.
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not a boolean.
+    """
+    if not isinstance(value, bool | np.bool_):
+        raise TypeError(f"{name} must be True or False, got {type(value).__name__} {value!r}")
+    return bool(value)
 
 
 def check_choice(value: object, name: str, choices: Iterable[str]) -> str:
