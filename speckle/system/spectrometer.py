@@ -42,7 +42,14 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from .._validate import as_finite_array, check_choice, check_int, check_real
+from .._validate import (
+    as_finite_array,
+    check_bool,
+    check_choice,
+    check_int,
+    check_memory,
+    check_real,
+)
 from .rolloff import carrier_response, rolloff_power
 
 __all__ = [
@@ -56,6 +63,7 @@ __all__ = [
     "check_dispersion",
     "dispersion_phase",
     "interferogram",
+    "interferogram_bytes",
     "interpolation_gain",
     "linearize",
     "process",
@@ -357,6 +365,8 @@ def interferogram(
         Shape (..., K); complex128 for ``"complex"``, float64 for ``"real"``.
     """
     check_choice(detection, "detection", DETECTIONS)
+    check_bool(dc, "dc")
+    check_bool(autocorrelation, "autocorrelation")
     k = as_finite_array(wavenumber, "wavenumber")
     if k.ndim != 1 or k.size < 2:
         raise ValueError("wavenumber must be 1-D with at least 2 camera pixels")
@@ -381,6 +391,12 @@ def interferogram(
         )
     batch = zz.shape[:-1]
     z2, a2 = zz.reshape(-1, zz.shape[-1]), aa.reshape(-1, zz.shape[-1])
+    finite = bool(np.any(w) or np.any(r))
+    check_memory(
+        interferogram_bytes(z2.shape[0], z2.shape[1], k.size, method, finite, autocorrelation),
+        "z (lines x scatterers) or the camera pixels",
+        "the camera signal",
+    )
     carrier = _carrier(z2, a2, k, w, r, method, eps)
     cross = np.sqrt(pr) * s * phase * carrier
     out = cross if detection == "complex" else 2 * cross.real
@@ -391,6 +407,32 @@ def interferogram(
         auto = np.abs(carrier) ** 2 if ideal else _autocorrelation(z2, a2, k, w, r, method, eps)
         out = out + s * auto
     return out.reshape(*batch, k.size)
+
+
+def interferogram_bytes(
+    lines: int,
+    scatterers: int,
+    pixels: int,
+    method: str = "direct",
+    finite_pixels: bool = True,
+    autocorrelation: bool = False,
+) -> float:
+    """Estimated peak memory (bytes) of :func:`interferogram`.
+
+    The signal and its terms (3 complex (lines, pixels) arrays), the direct sum's chunk
+    (:data:`CHUNK_ELEMENTS` complex phase factors, twice with a pixel response), the Chebyshev
+    coefficients of ``"finufft"`` with a varying response (up to 256 terms per scatterer, the
+    values and the coefficients), and the pair sources of the autocorrelation of finite pixels
+    (``M (M - 1)/2`` pairs of one line: two indices, a depth and a product).
+    """
+    out = 3 * 16.0 * lines * pixels
+    work = 2 * 16.0 * CHUNK_ELEMENTS
+    if method == "finufft" and finite_pixels:
+        work = max(work, 2 * 16.0 * 256 * lines * scatterers)
+    pairs = 0.0
+    if autocorrelation and finite_pixels:
+        pairs = 40.0 * scatterers * (scatterers - 1) / 2 + 16.0 * pixels
+    return out + work + pairs
 
 
 def _carrier(z, a, k, w, r, method, tol):
@@ -514,6 +556,17 @@ def _autocorrelation(z, a, k, w, r, method="direct", tol=1e-12):
 
 
 # --- processing -----------------------------------------------------------------------------
+def _camera_signal(signal: object) -> np.ndarray:
+    """A camera signal (..., K): real or complex numbers, every one finite (NaN counted)."""
+    y = np.asarray(signal)
+    if not (y.dtype.kind in "iufc" and y.ndim >= 1):
+        raise TypeError(
+            f"signal must be a numeric array (..., K) of camera samples, got dtype {y.dtype} "
+            f"and shape {y.shape}"
+        )
+    return as_finite_array(y, "signal", dtype=np.complex128 if y.dtype.kind == "c" else float)
+
+
 def linearize(signal: object, wavenumber: object, grid: object, method: str = "cubic"):
     """Resample a camera signal from the pixel wavenumbers onto the linear-``k`` grid.
 
@@ -534,7 +587,7 @@ def linearize(signal: object, wavenumber: object, grid: object, method: str = "c
     check_choice(method, "method", ("linear", "cubic"))
     k = as_finite_array(wavenumber, "wavenumber")
     g = as_finite_array(grid, "grid")
-    y = np.asarray(signal)
+    y = _camera_signal(signal)
     if y.shape[-1:] != k.shape:
         raise ValueError(f"signal's last dim must match wavenumber ({k.size}), got {y.shape}")
     dk = np.diff(k)
@@ -613,9 +666,7 @@ def process(
     comp = check_dispersion(dispersion)
     g = as_finite_array(grid, "grid")
     kc = check_real(k0, "k0", low=0)
-    y = np.asarray(signal)
-    if not (np.issubdtype(y.dtype, np.number) and y.ndim >= 1):
-        raise TypeError("signal must be a numeric array (..., K)")
+    y = _camera_signal(signal)
     if background is not None:
         if isinstance(background, str):
             check_choice(background, "background", ("mean",))
@@ -727,6 +778,9 @@ def camera_signal(
     parameters: :func:`camera_sampling`, :func:`interferogram`.
     """
     grid = grid_wavenumbers(system)
+    for flag, name in ((pixel_width, "pixel_width"), (resolution, "resolution"),
+                       (on_grid, "on_grid")):  # fmt: skip
+        check_bool(flag, name)
     cam = camera_sampling(system, sampling, at=grid if on_grid else None)
     sig = interferogram(
         z,
