@@ -39,12 +39,13 @@ from collections.abc import Sequence
 import numpy as np
 import xarray as xr
 
-from .._validate import check_int, check_real
+from .._validate import as_finite_array, check_int, check_memory, check_real
 from .regions import compile_regions, labels_of
 from .scatterers import _draw_amplitudes
 
 __all__ = [
     "AXES",
+    "MAX_TILES",
     "check_scene",
     "from_lines",
     "is_shared",
@@ -55,6 +56,11 @@ __all__ = [
 
 #: Position variables of a shared scene, in order of the tile index.
 AXES = ("z", "x", "y")
+#: Most tiles one :func:`shared_scene` call visits (each is a Python-level draw per region).
+MAX_TILES = 10**6
+#: Bytes per scatterer while a scene is built: the complex table of (z, x[, y], amplitude,
+#: region) per tile, its concatenation, the sorted copy and the output variables.
+SCATTERER_BYTES = 5 * 16 * 4
 
 _ATTRS = {
     "z": {"units": "um", "long_name": "scatterer depth"},
@@ -158,13 +164,34 @@ def shared_scene(
     if y_range is not None:
         ranges.append(_range(y_range, "y_range"))
     ndim = len(ranges)
-    tiles = np.broadcast_to(np.atleast_1d(np.asarray(tile, dtype=float)), (ndim,)).copy()
+    tv = np.atleast_1d(as_finite_array(tile, "tile"))
+    if tv.ndim != 1 or tv.size not in (1, ndim):
+        raise ValueError(
+            f"tile must be one edge or one per axis ({ndim} for a {ndim}-D scene) in µm, got "
+            f"shape {tv.shape}"
+        )
+    tiles = np.broadcast_to(tv, (ndim,)).copy()
     for i, t in enumerate(tiles):
         check_real(float(t), f"tile[{i}]", low=0, low_inclusive=False)
     lo = np.array([r[0] for r in ranges])
     hi = np.array([r[1] for r in ranges])
-    first = np.floor(lo / tiles).astype(int)
-    last = np.ceil(hi / tiles).astype(int)
+    first = np.floor(lo / tiles)
+    last = np.ceil(hi / tiles)
+    n_tiles = float(np.prod(last - first))
+    if n_tiles > MAX_TILES:
+        raise ValueError(
+            f"tile too small for the window: the scene would visit {n_tiles:.3g} tiles (each "
+            f"drawn in Python), above MAX_TILES = {MAX_TILES:g}; use a larger tile (µm) or a "
+            "smaller window"
+        )
+    volume = float(np.prod(hi - lo))
+    expected = volume * sum(max(float(row["density"]), 0.0) for row in compiled)
+    check_memory(
+        SCATTERER_BYTES * (expected + 6 * np.sqrt(expected + 1)),
+        "z_range/x_range (the window) or the densities",
+        f"the scene's ~{expected:.3g} scatterers",
+    )
+    first, last = first.astype(int), last.astype(int)
     parts = []
     for index in np.ndindex(*(last - first)):
         idx = tuple(int(i) for i in np.array(index) + first)
