@@ -178,7 +178,11 @@ def background(*, density: float, **props: object) -> dict:
 def layer(z_top: float, z_bottom: float, *, density: float, **props: object) -> dict:
     """A layer ``z_top <= z < z_bottom`` (µm) over all lateral positions."""
     top = check_real(z_top, "z_top")
-    bottom = check_real(z_bottom, "z_bottom", low=top, low_inclusive=False)
+    bottom = check_real(z_bottom, "z_bottom")
+    if bottom <= top:
+        raise ValueError(
+            f"z_bottom must be below z_top (z_top < z_bottom), got {top:g}, {bottom:g}"
+        )
     return {"shape": "layer", "z_top": top, "z_bottom": bottom, **_properties(density, props)}
 
 

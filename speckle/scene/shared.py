@@ -83,7 +83,7 @@ def tile_generator(seed: int, tile: Sequence[int], region: int) -> np.random.Gen
 
 
 def _range(value: object, name: str) -> tuple[float, float]:
-    if value is None or len(value) != 2:
+    if isinstance(value, str | bytes) or not hasattr(value, "__len__") or len(value) != 2:
         raise ValueError(f"{name} must be (min, max) in µm, got {value!r}")
     lo = check_real(value[0], f"{name}[0]")
     hi = check_real(value[1], f"{name}[1]", low=lo, low_inclusive=False)
@@ -184,12 +184,13 @@ def shared_scene(
             f"drawn in Python), above MAX_TILES = {MAX_TILES:g}; use a larger tile (µm) or a "
             "smaller window"
         )
-    volume = float(np.prod(hi - lo))
+    # every visited tile is drawn whole (then cropped to the window)
+    volume = float(np.prod((last - first) * tiles))
     expected = volume * sum(max(float(row["density"]), 0.0) for row in compiled)
     check_memory(
         SCATTERER_BYTES * (expected + 6 * np.sqrt(expected + 1)),
-        "z_range/x_range (the window) or the densities",
-        f"the scene's ~{expected:.3g} scatterers",
+        "tile, the window (z_range, x_range) or the densities",
+        f"drawing ~{expected:.3g} scatterers in the tiles covering the window",
     )
     first, last = first.astype(int), last.astype(int)
     parts = []
