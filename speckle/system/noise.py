@@ -109,7 +109,7 @@ def add_noise(
         From :func:`speckle.bscan`: ``field`` with dims ``(..., depth, aline)``; a scanned
         shared scene's ``(..., depth, x)`` works the same (lines along ``x``).
     snr_db : float
-        Mean signal intensity over mean noise intensity per pixel, in dB (finite).
+        Mean signal intensity over mean noise intensity per pixel, in dB, in [-300, 300].
     seed : int
         Non-negative seed; line ``i`` (index along ``aline`` or ``x``) of each image (index
         along every other dim, e.g. ``strain``) draws from its own stream, so the noise of a
@@ -130,7 +130,7 @@ def add_noise(
     """
     if not isinstance(image, xr.Dataset) or "field" not in image:
         raise TypeError("image must be a Dataset from speckle.bscan with a complex 'field'")
-    snr = check_real(snr_db, "snr_db")
+    snr = check_real(snr_db, "snr_db", low=-300.0, high=300.0)  # 10^(snr/10) stays finite
     sd = check_int(seed, "seed", low=0)
     check_choice(kind, "kind", NOISE_KINDS)
     field = image.field

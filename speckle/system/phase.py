@@ -53,13 +53,25 @@ _STREAM = 103
 _MAX_NODES = 2048
 
 
+#: Bounds of the screen parameters (far beyond any tissue, keeping every square finite).
+MAX_CORRELATION_LENGTH = 1e9  # µm
+MAX_K0 = 1e7  # rad/µm
+
+
+def _screen_parameters(index_variance: object, correlation_length: object, k0: object):
+    """``(s^2, l, k0)`` checked: ``0 <= s^2 <= 1``, ``0 < l <= 1e9`` µm, ``0 <= k0 <= 1e7``."""
+    s2 = check_real(index_variance, "index_variance", low=0, high=1)
+    ell = check_real(correlation_length, "correlation_length", low=0, low_inclusive=False,
+                     high=MAX_CORRELATION_LENGTH)  # fmt: skip
+    k = check_real(k0, "k0", low=0, high=MAX_K0)
+    return s2, ell, k
+
+
 def phase_structure(
     u: object, index_variance: float, correlation_length: float, k0: float
 ) -> np.ndarray:
     """``Var[phi(z + u) - phi(z)] = 4 k0^2 D(|u|)`` in rad^2 (module docstring)."""
-    s2 = check_real(index_variance, "index_variance", low=0)
-    ell = check_real(correlation_length, "correlation_length", low=0, low_inclusive=False)
-    k = check_real(k0, "k0", low=0)
+    s2, ell, k = _screen_parameters(index_variance, correlation_length, k0)
     uu = np.abs(as_finite_array(u, "u"))
     d = uu * ell * np.sqrt(np.pi) * special.erf(uu / ell) + ell**2 * np.expm1(-(uu**2) / ell**2)
     return 4 * k**2 * s2 * d
@@ -118,9 +130,7 @@ def phase_screens(
     """
     z = as_finite_array(depths, "depths").ravel()
     ns = check_int(n_screens, "n_screens", low=1)
-    s2 = check_real(index_variance, "index_variance", low=0)
-    ell = check_real(correlation_length, "correlation_length", low=0, low_inclusive=False)
-    k = check_real(k0, "k0", low=0)
+    s2, ell, k = _screen_parameters(index_variance, correlation_length, k0)
     sd = check_int(seed, "seed", low=0)
     return _draw(np.broadcast_to(z, (ns, z.size)), s2, ell, k, sd, ell / 8)
 
@@ -156,16 +166,18 @@ def shared_phase_screen(
         raise ValueError(f"z, x (and y) must have the same size, got {sizes}")
     if np.any(zz < 0):
         raise ValueError("scatterer depths must be >= 0 µm (the path starts at z = 0)")
-    s2 = check_real(index_variance, "index_variance", low=0)
-    ell = check_real(correlation_length, "correlation_length", low=0, low_inclusive=False)
+    s2, ell, k = _screen_parameters(index_variance, correlation_length, k0)
     lx = (
         ell
         if lateral_correlation_length is None
         else check_real(
-            lateral_correlation_length, "lateral_correlation_length", low=0, low_inclusive=False
+            lateral_correlation_length,
+            "lateral_correlation_length",
+            low=0,
+            low_inclusive=False,
+            high=MAX_CORRELATION_LENGTH,
         )
     )
-    k = check_real(k0, "k0", low=0)
     sd = check_int(seed, "seed", low=0)
     if zz.size == 0:
         return np.zeros(0)
@@ -251,9 +263,7 @@ def phase_perturb(
         )
     if "aline" not in scene.z.dims:
         raise ValueError("scene must have an 'aline' dim (or be a shared scene)")
-    s2 = check_real(index_variance, "index_variance", low=0)
-    ell = check_real(correlation_length, "correlation_length", low=0, low_inclusive=False)
-    k = check_real(k0, "k0", low=0)
+    s2, ell, k = _screen_parameters(index_variance, correlation_length, k0)
     sd = check_int(seed, "seed", low=0)
     step = ell / 8
     if "depth" in scene.attrs and "n_pixels" in scene.attrs:
