@@ -372,7 +372,11 @@ def datasheet(
     if (camera_range_nm is None) == (imaging_depth is None):
         raise ValueError("give exactly one of camera_range_nm (nm, nm) or imaging_depth (µm)")
     if camera_range_nm is not None:
-        if len(camera_range_nm) != 2:
+        if (
+            isinstance(camera_range_nm, str | bytes)
+            or not hasattr(camera_range_nm, "__len__")
+            or len(camera_range_nm) != 2
+        ):
             raise ValueError("camera_range_nm must be (lambda_min, lambda_max) in nm")
         lo = check_real(camera_range_nm[0], "camera_range_nm[0]", low=0, low_inclusive=False)
         hi = check_real(camera_range_nm[1], "camera_range_nm[1]", low=lo, low_inclusive=False)
@@ -391,7 +395,15 @@ def datasheet(
         )
         raise ValueError(
             f"{what} [{lo:g}, {hi:g}] nm must cover the FWHM band "
-            f"[{lam - bw / 2:g}, {lam + bw / 2:g}] nm of the source"
+            f"[{lam - bw / 2:g}, {lam + bw / 2:g}] nm of the source (wavelength_nm +- "
+            "bandwidth_nm/2)"
+        )
+    step = (hi - lo) / m
+    if bw < 2 * step:
+        raise ValueError(
+            f"bandwidth_nm = {bw:g} spans fewer than 2 camera pixels of {step:.3g} nm: the camera "
+            "does not resolve the source spectrum; use more camera_pixels or a narrower "
+            "camera_range_nm (a longer imaging_depth)"
         )
     if beam_waist is not None and lateral_resolution is not None:
         raise ValueError("give at most one of beam_waist and lateral_resolution (µm)")

@@ -564,6 +564,8 @@ def _camera_signal(signal: object) -> np.ndarray:
             f"signal must be a numeric array (..., K) of camera samples, got dtype {y.dtype} "
             f"and shape {y.shape}"
         )
+    if y.shape[-1] < 2 or y.size == 0:
+        raise ValueError(f"signal must hold >= 2 camera samples along its last dim, got {y.shape}")
     return as_finite_array(y, "signal", dtype=np.complex128 if y.dtype.kind == "c" else float)
 
 
@@ -663,6 +665,7 @@ def process(
     """
     check_choice(resample, "resample", ("none", "linear", "cubic"))
     check_choice(window, "window", WINDOWS)
+    fwhm = check_real(window_fwhm_fraction, "window_fwhm_fraction", low=0, low_inclusive=False)
     comp = check_dispersion(dispersion)
     g = as_finite_array(grid, "grid")
     kc = check_real(k0, "k0", low=0)
@@ -692,7 +695,7 @@ def process(
         if wavenumber is None:
             raise ValueError(f"resample={resample!r} needs wavenumber= (camera pixels, rad/µm)")
         y = linearize(y, wavenumber, g, resample)
-    f = y * spectral_window(g.size, window, window_fwhm_fraction)
+    f = y * spectral_window(g.size, window, fwhm)
     if comp:
         f = f * np.exp(-1j * dispersion_phase(g, kc, comp))
     return to_pixels(f.astype(np.complex128, copy=False))
