@@ -14,6 +14,7 @@ import numpy as np
 __all__ = [
     "MAX_BYTES",
     "as_finite_array",
+    "broadcast",
     "check_bool",
     "check_choice",
     "check_int",
@@ -147,6 +148,23 @@ def as_finite_array(value: object, name: str, *, dtype=float) -> np.ndarray:
         bad = int(np.size(arr) - np.count_nonzero(np.isfinite(arr)))
         raise ValueError(f"{name} must be finite; it holds {bad} NaN or infinite value(s)")
     return arr
+
+
+def broadcast(**arrays: np.ndarray) -> list[np.ndarray]:
+    """``np.broadcast_arrays`` of the named arrays, refusing mismatched shapes by name.
+
+    Raises
+    ------
+    ValueError
+        Naming every array and its shape when they do not broadcast together.
+    """
+    try:
+        return list(np.broadcast_arrays(*arrays.values()))
+    except ValueError:
+        shapes = ", ".join(f"{k} {np.shape(v)}" for k, v in arrays.items())
+        raise ValueError(
+            f"{', '.join(arrays)} must have broadcastable shapes; got {shapes}"
+        ) from None
 
 
 def check_memory(nbytes: float, name: str, what: str, limit: float | None = None) -> None:

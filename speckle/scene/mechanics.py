@@ -49,7 +49,14 @@ from scipy.sparse.linalg import splu
 from skfem.helpers import ddot, div, sym_grad
 from skfem.models.elasticity import lame_parameters
 
-from speckle._validate import as_finite_array, check_choice, check_int, check_memory, check_real
+from speckle._validate import (
+    as_finite_array,
+    broadcast,
+    check_choice,
+    check_int,
+    check_memory,
+    check_real,
+)
 from speckle.scene.regions import check_modulus, in_ellipse
 
 __all__ = [
@@ -258,10 +265,10 @@ def _per_label(
     return np.full(labels.shape, v if check is None else check(v, name))
 
 
-def _check_poisson(nu: np.ndarray) -> None:
+def _check_poisson(nu: np.ndarray, name: str = "poisson_ratio") -> None:
     if np.any(nu >= NU_MAX):
         raise ValueError(
-            "poisson_ratio must be in [0, 0.5): 0.5 (incompressible) makes the Lamé parameter "
+            f"{name} must be in [0, 0.5): 0.5 (incompressible) makes the Lamé parameter "
             "lambda infinite (a displacement formulation cannot represent an incompressible "
             "solid); use at most 0.49999"
         )
@@ -577,7 +584,7 @@ def displacement_at(result: xr.Dataset, z: object, x: object) -> tuple[np.ndarra
     """
     if not isinstance(result, xr.Dataset) or not {"uz_node", "ux_node"} <= set(result):
         raise TypeError("result must be the xarray.Dataset returned by speckle.compress")
-    zz, xx = np.broadcast_arrays(as_finite_array(z, "z"), as_finite_array(x, "x"))
+    zz, xx = broadcast(z=as_finite_array(z, "z"), x=as_finite_array(x, "x"))
     zn, xn = result["node_depth"].values, result["node_x"].values
     pts = np.stack([zz.ravel(), xx.ravel()], axis=-1)
     for k, (axis, name) in enumerate(((zn, "z"), (xn, "x"))):
@@ -691,11 +698,12 @@ def inclusion_strain(
         ``strain_zz`` and ``strain_xx`` inside the inclusion (compression positive).
     """
     s = check_real(strain, "strain", low=-1.0, high=1.0, low_inclusive=False, high_inclusive=False)
-    e0 = check_real(youngs_modulus, "youngs_modulus", low=0.0, low_inclusive=False)
-    e1 = check_real(inclusion_modulus, "inclusion_modulus", low=0.0, low_inclusive=False)
+    e0 = check_modulus(youngs_modulus, "youngs_modulus")
+    e1 = check_modulus(inclusion_modulus, "inclusion_modulus")
     nu0 = check_real(poisson_ratio, "poisson_ratio", low=0.0)
     nu1 = check_real(inclusion_poisson_ratio, "inclusion_poisson_ratio", low=0.0)
-    _check_poisson(np.array([nu0, nu1]))
+    _check_poisson(np.array([nu0]))
+    _check_poisson(np.array([nu1]), "inclusion_poisson_ratio")
     lam0, mu0 = lame_parameters(e0, nu0)
     lam1, mu1 = lame_parameters(e1, nu1)
     kappa = 3 - 4 * nu0
