@@ -698,8 +698,9 @@ def inclusion_strain(
         ``strain_zz`` and ``strain_xx`` inside the inclusion (compression positive).
     """
     s = check_real(strain, "strain", low=-1.0, high=1.0, low_inclusive=False, high_inclusive=False)
-    e0 = check_modulus(youngs_modulus, "youngs_modulus")
-    e1 = check_modulus(inclusion_modulus, "inclusion_modulus")
+    # only the ratio E_1/E enters: the rigid (1e12 x) and hole (1e-12 x) limits are allowed
+    e0 = check_real(youngs_modulus, "youngs_modulus", low=0.0, low_inclusive=False)
+    e1 = check_real(inclusion_modulus, "inclusion_modulus", low=0.0, low_inclusive=False)
     nu0 = check_real(poisson_ratio, "poisson_ratio", low=0.0)
     nu1 = check_real(inclusion_poisson_ratio, "inclusion_poisson_ratio", low=0.0)
     _check_poisson(np.array([nu0]))
