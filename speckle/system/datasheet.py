@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 
-from .._validate import check_choice, check_int, check_real
+from .._validate import check_choice, check_int, check_memory, check_real
 from .rolloff import rolloff_power
 from .source import spectrum as _spectrum
 
@@ -366,6 +366,8 @@ def datasheet(
             f"bandwidth_nm must be smaller than the central wavelength_nm={lam:g}, got {bw:g}"
         )
     m = check_int(camera_pixels, "camera_pixels", low=2)
+    # the camera, grid, spectrum and PSF arrays (a few float64 and complex128 of M points)
+    check_memory(64.0 * m, "camera_pixels", "the system's spectral arrays")
     n = check_real(refractive_index, "refractive_index", low=1.0)
     fill = check_real(fill_factor, "fill_factor", low=0, high=1, low_inclusive=False)
     res = check_real(spectral_resolution_nm, "spectral_resolution_nm", low=0)

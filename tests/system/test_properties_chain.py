@@ -104,8 +104,11 @@ def test_nan_in_the_camera_spectrum_is_refused_with_its_count():
 
 def test_chain_flags_are_booleans():
     for flag in ("pixel_width", "dc", "on_grid"):
-        with pytest.raises(TypeError, match=f"{flag} must be True or False"):
-            sp.camera_signal(SYSTEM, [[100.0]], [[1.0]], **{flag: "False"})
+        for bad in ("False", 0.5):
+            with pytest.raises(TypeError, match=f"{flag} must be True or False"):
+                sp.camera_signal(SYSTEM, [[100.0]], [[1.0]], **{flag: bad})
+    with pytest.raises(ValueError, match="camera_pixels too large"):
+        datasheet(840.0, 50.0, 10**12, imaging_depth=1000.0)
 
 
 def test_chain_memory_is_estimated_before_allocation():
