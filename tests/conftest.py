@@ -45,13 +45,16 @@ def _finite_result(out) -> bool:
     return out is not None
 
 
-@pytest.fixture(scope="session")
-def malformed():
-    """``(values, check)``: :data:`MALFORMED` (draw one with ``st.data()``) and
-    ``check(call, param, value)``: ``call()`` raises TypeError/ValueError naming ``param`` (or
-    its first word) or returns a finite answer; any other exception fails the test."""
+class Malformed:
+    """Drives the malformed-input property tests of a module with ``VALID`` (call name ->
+    valid keyword arguments) and ``_call(name, kwargs)``."""
 
+    values = MALFORMED
+
+    @staticmethod
     def check(call, param: str, value) -> None:
+        """``call()`` raises TypeError/ValueError naming ``param`` (or its first word) or
+        returns a finite answer; any other exception fails the test."""
         try:
             out = call()
         except (TypeError, ValueError) as err:
@@ -60,4 +63,24 @@ def malformed():
         else:
             assert _finite_result(out), (param, value)
 
-    return MALFORMED, check
+    def run(self, valid: dict, call, target: tuple[str, str], data) -> None:
+        """One drawn malformed value for parameter ``target = (name, param)``."""
+        from hypothesis import strategies as st
+
+        name, param = target
+        value = data.draw(st.sampled_from(self.values), label=param)
+        kw = {**valid[name], param: value}
+        self.check(lambda: call(name, kw), param, value)
+
+
+def pytest_generate_tests(metafunc):
+    """``malformed_target``: every (call, parameter) of the test module's ``VALID``."""
+    if "malformed_target" in metafunc.fixturenames:
+        targets = [(n, p) for n, kw in metafunc.module.VALID.items() for p in kw]
+        metafunc.parametrize("malformed_target", targets, ids=[f"{n}-{p}" for n, p in targets])
+
+
+@pytest.fixture(scope="session")
+def malformed() -> Malformed:
+    """The malformed-input driver (:class:`Malformed`)."""
+    return Malformed()

@@ -51,17 +51,9 @@ def _call(name: str, kw: dict):
     return detection.add_floor(IMAGE.intensity, **kw)
 
 
-TARGETS = [(name, param) for name, kw in VALID.items() for param in kw]
-
-
-@pytest.mark.parametrize("target", TARGETS, ids=[f"{n}-{p}" for n, p in TARGETS])
 @given(data=st.data())
-def test_malformed_effect_inputs(target, data, malformed):
-    values, check = malformed
-    name, param = target
-    value = data.draw(st.sampled_from(values))
-    kw = {**VALID[name], param: value}
-    check(lambda: _call(name, kw), param, value)
+def test_malformed_effect_inputs(malformed_target, data, malformed):
+    malformed.run(VALID, _call, malformed_target, data)
 
 
 def test_valid_calls_work():
