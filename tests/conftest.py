@@ -84,3 +84,68 @@ def pytest_generate_tests(metafunc):
 def malformed() -> Malformed:
     """The malformed-input driver (:class:`Malformed`)."""
     return Malformed()
+
+
+# --- bad configurations through `snakemake -n` (issues 13 and 21) ---------------------------
+class ConfigRuns:
+    """Merge config overrides and dry-run the workflow on a copy of the repository."""
+
+    ignore = staticmethod(
+        __import__("shutil").ignore_patterns(
+            ".git", ".snakemake", "results", "__pycache__", ".pytest_cache", ".hypothesis",
+            "*.egg-info",
+        )
+    )  # fmt: skip
+
+    @classmethod
+    def merge(cls, base: dict, over: dict) -> dict:
+        """``over`` merged into a copy of ``base`` as Snakemake layers config files."""
+        import copy
+
+        out = copy.deepcopy(base)
+        for key, value in over.items():
+            if isinstance(value, dict) and isinstance(out.get(key), dict):
+                out[key] = cls.merge(out[key], value)
+            else:
+                out[key] = value
+        return out
+
+    def copy_repo(self, dest: Path) -> Path:
+        """A copy of the repository (dry runs write .snakemake metadata)."""
+        import shutil
+
+        shutil.copytree(REPO, dest, ignore=self.ignore)
+        return dest
+
+    @staticmethod
+    def dry_run(repo: Path, *configfiles: str):
+        """``snakemake -n`` with the CI config and ``configfiles`` layered over it."""
+        import subprocess
+        import sys
+
+        paths = [str(repo), *filter(None, [os.environ.get("PYTHONPATH")])]
+        env = {**os.environ, "PYTHONPATH": os.pathsep.join(paths)}
+        cmd = [sys.executable, "-m", "snakemake", "-n", "--directory", str(repo)]
+        cmd += ["--snakefile", str(repo / "Snakefile"), "--configfile", "workflow/config/ci.yaml"]
+        proc = subprocess.run([*cmd, *configfiles], cwd=repo, env=env, capture_output=True,
+                              text=True)  # fmt: skip
+        proc.stdout += proc.stderr
+        return proc
+
+    @staticmethod
+    def assert_refused(proc, key: str) -> None:
+        """The run stopped before planning any job, naming ``key`` (a schema error names the
+        path in parts, a load check in full)."""
+        assert proc.returncode != 0, proc.stdout[-3000:]
+        assert "Job stats" not in proc.stdout, "jobs were planned"
+        key = key.split(" ")[0]
+        if "ValidationError" in proc.stdout:
+            parts = key.replace("[", ".").replace("]", "").split(".")
+            assert all(p in proc.stdout for p in parts), proc.stdout[-3000:]
+        else:
+            assert key in proc.stdout, proc.stdout[-3000:]
+
+
+@pytest.fixture(scope="session")
+def config_runs() -> ConfigRuns:
+    return ConfigRuns()

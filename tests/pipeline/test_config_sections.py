@@ -9,11 +9,6 @@ schema's enums are compared with the package's method tables.
 
 from __future__ import annotations
 
-import copy
-import os
-import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -120,26 +115,12 @@ BAD = {
         {"speed_accuracy": {"beam": {"methods": ["psf"]}}},
     ),
 }
-IGNORE = shutil.ignore_patterns(
-    ".git", ".snakemake", "results", "__pycache__", ".pytest_cache", ".hypothesis", "*.egg-info"
-)
-
-
-def _merge(base: dict, over: dict) -> dict:
-    out = copy.deepcopy(base)
-    for key, value in over.items():
-        if isinstance(value, dict) and isinstance(out.get(key), dict):
-            out[key] = _merge(out[key], value)
-        else:
-            out[key] = value
-    return out
 
 
 @pytest.fixture(scope="module")
-def repo(tmp_path_factory, repo_root) -> Path:
+def repo(tmp_path_factory, config_runs) -> Path:
     """A copy of the repository with the small measured image (dry runs write .snakemake)."""
-    dest = tmp_path_factory.mktemp("cfg21") / "repo"
-    shutil.copytree(repo_root, dest, ignore=IGNORE)
+    dest = config_runs.copy_repo(tmp_path_factory.mktemp("cfg21") / "repo")
     np.save(dest / MEASURED, np.ones(MEASURED_SHAPE))
     return dest
 
@@ -150,62 +131,42 @@ def schema(repo_root) -> dict:
 
 
 @pytest.fixture(scope="module")
-def merged(repo_root) -> dict:
+def merged(repo_root, config_runs) -> dict:
     base = yaml.safe_load((repo_root / "workflow/config/config.yaml").read_text())
-    return _merge(base, yaml.safe_load((repo_root / "workflow/config/ci.yaml").read_text()))
-
-
-def _dry_run(repo: Path, override: str) -> subprocess.CompletedProcess:
-    env = {
-        **os.environ,
-        "PYTHONPATH": os.pathsep.join([str(repo), *filter(None, [os.environ.get("PYTHONPATH")])]),
-    }
-    cmd = [sys.executable, "-m", "snakemake", "-n", "--directory", str(repo)]
-    cmd += ["--snakefile", str(repo / "Snakefile")]
-    cmd += ["--configfile", "workflow/config/ci.yaml", override]
-    proc = subprocess.run(cmd, cwd=repo, env=env, capture_output=True, text=True)
-    proc.stdout += proc.stderr
-    return proc
-
-
-def _names(out: str, key: str) -> bool:
-    """The error names ``key`` (a schema error names the path in parts, the check in full)."""
-    if "ValidationError" in out:
-        parts = key.replace("[", ".").replace("]", "").split(".")
-        return all(p in out for p in parts)
-    return key in out
+    return config_runs.merge(
+        base, yaml.safe_load((repo_root / "workflow/config/ci.yaml").read_text())
+    )
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("case", list(BAD))
-def test_bad_section_stops_before_any_job(repo, case):
+def test_bad_section_stops_before_any_job(repo, case, config_runs):
     key, override = BAD[case]
     name = f"bad21_{abs(hash(case))}.yaml"
     (repo / name).write_text(yaml.safe_dump(override))
-    proc = _dry_run(repo, name)
-    assert proc.returncode != 0, proc.stdout[-3000:]
-    assert "Job stats" not in proc.stdout, "jobs were planned"
-    assert _names(proc.stdout, key), proc.stdout[-3000:]
+    config_runs.assert_refused(config_runs.dry_run(repo, name), key)
     assert not (repo / "results").exists()
 
 
 @pytest.mark.parametrize("case", [c for c in BAD if "enum" not in c])
-def test_check_config_names_the_key(merged, schema, repo, case, monkeypatch):
+def test_check_config_names_the_key(merged, schema, repo, case, monkeypatch, config_runs):
     """The same cases without Snakemake (the enums are the schema's, tested below)."""
     key, override = BAD[case]
     monkeypatch.chdir(repo)  # the measured image's relative path
     with pytest.raises(ValueError, match=key.replace("[", r"\[").replace("]", r"\]")):
-        check_config(_merge(merged, override), schema)
+        check_config(config_runs.merge(merged, override), schema)
 
 
-def test_good_sections_pass(merged, schema, repo, monkeypatch):
+def test_good_sections_pass(merged, schema, repo, monkeypatch, config_runs):
     monkeypatch.chdir(repo)
     check_config(merged, schema)
     ok = {"realism": {"measured": {**_MEAS, "air_rows": [0, 8]}}}
-    check_config(_merge(merged, ok), schema)
+    check_config(config_runs.merge(merged, ok), schema)
     sheet = {"source": {"datasheet": {**_SHEET, "bandwidth_nm": 50.0}}}
-    check_config(_merge(merged, sheet), schema)
-    check_config(_merge(merged, {"beam": {"lags": 23}}), schema)  # one pair of lines left
+    check_config(config_runs.merge(merged, sheet), schema)
+    check_config(
+        config_runs.merge(merged, {"beam": {"lags": 23}}), schema
+    )  # one pair of lines left
 
 
 def _beam_methods() -> set[str]:
