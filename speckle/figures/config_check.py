@@ -277,6 +277,16 @@ def _datasheet(sheet: Mapping | None, key: str) -> None:
         raise _reword(key, exc, list(sheet)) from None
 
 
+def _pixel_size(config: Mapping) -> float:
+    """Depth pixel (µm) of the source section (its datasheet's ``H/N`` when it has one)."""
+    sheet = config["source"].get("datasheet")
+    if sheet:
+        from ._config import system_from_config
+
+        return float(system_from_config(sheet).pixel_size)
+    return float(config["source"]["pixel_size"])
+
+
 def _source_pixels(config: Mapping) -> int:
     sheet = config["source"].get("datasheet")
     return int(sheet["camera_pixels"]) if sheet else int(config["source"]["n_pixels"])
@@ -317,6 +327,18 @@ def _beam(config: Mapping) -> None:
     # the volume is streamed: a chunk of lines of every line along x at once, and one tile column
     vn, vl = int(vol["n_pixels"]), int(vol["n_lines"])
     _memory(PIXEL_BYTES * int(vol["chunk"]) * vl * vn, "beam.volume.chunk")
+    from ..scene.shared import MAX_TILES
+
+    tile = vol["tile"] if isinstance(vol["tile"], list) else [vol["tile"]] * 3
+    span = vl * pitch + 2 * beam_reach(float(vol["waist_pitch"]) * pitch)
+    extent = (vn * _pixel_size(config), span, span)
+    tiles = math.prod(math.ceil(e / float(t)) + 1 for e, t in zip(extent, tile, strict=True))
+    if tiles > MAX_TILES:
+        raise ValueError(
+            f"config key beam.volume.tile = {vol['tile']!r} is too small: the volume's scene "
+            f"would visit ~{tiles:.3g} tiles, above speckle.scene.shared.MAX_TILES = "
+            f"{MAX_TILES:g}; use larger tiles (µm)"
+        )
 
 
 def _realism(config: Mapping) -> None:

@@ -38,6 +38,7 @@ BAD = {
         {"beam": {"volume": {"method": "nufft", "tol": 1e-20}}},
     ),
     "beam.volume finufft": ("beam.volume.method", {"beam": {"volume": {"method": "finufft"}}}),
+    "beam.volume tiles": ("beam.volume.tile", {"beam": {"volume": {"tile": 0.05}}}),
     "beam.lags empties": ("beam.lags", {"beam": {"lags": 24}}),
     "beam memory": ("beam.n_lines", {"beam": {"n_lines": 20_000_000}}),
     "beam.volume memory": (
