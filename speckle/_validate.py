@@ -14,6 +14,8 @@ import numpy as np
 __all__ = [
     "MAX_BYTES",
     "as_finite_array",
+    "broadcast",
+    "check_bool",
     "check_choice",
     "check_int",
     "check_memory",
@@ -89,6 +91,22 @@ def check_int(value: object, name: str, *, low: int | None = None, high: int | N
     return v
 
 
+def check_bool(value: object, name: str) -> bool:
+    """Return ``value`` as a ``bool`` after checking it is one (``True``/``False``/numpy bool).
+
+    Strings (``"False"`` is truthy), numbers (``0.5``) and arrays are refused: they would be
+    silently taken as a truth value.
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not a boolean.
+    """
+    if not isinstance(value, bool | np.bool_):
+        raise TypeError(f"{name} must be True or False, got {type(value).__name__} {value!r}")
+    return bool(value)
+
+
 def check_choice(value: object, name: str, choices: Iterable[str]) -> str:
     """Return ``value`` after checking it is one of ``choices``."""
     choices = tuple(choices)
@@ -130,6 +148,23 @@ def as_finite_array(value: object, name: str, *, dtype=float) -> np.ndarray:
         bad = int(np.size(arr) - np.count_nonzero(np.isfinite(arr)))
         raise ValueError(f"{name} must be finite; it holds {bad} NaN or infinite value(s)")
     return arr
+
+
+def broadcast(**arrays: np.ndarray) -> list[np.ndarray]:
+    """``np.broadcast_arrays`` of the named arrays, refusing mismatched shapes by name.
+
+    Raises
+    ------
+    ValueError
+        Naming every array and its shape when they do not broadcast together.
+    """
+    try:
+        return list(np.broadcast_arrays(*arrays.values()))
+    except ValueError:
+        shapes = ", ".join(f"{k} {np.shape(v)}" for k, v in arrays.items())
+        raise ValueError(
+            f"{', '.join(arrays)} must have broadcastable shapes; got {shapes}"
+        ) from None
 
 
 def check_memory(nbytes: float, name: str, what: str, limit: float | None = None) -> None:

@@ -36,6 +36,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from ._validate import check_bool, check_int
+
 __all__ = [
     "ENGINE",
     "atomic_path",
@@ -190,6 +192,13 @@ def _prepared(ds: xr.Dataset, path: str | os.PathLike) -> xr.Dataset:
     """A copy of ``ds`` ready to write: checked path, one complex precision, storable attrs."""
     if Path(path).is_dir():
         raise ValueError(f"path must be a file path, got the directory {str(path)!r}")
+    for kind, names in (("variable", ds.variables), ("dimension", ds.dims)):
+        for name in names:
+            if not isinstance(name, str) or not name or "/" in name:
+                raise ValueError(
+                    f"{kind} name {name!r} cannot be stored in netCDF: names must be non-empty "
+                    "strings without '/'; rename it (Dataset.rename)"
+                )
     ds = _complex_guard(ds.copy())
     ds.attrs = netcdf_safe_attrs(ds.attrs)
     for name in ds.variables:
@@ -210,7 +219,16 @@ def open_dataset(path: str | os.PathLike, *, load: bool = True) -> xr.Dataset:
     load : bool
         Load into memory and close the file (default); ``False`` keeps it lazy.
     """
-    ds = xr.open_dataset(path, engine=ENGINE, auto_complex=True)
+    check_bool(load, "load")
+    if not Path(path).is_file():
+        raise FileNotFoundError(f"path {str(path)!r} is not a file")
+    try:
+        ds = xr.open_dataset(path, engine=ENGINE, auto_complex=True)
+    except OSError as exc:
+        raise ValueError(
+            f"path {str(path)!r} is not a readable netCDF4/HDF5 file (as speckle.io.to_netcdf "
+            f"writes): {exc}"
+        ) from None
     if load:
         with ds:
             return ds.load()
@@ -246,6 +264,8 @@ def stream_to_netcdf(
 
     if not isinstance(ds, xr.Dataset):
         raise TypeError(f"ds must be an xarray Dataset, got {type(ds).__name__}")
+    check_bool(progress, "progress")
+    complevel = check_int(complevel, "complevel", low=0, high=9)
     ds = _prepared(ds, path)
     encoding = {}
     for name, var in ds.data_vars.items():

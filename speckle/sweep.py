@@ -19,7 +19,7 @@ import dask
 import numpy as np
 import xarray as xr
 
-from ._validate import check_choice, check_int
+from ._validate import check_bool, check_choice, check_int
 
 __all__ = ["SCHEDULERS", "dask_scheduler", "sweep"]
 
@@ -125,6 +125,7 @@ def sweep(
         The results concatenated along the grid dims (grid dims first).
     """
     check_choice(scheduler, "scheduler", SCHEDULERS)
+    check_bool(progress, "progress")
     if n_workers is not None:
         check_int(n_workers, "n_workers", low=1)
     if not grid:

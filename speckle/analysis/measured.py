@@ -44,6 +44,8 @@ __all__ = [
     "log_intensity",
     "log_speckle_moments",
     "log_statistics",
+    "measured_shape",
+    "roi_slices",
     "standardise",
     "standardised_log_pdf",
 ]
@@ -53,6 +55,84 @@ SCALES = ("linear", "log")
 #: Fully developed speckle: skewness and excess kurtosis of ln(I).
 GUMBEL_SKEWNESS = float(-2.0 * special.zeta(3.0) / (np.pi**2 / 6.0) ** 1.5)
 GUMBEL_EXCESS_KURTOSIS = 2.4
+
+
+def _read(path: str | os.PathLike, *, mmap: bool = False) -> np.ndarray:
+    """The 2-D array of a ``.npy`` or image file (memory-mapped ``.npy`` if ``mmap``)."""
+    p = Path(path)
+    if not p.is_file():
+        raise FileNotFoundError(f"measured image not found: {p}")
+    if p.suffix.lower() == ".npy":
+        raw = np.load(p, allow_pickle=False, mmap_mode="r" if mmap else None)
+    else:
+        import matplotlib.image
+
+        raw = matplotlib.image.imread(p)
+        if raw.ndim == 3:
+            raw = raw[..., :3].mean(axis=-1)
+    if raw.ndim != 2:
+        raise ValueError(f"measured image must be 2-D (depth, aline), got shape {raw.shape}")
+    return raw
+
+
+def measured_shape(path: str | os.PathLike) -> tuple[int, int]:
+    """Shape ``(depth, aline)`` of a measured image file, without loading a ``.npy`` file.
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``path`` is not a file.
+    ValueError
+        If the file does not hold a 2-D image.
+    """
+    shape = _read(path, mmap=True).shape
+    return int(shape[0]), int(shape[1])
+
+
+def roi_slices(roi: Mapping | None, shape: tuple[int, int]) -> dict[str, slice]:
+    """Slices ``{"depth": ..., "aline": ...}`` of a region of interest in an image of ``shape``.
+
+    Parameters
+    ----------
+    roi : mapping, optional
+        ``{"depth": [start, stop], "aline": [start, stop]}`` in pixel indices (half-open, either
+        key optional, ``None`` bounds allowed).
+    shape : (int, int)
+        Image shape ``(depth, aline)``.
+
+    Raises
+    ------
+    TypeError
+        If ``roi`` is not a mapping or a bound not an integer.
+    ValueError
+        Naming ``roi[key]``: unknown key, bounds beyond the image (never clipped), start not
+        below stop, or fewer than 2 x 2 pixels left.
+    """
+    sl = {"depth": slice(None), "aline": slice(None)}
+    if roi is not None and not isinstance(roi, Mapping):
+        raise TypeError(
+            "roi must be a mapping {'depth': [start, stop], 'aline': [start, stop]} of pixel "
+            f"indices, got {type(roi).__name__} {roi!r}"
+        )
+    for key, value in (roi or {}).items():
+        if key not in sl:
+            raise ValueError(f"roi keys must be 'depth' and/or 'aline', got {key!r}")
+        if value is None:
+            continue
+        if isinstance(value, str) or not hasattr(value, "__len__") or len(value) != 2:
+            raise ValueError(f"roi[{key!r}] must be [start, stop], got {value!r}")
+        size = shape[0 if key == "depth" else 1]
+        lo, hi = (
+            None if v is None else check_int(v, f"roi[{key!r}]", low=0, high=size) for v in value
+        )
+        if lo is not None and hi is not None and hi <= lo:
+            raise ValueError(f"roi[{key!r}] must have start < stop, got {value!r}")
+        sl[key] = slice(lo, hi)
+    rows = range(shape[0])[sl["depth"]]
+    cols = range(shape[1])[sl["aline"]]
+    if len(rows) < 2 or len(cols) < 2:
+        raise ValueError(f"roi {roi!r} leaves fewer than 2x2 pixels of a {tuple(shape)} image")
+    return sl
 
 
 def load_measured(
@@ -90,44 +170,11 @@ def load_measured(
         the file, and ``clip_low``/``clip_high`` (the dtype's limits for integer data).
     """
     check_choice(scale, "scale", SCALES)
-    p = Path(path)
-    if not p.is_file():
-        raise FileNotFoundError(f"measured image not found: {p}")
-    if p.suffix.lower() == ".npy":
-        raw = np.load(p, allow_pickle=False)
-    else:
-        import matplotlib.image
-
-        raw = matplotlib.image.imread(p)
-        if raw.ndim == 3:
-            raw = raw[..., :3].mean(axis=-1)
-    if raw.ndim != 2:
-        raise ValueError(f"measured image must be 2-D (depth, aline), got shape {raw.shape}")
+    raw = _read(path)
     data = as_finite_array(raw, "measured image")
-    sl = {"depth": slice(None), "aline": slice(None)}
-    if roi is not None and not isinstance(roi, Mapping):
-        raise TypeError(
-            "roi must be a mapping {'depth': [start, stop], 'aline': [start, stop]} of pixel "
-            f"indices, got {type(roi).__name__} {roi!r}"
-        )
-    for key, value in (roi or {}).items():
-        if key not in sl:
-            raise ValueError(f"roi keys must be 'depth' and/or 'aline', got {key!r}")
-        if value is None:
-            continue
-        if isinstance(value, str) or not hasattr(value, "__len__") or len(value) != 2:
-            raise ValueError(f"roi[{key!r}] must be [start, stop], got {value!r}")
-        size = data.shape[0 if key == "depth" else 1]
-        lo, hi = (
-            None if v is None else check_int(v, f"roi[{key!r}]", low=0, high=size) for v in value
-        )
-        if lo is not None and hi is not None and hi <= lo:
-            raise ValueError(f"roi[{key!r}] must have start < stop, got {value!r}")
-        sl[key] = slice(lo, hi)
+    sl = roi_slices(roi, data.shape)
     rows = np.arange(data.shape[0])[sl["depth"]]
     cols = np.arange(data.shape[1])[sl["aline"]]
-    if rows.size < 2 or cols.size < 2:
-        raise ValueError(f"roi {roi!r} leaves fewer than 2x2 pixels of a {data.shape} image")
     attrs = {
         "source": str(path),
         "scale": scale,

@@ -924,6 +924,7 @@ def fit_system(
     Returns
     -------
     SystemFit
+        The fitted twin: parameters with their standard errors (see :class:`SystemFit`).
 
     Raises
     ------

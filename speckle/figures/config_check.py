@@ -27,7 +27,14 @@ import numpy as np
 
 from .._validate import MAX_BYTES
 
-__all__ = ["check_config", "check_scan_table", "check_twin", "figure_bytes"]
+__all__ = [
+    "check_config",
+    "check_scan_table",
+    "check_sections",
+    "check_twin",
+    "figure_bytes",
+    "tol_floor",
+]
 
 #: Bytes per scatterer slot (z, amplitude as drawn and as complex128) and per image pixel
 #: (complex field, amplitude, intensity).
@@ -155,6 +162,7 @@ def check_config(config: Mapping, schema: Mapping | None = None) -> None:
         _memory(figure_bytes(images, int(lines), n, float(rho)), key)
     measured = config["fig4"]["measured"]
     _measured_roi(measured.get("path"), measured.get("roi") or {})
+    check_sections(config)
     if "despeckle" in config:
         from .despeckle import check_despeckle_config
 
@@ -317,3 +325,230 @@ def check_scan_table(rows: Sequence[Mapping], n_pixels: int) -> None:
             )
         seen[key] = i
         _density_floor(key[0], n_pixels, f"scan.table row {i} density")
+
+
+# --- sections added since the first reliability round (issue 21) ---------------------------
+# beam, source.datasheet, system, realism, speed_accuracy.beam: each value is checked by the
+# package function the job will call (datasheet, roi_slices) or by the same rule (tol floors,
+# memory), and the package's message is reworded with the config key.
+
+
+def _reword(key: str, exc: Exception, names: Sequence[str] = ()) -> ValueError:
+    """A ValueError naming ``key`` (and the first of ``names`` the message mentions)."""
+    msg = str(exc)
+    found = [(msg.index(n), -len(n), n) for n in names if n in msg]
+    hit = min(found)[2] if found else None  # the parameter the message names first
+    full = f"{key}.{hit}" if hit else key
+    return ValueError(f"config key {full}: {msg}")
+
+
+def tol_floor(method: str, n_pixels: int = 2) -> float:
+    """Smallest ``tol`` a synthesis ``method`` accepts (0 for ``direct`` and ``auto``).
+
+    ``nufft`` and ``finufft``: :data:`speckle.imaging.nufft.NUFFT_TOL_FLOOR` (float64 NUFFT);
+    ``nufft32``: twice the float32 rounding estimate
+    (:func:`speckle.imaging.nufft.float32_error_estimate`) of an image of ``n_pixels`` pixels
+    with no scatterer (a lower bound: more scatterers raise it; the method refuses at run time
+    what this bound lets through).
+    """
+    from ..imaging.nufft import NUFFT_TOL_FLOOR, float32_error_estimate
+
+    if method in ("nufft", "finufft"):
+        return NUFFT_TOL_FLOOR
+    if method == "nufft32":
+        return max(NUFFT_TOL_FLOOR, 2.0 * float32_error_estimate(0, max(int(n_pixels), 2), 1))
+    return 0.0
+
+
+def _tol(method: str, tol: float | None, key: str, n_pixels: int, also_nufft: bool) -> None:
+    """``tol`` (key ``key``) at or above the floor of ``method``; ``also_nufft``: the target
+    also images independent lines with ``nufft`` at this tol whenever ``method != direct``."""
+    if tol is None:
+        return
+    methods = [method] + (["nufft"] if also_nufft and method != "direct" else [])
+    for m in methods:
+        floor = tol_floor(m, n_pixels)
+        if tol < floor:
+            via = "" if m == method else " (the independent-line B-scan of this target)"
+            raise ValueError(
+                f"config key {key} = {tol:g} is below what method {m!r}{via} reaches: "
+                f"tol >= {floor:.3g}; raise {key} or use method 'direct'"
+            )
+
+
+def _no_finufft(method: str, key: str, what: str) -> None:
+    """The FINUFFT beam reference images 2-D scenes without focus only."""
+    if method == "finufft":
+        raise ValueError(
+            f"config key {key} = 'finufft' cannot image {what} (the FINUFFT beam reference "
+            "handles a 2-D scene without focus only); use 'auto', 'direct', 'nufft' or 'nufft32'"
+        )
+
+
+def _datasheet(sheet: Mapping | None, key: str) -> None:
+    """The datasheet as :func:`speckle.datasheet` takes it (all its constraints, named)."""
+    if sheet is None:
+        return
+    from ._config import system_from_config
+
+    try:
+        system_from_config(sheet)
+    except (TypeError, ValueError) as exc:
+        raise _reword(key, exc, list(sheet)) from None
+
+
+def _pixel_size(config: Mapping) -> float:
+    """Depth pixel (µm) of the source section (its datasheet's ``H/N`` when it has one)."""
+    sheet = config["source"].get("datasheet")
+    if sheet:
+        from ._config import system_from_config
+
+        return float(system_from_config(sheet).pixel_size)
+    return float(config["source"]["pixel_size"])
+
+
+def _source_pixels(config: Mapping) -> int:
+    sheet = config["source"].get("datasheet")
+    return int(sheet["camera_pixels"]) if sheet else int(config["source"]["n_pixels"])
+
+
+def _beam(config: Mapping) -> None:
+    beam = config["beam"]
+    n = int(beam.get("n_pixels") or _source_pixels(config))
+    lines = int(beam["n_lines"])
+    if int(beam["lags"]) >= lines:
+        raise ValueError(
+            f"config key beam.lags = {beam['lags']} leaves no pair of lines at the largest lag "
+            f"in a B-scan of beam.n_lines = {lines}; need beam.lags < beam.n_lines"
+        )
+    if int(beam["lags"]) >= n:
+        raise ValueError(
+            f"config key beam.lags = {beam['lags']} must be below the pixels per A-scan ({n})"
+        )
+    _tol(beam["method"], beam["tol"], "beam.tol", n, also_nufft=True)
+    vol = beam["volume"]
+    _no_finufft(vol["method"], "beam.volume.method", "a 3-D volume")
+    _tol(vol["method"], vol["tol"], "beam.volume.tol", int(vol["n_pixels"]), also_nufft=False)
+    from ..imaging.scan import beam_reach
+
+    pitch = float(beam["pitch"])
+    ratios = [float(r) for r in beam["waist_pitch"]]
+    halo_lines = 2 * beam_reach(max(ratios) * pitch) / pitch
+    scat = float(beam["density"]) * n * (lines + halo_lines)
+    img = (len(ratios) + 2) * lines * n  # the B-scans, their concatenation, independent lines
+    _memory(SCATTERER_BYTES * scat + PIXEL_BYTES * img, "beam.n_lines")
+    st = beam["strain"]
+    sl = int(st["n_lines"])
+    scat = float(beam["density"]) * n * (sl + 2 * beam_reach(float(st["waist_pitch"]) * pitch))
+    _memory(
+        SCATTERER_BYTES * scat * (1 + int(st["num"])) + PIXEL_BYTES * 4 * int(st["num"]) * sl * n,
+        "beam.strain.num",
+    )
+    # the volume is streamed: a chunk of lines of every line along x at once, and one tile column
+    vn, vl = int(vol["n_pixels"]), int(vol["n_lines"])
+    _memory(PIXEL_BYTES * int(vol["chunk"]) * vl * vn, "beam.volume.chunk")
+    from ..scene.shared import MAX_TILES
+
+    tile = vol["tile"] if isinstance(vol["tile"], list) else [vol["tile"]] * 3
+    span = vl * pitch + 2 * beam_reach(float(vol["waist_pitch"]) * pitch)
+    extent = (vn * _pixel_size(config), span, span)
+    tiles = math.prod(math.ceil(e / float(t)) + 1 for e, t in zip(extent, tile, strict=True))
+    if tiles > MAX_TILES:
+        raise ValueError(
+            f"config key beam.volume.tile = {vol['tile']!r} is too small: the volume's scene "
+            f"would visit ~{tiles:.3g} tiles, above speckle.scene.shared.MAX_TILES = "
+            f"{MAX_TILES:g}; use larger tiles (µm)"
+        )
+
+
+def _realism(config: Mapping) -> None:
+    real = config["realism"]
+    meas = real["measured"]
+    path = meas.get("path")
+    if path and os.path.isfile(path):
+        from ..analysis.measured import measured_shape, roi_slices
+
+        shape = measured_shape(path)
+        for key, roi in (
+            ("realism.measured.roi", meas.get("roi") or {}),
+            (
+                "realism.measured.air_rows",
+                {"depth": meas["air_rows"]} if meas.get("air_rows") else {},
+            ),
+        ):
+            try:
+                roi_slices(roi, shape)
+            except (TypeError, ValueError) as exc:
+                raise ValueError(
+                    f"config key {key} = {roi!r} does not fit the measured image {path} of shape "
+                    f"{shape} (depth, aline): {exc}"
+                ) from None
+    show = real.get("showcase")
+    if show is None:
+        return
+    n, p = int(show["n_pixels"]), float(show["pixel_size"])
+    depth = n * p
+    for name in ("focus", "surface", "interface", "bottom"):
+        if not 0.0 <= float(show[name]) <= depth:
+            raise ValueError(
+                f"config key realism.showcase.{name} = {show[name]!r} lies outside the scene: "
+                f"need 0 <= {name} <= n_pixels * pixel_size = {depth:g} µm"
+            )
+    if not float(show["surface"]) < float(show["interface"]) < float(show["bottom"]):
+        raise ValueError(
+            "config keys realism.showcase.surface < interface < bottom must increase; got "
+            f"{show['surface']}, {show['interface']}, {show['bottom']}"
+        )
+    _no_finufft(show["method"], "realism.showcase.method", "a focused beam")
+    _tol(show["method"], show["tol"], "realism.showcase.tol", n, also_nufft=False)
+    lines = int(show["n_lines"]) + 10 * float(show["waist"]) / float(show["pitch"])
+    nbytes = SCATTERER_BYTES * 2 * float(show["density"]) * n * lines + PIXEL_BYTES * 6 * n * lines
+    _memory(nbytes, "realism.showcase.n_lines")
+
+
+def _speed_beam(config: Mapping) -> None:
+    sec = config["speed_accuracy"]["beam"]
+    images = len(sec["methods"]) + 1  # every method's B-scan and the direct reference
+    for i, size in enumerate(sec["sizes"]):
+        nbytes = figure_bytes(
+            images, int(size["n_lines"]), int(size["n_pixels"]), float(size["density"])
+        )
+        _memory(nbytes, f"speed_accuracy.beam.sizes[{i}]")
+
+
+def _system(config: Mapping) -> None:
+    sysc = config["system"]
+    sheet = sysc["datasheet"]
+    m = int(sheet["camera_pixels"])
+    b = sysc["bscan"]
+    scat = max(1.0, float(b["density"]) * m) + len(b["interfaces"])
+    # the chain sums every scatterer's carrier over the camera pixels per A-line (complex128)
+    _memory(16.0 * int(b["n_alines"]) * scat * m, "system.bscan.n_alines")
+    _memory(16.0 * len(sysc["psf"]["depths"]) * m * 8, "system.psf.depths")
+    _memory(16.0 * int(sysc["rolloff"]["n_depths"]) * m * 8, "system.rolloff.n_depths")
+
+
+def check_sections(config: Mapping) -> None:
+    """Constraints of the ``beam``, ``source.datasheet``, ``system``, ``realism`` and
+    ``speed_accuracy.beam`` sections that JSON Schema cannot express.
+
+    * datasheets (``source.datasheet``, ``system.datasheet``): every constraint of
+      :func:`speckle.datasheet` (bandwidth below the wavelength, exactly one of
+      ``camera_range_nm`` / ``imaging_depth``, the camera range covering the FWHM band, ...);
+    * ``tol`` at or above the floor of the method (:func:`tol_floor`);
+    * ``beam.lags`` below ``beam.n_lines`` (a correlation at every lag);
+    * ``realism.measured.roi`` / ``air_rows`` inside the measured file (when it exists);
+      ``realism.showcase`` depths (``focus``, layers) inside the scene, layers in order;
+    * the memory each target holds at once within :data:`speckle._validate.MAX_BYTES`.
+
+    Raises
+    ------
+    ValueError
+        Naming the key path and the allowed values.
+    """
+    _datasheet(config["source"].get("datasheet"), "source.datasheet")
+    _datasheet(config["system"]["datasheet"], "system.datasheet")
+    _beam(config)
+    _realism(config)
+    _speed_beam(config)
+    _system(config)

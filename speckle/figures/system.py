@@ -118,7 +118,11 @@ def rolloff_dataset(system: System, n_depths: int, resample: str = "cubic") -> x
 
     ``measured_db``: ``20 log10(|A(q)|/sum S)`` through the chain (wavelength-linear camera,
     pixel width, spectrometer line, real detection, ``resample``); ``measured_exact_db``: the
-    same with exact k-linearisation; ``analytic_db``: :meth:`System.rolloff_db` (central pixel).
+    same with exact k-linearisation; ``camera_db``: :meth:`System.rolloff_db` (pixel width and
+    spectrometer line at the central pixel); ``analytic_db``: ``camera_db`` plus the
+    k-linearisation's own attenuation ``20 log10 |F(z)|``
+    (:func:`speckle.system.spectrometer.resampling_response`, 0 dB for ``"exact"``), the
+    closed form of the processing used.
     """
     # from 8 px: nearer the zero delay the mirror image's PSF overlaps the reflector's
     q = np.unique(np.linspace(8, system.n_pixels // 2 - 1, n_depths).round().astype(int))
@@ -129,11 +133,15 @@ def rolloff_dataset(system: System, n_depths: int, resample: str = "cubic") -> x
         img = sp.system_ascan(system, z, np.ones_like(z), resample=method)
         measured[name] = _db(img[np.arange(q.size), q], ref)
     level = attrs("level")
+    camera = system.rolloff_db(z[:, 0])
+    resampling = 20 * np.log10(np.abs(sp.resampling_response(system, z[:, 0], resample)))
     return xr.Dataset(
         {
             "measured_db": ("depth", measured["measured_db"], {**level, "resample": resample}),
             "measured_exact_db": ("depth", measured["measured_exact_db"], level),
-            "analytic_db": ("depth", system.rolloff_db(z[:, 0]), level),
+            "camera_db": ("depth", camera, {**level, "long_name": "pixel width and line"}),
+            "analytic_db": ("depth", camera + resampling, {**level, "resample": resample,
+                            "long_name": "pixel width, line and k-linearisation"}),
         },
         coords={"depth": coord("depth", z[:, 0], "reflector depth")},
         attrs={"imaging_depth": system.imaging_depth, "rolloff_6db": system.rolloff_6db_depth},
@@ -258,7 +266,9 @@ def plot_rolloff(ds: xr.Dataset) -> Figure:
     """Measured roll-off (markers) against the closed form (line)."""
     fig, axes = new_figure(1, 1, width=4.0, height=3.0)
     ax = axes[0, 0]
-    ax.plot(ds.depth, ds.analytic_db, "k-", lw=1, label="analytic")
+    ax.plot(ds.depth, ds.camera_db, "k:", lw=1, label="analytic, camera only (exact)")
+    ax.plot(ds.depth, ds.analytic_db, "k-", lw=1,
+            label=f"analytic, {ds.analytic_db.attrs['resample']} resampling")  # fmt: skip
     ax.plot(ds.depth, ds.measured_exact_db, "o", ms=3, mfc="none", label="chain, exact resampling")
     ax.plot(ds.depth, ds.measured_db, "x", ms=3,
             label=f"chain, {ds.measured_db.attrs['resample']} resampling")  # fmt: skip

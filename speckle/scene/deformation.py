@@ -29,7 +29,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import xarray as xr
 
-from .._validate import as_finite_array, check_real
+from .._validate import as_finite_array, check_bool, check_real
 from ..conventions import spacing
 from .scatterers import line_generator, random_scatterers
 from .shared import check_scene, is_shared
@@ -178,6 +178,31 @@ def uniaxial_displacement(
     return field
 
 
+def _component(value: object, shape: tuple[int, ...], label: str) -> np.ndarray:
+    """A displacement function's component ``label``: finite, a scalar or shaped like ``z``."""
+    v = as_finite_array(value, f"displacement {label}")
+    try:
+        return np.broadcast_to(v, shape)
+    except ValueError:
+        raise ValueError(
+            f"displacement function returned {label} of shape {v.shape}; it must be a scalar or "
+            f"shaped like its position arguments {shape} (µm)"
+        ) from None
+
+
+def _at_scatterers(values: np.ndarray, name: str) -> np.ndarray:
+    """Field values interpolated at the scatterers: NaN there means the field is undefined
+    where the scene has scatterers (NaN elsewhere in the field is allowed)."""
+    bad = int(np.size(values) - np.count_nonzero(np.isfinite(values)))
+    if bad:
+        raise ValueError(
+            f"displacement field {name} is NaN at {bad} scatterer(s) (NaN nodes of the field "
+            "reach them through linear interpolation); give finite values wherever the scene "
+            "has scatterers (NaN is allowed only where it has none)"
+        )
+    return values
+
+
 def _field_values(
     displacement: Displacement, z: np.ndarray, x: np.ndarray, aline: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -189,17 +214,7 @@ def _field_values(
                 f"displacement function must return u_z or (u_z, u_x); got a {len(out)}-tuple"
             )
         uz, ux = out if isinstance(out, tuple) else (out, 0.0)
-        vals = []
-        for label, v in (("u_z", uz), ("u_x", ux)):
-            v = as_finite_array(v, f"displacement {label}")
-            try:
-                vals.append(np.broadcast_to(v, z.shape))
-            except ValueError:
-                raise ValueError(
-                    f"displacement function returned {label} of shape {v.shape}; it must be a "
-                    f"scalar or shaped like its z, x arguments {z.shape} (µm)"
-                ) from None
-        return vals[0], vals[1]
+        return _component(uz, z.shape, "u_z"), _component(ux, z.shape, "u_x")
     if isinstance(displacement, xr.DataArray):
         displacement = xr.Dataset({"uz": displacement})
     if not isinstance(displacement, xr.Dataset):
@@ -225,7 +240,7 @@ def _field_values(
             vals = np.broadcast_to(vals.values.reshape(z.shape), z.shape)
         else:
             vals = np.full(z.shape, float(da.values))
-        out.append(as_finite_array(vals, f"displacement {name}"))
+        out.append(_at_scatterers(vals, name))
     return out[0], out[1]
 
 
@@ -286,7 +301,17 @@ def _check_component(
     for d in da.dims:
         if d in spatial and d not in da.coords:
             raise ValueError(f"displacement field {name!r} needs a coordinate {d!r} in µm")
-    as_finite_array(da.values, f"displacement field {name}")
+    try:
+        vals = np.asarray(da.values, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(
+            f"displacement field {name!r} must hold real numbers (µm), got dtype {da.dtype}"
+        ) from None
+    if da.dtype.kind in "bUSO" or np.any(np.isinf(vals)):
+        raise ValueError(
+            f"displacement field {name!r} must hold real, non-infinite values in µm (NaN marks "
+            "points outside the sample and is allowed where no scatterer lies)"
+        )
 
 
 def displace(scene: xr.Dataset, displacement: Displacement, *, wrap: bool = False) -> xr.Dataset:
@@ -321,6 +346,7 @@ def displace(scene: xr.Dataset, displacement: Displacement, *, wrap: bool = Fals
     ``(u_z, u_x[, u_y])``; xarray fields have dims among ``depth``, ``x`` (and ``y``) in µm,
     e.g. the FEM displacement ``uz``, ``ux`` over ``(depth, x)``.
     """
+    check_bool(wrap, "wrap")
     if is_shared(scene):
         return _displace_shared(scene, displacement)
     check_line_scene(scene)
@@ -381,10 +407,7 @@ def _shared_field_values(displacement: Displacement, pos: list[np.ndarray]) -> l
                 f"displacement returned {len(out)} components for a {len(pos)}-D scene"
             )
         out += [0.0] * (len(pos) - len(out))
-        return [
-            as_finite_array(np.broadcast_to(u, shape), f"displacement {n}")
-            for u, n in zip(out, names, strict=True)
-        ]
+        return [_component(u, shape, n) for u, n in zip(out, names, strict=True)]
     if isinstance(displacement, xr.DataArray):
         displacement = xr.Dataset({"uz": displacement})
     if not isinstance(displacement, xr.Dataset) or "uz" not in displacement:
@@ -406,7 +429,7 @@ def _shared_field_values(displacement: Displacement, pos: list[np.ndarray]) -> l
             vals = da.interp(pts, method="linear", kwargs={"fill_value": None}).values
         else:
             vals = np.full(shape, float(da.values))
-        out.append(as_finite_array(vals, f"displacement {var}"))
+        out.append(_at_scatterers(vals, var))
     return out
 
 
@@ -502,6 +525,7 @@ def uniaxial_strain(
     ValueError
         If a strain is outside (-1, 1) or the scene is not populated deep enough for it.
     """
+    check_bool(wrap, "wrap")
     if not is_shared(scene):
         check_line_scene(scene)
     s = check_strain(strain)
@@ -562,6 +586,7 @@ def translate(scene: xr.Dataset, dz: object, dx: float = 0.0, *, wrap: bool = Fa
     Returns a dataset with a ``shift`` dim (axial shift in µm) when ``dz`` is a sequence.
     Shared scenes move continuously (``wrap`` is then not used).
     """
+    check_bool(wrap, "wrap")
     if not is_shared(scene):
         check_line_scene(scene)
     dzs = as_finite_array(dz, "dz")

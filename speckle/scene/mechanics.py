@@ -49,13 +49,21 @@ from scipy.sparse.linalg import splu
 from skfem.helpers import ddot, div, sym_grad
 from skfem.models.elasticity import lame_parameters
 
-from speckle._validate import as_finite_array, check_choice, check_int, check_real
-from speckle.scene.regions import in_ellipse
+from speckle._validate import (
+    as_finite_array,
+    broadcast,
+    check_choice,
+    check_int,
+    check_memory,
+    check_real,
+)
+from speckle.scene.regions import check_modulus, in_ellipse
 
 __all__ = [
     "CONTACTS",
     "compress",
     "displacement_at",
+    "fem_bytes",
     "inclusion_labels",
     "inclusion_strain",
     "layer_strains",
@@ -217,23 +225,50 @@ def _subdivide(edges: np.ndarray, size: float) -> np.ndarray:
     return np.concatenate([*parts, edges[-1:]])
 
 
-def _per_label(value: Value, labels: np.ndarray, name: str, **bounds) -> np.ndarray:
+def _as_table(value: object, name: str, units: str | None) -> object:
+    """A per-region DataArray (dim ``region``, e.g. a regions table's column) as a mapping,
+    after checking its ``units`` attribute is ``units`` (the one unit of the quantity)."""
+    if not isinstance(value, xr.DataArray):
+        return value
+    have = value.attrs.get("units")
+    if units is not None and have is not None and have != units:
+        raise ValueError(
+            f"{name} is given in {have!r}; compress takes {units!r} (convert the values, e.g. "
+            "Pa / 1000 -> kPa, and set attrs['units'])"
+        )
+    if value.ndim == 0:
+        return float(value.values)
+    if value.dims != ("region",):
+        raise ValueError(
+            f"{name} as a DataArray must have the single dim 'region', got {value.dims}"
+        )
+    return {int(r): float(v) for r, v in zip(value.region.values, value.values, strict=True)}
+
+
+def _per_label(
+    value: Value, labels: np.ndarray, name: str, units: str | None = None, **bounds
+) -> np.ndarray:
     """Map each pixel's label to a checked material value."""
+    value = _as_table(value, name, units)
     present = np.unique(labels)
+    check = check_modulus if name == "youngs_modulus" else None
     if isinstance(value, Mapping):
         missing = sorted(set(present.tolist()) - set(value))
         if missing:
             raise ValueError(f"{name} has no value for label(s) {missing} of the label image")
         table = {int(k): check_real(v, f"{name}[{k}]", **bounds) for k, v in value.items()}
+        if check is not None:
+            table = {k: check(v, f"{name}[{k}]") for k, v in table.items()}
         lut = np.array([table[int(k)] for k in present])
         return lut[np.searchsorted(present, labels)]
-    return np.full(labels.shape, check_real(value, name, **bounds))
+    v = check_real(value, name, **bounds)
+    return np.full(labels.shape, v if check is None else check(v, name))
 
 
-def _check_poisson(nu: np.ndarray) -> None:
+def _check_poisson(nu: np.ndarray, name: str = "poisson_ratio") -> None:
     if np.any(nu >= NU_MAX):
         raise ValueError(
-            "poisson_ratio must be in [0, 0.5): 0.5 (incompressible) makes the Lamé parameter "
+            f"{name} must be in [0, 0.5): 0.5 (incompressible) makes the Lamé parameter "
             "lambda infinite (a displacement formulation cannot represent an incompressible "
             "solid); use at most 0.49999"
         )
@@ -271,6 +306,22 @@ def _grad_zz(w):
 @fem.Functional
 def _shear_xz(w):
     return 0.5 * (w["u"].grad[0][1] + w["u"].grad[1][0])
+
+
+#: Sparse-LU factor entries per degree of freedom ``d``: ``FILL_COEF * d**0.25`` (SuperLU with
+#: the MMD ordering on square label grids, 16x16 to 128x128 pixels: 10.5 to 11.8; rounded up),
+#: at 12 bytes each (value and index), with the stiffness matrix and the FE fields beside them.
+FILL_COEF = 16.0
+FILL_EXPONENT = 0.25
+
+
+def fem_bytes(n_nodes: int) -> float:
+    """Estimated peak memory (bytes) of :func:`compress` on a mesh of ``n_nodes`` nodes: the
+    sparse-LU factors (:data:`FILL_COEF`), the stiffness matrix and the FE fields."""
+    dofs = 2.0 * n_nodes
+    factor = FILL_COEF * dofs ** (1 + FILL_EXPONENT) * 12.0
+    stiffness = 18.0 * dofs * 12.0 * 2  # assembled twice (deviatoric + volumetric)
+    return factor + stiffness + 64.0 * dofs
 
 
 def _solver(a, b, **_):
@@ -375,8 +426,16 @@ def compress(
             f"[0, {depth[1] - depth[0]:g}] µm (at most one step below it), got {depth[0]:g}"
         )
     values = lab.values
-    young = _per_label(youngs_modulus, values, "youngs_modulus", low=0.0, low_inclusive=False)
-    nu = _per_label(poisson_ratio, values, "poisson_ratio", low=0.0)
+    if np.any(values < 0):
+        raise ValueError(
+            f"labels hold {int(np.count_nonzero(values < 0))} of {values.size} pixel(s) with "
+            "label -1 (no region): compress meshes every pixel and needs a material there; "
+            "give every pixel a region (e.g. a background) or crop the label image"
+        )
+    young = _per_label(
+        youngs_modulus, values, "youngs_modulus", "kPa", low=0.0, low_inclusive=False
+    )
+    nu = _per_label(poisson_ratio, values, "poisson_ratio", "1", low=0.0)
     _check_poisson(nu)
     z_edges, x_edges = _pixel_edges(depth, top=0.0), _pixel_edges(xcoord)
     largest = float(max(np.diff(z_edges).max(), np.diff(x_edges).max()))
@@ -390,6 +449,11 @@ def compress(
                 "span pixels (interfaces stay on element edges); coarsen the label image instead"
             )
     z_nodes, x_nodes = _subdivide(z_edges, size), _subdivide(x_edges, size)
+    check_memory(
+        fem_bytes(z_nodes.size * x_nodes.size),
+        "labels (pixels) or 1/mesh_size",
+        f"the FE solve on {z_nodes.size} x {x_nodes.size} nodes",
+    )
 
     mesh = fem.MeshQuad.init_tensor(x_nodes, z_nodes)  # first coordinate x, second z
     basis = fem.Basis(mesh, fem.ElementVector(fem.ElementQuad1()))
@@ -520,7 +584,7 @@ def displacement_at(result: xr.Dataset, z: object, x: object) -> tuple[np.ndarra
     """
     if not isinstance(result, xr.Dataset) or not {"uz_node", "ux_node"} <= set(result):
         raise TypeError("result must be the xarray.Dataset returned by speckle.compress")
-    zz, xx = np.broadcast_arrays(as_finite_array(z, "z"), as_finite_array(x, "x"))
+    zz, xx = broadcast(z=as_finite_array(z, "z"), x=as_finite_array(x, "x"))
     zn, xn = result["node_depth"].values, result["node_x"].values
     pts = np.stack([zz.ravel(), xx.ravel()], axis=-1)
     for k, (axis, name) in enumerate(((zn, "z"), (xn, "x"))):
@@ -634,11 +698,13 @@ def inclusion_strain(
         ``strain_zz`` and ``strain_xx`` inside the inclusion (compression positive).
     """
     s = check_real(strain, "strain", low=-1.0, high=1.0, low_inclusive=False, high_inclusive=False)
+    # only the ratio E_1/E enters: the rigid (1e12 x) and hole (1e-12 x) limits are allowed
     e0 = check_real(youngs_modulus, "youngs_modulus", low=0.0, low_inclusive=False)
     e1 = check_real(inclusion_modulus, "inclusion_modulus", low=0.0, low_inclusive=False)
     nu0 = check_real(poisson_ratio, "poisson_ratio", low=0.0)
     nu1 = check_real(inclusion_poisson_ratio, "inclusion_poisson_ratio", low=0.0)
-    _check_poisson(np.array([nu0, nu1]))
+    _check_poisson(np.array([nu0]))
+    _check_poisson(np.array([nu1]), "inclusion_poisson_ratio")
     lam0, mu0 = lame_parameters(e0, nu0)
     lam1, mu1 = lame_parameters(e1, nu1)
     kappa = 3 - 4 * nu0

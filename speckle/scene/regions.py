@@ -29,8 +29,10 @@ amplitude_model   --            one of :data:`speckle.scene.scatterers.AMPLITUDE
 backscatter       1             mean backscatter E|a|^2 of the region (amplitudes are scaled
                                 by its square root)
 attenuation       1/um          attenuation coefficient (default 0; used by system effects)
-depolarization    1             depolarisation ratio (default 0)
-youngs_modulus    Pa            Young's modulus (default 1e4, soft tissue; used by mechanics)
+depolarization    1             cross-polarized fraction in [0, 1] (default 0)
+youngs_modulus    kPa           Young's modulus (default 10, soft tissue; used by mechanics,
+                                whose :func:`~speckle.scene.mechanics.compress` takes kPa);
+                                values above :data:`MAX_MODULUS_KPA` are refused as given in Pa
 poisson_ratio     1             Poisson ratio (default 0.45)
 ================  ============  ===========================================================
 
@@ -53,10 +55,12 @@ from .scatterers import AMPLITUDE_MODELS
 
 __all__ = [
     "DEFAULTS",
+    "MAX_MODULUS_KPA",
     "SHAPES",
     "background",
     "bounding_box",
     "cell_density",
+    "check_modulus",
     "circle",
     "compile_regions",
     "ellipse",
@@ -70,13 +74,19 @@ __all__ = [
 
 SHAPES = ("background", "layer", "ellipse", "image")
 
+#: Largest Young's modulus accepted, kPa (1 GPa; soft tissue, cartilage and elastography phantoms
+#: are 0.1-1000 kPa). The package's one unit of modulus is kPa: a Pa value of a stiff material
+#: (above 1 MPa) lands above the cap and is refused; tables carry ``units = "kPa"``, which
+#: :func:`~speckle.scene.mechanics.compress` checks when given a DataArray.
+MAX_MODULUS_KPA = 1.0e6
+
 #: Default value of every property column other than density (units as in the module table).
 DEFAULTS: dict[str, object] = {
     "amplitude_model": "rayleigh",
     "backscatter": 1.0,
     "attenuation": 0.0,
     "depolarization": 0.0,
-    "youngs_modulus": 1.0e4,
+    "youngs_modulus": 10.0,
     "poisson_ratio": 0.45,
 }
 
@@ -85,7 +95,7 @@ _UNITS = {
     "backscatter": ("1", "mean backscatter E|a|^2"),
     "attenuation": ("1/um", "attenuation coefficient"),
     "depolarization": ("1", "depolarisation ratio"),
-    "youngs_modulus": ("Pa", "Young's modulus"),
+    "youngs_modulus": ("kPa", "Young's modulus"),
     "poisson_ratio": ("1", "Poisson ratio"),
 }
 _GEOMETRY = (
@@ -119,6 +129,25 @@ def cell_density(per_cell: float, pixel_size: float, pitch: float, ndim: int = 2
     return rho / (p * d ** (nd - 1))
 
 
+def check_modulus(value: object, name: str = "youngs_modulus") -> float:
+    """A Young's modulus in kPa: finite, > 0 and at most :data:`MAX_MODULUS_KPA`.
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not a real number.
+    ValueError
+        Naming ``name``, if it is out of range (a value above the cap is most likely in Pa).
+    """
+    e = check_real(value, name, low=0, low_inclusive=False)
+    if e > MAX_MODULUS_KPA:
+        raise ValueError(
+            f"{name} = {e:g} kPa is above {MAX_MODULUS_KPA:g} kPa (1 GPa): moduli are in kPa "
+            f"throughout speckle; a value in Pa must be divided by 1000 ({e / 1e3:g} kPa)"
+        )
+    return e
+
+
 def _properties(density: float, props: Mapping) -> dict:
     out = {"density": check_real(density, "density", low=0)}
     for name, value in {**DEFAULTS, **props}.items():
@@ -128,8 +157,12 @@ def _properties(density: float, props: Mapping) -> dict:
             if not isinstance(value, str):
                 raise TypeError(f"name must be a string, got {type(value).__name__}")
             out[name] = value
-        elif name in ("backscatter", "attenuation", "depolarization", "youngs_modulus"):
+        elif name in ("backscatter", "attenuation"):
             out[name] = check_real(value, name, low=0)
+        elif name == "depolarization":
+            out[name] = check_real(value, name, low=0, high=1)
+        elif name == "youngs_modulus":
+            out[name] = check_modulus(value, name)
         elif name == "poisson_ratio":
             out[name] = check_real(value, name, low=-1.0, high=0.5, low_inclusive=False)
         else:
@@ -145,7 +178,11 @@ def background(*, density: float, **props: object) -> dict:
 def layer(z_top: float, z_bottom: float, *, density: float, **props: object) -> dict:
     """A layer ``z_top <= z < z_bottom`` (µm) over all lateral positions."""
     top = check_real(z_top, "z_top")
-    bottom = check_real(z_bottom, "z_bottom", low=top, low_inclusive=False)
+    bottom = check_real(z_bottom, "z_bottom")
+    if bottom <= top:
+        raise ValueError(
+            f"z_bottom must be below z_top (z_top < z_bottom), got {top:g}, {bottom:g}"
+        )
     return {"shape": "layer", "z_top": top, "z_bottom": bottom, **_properties(density, props)}
 
 

@@ -39,12 +39,13 @@ from collections.abc import Sequence
 import numpy as np
 import xarray as xr
 
-from .._validate import check_int, check_real
+from .._validate import as_finite_array, check_int, check_memory, check_real
 from .regions import compile_regions, labels_of
 from .scatterers import draw_amplitudes
 
 __all__ = [
     "AXES",
+    "MAX_TILES",
     "check_scene",
     "from_lines",
     "is_shared",
@@ -55,6 +56,11 @@ __all__ = [
 
 #: Position variables of a shared scene, in order of the tile index.
 AXES = ("z", "x", "y")
+#: Most tiles one :func:`shared_scene` call visits (each is a Python-level draw per region).
+MAX_TILES = 10**6
+#: Bytes per scatterer while a scene is built: the complex table of (z, x[, y], amplitude,
+#: region) per tile, its concatenation, the sorted copy and the output variables.
+SCATTERER_BYTES = 5 * 16 * 4
 
 _ATTRS = {
     "z": {"units": "um", "long_name": "scatterer depth"},
@@ -77,7 +83,7 @@ def tile_generator(seed: int, tile: Sequence[int], region: int) -> np.random.Gen
 
 
 def _range(value: object, name: str) -> tuple[float, float]:
-    if value is None or len(value) != 2:
+    if isinstance(value, str | bytes) or not hasattr(value, "__len__") or len(value) != 2:
         raise ValueError(f"{name} must be (min, max) in µm, got {value!r}")
     lo = check_real(value[0], f"{name}[0]")
     hi = check_real(value[1], f"{name}[1]", low=lo, low_inclusive=False)
@@ -158,13 +164,35 @@ def shared_scene(
     if y_range is not None:
         ranges.append(_range(y_range, "y_range"))
     ndim = len(ranges)
-    tiles = np.broadcast_to(np.atleast_1d(np.asarray(tile, dtype=float)), (ndim,)).copy()
+    tv = np.atleast_1d(as_finite_array(tile, "tile"))
+    if tv.ndim != 1 or tv.size not in (1, ndim):
+        raise ValueError(
+            f"tile must be one edge or one per axis ({ndim} for a {ndim}-D scene) in µm, got "
+            f"shape {tv.shape}"
+        )
+    tiles = np.broadcast_to(tv, (ndim,)).copy()
     for i, t in enumerate(tiles):
         check_real(float(t), f"tile[{i}]", low=0, low_inclusive=False)
     lo = np.array([r[0] for r in ranges])
     hi = np.array([r[1] for r in ranges])
-    first = np.floor(lo / tiles).astype(int)
-    last = np.ceil(hi / tiles).astype(int)
+    first = np.floor(lo / tiles)
+    last = np.ceil(hi / tiles)
+    n_tiles = float(np.prod(last - first))
+    if n_tiles > MAX_TILES:
+        raise ValueError(
+            f"tile too small for the window: the scene would visit {n_tiles:.3g} tiles (each "
+            f"drawn in Python), above MAX_TILES = {MAX_TILES:g}; use a larger tile (µm) or a "
+            "smaller window"
+        )
+    # every visited tile is drawn whole (then cropped to the window)
+    volume = float(np.prod((last - first) * tiles))
+    expected = volume * sum(max(float(row["density"]), 0.0) for row in compiled)
+    check_memory(
+        SCATTERER_BYTES * (expected + 6 * np.sqrt(expected + 1)),
+        "tile, the window (z_range, x_range) or the densities",
+        f"drawing ~{expected:.3g} scatterers in the tiles covering the window",
+    )
+    first, last = first.astype(int), last.astype(int)
     parts = []
     for index in np.ndindex(*(last - first)):
         idx = tuple(int(i) for i in np.array(index) + first)

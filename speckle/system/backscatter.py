@@ -26,7 +26,12 @@ def backscatter(scene: xr.Dataset, value: float | xr.Dataset) -> xr.Dataset:
         Relative backscattered intensity (>= 0), or layers with ``backscatter``.
     """
     check_scene(scene)
-    b = xr.apply_ufunc(property_profile, scene.z, kwargs={"value": value, "name": "backscatter"})
+    try:
+        b = xr.apply_ufunc(
+            property_profile, scene.z, kwargs={"value": value, "name": "backscatter"}
+        )
+    except (TypeError, ValueError) as exc:  # name the parameter as the caller wrote it
+        raise type(exc)(f"value: {exc}") from None
     return scale_amplitudes(scene, np.sqrt(b))
 
 

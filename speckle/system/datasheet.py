@@ -20,7 +20,9 @@ Conventions and closed forms
 * The source is Gaussian in ``k`` about ``k_s = 2 pi n/lambda0`` with FWHM
   ``Delta_k = 2 pi n Delta_lambda / lambda0^2`` (the linearisation behind the textbook formula).
   The FWHM of the amplitude point-spread function is then ``4 ln2 / Delta_k =
-  (2 ln2/pi) lambda0^2/(n Delta_lambda)``, the axial resolution in tissue (in air for n = 1).
+  (2 ln2/pi) lambda0^2/(n Delta_lambda)`` (:attr:`System.gaussian_resolution`) for the uncut
+  Gaussian; :attr:`System.axial_resolution` is the FWHM of the spectrum actually built on the
+  camera's range, broader when the range cuts the tails (in tissue; in air for n = 1).
 * Roll-off (Yun et al., Opt. Express 11, 3598 (2003)): a camera pixel of width ``w`` in ``k``
   averages the carrier ``exp(2ikz)`` into ``sinc(w z)`` (``sinc x = sin x / x``), and a
   Gaussian spectrometer line of FWHM ``d_res`` in ``k`` into ``exp(-(d_res z)^2/(4 ln2))``.
@@ -38,13 +40,15 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 
-from .._validate import check_choice, check_int, check_real
+from .._validate import check_choice, check_int, check_memory, check_real
 from .rolloff import rolloff_power
 from .source import spectrum as _spectrum
 
-__all__ = ["EXAMPLE_SYSTEMS", "System", "datasheet", "example_system"]
+__all__ = ["EXAMPLE_SYSTEMS", "TRUNCATION_SHOWN", "System", "datasheet", "example_system"]
 
 FWHM_TO_WAIST = 1.0 / np.sqrt(2.0 * np.log(2.0))
+#: Relative PSF broadening by the camera's cut of the spectrum above which the summary shows it.
+TRUNCATION_SHOWN = 0.01
 
 
 @dataclass(frozen=True)
@@ -137,9 +141,49 @@ class System:
         return self.fwhm_k / self.delta_k
 
     @property
-    def axial_resolution(self) -> float:
-        """Axial resolution in the sample, ``(2 ln2/pi) lambda0^2/(n Delta_lambda)``, µm."""
+    def gaussian_resolution(self) -> float:
+        """Axial resolution of the untruncated Gaussian source, ``(2 ln2/pi) lambda0^2/(n
+        Delta_lambda)`` in µm (the textbook closed form; :attr:`axial_resolution` is the FWHM of
+        the spectrum actually built, broader when the camera cuts the Gaussian's tails)."""
         return 2 * np.log(2) / np.pi * self.wavelength**2 / (self.refractive_index * self.bandwidth)
+
+    @property
+    def axial_resolution(self) -> float:
+        """Axial resolution in the sample, µm: the FWHM of the amplitude PSF of the spectrum
+        this system builds (:attr:`psf_resolution`). The camera range cuts the Gaussian, e.g.
+        at its FWHM x 2 (840 nm / 50 nm, camera 790-890 nm): 4.69 µm instead of the closed form
+        :attr:`gaussian_resolution` 4.51 µm (n = 1.38)."""
+        return self.psf_resolution
+
+    @property
+    def psf_resolution(self) -> float:
+        """FWHM in µm of the amplitude PSF ``|sum_n S(k_n) exp(2i k_n z)|`` of the spectrum this
+        system builds (:meth:`spectrum`, sampled on the grid and cut at the camera's ends).
+
+        Equal to :attr:`gaussian_resolution` (the untruncated Gaussian's closed form) to sampling
+        accuracy when the camera holds the Gaussian's tails; broader when the camera range cuts
+        them. Found by root bracketing on ``|A(z)| = |A(0)|/2``.
+        """
+        from scipy.optimize import brentq
+
+        k = self.k0 + (np.arange(self.n_pixels) - self.n_pixels // 2) * self.wavenumber_step
+        w = np.exp(-4 * np.log(2) * ((k - self.source_wavenumber) / self.fwhm_k) ** 2)
+        kc = k - self.source_wavenumber
+
+        def half(z: float) -> float:
+            return abs(np.sum(w * np.exp(2j * kc * z))) / w.sum() - 0.5
+
+        z, step = 0.0, 0.05 * self.gaussian_resolution
+        while half(z + step) > 0:  # |A| falls monotonically to half its peak
+            z += step
+            if z > 0.5 * self.imaging_depth:
+                return float("nan")
+        return 2.0 * float(brentq(half, z, z + step, xtol=1e-12 * self.gaussian_resolution))
+
+    @property
+    def truncation(self) -> float:
+        """Relative broadening ``psf_resolution / gaussian_resolution - 1`` by the camera's cut."""
+        return self.psf_resolution / self.gaussian_resolution - 1.0
 
     @property
     def lateral_resolution(self) -> float | None:
@@ -201,7 +245,8 @@ class System:
             "wavelength bandwidth camera_pixels wavelength_min wavelength_max refractive_index "
             "beam_waist aline_pitch spectral_resolution fill_factor label sampling_interval "
             "n_pixels depth imaging_depth pixel_size k0 delta_k k0_dk source_wavenumber fwhm_k "
-            "fwhm_fraction axial_resolution lateral_resolution rolloff_6db_depth"
+            "fwhm_fraction gaussian_resolution axial_resolution lateral_resolution "
+            "rolloff_6db_depth"
         ).split()
         return {k: getattr(self, k) for k in keys}
 
@@ -222,7 +267,15 @@ class System:
             ("pixel size H/N", f"{self.pixel_size:.3f} µm"),
             ("k0, k0/Δk", f"{self.k0:.4f} rad/µm, {self.k0_dk:.3f}"),
             ("source FWHM in k", f"{self.fwhm_k:.4f} rad/µm ({self.fwhm_fraction:.3f} Δk)"),
-            ("axial resolution", f"{self.axial_resolution:.2f} µm (in the sample)"),
+            (
+                "axial resolution",
+                f"{self.axial_resolution:.2f} µm (in the sample)"
+                + (
+                    f"; the camera cuts the Gaussian ({self.gaussian_resolution:.2f} µm uncut)"
+                    if self.truncation > TRUNCATION_SHOWN
+                    else ""
+                ),
+            ),
             ("lateral resolution", "-" if lat is None else f"{lat:.2f} µm (FWHM)"),
             ("A-line pitch", "-" if self.aline_pitch is None else f"{self.aline_pitch:g} µm"),
             (
@@ -313,13 +366,19 @@ def datasheet(
             f"bandwidth_nm must be smaller than the central wavelength_nm={lam:g}, got {bw:g}"
         )
     m = check_int(camera_pixels, "camera_pixels", low=2)
+    # the camera, grid, spectrum and PSF arrays (a few float64 and complex128 of M points)
+    check_memory(64.0 * m, "camera_pixels", "the system's spectral arrays")
     n = check_real(refractive_index, "refractive_index", low=1.0)
     fill = check_real(fill_factor, "fill_factor", low=0, high=1, low_inclusive=False)
     res = check_real(spectral_resolution_nm, "spectral_resolution_nm", low=0)
     if (camera_range_nm is None) == (imaging_depth is None):
         raise ValueError("give exactly one of camera_range_nm (nm, nm) or imaging_depth (µm)")
     if camera_range_nm is not None:
-        if len(camera_range_nm) != 2:
+        if (
+            isinstance(camera_range_nm, str | bytes)
+            or not hasattr(camera_range_nm, "__len__")
+            or len(camera_range_nm) != 2
+        ):
             raise ValueError("camera_range_nm must be (lambda_min, lambda_max) in nm")
         lo = check_real(camera_range_nm[0], "camera_range_nm[0]", low=0, low_inclusive=False)
         hi = check_real(camera_range_nm[1], "camera_range_nm[1]", low=lo, low_inclusive=False)
@@ -333,9 +392,20 @@ def datasheet(
                 f"camera range would reach {lo:g} nm"
             )
     if lo > lam - bw / 2 or hi < lam + bw / 2:
+        what = (
+            "camera_range_nm" if camera_range_nm is not None else "imaging_depth (its camera range)"
+        )
         raise ValueError(
-            f"the camera range [{lo:g}, {hi:g}] nm must cover the FWHM band "
-            f"[{lam - bw / 2:g}, {lam + bw / 2:g}] nm of the source"
+            f"{what} [{lo:g}, {hi:g}] nm must cover the FWHM band "
+            f"[{lam - bw / 2:g}, {lam + bw / 2:g}] nm of the source (wavelength_nm +- "
+            "bandwidth_nm/2)"
+        )
+    step = (hi - lo) / m
+    if bw < 2 * step:
+        raise ValueError(
+            f"bandwidth_nm = {bw:g} spans fewer than 2 camera pixels of {step:.3g} nm: the camera "
+            "does not resolve the source spectrum; use more camera_pixels or a narrower "
+            "camera_range_nm (a longer imaging_depth)"
         )
     if beam_waist is not None and lateral_resolution is not None:
         raise ValueError("give at most one of beam_waist and lateral_resolution (µm)")
@@ -350,7 +420,7 @@ def datasheet(
     pitch = None
     if aline_pitch is not None:
         pitch = check_real(aline_pitch, "aline_pitch", low=0, low_inclusive=False)
-    return System(
+    system = System(
         wavelength=lam * 1e-3,
         bandwidth=bw * 1e-3,
         camera_pixels=m,
@@ -363,6 +433,7 @@ def datasheet(
         fill_factor=fill,
         label=str(label),
     )
+    return system
 
 
 #: Illustrative parameter sets of two common SD-OCT classes (not any vendor's specification).

@@ -12,9 +12,27 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .._validate import check_int, check_real
+from .._validate import as_finite_array, check_int, check_real
 
 __all__ = ["add_floor", "log_compress", "log_expand"]
+
+
+def _intensity(intensity: object, name: str = "intensity") -> xr.DataArray:
+    """Real, finite, non-negative intensities ``|A|^2`` (the shared check of this module)."""
+    if not isinstance(intensity, xr.DataArray):
+        raise TypeError(f"{name} must be an xarray.DataArray of intensities |A|^2")
+    if np.iscomplexobj(intensity):
+        raise TypeError(
+            f"{name} must be real intensities |A|^2, got a complex array (a field): pass "
+            "abs(field) ** 2 or the image's 'intensity' variable"
+        )
+    values = as_finite_array(intensity.values, name)  # NaN/inf refused with their count
+    negative = int(np.count_nonzero(values < 0))
+    if negative:
+        raise ValueError(
+            f"{name} must be >= 0 (an intensity); it holds {negative} negative value(s)"
+        )
+    return intensity
 
 
 def add_floor(
@@ -36,8 +54,7 @@ def add_floor(
     xarray.DataArray
         ``I + floor * <I>`` with attrs ``floor`` and ``floor_intensity`` recorded.
     """
-    if not isinstance(intensity, xr.DataArray):
-        raise TypeError("intensity must be an xarray.DataArray")
+    _intensity(intensity)
     b = check_real(floor, "floor", low=0)
     mean = (
         float(intensity.mean())
@@ -55,7 +72,8 @@ def log_compress(
     Parameters
     ----------
     intensity : xarray.DataArray
-        Intensities (> 0 where finite output is wanted; zeros map to the low clip).
+        Real intensities ``|A|^2`` (>= 0, finite; zeros map to the low clip). A complex field,
+        negative or NaN values are refused (with their count).
     gain : float
         Data units per natural-log unit of intensity (> 0).
     offset : float
@@ -63,8 +81,7 @@ def log_compress(
     bits : int or None
         Round to integers and clip to ``[0, 2**bits - 1]`` (1..16); ``None`` keeps floats.
     """
-    if not isinstance(intensity, xr.DataArray):
-        raise TypeError("intensity must be an xarray.DataArray")
+    _intensity(intensity)
     g = check_real(gain, "gain", low=0, low_inclusive=False)
     c = check_real(offset, "offset")
     with np.errstate(divide="ignore"):

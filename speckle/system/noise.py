@@ -30,7 +30,7 @@ import numpy as np
 import xarray as xr
 from scipy import special
 
-from .._validate import check_choice, check_int, check_real
+from .._validate import as_finite_array, check_choice, check_int, check_real
 from ._scene import line_rng
 from .source import index_shift_phase
 
@@ -55,6 +55,15 @@ def _weights(kind: str, spectrum: xr.DataArray | None, n: int) -> np.ndarray:
     if s.shape != (n,):
         raise ValueError(f"spectrum must hold n_pixels={n} weights, got shape {s.shape}")
     return s if kind == "shot" else s**2
+
+
+def _image_rng(seed: int, line: int, index: tuple[int, ...]) -> np.random.Generator:
+    """Noise stream of line ``line`` of the image at ``index`` along the leading dims (a 2-D
+    image, ``index = ()``, uses the line's stream of :func:`speckle.system._scene.line_rng`)."""
+    if not index:
+        return line_rng(seed, line, _STREAM)
+    key = (line, _STREAM, *(int(i) for i in index))
+    return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=key))
 
 
 def noise_autocorrelation(
@@ -100,11 +109,12 @@ def add_noise(
         From :func:`speckle.bscan`: ``field`` with dims ``(..., depth, aline)``; a scanned
         shared scene's ``(..., depth, x)`` works the same (lines along ``x``).
     snr_db : float
-        Mean signal intensity over mean noise intensity per pixel, in dB (finite).
+        Mean signal intensity over mean noise intensity per pixel, in dB, in [-300, 300].
     seed : int
-        Non-negative seed; line ``i`` (index along ``aline`` or ``x``) and every combination
-        of the other dims draw from their own stream, so the noise of a line does not depend
-        on how many lines are imaged.
+        Non-negative seed; line ``i`` (index along ``aline`` or ``x``) of each image (index
+        along every other dim, e.g. ``strain``) draws from its own stream, so the noise of a
+        line does not depend on how many lines or images there are (same seed: the same noise
+        on the strain-0 image whatever the number of strains).
     kind : {"white", "shot", "rin"}
         Spectral shape of the noise (see module docstring); not white needs ``spectrum``.
     spectrum : xarray.DataArray, optional
@@ -120,10 +130,11 @@ def add_noise(
     """
     if not isinstance(image, xr.Dataset) or "field" not in image:
         raise TypeError("image must be a Dataset from speckle.bscan with a complex 'field'")
-    snr = check_real(snr_db, "snr_db")
+    snr = check_real(snr_db, "snr_db", low=-300.0, high=300.0)  # 10^(snr/10) stays finite
     sd = check_int(seed, "seed", low=0)
     check_choice(kind, "kind", NOISE_KINDS)
     field = image.field
+    as_finite_array(field.values, "image field", dtype=complex)  # NaN refused with its count
     lateral = "aline" if "aline" in field.dims else "x"
     if "depth" not in field.dims or lateral not in field.dims:
         raise ValueError(f"field must have dims 'depth' and 'aline' (or 'x'), got {field.dims}")
@@ -143,9 +154,12 @@ def add_noise(
     lead = f.shape[:-2]
     noise = np.empty(f.shape, dtype=np.complex128)
     for i in range(f.sizes[lateral]):
-        rng = line_rng(sd, i, _STREAM)
-        e = (rng.standard_normal((*lead, n)) + 1j * rng.standard_normal((*lead, n))) / np.sqrt(2)
-        noise[..., i, :] = shift * np.fft.fft(e * amp, axis=-1)
+        for idx in np.ndindex(*lead):
+            # one stream per image (index along every leading dim) and line: the noise of an
+            # image never depends on how many other images (strains, channels, ...) there are
+            rng = _image_rng(sd, i, idx)
+            e = (rng.standard_normal(n) + 1j * rng.standard_normal(n)) / np.sqrt(2)
+            noise[(*idx, i)] = shift * np.fft.fft(e * amp)
     nz = f.copy(data=noise).transpose(*field.dims)
     noisy = field + nz
     out = image.assign(

@@ -21,23 +21,29 @@ Sampling: ``phi`` is drawn exactly (multivariate normal, covariance from ``D``) 
 step ``min(l/8, H/N)`` and linearly interpolated to the scatterer depths; each A-line (and each
 combination of other dims) has an independent screen.
 
-Shared scenes (scatterers at ``(z, x)`` seen by overlapping A-lines): the fluctuation is a 2-D
-field with separable Gaussian correlation ``s^2 exp(-u^2/l^2) exp(-v^2/l_x^2)`` (``v`` lateral,
-``l_x``: ``lateral_correlation_length``, default ``l``), and the path to a scatterer runs
-straight down at its own ``x`` (paraxial). Then ``phi(z, x)`` is Gaussian with covariance
+Shared scenes (scatterers at ``(z, x)``, or ``(z, x, y)`` in 3-D, seen by overlapping
+A-lines): the fluctuation is a 2-D (3-D) field with separable Gaussian correlation
+``s^2 exp(-u^2/l^2) exp(-v^2/l_x^2)`` (``v`` lateral, ``l_x``:
+``lateral_correlation_length``, default ``l``), and the path to a scatterer runs straight down
+at its own ``x`` (paraxial). Then ``phi(z, x)`` is Gaussian with covariance
 ``C_z(z1, z2) exp(-(x1 - x2)^2/l_x^2)``, ``C_z`` the single-line covariance above: the same
 variance ``4 k0^2 D(z)`` at every ``x``, and scatterers ``dx`` apart at one depth share the
 fraction ``exp(-dx^2/l_x^2)`` of it. One screen ``L_z W L_x^T`` (white ``W``) is drawn on a
-``(z, x)`` grid of step ``l/8`` by ``l_x/8`` over the scene and interpolated bilinearly.
+``(z, x)`` grid of step ``l/8`` by ``l_x/8`` over the scene and interpolated bilinearly; in 3-D
+the lateral factor is ``exp(-(dx^2 + dy^2)/l_x^2)`` (one square root per lateral axis, trilinear
+interpolation), so the screen varies in ``y`` as in ``x``.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import xarray as xr
 from scipy import special
+from scipy.interpolate import RegularGridInterpolator
 
-from .._validate import as_finite_array, check_int, check_real
+from .._validate import as_finite_array, check_int, check_memory, check_real
 from ..scene.shared import is_shared
 from ._scene import check_scene, line_rng, scale_amplitudes
 
@@ -47,13 +53,25 @@ _STREAM = 103
 _MAX_NODES = 2048
 
 
+#: Bounds of the screen parameters (far beyond any tissue, keeping every square finite).
+MAX_CORRELATION_LENGTH = 1e9  # µm
+MAX_K0 = 1e7  # rad/µm
+
+
+def _screen_parameters(index_variance: object, correlation_length: object, k0: object):
+    """``(s^2, l, k0)`` checked: ``0 <= s^2 <= 1``, ``0 < l <= 1e9`` µm, ``0 <= k0 <= 1e7``."""
+    s2 = check_real(index_variance, "index_variance", low=0, high=1)
+    ell = check_real(correlation_length, "correlation_length", low=0, low_inclusive=False,
+                     high=MAX_CORRELATION_LENGTH)  # fmt: skip
+    k = check_real(k0, "k0", low=0, high=MAX_K0)
+    return s2, ell, k
+
+
 def phase_structure(
     u: object, index_variance: float, correlation_length: float, k0: float
 ) -> np.ndarray:
     """``Var[phi(z + u) - phi(z)] = 4 k0^2 D(|u|)`` in rad^2 (module docstring)."""
-    s2 = check_real(index_variance, "index_variance", low=0)
-    ell = check_real(correlation_length, "correlation_length", low=0, low_inclusive=False)
-    k = check_real(k0, "k0", low=0)
+    s2, ell, k = _screen_parameters(index_variance, correlation_length, k0)
     uu = np.abs(as_finite_array(u, "u"))
     d = uu * ell * np.sqrt(np.pi) * special.erf(uu / ell) + ell**2 * np.expm1(-(uu**2) / ell**2)
     return 4 * k**2 * s2 * d
@@ -112,9 +130,7 @@ def phase_screens(
     """
     z = as_finite_array(depths, "depths").ravel()
     ns = check_int(n_screens, "n_screens", low=1)
-    s2 = check_real(index_variance, "index_variance", low=0)
-    ell = check_real(correlation_length, "correlation_length", low=0, low_inclusive=False)
-    k = check_real(k0, "k0", low=0)
+    s2, ell, k = _screen_parameters(index_variance, correlation_length, k0)
     sd = check_int(seed, "seed", low=0)
     return _draw(np.broadcast_to(z, (ns, z.size)), s2, ell, k, sd, ell / 8)
 
@@ -129,48 +145,57 @@ def shared_phase_screen(
     seed: int,
     lateral_correlation_length: float | None = None,
     step: float | None = None,
+    y: object | None = None,
 ) -> np.ndarray:
-    """Phase ``phi(z_j, x_j)`` in rad of one 2-D screen at scatterer positions (µm; module
-    docstring). ``step``: the depth grid step (default ``l/8``). Same arguments, same screen.
+    """Phase ``phi(z_j, x_j[, y_j])`` in rad of one 2-D (3-D with ``y``) screen at scatterer
+    positions (µm; module docstring). ``step``: the depth grid step (default ``l/8``). Same
+    arguments, same screen. In 3-D the lateral covariance ``exp(-(dx^2 + dy^2)/l_x^2)`` is the
+    product of one factor per lateral axis: the screen ``W`` (white, ``(z, x, y)`` grid) is
+    multiplied by the covariance square root along each axis and interpolated trilinearly.
+
+    Raises
+    ------
+    ValueError
+        On mismatched sizes, negative depths, a grid beyond the node or memory limit.
     """
     zz = as_finite_array(z, "z").ravel()
     xx = as_finite_array(x, "x").ravel()
-    if zz.shape != xx.shape:
-        raise ValueError(f"z and x must have the same size, got {zz.size} and {xx.size}")
+    yy = None if y is None else as_finite_array(y, "y").ravel()
+    if zz.shape != xx.shape or (yy is not None and yy.shape != zz.shape):
+        sizes = f"{zz.size} and {xx.size}" + ("" if yy is None else f" and {yy.size}")
+        raise ValueError(f"z, x (and y) must have the same size, got {sizes}")
     if np.any(zz < 0):
         raise ValueError("scatterer depths must be >= 0 µm (the path starts at z = 0)")
-    s2 = check_real(index_variance, "index_variance", low=0)
-    ell = check_real(correlation_length, "correlation_length", low=0, low_inclusive=False)
+    s2, ell, k = _screen_parameters(index_variance, correlation_length, k0)
     lx = (
         ell
         if lateral_correlation_length is None
         else check_real(
-            lateral_correlation_length, "lateral_correlation_length", low=0, low_inclusive=False
+            lateral_correlation_length,
+            "lateral_correlation_length",
+            low=0,
+            low_inclusive=False,
+            high=MAX_CORRELATION_LENGTH,
         )
     )
-    k = check_real(k0, "k0", low=0)
     sd = check_int(seed, "seed", low=0)
     if zz.size == 0:
         return np.zeros(0)
     gz = _grid(float(zz.max()), min(ell / 8, ell / 8 if step is None else step))
-    x0 = float(xx.min())
-    gx = x0 + _grid(float(xx.max()) - x0, lx / 8)
+    lateral = [xx] if yy is None else [xx, yy]
+    grids = [float(v.min()) + _grid(float(v.max()) - float(v.min()), lx / 8) for v in lateral]
+    shape = (gz.size, *(g.size for g in grids))
+    check_memory(3 * 8.0 * math.prod(shape), "lateral_correlation_length", "the phase screen")
     lz = _factor(gz, s2, ell, k)
-    lxm = _sqrt_cov(np.exp(-((gx[:, None] - gx[None, :]) ** 2) / lx**2))
+    factors = [_sqrt_cov(np.exp(-((g[:, None] - g[None, :]) ** 2) / lx**2)) for g in grids]
     rng = np.random.default_rng(np.random.SeedSequence(sd, spawn_key=(_STREAM,)))
-    screen = lz @ rng.standard_normal((gz.size, gx.size)) @ lxm.T
-    iz = np.clip(np.searchsorted(gz, zz) - 1, 0, gz.size - 2)
-    ix = np.clip(np.searchsorted(gx, xx) - 1, 0, max(gx.size - 2, 0))
-    if gx.size == 1:
-        return np.interp(zz, gz, screen[:, 0])
-    tz = (zz - gz[iz]) / (gz[iz + 1] - gz[iz])
-    tx = (xx - gx[ix]) / (gx[ix + 1] - gx[ix])
-    return (
-        (1 - tz) * (1 - tx) * screen[iz, ix]
-        + tz * (1 - tx) * screen[iz + 1, ix]
-        + (1 - tz) * tx * screen[iz, ix + 1]
-        + tz * tx * screen[iz + 1, ix + 1]
-    )
+    if yy is None:
+        screen = lz @ rng.standard_normal(shape) @ factors[0].T
+    else:
+        screen = np.einsum("ia,abc->ibc", lz, rng.standard_normal(shape))
+        screen = np.einsum("jb,ibc->ijc", factors[0], screen)
+        screen = np.einsum("kc,ijc->ijk", factors[1], screen)
+    return RegularGridInterpolator((gz, *grids), screen)(np.column_stack([zz, *lateral]))
 
 
 def phase_perturb(
@@ -211,6 +236,7 @@ def phase_perturb(
         phi = shared_phase_screen(
             scene.z.values,
             scene.x.values,
+            y=scene.y.values if "y" in scene.data_vars else None,
             index_variance=index_variance,
             correlation_length=correlation_length,
             k0=k0,
@@ -237,9 +263,7 @@ def phase_perturb(
         )
     if "aline" not in scene.z.dims:
         raise ValueError("scene must have an 'aline' dim (or be a shared scene)")
-    s2 = check_real(index_variance, "index_variance", low=0)
-    ell = check_real(correlation_length, "correlation_length", low=0, low_inclusive=False)
-    k = check_real(k0, "k0", low=0)
+    s2, ell, k = _screen_parameters(index_variance, correlation_length, k0)
     sd = check_int(seed, "seed", low=0)
     step = ell / 8
     if "depth" in scene.attrs and "n_pixels" in scene.attrs:

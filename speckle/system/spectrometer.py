@@ -42,7 +42,14 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from .._validate import as_finite_array, check_choice, check_int, check_real
+from .._validate import (
+    as_finite_array,
+    check_bool,
+    check_choice,
+    check_int,
+    check_memory,
+    check_real,
+)
 from .rolloff import carrier_response, rolloff_power
 
 __all__ = [
@@ -56,9 +63,12 @@ __all__ = [
     "check_dispersion",
     "dispersion_phase",
     "interferogram",
+    "interferogram_bytes",
+    "interpolation_gain",
     "linearize",
     "process",
     "resampling_error",
+    "resampling_response",
     "rolloff_power",
     "spectral_window",
     "system_ascan",
@@ -167,32 +177,120 @@ def axial_intensity_correlation(
     return (rho**2 * np.abs(c) ** 2 + rho * kap * d) / (rho**2 * c0**2 + rho * kap * d0)
 
 
+def _b3(x: np.ndarray) -> np.ndarray:
+    """Cubic B-spline ``beta3(x)`` (support ``|x| < 2``)."""
+    a = np.abs(x)
+    return np.where(a < 1, 2 / 3 - a**2 + a**3 / 2, np.where(a < 2, (2 - a) ** 3 / 6, 0.0))
+
+
+def interpolation_gain(theta: object, t: object, method: str) -> np.ndarray:
+    """Complex gain of the interpolation kernel on a tone: the kernel's closed-form response.
+
+    A tone ``exp(i theta j)`` sampled at the integers (``theta`` rad per input sample) and
+    interpolated at ``j0 + t`` (``0 <= t < 1``) gives ``sum_j h(t - j) exp(i theta j)``; divided
+    by the true value ``exp(i theta t)`` this is
+
+    * ``"linear"`` (hat kernel): ``H = (1 - t) exp(-i theta t) + t exp(i theta (1 - t))``;
+      its mean over ``t`` is the hat's Fourier transform ``sinc^2(theta/2)``;
+    * ``"cubic"`` (interpolating cubic spline, the cardinal spline of the not-a-knot spline away
+      from the ends): ``H = sum_{j=-1}^{2} beta3(t - j) exp(i theta (j - t)) / ((2 + cos theta)/3)``
+      (B-spline weights, divided by the B-spline's response at the samples); its mean over
+      ``t`` is ``sinc^4(theta/2) 3/(2 + cos theta)``;
+    * ``"exact"``: 1.
+
+    ``sinc x = sin x / x``. ``H = 1`` at ``t = 0`` (both kernels interpolate).
+
+    Parameters
+    ----------
+    theta : array_like
+        Tone phase per input sample, rad.
+    t : array_like
+        Fractional position of the output point between input samples, in [0, 1]; broadcast
+        with ``theta``.
+    method : {"linear", "cubic", "exact"}
+        The interpolation.
+
+    Returns
+    -------
+    numpy.ndarray
+        Complex gain, the broadcast shape of ``theta`` and ``t``.
+    """
+    th = as_finite_array(theta, "theta")
+    tt = as_finite_array(t, "t")
+    check_choice(method, "method", ("linear", "cubic", "exact"))
+    if tt.size and (tt.min() < 0 or tt.max() > 1):
+        raise ValueError(f"t must lie in [0, 1], got values in [{tt.min():g}, {tt.max():g}]")
+    th, tt = np.broadcast_arrays(th, tt)
+    if method == "exact":
+        return np.ones(th.shape, complex)
+    if method == "linear":
+        return (1 - tt) * np.exp(-1j * th * tt) + tt * np.exp(1j * th * (1 - tt))
+    s = sum(np.exp(1j * th * (j - tt)) * _b3(tt - j) for j in (-1, 0, 1, 2))
+    return s / ((2 + np.cos(th)) / 3)
+
+
 def resampling_error(theta: object, method: str) -> np.ndarray:
     """RMS error of resampling a unit tone, from the interpolation kernel's response.
 
-    A tone advancing ``theta`` rad per input sample, interpolated at a fractional position
-    ``t`` between samples, gives ``sum_j h(t - j) exp(i theta j)`` instead of
-    ``exp(i theta t)``: for ``"linear"`` ``(1 - t) + t exp(i theta)``, for ``"cubic"`` the
-    cardinal cubic spline (B-spline weights divided by ``(2 + cos theta)/3``). Returned is the
-    RMS over ``t`` uniform in [0, 1) (128-point Gauss-Legendre quadrature). For small ``theta``
-    it grows as ``theta^2/(2 sqrt 30)`` (linear) and ``theta^4`` (cubic): with ``theta = 2 z h``
-    (``h`` the camera step in ``k``), errors grow with depth as ``z^2`` and ``z^4``.
+    ``|H(theta, t) - 1|`` (:func:`interpolation_gain`) in RMS over ``t`` uniform in [0, 1)
+    (128-point Gauss-Legendre quadrature). For small ``theta`` it grows as
+    ``theta^2/(2 sqrt 30)`` (linear) and ``theta^4`` (cubic): with ``theta = 2 z h`` (``h`` the
+    camera step in ``k``), errors grow with depth as ``z^2`` and ``z^4``.
     """
     th = as_finite_array(theta, "theta")[..., None]
     check_choice(method, "method", ("linear", "cubic"))
     x, wq = np.polynomial.legendre.leggauss(128)
     t, wq = (x + 1) / 2, wq / 2
-    if method == "linear":
-        s = (1 - t) + t * np.exp(1j * th)
-    else:
-
-        def b3(x):
-            a = np.abs(x)
-            return np.where(a < 1, 2 / 3 - a**2 + a**3 / 2, np.where(a < 2, (2 - a) ** 3 / 6, 0))
-
-        s = sum(np.exp(1j * th * j) * b3(t - j) for j in (-1, 0, 1, 2)) / ((2 + np.cos(th)) / 3)
-    err2 = np.abs(s - np.exp(1j * th * t)) ** 2
+    err2 = np.abs(interpolation_gain(th, t, method) - 1) ** 2
     return np.sqrt(err2 @ wq)
+
+
+def resampling_response(system, depth: object, method: str) -> np.ndarray:
+    """Amplitude factor of the k-linearisation on a reflector's peak, from the kernel's response.
+
+    The processing interpolates the wavelength-linear camera signal onto the linear-``k`` grid.
+    At grid point ``k_n`` between camera pixels ``i`` and ``i + 1`` (step ``h_n``, fractional
+    position ``t_n``) a reflector at depth ``z`` is a tone of ``theta_n = 2 z h_n`` per camera
+    sample, so the interpolated signal is the exact one times :func:`interpolation_gain`
+    ``H(theta_n, t_n)``. The DFT peak (pixel of ``z``) sums the grid samples weighted by the
+    source, hence the factor
+
+        ``F(z) = sum_n S(k_n) H(2 z h_n, t_n) / sum_n S(k_n)``
+
+    (complex; ``|F|^2`` is the power attenuation). It neglects the change of the camera step
+    within the kernel's support and the spline's end conditions (both second order). The
+    fractional positions are the system's own (they drift slowly across the camera, so ``t``
+    is not uniform and the mean response ``sinc^2(theta/2)`` would not do).
+
+    Parameters
+    ----------
+    system : speckle.system.datasheet.System
+        The system (wavelength-linear camera, processing grid).
+    depth : array_like
+        Reflector depths ``z`` in µm (medium).
+    method : {"linear", "cubic", "exact"}
+        The k-linearisation of :func:`system_ascan` (``"exact"``: 1).
+
+    Returns
+    -------
+    numpy.ndarray
+        Complex factor, shape of ``depth``.
+    """
+    z = as_finite_array(depth, "depth")
+    check_choice(method, "method", ("linear", "cubic", "exact"))
+    grid = grid_wavenumbers(system)
+    cam = camera_sampling(system)["wavenumber"]
+    i = np.clip(np.searchsorted(cam, grid, side="right") - 1, 0, cam.size - 2)
+    h = cam[i + 1] - cam[i]
+    t = np.clip((grid - cam[i]) / h, 0.0, 1.0)
+    weights = source_weights(system, grid)
+    out = np.empty(z.shape, complex)
+    flat = z.ravel()
+    for j0 in range(0, flat.size, max(1, CHUNK_ELEMENTS // grid.size)):
+        zz = flat[j0 : j0 + max(1, CHUNK_ELEMENTS // grid.size), None]
+        gain = interpolation_gain(2 * zz * h, t, method)
+        out.ravel()[j0 : j0 + zz.shape[0]] = gain @ weights / weights.sum()
+    return out
 
 
 # --- camera ---------------------------------------------------------------------------------
@@ -267,6 +365,8 @@ def interferogram(
         Shape (..., K); complex128 for ``"complex"``, float64 for ``"real"``.
     """
     check_choice(detection, "detection", DETECTIONS)
+    check_bool(dc, "dc")
+    check_bool(autocorrelation, "autocorrelation")
     k = as_finite_array(wavenumber, "wavenumber")
     if k.ndim != 1 or k.size < 2:
         raise ValueError("wavenumber must be 1-D with at least 2 camera pixels")
@@ -291,6 +391,12 @@ def interferogram(
         )
     batch = zz.shape[:-1]
     z2, a2 = zz.reshape(-1, zz.shape[-1]), aa.reshape(-1, zz.shape[-1])
+    finite = bool(np.any(w) or np.any(r))
+    check_memory(
+        interferogram_bytes(z2.shape[0], z2.shape[1], k.size, method, finite, autocorrelation),
+        "z (lines x scatterers) or the camera pixels",
+        "the camera signal",
+    )
     carrier = _carrier(z2, a2, k, w, r, method, eps)
     cross = np.sqrt(pr) * s * phase * carrier
     out = cross if detection == "complex" else 2 * cross.real
@@ -301,6 +407,32 @@ def interferogram(
         auto = np.abs(carrier) ** 2 if ideal else _autocorrelation(z2, a2, k, w, r, method, eps)
         out = out + s * auto
     return out.reshape(*batch, k.size)
+
+
+def interferogram_bytes(
+    lines: int,
+    scatterers: int,
+    pixels: int,
+    method: str = "direct",
+    finite_pixels: bool = True,
+    autocorrelation: bool = False,
+) -> float:
+    """Estimated peak memory (bytes) of :func:`interferogram`.
+
+    The signal and its terms (3 complex (lines, pixels) arrays), the direct sum's chunk
+    (:data:`CHUNK_ELEMENTS` complex phase factors, twice with a pixel response), the Chebyshev
+    coefficients of ``"finufft"`` with a varying response (up to 256 terms per scatterer, the
+    values and the coefficients), and the pair sources of the autocorrelation of finite pixels
+    (``M (M - 1)/2`` pairs of one line: two indices, a depth and a product).
+    """
+    out = 3 * 16.0 * lines * pixels
+    work = 2 * 16.0 * CHUNK_ELEMENTS
+    if method == "finufft" and finite_pixels:
+        work = max(work, 2 * 16.0 * 256 * lines * scatterers)
+    pairs = 0.0
+    if autocorrelation and finite_pixels:
+        pairs = 40.0 * scatterers * (scatterers - 1) / 2 + 16.0 * pixels
+    return out + work + pairs
 
 
 def _carrier(z, a, k, w, r, method, tol):
@@ -424,6 +556,19 @@ def _autocorrelation(z, a, k, w, r, method="direct", tol=1e-12):
 
 
 # --- processing -----------------------------------------------------------------------------
+def _camera_signal(signal: object) -> np.ndarray:
+    """A camera signal (..., K): real or complex numbers, every one finite (NaN counted)."""
+    y = np.asarray(signal)
+    if not (y.dtype.kind in "iufc" and y.ndim >= 1):
+        raise TypeError(
+            f"signal must be a numeric array (..., K) of camera samples, got dtype {y.dtype} "
+            f"and shape {y.shape}"
+        )
+    if y.shape[-1] < 2 or y.size == 0:
+        raise ValueError(f"signal must hold >= 2 camera samples along its last dim, got {y.shape}")
+    return as_finite_array(y, "signal", dtype=np.complex128 if y.dtype.kind == "c" else float)
+
+
 def linearize(signal: object, wavenumber: object, grid: object, method: str = "cubic"):
     """Resample a camera signal from the pixel wavenumbers onto the linear-``k`` grid.
 
@@ -444,7 +589,7 @@ def linearize(signal: object, wavenumber: object, grid: object, method: str = "c
     check_choice(method, "method", ("linear", "cubic"))
     k = as_finite_array(wavenumber, "wavenumber")
     g = as_finite_array(grid, "grid")
-    y = np.asarray(signal)
+    y = _camera_signal(signal)
     if y.shape[-1:] != k.shape:
         raise ValueError(f"signal's last dim must match wavenumber ({k.size}), got {y.shape}")
     dk = np.diff(k)
@@ -520,12 +665,11 @@ def process(
     """
     check_choice(resample, "resample", ("none", "linear", "cubic"))
     check_choice(window, "window", WINDOWS)
+    fwhm = check_real(window_fwhm_fraction, "window_fwhm_fraction", low=0, low_inclusive=False)
     comp = check_dispersion(dispersion)
     g = as_finite_array(grid, "grid")
     kc = check_real(k0, "k0", low=0)
-    y = np.asarray(signal)
-    if not (np.issubdtype(y.dtype, np.number) and y.ndim >= 1):
-        raise TypeError("signal must be a numeric array (..., K)")
+    y = _camera_signal(signal)
     if background is not None:
         if isinstance(background, str):
             check_choice(background, "background", ("mean",))
@@ -551,7 +695,7 @@ def process(
         if wavenumber is None:
             raise ValueError(f"resample={resample!r} needs wavenumber= (camera pixels, rad/µm)")
         y = linearize(y, wavenumber, g, resample)
-    f = y * spectral_window(g.size, window, window_fwhm_fraction)
+    f = y * spectral_window(g.size, window, fwhm)
     if comp:
         f = f * np.exp(-1j * dispersion_phase(g, kc, comp))
     return to_pixels(f.astype(np.complex128, copy=False))
@@ -637,6 +781,9 @@ def camera_signal(
     parameters: :func:`camera_sampling`, :func:`interferogram`.
     """
     grid = grid_wavenumbers(system)
+    for flag, name in ((pixel_width, "pixel_width"), (resolution, "resolution"),
+                       (on_grid, "on_grid")):  # fmt: skip
+        check_bool(flag, name)
     cam = camera_sampling(system, sampling, at=grid if on_grid else None)
     sig = interferogram(
         z,

@@ -8,11 +8,6 @@ the schema's method enum is compared with the package's method registry.
 
 from __future__ import annotations
 
-import copy
-import os
-import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -38,24 +33,21 @@ BAD_TABLES = {
     "empty": "density\tk0_dk\tspectrum\n",
     "duplicate": "density\tk0_dk\tspectrum\n4.0\t10.0\trectangular\n4.0\t10.0\trectangular\n",
 }
-IGNORE = shutil.ignore_patterns(
-    ".git", ".snakemake", "results", "__pycache__", ".pytest_cache", ".hypothesis", "*.egg-info"
-)
 
 
 @pytest.fixture(scope="module")
-def repo(tmp_path_factory, repo_root) -> Path:
+def repo(tmp_path_factory, config_runs) -> Path:
     """A copy of the repository (dry runs write .snakemake metadata)."""
-    dest = tmp_path_factory.mktemp("cfg") / "repo"
-    shutil.copytree(repo_root, dest, ignore=IGNORE)
-    return dest
+    return config_runs.copy_repo(tmp_path_factory.mktemp("cfg") / "repo")
 
 
 @pytest.fixture(scope="module")
-def merged(repo_root) -> dict:
+def merged(repo_root, config_runs) -> dict:
     """The CI configuration as Snakemake merges it (defaults, then ci.yaml)."""
     base = yaml.safe_load((repo_root / "workflow/config/config.yaml").read_text())
-    return _merge(base, yaml.safe_load((repo_root / "workflow/config/ci.yaml").read_text()))
+    return config_runs.merge(
+        base, yaml.safe_load((repo_root / "workflow/config/ci.yaml").read_text())
+    )
 
 
 @pytest.fixture(scope="module")
@@ -63,71 +55,41 @@ def schema(repo_root) -> dict:
     return yaml.safe_load((repo_root / SCHEMA).read_text())
 
 
-def _merge(base: dict, over: dict) -> dict:
-    out = copy.deepcopy(base)
-    for key, value in over.items():
-        if isinstance(value, dict) and isinstance(out.get(key), dict):
-            out[key] = _merge(out[key], value)
-        else:
-            out[key] = value
-    return out
-
-
-def dry_run(repo: Path, *args: str) -> subprocess.CompletedProcess:
-    env = {
-        **os.environ,
-        "PYTHONPATH": os.pathsep.join([str(repo), *filter(None, [os.environ.get("PYTHONPATH")])]),
-    }
-    cmd = [sys.executable, "-m", "snakemake", "-n", "--directory", str(repo)]
-    cmd += ["--snakefile", str(repo / "Snakefile"), "--configfile", "workflow/config/ci.yaml"]
-    proc = subprocess.run([*cmd, *args], cwd=repo, env=env, capture_output=True, text=True)
-    proc.stdout += proc.stderr
-    return proc
-
-
-def _assert_refused(proc: subprocess.CompletedProcess, key: str) -> None:
-    assert proc.returncode != 0, proc.stdout[-3000:]
-    assert "Job stats" not in proc.stdout, "jobs were planned"
-    parts = key.split(" ")[0].replace("[", ".").replace("]", "").split(".")
-    if "ValidationError" in proc.stdout:  # schema error: jsonschema names the path in parts
-        assert all(p in proc.stdout for p in parts), proc.stdout[-3000:]
-    else:
-        assert key.split(" ")[0] in proc.stdout, proc.stdout[-3000:]
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("key", list(BAD_CONFIGS))
-def test_bad_config_stops_before_any_job(repo, key):
+def test_bad_config_stops_before_any_job(repo, key, config_runs):
     path = repo / f"bad_{abs(hash(key))}.yaml"
     path.write_text(yaml.safe_dump(BAD_CONFIGS[key]))
-    _assert_refused(dry_run(repo, path.name), key)
+    config_runs.assert_refused(config_runs.dry_run(repo, path.name), key)
     assert not (repo / "results").exists()
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(BAD_TABLES))
-def test_bad_scan_table_stops_before_any_job(repo, name):
+def test_bad_scan_table_stops_before_any_job(repo, name, config_runs):
     table = repo / f"scan_{name}.tsv"
     table.write_text(BAD_TABLES[name])
     cfg = repo / f"scan_{name}.yaml"
     cfg.write_text(yaml.safe_dump({"scan": {"table": table.name}}))
-    _assert_refused(dry_run(repo, cfg.name), "scan.table")
+    config_runs.assert_refused(config_runs.dry_run(repo, cfg.name), "scan.table")
     assert not (repo / "results").exists()
 
 
 @pytest.mark.parametrize("key", [k for k in BAD_CONFIGS if k != "fig3.method"])
-def test_check_config_names_the_key(merged, schema, key):
+def test_check_config_names_the_key(merged, schema, key, config_runs):
     """The same cases directly (``fig3.method`` is the schema's enum, tested below)."""
     with pytest.raises(ValueError, match=key.split(" ")[0].replace("[", r"\[").replace("]", r"\]")):
-        check_config(_merge(merged, BAD_CONFIGS[key]), schema)
+        check_config(config_runs.merge(merged, BAD_CONFIGS[key]), schema)
 
 
-def test_good_configs_pass(merged, schema, repo_root):
+def test_good_configs_pass(merged, schema, repo_root, config_runs):
     check_config(merged, schema)
     base = yaml.safe_load((repo_root / "workflow/config/config.yaml").read_text())
     check_config(base, schema)
     # a Gaussian source with its width is fine; the step of 1 pixel in tracking too
-    check_config(_merge(merged, {"source": {"shape": "gaussian", "fwhm_fraction": 0.5}}), schema)
+    check_config(
+        config_runs.merge(merged, {"source": {"shape": "gaussian", "fwhm_fraction": 0.5}}), schema
+    )
 
 
 def test_scan_table_checks():
