@@ -21,6 +21,13 @@ __getattr__, __dir__, __all__ = attach(
         "polarization": ["degree_of_polarization", "depolarize"],
         "rolloff": ["rolloff"],
         "source": ["delta_k", "k0_from_wavelength", "spectrum", "wavelength_from_k0"],
-        "spectrometer": ["interferogram", "process", "system_ascan"],
+        "spectrometer": [
+            "interferogram",
+            "interferogram_bytes",
+            "interpolation_gain",
+            "process",
+            "resampling_response",
+            "system_ascan",
+        ],
     },
 )
