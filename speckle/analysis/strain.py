@@ -575,6 +575,19 @@ def _no_answer_reason(method: str, quality: np.ndarray, opts: dict, window) -> s
     )
 
 
+def _strain_attrs(method: str, wz: int, wx: int) -> dict:
+    """Attrs of a strain estimate: what it is, the method and the window (pixels)."""
+    return {
+        "long_name": "axial strain (compression > 0)"
+        if method != "correlation"
+        else "axial strain magnitude",
+        "units": "1",
+        "method": method,
+        "window_depth_pixels": wz,
+        "window_aline_pixels": wx,
+    }
+
+
 def _wrap(values: np.ndarray, template, name: str, attrs: dict) -> object:
     if template is None:
         return values
@@ -652,17 +665,7 @@ def estimate_strain(
         strain, quality, info = _METHOD_FUNCS[method](a1, a2, k, p, wz, wx, opts)
     if not np.isfinite(strain).any():
         warnings.warn(_no_answer_reason(method, quality, opts, (wz, wx)), stacklevel=2)
-    attrs = {
-        "long_name": "axial strain (compression > 0)"
-        if method != "correlation"
-        else "axial strain magnitude",
-        "units": "1",
-        "method": method,
-        "window_depth_pixels": wz,
-        "window_aline_pixels": wx,
-        **{k_: v for k_, v in info.items()},
-    }
-    out = _wrap(strain, template, "strain", attrs)
+    out = _wrap(strain, template, "strain", {**_strain_attrs(method, wz, wx), **info})
     if template is not None:
         out = out.assign_coords(
             quality=(("depth", "aline"), quality, {"units": "1", "long_name": "quality"})
@@ -755,15 +758,7 @@ def _strain_frames(reference, deformed, has_frame, k0, pixel_size, method, windo
         both[:, 0],
         dims=("frame", "depth", "aline"),
         coords=coords,
-        attrs={
-            "long_name": "axial strain (compression > 0)"
-            if method != "correlation"
-            else "axial strain magnitude",
-            "units": "1",
-            "method": method,
-            "window_depth_pixels": wz,
-            "window_aline_pixels": wx,
-        },
+        attrs=_strain_attrs(method, wz, wx),
     )
     return out.assign_coords(
         quality=(("frame", "depth", "aline"), both[:, 1], {"units": "1", "long_name": "quality"})
