@@ -40,6 +40,7 @@ import xarray as xr
 from ..analysis import compounding as cp
 from ..analysis import filters as dsp
 from ..analysis import image_quality as iq
+from ..conventions import coord
 from ..imaging.aline import ascan
 from ..imaging.bscan import bscan
 from ..imaging.scan import beam_reach, image, scan_lines
@@ -803,52 +804,32 @@ def frequency_compounding_data(cfg: Mapping, seed: int) -> xr.Dataset:
         fine = (np.abs(iq.bandlimited(pl, 64)) ** 2).sum(axis=0)
         fw.append(iq.peak_fwhm(fine, p / 64))
         ft.append(cp.subband_fwhm(n, n // nlk) * p)
+    one = "dimensionless"
     ds = xr.Dataset(
         {
-            "contrast": (
-                "looks",
-                c,
-                {"units": "1", "long_name": "measured intensity contrast of the compounded image"},
+            "contrast": coord(
+                one, c, "measured intensity contrast of the compounded image", dims="looks"
             ),
-            "contrast_standard_error": (
-                "looks",
-                se,
-                {"units": "1", "long_name": "SE of the contrast (16 blocks of lines)"},
+            "contrast_standard_error": coord(
+                one, se, "SE of the contrast (16 blocks of lines)", dims="looks"
             ),
-            "contrast_theory": (
-                "looks",
-                ct,
-                {"units": "1", "long_name": "exact Poisson theory, finite density"},
-            ),
-            "contrast_dense": (
-                "looks",
-                cd,
-                {"units": "1", "long_name": "dense limit 1/sqrt(looks)"},
-            ),
-            "axial_fwhm": (
-                "looks",
+            "contrast_theory": coord(one, ct, "exact Poisson theory, finite density", dims="looks"),
+            "contrast_dense": coord(one, cd, "dense limit 1/sqrt(looks)", dims="looks"),
+            "axial_fwhm": coord(
+                "length",
                 fw,
-                {
-                    "units": "um",
-                    "long_name": "axial FWHM of the compounded intensity PSF (band-limited "
-                    "interpolation)",
-                },
+                "axial FWHM of the compounded intensity PSF (band-limited interpolation)",
+                dims="looks",
             ),
-            "axial_fwhm_theory": (
-                "looks",
+            "axial_fwhm_theory": coord(
+                "length",
                 ft,
-                {
-                    "units": "um",
-                    "long_name": "FWHM of |sin(pi M x/N)/(M sin(pi x/N))|^2, M = N/looks",
-                },
+                "FWHM of |sin(pi M x/N)/(M sin(pi x/N))|^2, M = N/looks",
+                dims="looks",
             ),
         },
         coords={
-            "looks": (
-                "looks",
-                looks,
-                {"units": "1", "long_name": "sub-bands (non-overlapping, rectangular)"},
-            )
+            "looks": coord(one, looks, "sub-bands (non-overlapping, rectangular)", dims="looks")
         },
         attrs={
             "n_pixels": n,
