@@ -150,6 +150,7 @@ def resample_depth(field: object, positions: object) -> np.ndarray:
     Returns
     -------
     numpy.ndarray, shape (N, M)
+        Pixel ``(q, j)``: A-line ``j`` evaluated at depth ``positions[q, j]``.
     """
     a = np.asarray(field)
     if a.ndim != 2 or not np.iscomplexobj(a):
