@@ -1,7 +1,7 @@
 """Elastography on simulated phantoms: strain maps, failure maps, speed-accuracy chart, sequence.
 
 Each ``*_data`` function takes the pipeline's ``elastography`` config section and the seed and
-returns the dataset its ``*_figure`` function draws (every figure is drawn from a NetCDF file).
+returns the dataset its ``plot_<name>`` function draws (every figure is drawn from a NetCDF file).
 Images are made with the package API (:func:`speckle.deformable_scene`,
 :func:`speckle.displace`, :func:`speckle.bscan`) on a Gaussian spectrum, and every estimator
 runs through :func:`speckle.estimate_strain`.
@@ -18,6 +18,7 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 import xarray as xr
+from matplotlib.figure import Figure
 from scipy import ndimage
 
 from ..analysis.correlation import expected_correlation
@@ -30,22 +31,22 @@ from ..scene.deformation import deformable_scene, displace
 from ..scene.mechanics import compress, inclusion_labels
 from ..system.noise import add_complex_noise
 from ..system.source import spectrum
-from ._style import new_figure, save
+from ._style import new_figure
 
 __all__ = [
     "failure_data",
-    "failure_figure",
     "inclusion_data",
-    "inclusion_figure",
     "phantom_data",
-    "phantom_figure",
+    "plot_failure",
+    "plot_inclusion",
+    "plot_phantom",
+    "plot_sequence",
+    "plot_sequence_large",
+    "plot_speed",
     "sequence_data",
-    "sequence_figure",
     "sequence_large_data",
-    "sequence_large_figure",
     "sequence_large_frames",
     "speed_data",
-    "speed_figure",
 ]
 
 STRAIN = {"units": "1", "long_name": "axial strain (compression > 0)"}
@@ -213,7 +214,7 @@ def inclusion_data(cfg: Mapping, seed: int) -> xr.Dataset:
     return ds
 
 
-def phantom_figure(ds: xr.Dataset, path: str) -> None:
+def plot_phantom(ds: xr.Dataset) -> Figure:
     """Modulus and true strain (left), each method's strain map (top) and error map (bottom)."""
     methods = list(ds.method.values)
     fig, axes = new_figure(2, len(methods) + 1, width=2.0 * (len(methods) + 1), height=5.0)
@@ -240,12 +241,12 @@ def phantom_figure(ds: xr.Dataset, path: str) -> None:
     fig.colorbar(im2, ax=axes[1, -1])
     for ax in axes[:, 0]:
         ax.set_ylabel("depth (µm)")
-    save(fig, path)
+    return fig
 
 
-def inclusion_figure(ds: xr.Dataset, path: str) -> None:
-    """As :func:`phantom_figure`, for the finite-element inclusion phantom."""
-    phantom_figure(ds, path)
+def plot_inclusion(ds: xr.Dataset) -> Figure:
+    """As :func:`plot_phantom`, for the finite-element inclusion phantom."""
+    return plot_phantom(ds)
 
 
 # --------------------------------------------------------------------------------------------
@@ -367,7 +368,7 @@ def failure_data(cfg: Mapping, seed: int) -> xr.Dataset:
     )
 
 
-def failure_figure(ds: xr.Dataset, path: str) -> None:
+def plot_failure(ds: xr.Dataset) -> Figure:
     """Failure maps: rms error (top) and fraction answered (bottom) per sweep, with limits."""
     sweeps = ["strain", "snr_db", "window", "k0_dk", "fwhm_fraction", "density"]
     fig, axes = new_figure(2, len(sweeps), width=2.4 * len(sweeps), height=5.0)
@@ -405,7 +406,7 @@ def failure_figure(ds: xr.Dataset, path: str) -> None:
     axes[0, 0].legend(fontsize=5)
     axes[0, 1].legend(fontsize=5)
     axes[1, 0].set_ylabel("fraction of pixels answered")
-    save(fig, path)
+    return fig
 
 
 # --------------------------------------------------------------------------------------------
@@ -440,7 +441,7 @@ def speed_data(cfg: Mapping, seed: int) -> xr.Dataset:
     )
 
 
-def speed_figure(ds: xr.Dataset, path: str) -> None:
+def plot_speed(ds: xr.Dataset) -> Figure:
     """Rms strain error against time per megapixel for each method and window."""
     fig, axes = new_figure(1, 1, width=4.5, height=3.5)
     ax = axes[0, 0]
@@ -455,7 +456,7 @@ def speed_figure(ds: xr.Dataset, path: str) -> None:
     ax.set_xlabel("time per megapixel (s)")
     ax.set_ylabel(f"rms error / strain (strain {ds.attrs['strain']:g})")
     ax.legend()
-    save(fig, path)
+    return fig
 
 
 # --------------------------------------------------------------------------------------------
@@ -487,7 +488,7 @@ def sequence_data(cfg: Mapping, seed: int) -> xr.Dataset:
     return out
 
 
-def sequence_figure(ds: xr.Dataset, path: str) -> None:
+def plot_sequence(ds: xr.Dataset) -> Figure:
     """Accumulated strain of a compression sequence against the truth, per frame."""
     fig, axes = new_figure(1, 2, width=7.0, height=3.0)
     f = ds.frame.values
@@ -501,7 +502,7 @@ def sequence_figure(ds: xr.Dataset, path: str) -> None:
     axes[0, 1].plot(f, ds.rms_error_cumulative / ds.true_cumulative, "s-", label="rms / truth")
     axes[0, 1].set_xlabel("frame")
     axes[0, 1].legend()
-    save(fig, path)
+    return fig
 
 
 # --------------------------------------------------------------------------------------------
@@ -580,7 +581,7 @@ def sequence_large_data(cfg: Mapping, seed: int, path: str) -> xr.Dataset:
     )
 
 
-def sequence_large_figure(ds: xr.Dataset, path: str, per_frame: float) -> None:
+def plot_sequence_large(ds: xr.Dataset, per_frame: float) -> Figure:
     fig, axes = new_figure(1, 2, width=7.0, height=3.0)
     last = ds["cumulative"].isel(frame=-1)
     im = axes[0, 0].imshow(last.values, aspect="auto", cmap="viridis")
@@ -595,4 +596,4 @@ def sequence_large_figure(ds: xr.Dataset, path: str, per_frame: float) -> None:
     axes[0, 1].set_xlabel("frame")
     axes[0, 1].set_ylabel("cumulative strain")
     axes[0, 1].legend()
-    save(fig, path)
+    return fig

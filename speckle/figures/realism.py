@@ -12,6 +12,7 @@ from collections.abc import Mapping
 
 import numpy as np
 import xarray as xr
+from matplotlib.figure import Figure
 
 from ..analysis.realism import EFFECTS, realism_study
 from ..analysis.twin import SystemFit
@@ -70,7 +71,7 @@ def realism_dataset(
     return ds
 
 
-def plot_realism(ds: xr.Dataset):
+def plot_realism(ds: xr.Dataset) -> Figure:
     """Autocorrelations (depth, lateral) and the misfit of each model; model only without data."""
     have = "measured_autocorrelation" in ds
     fig, axes = new_figure(1, 3 if have else 2, width=10.0 if have else 7.0, height=3.2)
@@ -223,7 +224,7 @@ def showcase_dataset(cfg: Mapping, seed: int) -> xr.Dataset:
     )
 
 
-def plot_showcase(ds: xr.Dataset, dynamic_range: float = 40.0):
+def plot_showcase(ds: xr.Dataset, dynamic_range: float = 40.0) -> Figure:
     """Pure model beside the model with system effects, same dB scale."""
     fig, axes = new_figure(1, 2, width=7.0, height=3.4)
     extent = [ds.x.values[0], ds.x.values[-1], ds.depth.values[-1], ds.depth.values[0]]

@@ -12,6 +12,7 @@ from collections.abc import Mapping
 
 import numpy as np
 import xarray as xr
+from matplotlib.figure import Figure
 
 from ..analysis.image_files import load_image
 from ..analysis.twin import SystemFit, fit_system
@@ -59,7 +60,7 @@ def twin_datasets(cfg: Mapping, seed: int) -> tuple[xr.Dataset, xr.Dataset, xr.D
     return fit.parameters, fit.compare(image, seed=seed), failure
 
 
-def plot_compare(ds: xr.Dataset):
+def plot_compare(ds: xr.Dataset) -> Figure:
     """Image panels, autocorrelations (2 SE bars) and log-data histograms: measured vs twin."""
     fig, axes = new_figure(2, 3, width=10.0, height=5.6)
     for ax, name in zip(axes[0, :2], ("measured", "twin"), strict=True):
@@ -116,7 +117,7 @@ def plot_compare(ds: xr.Dataset):
     return fig
 
 
-def plot_failure(ds: xr.Dataset):
+def plot_failure(ds: xr.Dataset) -> Figure:
     """rms error / strain and the answered fraction against strain, one line per estimator."""
     fig, axes = new_figure(2, 1, width=4.0, height=5.0)
     s = ds.strain.values

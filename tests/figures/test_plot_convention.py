@@ -9,7 +9,18 @@ import inspect
 import pytest
 from matplotlib.figure import Figure
 
-MODULES = ["beam", "deformation", "histograms", "speed", "static", "system"]
+MODULES = [
+    "beam",
+    "deformation",
+    "despeckle",
+    "elastography",
+    "histograms",
+    "realism",
+    "speed",
+    "static",
+    "system",
+    "twin",
+]
 
 
 @pytest.mark.parametrize("name", MODULES)

@@ -2,13 +2,14 @@
 
 from speckle._workflow import run
 from speckle.figures import elastography
+from speckle.figures._style import save
 from speckle.io import to_netcdf
 
 
 def main(snakemake) -> None:
     ds = elastography.failure_data(snakemake.params.elastography, snakemake.params.seed)
     to_netcdf(ds, snakemake.output.data)
-    elastography.failure_figure(ds, snakemake.output.figure)
+    save(elastography.plot_failure(ds), snakemake.output.figure)
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
 
 

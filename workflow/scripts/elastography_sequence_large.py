@@ -3,6 +3,7 @@ scheduler with speckle.figures.elastography, streaming the NetCDF; draw the PNG 
 
 from speckle._workflow import run
 from speckle.figures import elastography
+from speckle.figures._style import save
 from speckle.sweep import dask_scheduler
 
 
@@ -10,9 +11,8 @@ def main(snakemake) -> None:
     cfg = snakemake.params.elastography
     with dask_scheduler(**snakemake.config["dask"]):
         ds = elastography.sequence_large_data(cfg, snakemake.params.seed, snakemake.output.data)
-    elastography.sequence_large_figure(
-        ds, snakemake.output.figure, float(cfg["sequence_large"]["strain"])
-    )
+    per_frame = float(cfg["sequence_large"]["strain"])
+    save(elastography.plot_sequence_large(ds, per_frame), snakemake.output.figure)
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
 
 
