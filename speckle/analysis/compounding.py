@@ -42,6 +42,7 @@ import scipy.optimize as opt
 import xarray as xr
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
+from ..conventions import coord
 from ..imaging.scan import image
 from ..system.polarization import depolarize
 
@@ -367,6 +368,20 @@ def _image_kw(waist, x, method, tol, chunk) -> dict:
     return {"waist": waist, "x": x, "method": method, "tol": tol, "chunk": chunk}
 
 
+def _moved_field(scene: xr.Dataset, source: xr.DataArray, kw: dict) -> np.ndarray:
+    """Complex field of a shared scene whose scatterers moved (sorted by ``x`` again first)."""
+    order = np.argsort(scene.x.values, kind="stable")
+    return image(scene.isel(scatterer=order), source, **kw).field.values
+
+
+def _stacked_looks(
+    fields: list[np.ndarray], kind: str, name: str, coordinate: tuple, **attrs: object
+) -> xr.DataArray:
+    """Looks ``(look, depth, x)`` of the fields, coordinate ``name`` along ``look``."""
+    looks = xr.DataArray(np.stack(fields), dims=("look", "depth", "x"), coords={name: coordinate})
+    return _looks(looks, kind, **attrs)
+
+
 def angular_looks(
     scene: xr.Dataset,
     source: xr.DataArray,
@@ -408,9 +423,7 @@ def angular_looks(
         rot = scene.assign(
             z=("scatterer", zc + c * z + s * xv), x=("scatterer", xc - s * z + c * xv)
         )
-        order = np.argsort(rot.x.values, kind="stable")
-        f = image(rot.isel(scatterer=order), source, **_image_kw(waist, xs, method, tol, chunk))
-        f = f.field.values
+        f = _moved_field(rot, source, _image_kw(waist, xs, method, tol, chunk))
         # object point (z, x) sits at the rotated position in the look's image
         zr, xr_ = zc + c * zz + s * xx, xc - s * zz + c * xx
         coords = np.stack([zr / p, (xr_ - xs[0]) / pitch])
@@ -419,12 +432,8 @@ def angular_looks(
             for comp in (f.real, f.imag)
         ]
         out.append(part[0] + 1j * part[1])
-    looks = xr.DataArray(
-        np.stack(out),
-        dims=("look", "depth", "x"),
-        coords={"angle": ("look", ang, {"units": "degree", "long_name": "beam angle"})},
-    )
-    return _looks(looks, "angular")
+    angle = ("look", ang, {"units": "degree", "long_name": "beam angle"})
+    return _stacked_looks(out, "angular", "angle", angle)
 
 
 def spatial_looks(
@@ -455,14 +464,8 @@ def spatial_looks(
         image(scene, source, **_image_kw(waist, xs + d, method, tol, chunk)).field.values
         for d in off
     ]
-    looks = xr.DataArray(
-        np.stack(out),
-        dims=("look", "depth", "x"),
-        coords={
-            "offset": ("look", off, {"units": "um", "long_name": "lateral offset of the lines"})
-        },
-    )
-    return _looks(looks, "spatial")
+    offset = coord("length", off, "lateral offset of the lines", dims="look")
+    return _stacked_looks(out, "spatial", "offset", offset)
 
 
 def polarization_looks(
@@ -568,18 +571,12 @@ def temporal_looks(
     """Frames of a shared scene in Brownian motion (:func:`brownian_frames`) as looks."""
     frames = brownian_frames(scene, n_frames, diffusion=diffusion, interval=interval, seed=seed)
     xs = np.asarray(x, dtype=float)
-    out = []
-    for i in range(frames.sizes["frame"]):
-        fr = frames.isel(frame=i).drop_vars("time")
-        order = np.argsort(fr.x.values, kind="stable")
-        out.append(
-            image(
-                fr.isel(scatterer=order), source, **_image_kw(waist, xs, method, tol, chunk)
-            ).field.values
-        )
-    looks = xr.DataArray(
-        np.stack(out),
-        dims=("look", "depth", "x"),
-        coords={"time": ("look", frames.time.values, frames.time.attrs)},
+    kw = _image_kw(waist, xs, method, tol, chunk)
+    out = [
+        _moved_field(frames.isel(frame=i).drop_vars("time"), source, kw)
+        for i in range(frames.sizes["frame"])
+    ]
+    time = ("look", frames.time.values, frames.time.attrs)
+    return _stacked_looks(
+        out, "temporal", "time", time, diffusion=float(diffusion), frame_interval=float(interval)
     )
-    return _looks(looks, "temporal", diffusion=float(diffusion), frame_interval=float(interval))
