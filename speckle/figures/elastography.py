@@ -582,6 +582,7 @@ def sequence_large_data(cfg: Mapping, seed: int, path: str) -> xr.Dataset:
 
 
 def plot_sequence_large(ds: xr.Dataset, per_frame: float) -> Figure:
+    """Cumulative strain of the last frame, and its median per frame against the nominal."""
     fig, axes = new_figure(1, 2, width=7.0, height=3.0)
     last = ds["cumulative"].isel(frame=-1)
     im = axes[0, 0].imshow(last.values, aspect="auto", cmap="viridis")
