@@ -46,6 +46,7 @@ errors in it cost speed, never accuracy.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -93,6 +94,24 @@ def _estimate(
     raise ValueError(f"no error/cost model for method {method!r}")
 
 
+def _estimator(
+    n_lines: int,
+    n_scatterers: int,
+    n_pixels: int,
+    spectrum: np.ndarray | None,
+    tol: float | None,
+    float64_error: float,
+) -> tuple[float, Callable[[str], tuple[float, float]]]:
+    """``(tol, estimate)``: the resolved tol and ``estimate(method) -> (error, cost_ns)``."""
+    tolv = resolve_tol(tol)
+    s = np.ones(n_pixels) if spectrum is None else np.asarray(spectrum, dtype=float)
+
+    def estimate(name):
+        return _estimate(name, n_lines, n_scatterers, n_pixels, s, tolv, float64_error)
+
+    return tolv, estimate
+
+
 def method_estimates(
     n_lines: int,
     n_scatterers: int,
@@ -122,12 +141,7 @@ def method_estimates(
     dict
         ``{method: {"error": e, "cost_ns": t, "admissible": e <= tol}}``.
     """
-    tolv = resolve_tol(tol)
-    s = np.ones(n_pixels) if spectrum is None else np.asarray(spectrum, dtype=float)
-
-    def estimate(name):
-        return _estimate(name, n_lines, n_scatterers, n_pixels, s, tolv, float64_error)
-
+    tolv, estimate = _estimator(n_lines, n_scatterers, n_pixels, spectrum, tol, float64_error)
     return estimate_table(AUTO_CANDIDATES, estimate, tolv)
 
 
@@ -146,12 +160,7 @@ def choose_method(
     float64_error: float = 0.0,
 ) -> str:
     """Name of the fastest admissible method (see :func:`method_estimates`); never runs one."""
-    tolv = resolve_tol(tol)
-    s = np.ones(n_pixels) if spectrum is None else np.asarray(spectrum, dtype=float)
-
-    def estimate(name):
-        return _estimate(name, n_lines, n_scatterers, n_pixels, s, tolv, float64_error)
-
+    tolv, estimate = _estimator(n_lines, n_scatterers, n_pixels, spectrum, tol, float64_error)
     # psf cannot win when its floor (one slot per scatterer) is beaten: not estimated then
     floor = {"psf": _psf_floor_ns(n_lines, n_scatterers, n_pixels)}
     return choose(AUTO_CANDIDATES, estimate, tolv, cost_floor=floor)
