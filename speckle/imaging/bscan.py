@@ -7,6 +7,8 @@ fields are imaged lazily, chunk by chunk.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import xarray as xr
 
@@ -16,7 +18,7 @@ from ..scene.scatterers import AMPLITUDE_MODELS
 from ._rules import check_tol
 from .aline import METHODS, ascan, pixel_depths
 
-__all__ = ["NORMALISATIONS", "bscan", "expected_intensity"]
+__all__ = ["NORMALISATIONS", "bscan", "expected_intensity", "map_lines"]
 
 #: ``"none"``: Eq. 4 as is. ``"density"``: divide the field by sqrt(density) (paper's Fig. 2).
 #: ``"expected"``: divide by sqrt of the expected mean intensity, so <|A|^2> = 1.
@@ -34,6 +36,48 @@ def expected_intensity(
     """
     s2 = float(n_pixels) if spectrum is None else float(np.sum(np.asarray(spectrum) ** 2))
     return density * n_pixels * mean_square_amplitude * s2
+
+
+def map_lines(
+    func: Callable[..., np.ndarray],
+    scene: xr.Dataset,
+    n_pixels: int,
+    dtype: type,
+    **kwargs: object,
+) -> xr.DataArray:
+    """``func(z, amplitude, n_pixels=N, **kwargs)`` over every line of a scene of A-lines.
+
+    Parameters
+    ----------
+    func : callable
+        Maps depths and amplitudes of shape ``(..., M)`` to ``(..., N)`` (e.g.
+        :func:`speckle.ascan`).
+    scene : xarray.Dataset
+        Variables ``z`` and ``amplitude`` with a ``scatterer`` dim (numpy or Dask-backed: a
+        Dask scene stays lazy, one task per chunk).
+    n_pixels : int
+        Pixels ``N`` of the new last dim ``depth``.
+    dtype : numpy dtype
+        The output's dtype.
+    **kwargs
+        Further keyword arguments of ``func``.
+
+    Returns
+    -------
+    xarray.DataArray
+        ``func``'s output over the scene's other dims and ``depth``.
+    """
+    return xr.apply_ufunc(
+        func,
+        scene.z,
+        scene.amplitude,
+        input_core_dims=[["scatterer"], ["scatterer"]],
+        output_core_dims=[["depth"]],
+        kwargs={"n_pixels": n_pixels, **kwargs},
+        dask="parallelized",
+        output_dtypes=[dtype],
+        dask_gufunc_kwargs={"output_sizes": {"depth": n_pixels}},
+    )
 
 
 def bscan(
@@ -94,23 +138,16 @@ def bscan(
                 f"{key}={value!r}; build the scene and the spectrum with the same n_pixels "
                 "and depth (µm)"
             )
-    field = xr.apply_ufunc(
+    field = map_lines(
         ascan,
-        scene.z,
-        scene.amplitude,
-        input_core_dims=[["scatterer"], ["scatterer"]],
-        output_core_dims=[["depth"]],
-        kwargs={
-            "n_pixels": n,
-            "depth": h,
-            "k0": k0,
-            "spectrum": source.values,
-            "method": method,
-            "tol": tol,
-        },
-        dask="parallelized",
-        output_dtypes=[np.complex128],
-        dask_gufunc_kwargs={"output_sizes": {"depth": n}},
+        scene,
+        n,
+        np.complex128,
+        depth=h,
+        k0=k0,
+        spectrum=source.values,
+        method=method,
+        tol=tol,
     )
     density = float(scene.attrs.get("density", np.nan))
     if normalise != "none" and not density > 0:

@@ -37,6 +37,7 @@ from ..provenance import provenance_attrs
 from ..system.source import check_weights, spectrum
 from ._rules import check_tol
 from .aline import METHODS, ascan, pixel_depths
+from .bscan import map_lines
 from .scan import image
 
 __all__ = ["intensity_spectrum", "speckle_free_image", "speckle_free_lines"]
@@ -168,22 +169,15 @@ def speckle_free_image(
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
         check_tol(tol)
-        truth = xr.apply_ufunc(
+        truth = map_lines(
             speckle_free_lines,
-            scene.z,
-            scene.amplitude,
-            input_core_dims=[["scatterer"], ["scatterer"]],
-            output_core_dims=[["depth"]],
-            kwargs={
-                "n_pixels": n,
-                "depth": h,
-                "spectrum": source.values,
-                "method": method,
-                "tol": tol,
-            },
-            dask="parallelized",
-            output_dtypes=[np.float64],
-            dask_gufunc_kwargs={"output_sizes": {"depth": n}},
+            scene,
+            n,
+            np.float64,
+            depth=h,
+            spectrum=source.values,
+            method=method,
+            tol=tol,
         )
         truth = truth.assign_coords(depth=coord("depth", pixel_depths(n, h)))
         lateral = "aline"
