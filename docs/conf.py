@@ -14,6 +14,7 @@ from __future__ import annotations
 import importlib
 import os
 import pkgutil
+import shutil
 from pathlib import Path
 
 import speckle
@@ -138,6 +139,11 @@ def write_api_pages(app=None) -> None:
     """Write docs/api/<topic>.rst from the packages' ``__all__`` (autosummary tables)."""
     out = HERE / "api"
     out.mkdir(exist_ok=True)
+    # autosummary's pages are regenerated at every build: a stub of a renamed or removed name
+    # would otherwise stay and fail the build (it is imported, and -W makes that an error)
+    shutil.rmtree(out / "generated", ignore_errors=True)
+    for stale in out.glob("*.rst"):
+        stale.unlink()
     for order, (topic, (title, intro, sections)) in enumerate(api_topics().items()):
         lines = [f".. _api-{topic}:", "", title, "=" * len(title), "", intro, ""]
         for module, names in sections.items():
@@ -149,9 +155,7 @@ def write_api_pages(app=None) -> None:
                       "   :toctree: generated", ""]  # fmt: skip
             lines += [f"   {name}" for name in sorted(names, key=str.lower)] + [""]
         text = "\n".join(lines)
-        path = out / f"{order}_{topic}.rst"
-        if not path.exists() or path.read_text() != text:
-            path.write_text(text)
+        (out / f"{order}_{topic}.rst").write_text(text)
 
 
 def documented_names() -> set[str]:
