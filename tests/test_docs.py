@@ -3,6 +3,8 @@
 Every ```python block of README.md and of the docs' MyST pages (docs/**/*.md) is executed, the
 blocks of one page in order in one namespace (a tutorial builds on its earlier blocks), in a
 fresh temporary directory, so that a page that writes files leaves nothing in the repository.
+The directory holds a link to the repository's ``workflow/``, so a block that reads
+``workflow/config/config.yaml`` runs as it would from the repository root.
 The gallery scripts (examples/) run when the site builds (``sphinx-build -W``, in CI).
 """
 
@@ -59,6 +61,7 @@ def test_block_pattern_finds_only_python_fences():
 )
 def test_page_code_runs(page: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch):
     matplotlib.use("Agg")
+    (tmp_path / "workflow").symlink_to(REPO / "workflow", target_is_directory=True)
     monkeypatch.chdir(tmp_path)
     namespace: dict = {"__name__": "__main__"}
     for i, code in enumerate(python_blocks(page)):
