@@ -120,6 +120,27 @@ def _time_methods(run, methods, tols, repeat):
     return t_all, e_all
 
 
+def _time_sizes(sizes, methods, tols, repeat, case):
+    """Times and errors ``(scene, method, tol)``, auto's choices and scatterer counts.
+
+    ``case(size) -> (run, small, n_scatterers, choose)`` builds the scene of one entry of
+    ``sizes``: ``run(method=, tol=)`` images it, ``small`` is ``run`` on a tiny part of it (the
+    warm-up, :func:`_warm_up`) and ``choose(tol)`` is ``method="auto"``'s choice.
+    """
+    shape_ = (len(sizes), len(methods), len(tols))
+    t_all = np.full(shape_, np.nan)
+    e_all = np.full(shape_, np.nan)
+    chosen = np.empty((len(sizes), len(tols)), dtype=object)
+    n_scat = []
+    for i, sz in enumerate(sizes):
+        run, small, m, choose = case(sz)
+        n_scat.append(m)
+        _warm_up(small, methods, tols)
+        t_all[i], e_all[i] = _time_methods(run, methods, tols, repeat)
+        chosen[i] = [choose(tol) for tol in tols]
+    return t_all, e_all, chosen, n_scat
+
+
 def _chart_dataset(time_, error, chosen, methods, tols, coords, attrs) -> xr.Dataset:
     """The chart's dataset: dims ``(scene, method, tol)``, ``coords`` per scene as
     ``{name: (values, attrs)}`` (``n_scatterers`` among them), ``rate`` from ``time``."""
@@ -202,23 +223,19 @@ def speed_accuracy(
         refused the tol), ``rate`` (scatterers/s), ``chosen`` (auto's choice, per scene and tol);
         scene coords ``n_pixels``, ``n_lines``, ``density``, ``n_scatterers``.
     """
-    shape_ = (len(sizes), len(methods), len(tols))
-    t_all = np.full(shape_, np.nan)
-    e_all = np.full(shape_, np.nan)
-    chosen = np.empty((len(sizes), len(tols)), dtype=object)
-    n_scat = []
-    for i, sz in enumerate(sizes):
+
+    def case(sz):
         n, nl, rho = int(sz["n_pixels"]), int(sz["n_lines"]), float(sz["density"])
         z, a, depth = random_scene(n, nl, rho, pixel_size=pixel_size, seed=seed)
         spec = _spectrum(n, depth, k0_dk, shape, fwhm_fraction)
         k0 = float(spec.attrs["k0"])
         s = spec.values
-        n_scat.append(z.size)
         common = dict(n_pixels=n, depth=depth, k0=k0, spectrum=s)
-        _warm_up(functools.partial(ascan, z[:1, :4], a[:1, :4], **common), methods, tols)
+        small = functools.partial(ascan, z[:1, :4], a[:1, :4], **common)
         run = functools.partial(ascan, z, a, **common)
-        t_all[i], e_all[i] = _time_methods(run, methods, tols, repeat)
-        chosen[i] = [choose_method(nl, z.shape[1], n, s, tol) for tol in tols]
+        return run, small, z.size, lambda tol: choose_method(nl, z.shape[1], n, s, tol)
+
+    t_all, e_all, chosen, n_scat = _time_sizes(sizes, methods, tols, repeat, case)
     coords = {
         "n_pixels": ([int(s["n_pixels"]) for s in sizes], {"units": "1"}),
         "n_lines": ([int(s["n_lines"]) for s in sizes], {"units": "1"}),
@@ -300,13 +317,9 @@ def beam_speed_accuracy(
         As :func:`speed_accuracy` (``chosen``: the beam's auto choice), scene coords
         ``n_pixels``, ``n_lines``, ``density``, ``waist_pitch``, ``n_scatterers``.
     """
-    shape_ = (len(sizes), len(methods), len(tols))
-    t_all = np.full(shape_, np.nan)
-    e_all = np.full(shape_, np.nan)
-    chosen = np.empty((len(sizes), len(tols)), dtype=object)
-    n_scat = []
     pitch = pixel_size
-    for i, sz in enumerate(sizes):
+
+    def case(sz):
         n, nl, rho = int(sz["n_pixels"]), int(sz["n_lines"]), float(sz["density"])
         w0 = float(sz["waist_pitch"]) * pitch
         z, x, a, lines, depth = random_beam_scene(
@@ -315,15 +328,14 @@ def beam_speed_accuracy(
         spec = _spectrum(n, depth, k0_dk, shape, fwhm_fraction)
         k0 = float(spec.attrs["k0"])
         s = spec.values
-        n_scat.append(z.size)
         common = dict(lines=lines, waist=w0, n_pixels=n, depth=depth, k0=k0, spectrum=s)
-        small = slice(0, 64)
-        _warm_up(functools.partial(beam_scan, z[small], x[small], a[small], **common),
-                 methods, tols)  # fmt: skip
+        part = slice(0, 64)
+        small = functools.partial(beam_scan, z[part], x[part], a[part], **common)
         run = functools.partial(beam_scan, z, x, a, **common)
-        t_all[i], e_all[i] = _time_methods(run, methods, tols, repeat)
         scene = BeamScene(z, x, None, a, lines, n, depth, k0, s)
-        chosen[i] = [choose_beam_method(scene, Beam(w0, None, None), tol) for tol in tols]
+        return run, small, z.size, lambda tol: choose_beam_method(scene, Beam(w0, None, None), tol)
+
+    t_all, e_all, chosen, n_scat = _time_sizes(sizes, methods, tols, repeat, case)
     coords = {
         "n_pixels": ([int(s["n_pixels"]) for s in sizes], {"units": "1"}),
         "n_lines": ([int(s["n_lines"]) for s in sizes], {"units": "1"}),
