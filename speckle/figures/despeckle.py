@@ -266,25 +266,37 @@ def _physical_looks(ph: dict, cfg: Mapping, seed: int, snr_db: float) -> dict:
     noisy_single = cp.noisy_looks(base, snr_db, seed=seed, signal_intensity=ref)
     out["single_noisy"] = noisy_single.values[0]
     phys = cfg["physical"]
-    out["angular"] = cp.angular_looks(sc, src, phys["angular"]["angles"], **kw)
-    out["spatial"] = cp.spatial_looks(sc, src, phys["spatial"]["offsets"], **kw)
-    out["polarization"] = cp.polarization_looks(
-        sc, src, phys["polarization"]["depolarization"], seed=seed + 1, **kw
-    )
-    tm = phys["temporal"]
-    out["temporal"] = cp.temporal_looks(
-        sc,
-        src,
-        tm["frames"],
-        diffusion=tm["diffusion"],
-        interval=tm["interval"],
-        seed=seed + 2,
-        **kw,
-    )
+    for fam in ("angular", "spatial", "polarization", "temporal"):
+        out[fam] = _family_looks(fam, phys[fam], ph, seed)
     for fam in ("angular", "spatial", "polarization", "temporal"):
         out[fam + "_noisy"] = cp.noisy_looks(out[fam], snr_db, seed=seed + 3, signal_intensity=ref)
     out["ref_intensity"] = ref
     return out
+
+
+def _family_looks(fam: str, spec: Mapping, ph: dict, seed: int) -> xr.DataArray:
+    """Noise-free looks of physical family ``fam`` on phantom ``ph``, as its config ``spec`` says.
+
+    The polarization and temporal looks are seeded by ``seed + 1`` and ``seed + 2``.
+    """
+    src, sc, kw = ph["source"], ph["scene"], ph["kw"]
+    if fam == "angular":
+        return cp.angular_looks(sc, src, spec["angles"], **kw)
+    if fam == "spatial":
+        return cp.spatial_looks(sc, src, spec["offsets"], **kw)
+    if fam == "polarization":
+        return cp.polarization_looks(sc, src, spec["depolarization"], seed=seed + 1, **kw)
+    if fam == "temporal":
+        return cp.temporal_looks(
+            sc,
+            src,
+            spec["frames"],
+            diffusion=spec["diffusion"],
+            interval=spec["interval"],
+            seed=seed + 2,
+            **kw,
+        )
+    raise ValueError(f"unknown method family {fam!r}; allowed: {FAMILIES}")
 
 
 def _central(looks: xr.DataArray, n: int) -> xr.DataArray:
@@ -629,24 +641,7 @@ def _method_image(spec: Mapping, ph: dict, seed: int, snr_db: float, cache: dict
         img = np.abs(noisy(single).values[0]) ** 2
         return dsp.despeckle(img, fam, spec.get("params", {}), domain=spec.get("domain", "linear"))
     if fam not in cache:
-        if fam == "angular":
-            cache[fam] = cp.angular_looks(sc, src, spec["angles"], **kw)
-        elif fam == "spatial":
-            cache[fam] = cp.spatial_looks(sc, src, spec["offsets"], **kw)
-        elif fam == "polarization":
-            cache[fam] = cp.polarization_looks(sc, src, spec["depolarization"], seed=seed + 1, **kw)
-        elif fam == "temporal":
-            cache[fam] = cp.temporal_looks(
-                sc,
-                src,
-                spec["frames"],
-                diffusion=spec["diffusion"],
-                interval=spec["interval"],
-                seed=seed + 2,
-                **kw,
-            )
-        else:
-            raise ValueError(f"unknown method family {fam!r}; allowed: {FAMILIES}")
+        cache[fam] = _family_looks(fam, spec, ph, seed)
     return cp.compound(noisy(cache[fam]), mode).values
 
 
