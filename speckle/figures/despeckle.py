@@ -36,6 +36,7 @@ from collections.abc import Mapping
 
 import numpy as np
 import xarray as xr
+from matplotlib.figure import Figure
 
 from ..analysis import compounding as cp
 from ..analysis import filters as dsp
@@ -557,7 +558,7 @@ def _colours(fams) -> dict:
     return {f: cmap(i % 20) for i, f in enumerate(fams)}
 
 
-def plot_methods(ds: xr.Dataset):
+def plot_methods(ds: xr.Dataset) -> Figure:
     """Pareto charts: speckle reduction vs resolution loss, and vs time per megapixel."""
     fig, axes = new_figure(1, 2, width=9.0, height=3.8)
     axes = axes[0]
@@ -586,7 +587,7 @@ def plot_methods(ds: xr.Dataset):
     return fig
 
 
-def plot_phantom(ds: xr.Dataset):
+def plot_phantom(ds: xr.Dataset) -> Figure:
     """Region map, truth, single look and the best method of each family, in dB."""
     nb = ds.sizes["family"]
     ncol = 5
@@ -730,7 +731,7 @@ def failure_data(cfg: Mapping, seed: int) -> xr.Dataset:
     return ds
 
 
-def plot_failure(ds: xr.Dataset):
+def plot_failure(ds: xr.Dataset) -> Figure:
     """Speckle reduction and feature retained against density, SNR and feature size."""
     axes_names = ("density", "snr_db", "feature_radius")
     fig, axes = new_figure(2, 3, width=10.0, height=5.5)

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 import speckle
 import speckle.scene.regions as reg
 import speckle.scene.shared as sh
-from speckle.system import attenuation, backscatter, detection, noise, phase, polarization, rolloff
+from speckle.system import attenuation, detection, noise, phase, polarization
 
 SRC = speckle.spectrum(16, 128.0, k0_dk=3.0)
 LINES = speckle.random_scatterers(4, 2.0, n_pixels=16, depth=128.0, seed=1)
@@ -37,9 +37,9 @@ def _call(name: str, kw: dict):
     if name == "attenuate":
         return attenuation.attenuate(LINES, **kw)
     if name == "backscatter":
-        return backscatter.backscatter(LINES, **kw)
+        return speckle.system.backscatter(LINES, **kw)
     if name == "rolloff":
-        return rolloff.rolloff(LINES, **kw)
+        return speckle.system.rolloff(LINES, **kw)
     if name == "add_noise":
         return noise.add_noise(IMAGE, **kw)
     if name == "depolarize":

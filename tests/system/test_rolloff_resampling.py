@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from speckle.figures import _config
+from speckle.figures import _config  # private: the datasheet config adapter the rule uses
 from speckle.figures import system as fs
 from speckle.system import spectrometer as sp
 
