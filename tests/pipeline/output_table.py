@@ -30,6 +30,15 @@ RTOL = 1e-12
 N_SAMPLES = 5
 
 
+#: Variables left out, with the reason: each is a least-squares fit on speckle whose optimum
+#: moves when the image changes in its last bits (thread-count-dependent sums such as
+#: FINUFFT's), so an exact comparison would test the optimiser, not the model. The images they
+#: are fitted on are in the table.
+UNSTABLE_FITS = {
+    "despeckle/methods.nc:edge_width_se": "erf fit of a step edge on a quarter of the lines",
+}
+
+
 def _is_timing(name: str, var: xr.DataArray) -> bool:
     units = str(var.attrs.get("units", "")).strip().lower()
     return units in {"s", "seconds", "ms", "1/s"} or any(
@@ -72,7 +81,7 @@ def summarise(results: Path) -> dict[str, dict[str, object]]:
         rel = path.relative_to(results).as_posix()
         with xr.open_dataset(path, engine="netcdf4", auto_complex=True) as ds:
             for name, var in {**ds.coords, **ds.data_vars}.items():
-                if _is_timing(str(name), var):
+                if _is_timing(str(name), var) or f"{rel}:{name}" in UNSTABLE_FITS:
                     continue
                 table[f"{rel}:{name}"] = summarise_array(var.values)
     return table

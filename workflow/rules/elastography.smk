@@ -135,7 +135,7 @@ rule elastography_sequence:
 # depend on the scheduler, so changing it does not rerun the rule.
 rule elastography_sequence_large:
     input:
-        code=package_code("speckle.figures.elastography", "speckle.io"),
+        code=package_code("speckle.figures.elastography", "speckle.io", "speckle.sweep"),
     output:
         data=f"{RESULTS}/elastography/sequence_large.nc",
         figure=report(
