@@ -225,10 +225,10 @@ def _scene_keys(x, y, z, three_d, o_ax, xo, po, r_o, n_outer, halo, yo, pi_, r_i
 
 
 @numba.njit(parallel=True, cache=True)
-def _gather_scene(order, x, y, z, a, gam, three_d, o_ax, xo, po, yo, pi_):
-    """``(z, a, so, si, gam)`` of scatterers ``order`` (``si``/``gam`` of size 1 when not per
-    scatterer), lateral coordinates in pitches."""
-    total = order.size
+def _scatter_scene(dest, total, x, y, z, a, gam, three_d, o_ax, xo, po, yo, pi_):
+    """``(z, a, so, si, gam)`` of the ``total`` scatterers kept by the sort, scatterer ``j`` at
+    slot ``dest[j]`` (``si``/``gam`` of size 1 when not per scatterer), lateral coordinates in
+    pitches; the input is streamed in order."""
     zs = np.empty(total)
     as_ = np.empty(total, dtype=np.complex128)
     sos = np.empty(total)
@@ -236,8 +236,10 @@ def _gather_scene(order, x, y, z, a, gam, three_d, o_ax, xo, po, yo, pi_):
     gams = np.empty(total if gam.size > 1 else 1, dtype=np.complex128)
     if gam.size == 1:
         gams[0] = gam[0]
-    for t in numba.prange(total):
-        j = order[t]
+    for j in numba.prange(z.size):
+        t = dest[j]
+        if t < 0:
+            continue
         zs[t] = z[j]
         as_[t] = a[j]
         sos[t] = ((x[j] if o_ax == 0 else y[j]) - xo) / po
@@ -263,8 +265,10 @@ def _sort_scene(
     """
     key = _scene_keys(x, y, z, three_d, o_ax, xo, po, r_o, n_outer, halo, yo, pi_, r_i,
                       n_inner, bli, depth, nbi)  # fmt: skip
-    starts, order = bucket_sort(key, (n_outer + 2 * halo) * nbi)
-    return (*_gather_scene(order, x, y, z, a, gam, three_d, o_ax, xo, po, yo, pi_), starts)
+    nb = (n_outer + 2 * halo) * nbi
+    starts, dest = bucket_sort(key, nb)
+    scene = _scatter_scene(dest, starts[nb], x, y, z, a, gam, three_d, o_ax, xo, po, yo, pi_)
+    return (*scene, starts)
 
 
 @numba.njit(cache=True, fastmath=False)

@@ -48,7 +48,15 @@ import math
 import numba
 import numpy as np
 
-from ._kernels import LANES, axpy8, bucket_sort, carrier_and_position, es_kernel_values, fold_padded
+from ._kernels import (
+    LANES,
+    axpy8,
+    bucket_sort,
+    carrier_and_position,
+    es_kernel_values,
+    fold_padded,
+    sort_chunks,
+)
 
 __all__ = [
     "ROW_MAX_B",
@@ -193,34 +201,30 @@ def _row_keys(x, y, origin, pitch, reach, size, h, two_d):
 
 
 @numba.njit(parallel=True, cache=True)
-def _row_records(order, x, y, z, a, k0, depth, nf, origin, pitch, two_d, rec):
-    """``rec[t] = (Re c, Im c, u, s_o[, s_i])`` of scatterer ``order[t]`` (carriers
-    vectorised over runs of :data:`_SUB` records)."""
-    total = order.size
-    n_chunks = max(1, min(64, total // 16384))
-    chunk = (total + n_chunks - 1) // n_chunks
+def _row_records(dest, x, y, z, a, k0, depth, nf, origin, pitch, two_d, rec):
+    """``rec[dest[j]] = (Re c, Im c, u, s_o[, s_i])`` of every scatterer ``j`` kept by the sort
+    (``dest[j] >= 0``): the input streamed in order, carriers vectorised over runs of
+    :data:`_SUB` scatterers, records scattered to their slots."""
+    m = z.size
+    n_chunks, chunk = sort_chunks(m)
     inv_o = 1.0 / pitch[0]
     inv_i = 1.0 / pitch[1]
     for c in numba.prange(n_chunks):
-        bz = np.empty(_SUB)
-        ba = np.empty(_SUB, dtype=np.complex128)
         bcr = np.empty(_SUB)
         bci = np.empty(_SUB)
         bu = np.empty(_SUB)
-        hi = min(total, (c + 1) * chunk)
-        for t0 in range(c * chunk, hi, _SUB):
-            n = min(hi, t0 + _SUB) - t0
-            for t in range(n):
-                j = order[t0 + t]
-                bz[t] = z[j]
-                ba[t] = a[j]
-            carrier_and_position(bz[:n], ba[:n], k0, depth, nf, bcr, bci, bu)
-            for t in range(n):
-                j = order[t0 + t]
-                r = rec[t0 + t]
-                r[0] = bcr[t]
-                r[1] = bci[t]
-                r[2] = bu[t]
+        hi = min(m, (c + 1) * chunk)
+        for j0 in range(c * chunk, hi, _SUB):
+            j1 = min(hi, j0 + _SUB)
+            carrier_and_position(z[j0:j1], a[j0:j1], k0, depth, nf, bcr, bci, bu)
+            for j in range(j0, j1):
+                t = dest[j]
+                if t < 0:
+                    continue
+                r = rec[t]
+                r[0] = bcr[j - j0]
+                r[1] = bci[j - j0]
+                r[2] = bu[j - j0]
                 r[3] = (x[j] - origin[0]) * inv_o
                 if two_d:
                     r[4] = (y[j] - origin[1]) * inv_i
@@ -240,8 +244,8 @@ def _sort_rows(x, y, z, a, k0, depth, nf, origin, pitch, reach, size, h, two_d, 
     nbo = size[0] + 2 * h[0] + 1
     nbi = size[1] + 2 * h[1] + 1 if two_d else 1
     key = _row_keys(x, y, origin, pitch, reach, size, h, two_d)
-    starts, order = bucket_sort(key, int(nbo * nbi))
-    _row_records(order, x, y, z, a, k0, depth, nf, origin, pitch, two_d, rec)
+    starts, dest = bucket_sort(key, int(nbo * nbi))
+    _row_records(dest, x, y, z, a, k0, depth, nf, origin, pitch, two_d, rec)
     return starts
 
 
