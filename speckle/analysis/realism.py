@@ -159,16 +159,16 @@ def simulate(
         )
     else:
         src = spectrum(n_pixels, h, k0_dk=k0_dk)
-    attrs = {"depth": h, "n_pixels": n_pixels, "density": density}
+    attrs = {"depth_range": h, "n_pixels": n_pixels, "density": density}
     if "beam" in effects:
         w0 = fit["waist"] * pixel_size  # lines one pixel_size apart: only w0/pitch matters
         sc = shared_scatterers(
-            n_alines, pixel_size, density, n_pixels=n_pixels, depth=h, waist=w0, seed=seed
+            n_alines, pixel_size, density, n_pixels=n_pixels, depth_range=h, waist=w0, seed=seed
         )
         scene = beam_lines(sc["z"], sc["x"], sc["amplitude"], lines=sc["lines"], waist=w0)
         scene = scene.assign_attrs(attrs)
     else:
-        scene = random_scatterers(n_alines, density, n_pixels=n_pixels, depth=h, seed=seed)
+        scene = random_scatterers(n_alines, density, n_pixels=n_pixels, depth_range=h, seed=seed)
     if "attenuation" in effects:
         scene = attenuate(scene, fit["attenuation"])
     if "phase" in effects:

@@ -409,7 +409,7 @@ class SystemFit:
             "lines": np.arange(nx) * pitch,
             "waist": self._value("waist"),
             "n_pixels": n,
-            "depth": h,
+            "depth_range": h,
             "k0": k0,
             "spectrum": spec,
             "method": "nufft",
@@ -420,12 +420,12 @@ class SystemFit:
             beam["rayleigh_range"] = self._value("rayleigh_range")
         return {"n": n, "h": h, "k0": k0, "rho": rho, "pitch": pitch, "beam": beam, "dz": dz}
 
-    def _scatterers(self, m: dict, nx: int, seed: int, depth: float) -> dict[str, np.ndarray]:
+    def _scatterers(self, m: dict, nx: int, seed: int, depth_range: float) -> dict[str, np.ndarray]:
         w0 = m["beam"]["waist"]
         x0, x1 = -4.5 * w0, (nx - 1) * m["pitch"] + 4.5 * w0
-        count = round(m["rho"] * (depth / m["dz"]) * (x1 - x0) / m["pitch"])
+        count = round(m["rho"] * (depth_range / m["dz"]) * (x1 - x0) / m["pitch"])
         rng = np.random.default_rng(np.random.SeedSequence([seed, 20]))
-        return {"z": rng.uniform(0.0, depth, count), "x": rng.uniform(x0, x1, count)}
+        return {"z": rng.uniform(0.0, depth_range, count), "x": rng.uniform(x0, x1, count)}
 
     def _field(self, m: dict, sc: dict, strain: float = 0.0) -> np.ndarray:
         """Noise-free complex field (depth, x) of the scatterers, compressed by ``strain``."""
