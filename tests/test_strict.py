@@ -214,7 +214,7 @@ def test_mismatched_images_are_refused(pair, src):
     assert speckle.pearson(ref, stack).sizes == {"strain": 2}
 
 
-def test_compensate_refuses_other_grids_and_missing_attrs(pair):
+def test_compensate_refuses_other_grids_and_a_missing_k0(pair):
     ref, dfm = pair
     disp = speckle.scene.deformation.pixel_displacement(
         lambda z, x: 3.0 + 0 * z, ref.depth, ref.aline
@@ -222,7 +222,7 @@ def test_compensate_refuses_other_grids_and_missing_attrs(pair):
     assert speckle.compensate(dfm, disp).shape == dfm.field.shape
     with pytest.raises(ValueError, match="different 'depth' coordinates"):
         speckle.compensate(dfm, disp.assign_coords(depth=disp.depth * 2))
-    with pytest.raises(ValueError, match="deformed needs attributes"):
+    with pytest.raises(ValueError, match="deformed needs attribute k0"):
         speckle.compensate(dfm.field, disp)
 
 
