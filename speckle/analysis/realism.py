@@ -33,6 +33,7 @@ import xarray as xr
 from scipy import stats
 
 from .._validate import check_choice, check_int, check_real
+from ..conventions import coord
 from ..imaging.beam_lines import beam_lines, shared_scatterers
 from ..imaging.bscan import bscan
 from ..scene.scatterers import random_scatterers
@@ -98,9 +99,14 @@ def fit_parameters(
     parts = [roi.values] if air is None else [air.values, roi.values]
     n_air = 0 if air is None else air.shape[0]
     values = np.vstack(parts)
+    rows, cols = values.shape
     image = xr.DataArray(
         values,
         dims=("depth", "x"),
+        coords={
+            "depth": coord("depth", np.arange(rows) * dz),
+            "x": coord("x", np.arange(cols, dtype=float)),  # pitch 1: only w0/pitch matters
+        },
         attrs={"kind": "log", "pixel_size": dz, "pitch": 1.0, **_clip_attrs(roi)},
     )
     fit = fit_system(
@@ -159,16 +165,16 @@ def simulate(
         )
     else:
         src = spectrum(n_pixels, h, k0_dk=k0_dk)
-    attrs = {"depth": h, "n_pixels": n_pixels, "density": density}
+    attrs = {"depth_range": h, "n_pixels": n_pixels, "density": density}
     if "beam" in effects:
         w0 = fit["waist"] * pixel_size  # lines one pixel_size apart: only w0/pitch matters
         sc = shared_scatterers(
-            n_alines, pixel_size, density, n_pixels=n_pixels, depth=h, waist=w0, seed=seed
+            n_alines, pixel_size, density, n_pixels=n_pixels, depth_range=h, waist=w0, seed=seed
         )
         scene = beam_lines(sc["z"], sc["x"], sc["amplitude"], lines=sc["lines"], waist=w0)
         scene = scene.assign_attrs(attrs)
     else:
-        scene = random_scatterers(n_alines, density, n_pixels=n_pixels, depth=h, seed=seed)
+        scene = random_scatterers(n_alines, density, n_pixels=n_pixels, depth_range=h, seed=seed)
     if "attenuation" in effects:
         scene = attenuate(scene, fit["attenuation"])
     if "phase" in effects:

@@ -180,7 +180,7 @@ def showcase_dataset(cfg: Mapping, seed: int) -> xr.Dataset:
         "lines": lines,
         "waist": w0,
         "n_pixels": n,
-        "depth": h,
+        "depth_range": h,
         "k0": src.attrs["k0"],
         "spectrum": src.values,
         "method": cfg["method"],

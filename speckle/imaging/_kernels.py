@@ -85,7 +85,7 @@ def _wrap_phase(ph):
 
 
 @numba.njit(fastmath=True, cache=True)
-def carrier_and_position(z, a, k0, depth, grid, cr, ci, u):
+def carrier_and_position(z, a, k0, depth_range, grid, cr, ci, u):
     """Fill ``cr + 1j*ci = a * exp(2i k0 z)`` and ``u = frac(z/depth) * grid`` for one line.
 
     ``z`` (float64, µm) and ``a`` (complex128) have shape (M,); outputs are float64 arrays of
@@ -93,7 +93,7 @@ def carrier_and_position(z, a, k0, depth, grid, cr, ci, u):
     (Taylor to degree 17 at a quarter of the phase, then squared twice, relative error
     < 1e-15) so that numba vectorises the loop.
     """
-    inv_h = 1.0 / depth
+    inv_h = 1.0 / depth_range
     two_k0 = 2.0 * k0
     for j in range(z.shape[0]):
         zj = z[j]
