@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["method_options", "strain_scores"]
+__all__ = ["mean_and_se", "method_options", "strain_scores"]
 
 #: Label suffix -> the ``align`` option of ``estimate_strain`` it stands for.
 _ALIGN_SUFFIXES = {"_unaligned": False, "_aligned": True}
@@ -56,3 +56,30 @@ def strain_scores(estimate: np.ndarray, truth: np.ndarray | float) -> tuple[floa
         return np.nan, np.nan, 0.0
     err = estimate[ok] - np.broadcast_to(truth, estimate.shape)[ok]
     return float(np.median(err)), float(np.sqrt(np.mean(err**2))), float(ok.mean())
+
+
+def mean_and_se(values: np.ndarray, axis: int = -1) -> tuple[np.ndarray, np.ndarray]:
+    """Mean over independent repeats (seeds) and its standard error, ignoring NaN repeats.
+
+    Parameters
+    ----------
+    values : numpy.ndarray
+        Repeated measurements, the repeats along ``axis``; NaN where a repeat gave no value.
+    axis : int
+        The axis of the repeats.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The mean of the finite repeats (NaN when none) and its standard error
+        ``std(ddof=1) / sqrt(n)`` over the ``n`` finite repeats (NaN when ``n < 2``).
+    """
+    v = np.asarray(values, dtype=float)
+    n = np.isfinite(v).sum(axis=axis)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        total = np.where(np.isfinite(v), v, 0.0).sum(axis=axis)
+        mean = np.where(n > 0, total / np.maximum(n, 1), np.nan)
+        dev = np.where(np.isfinite(v), v - np.expand_dims(mean, axis), 0.0)
+        var = (dev**2).sum(axis=axis) / np.maximum(n - 1, 1)
+        se = np.where(n >= 2, np.sqrt(var / np.maximum(n, 1)), np.nan)
+    return mean, se
