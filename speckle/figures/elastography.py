@@ -542,12 +542,12 @@ def plot_failure(ds: xr.Dataset) -> Figure:
         xplot = (
             np.where(np.isinf(x), np.nanmax(x[np.isfinite(x)]) + 10, x) if name == "snr_db" else x
         )
-        for m in ds.method.values:
-            sel = {"method": m}
+        for i, m in enumerate(ds.method.values):
+            sel = {"method": i}  # by position: a str index read back from NetCDF may not select
             line = axes[0, j].errorbar(
                 xplot,
-                ds[f"relative_rms_error_{name}"].sel(sel).values,
-                yerr=ds[f"relative_rms_error_{name}_se"].sel(sel).values,
+                ds[f"relative_rms_error_{name}"].isel(sel).values,
+                yerr=ds[f"relative_rms_error_{name}_se"].isel(sel).values,
                 fmt="o-",
                 ms=3,
                 lw=0.8,
@@ -556,8 +556,8 @@ def plot_failure(ds: xr.Dataset) -> Figure:
             )
             axes[1, j].errorbar(
                 xplot,
-                ds[f"answered_{name}"].sel(sel).values,
-                yerr=ds[f"answered_{name}_se"].sel(sel).values,
+                ds[f"answered_{name}"].isel(sel).values,
+                yerr=ds[f"answered_{name}_se"].isel(sel).values,
                 fmt="o-",
                 ms=3,
                 lw=0.8,
