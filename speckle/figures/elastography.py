@@ -355,6 +355,22 @@ def _half_width(image: np.ndarray) -> float:
     return float(i - 1 + (rho[i - 1] - 0.5) / (rho[i - 1] - rho[i]))
 
 
+def _over_seeds(key: str, dim: str, values: np.ndarray, long_name: str) -> dict:
+    """``key`` (mean over seeds), ``key_se`` (its standard error) and ``key_per_seed`` of the
+    per-seed ``values`` over ``(dim, method, replicate)``."""
+    mean, se = mean_and_se(values)
+    dims = (dim, "method")
+    return {
+        key: (dims, mean, attrs("dimensionless", f"{long_name}, mean over seeds")),
+        f"{key}_se": (dims, se, attrs("dimensionless", f"standard error of {key} (seeds)")),
+        f"{key}_per_seed": (
+            (*dims, "replicate"),
+            values,
+            attrs("dimensionless", f"{long_name}, per seed"),
+        ),
+    }
+
+
 def failure_data(
     cfg: Mapping,
     seed: int,
@@ -436,51 +452,29 @@ def failure_data(
         part = scores.isel(case=rows).transpose("case", "method", "replicate")
         scale = np.abs(np.asarray(coords["strain"], float)) if name == "strain" else base["strain"]
         scale = np.reshape(scale, (-1, 1, 1)) if name == "strain" else scale
-        rel = part["rms_error"].values / scale
-        answered = part["answered"].values
-        dims, seed_dims = (name, "method"), (name, "method", "replicate")
-        rel_mean, rel_se = mean_and_se(rel)
-        ans_mean, ans_se = mean_and_se(answered)
         what = "true strain" if name == "strain" else "base strain"
-        data[f"median_error_{name}"] = (
-            dims,
-            mean_and_se(part["median_error"].values)[0],
-            {**STRAIN_ERROR, "long_name": "median of estimate minus truth, mean over seeds"},
+        for var, long_name in (
+            ("median_error", "median of estimate minus truth, mean over seeds"),
+            ("rms_error", "rms of estimate minus truth, mean over seeds"),
+        ):
+            mean = mean_and_se(part[var].values)[0]
+            data[f"{var}_{name}"] = (
+                (name, "method"),
+                mean,
+                {**STRAIN_ERROR, "long_name": long_name},
+            )
+        data.update(
+            _over_seeds(
+                f"relative_rms_error_{name}",
+                name,
+                part["rms_error"].values / scale,
+                f"rms error / {what}",
+            )
         )
-        data[f"rms_error_{name}"] = (
-            dims,
-            mean_and_se(part["rms_error"].values)[0],
-            {**STRAIN_ERROR, "long_name": "rms of estimate minus truth, mean over seeds"},
-        )
-        data[f"relative_rms_error_{name}"] = (
-            dims,
-            rel_mean,
-            attrs("dimensionless", f"rms error / {what}, mean over seeds"),
-        )
-        data[f"relative_rms_error_{name}_se"] = (
-            dims,
-            rel_se,
-            attrs("dimensionless", f"standard error of relative_rms_error_{name} (seeds)"),
-        )
-        data[f"relative_rms_error_{name}_per_seed"] = (
-            seed_dims,
-            rel,
-            attrs("dimensionless", f"rms error / {what}, per seed"),
-        )
-        data[f"answered_{name}"] = (
-            dims,
-            ans_mean,
-            attrs("dimensionless", "fraction of pixels answered, mean over seeds"),
-        )
-        data[f"answered_{name}_se"] = (
-            dims,
-            ans_se,
-            attrs("dimensionless", f"standard error of answered_{name} (seeds)"),
-        )
-        data[f"answered_{name}_per_seed"] = (
-            seed_dims,
-            answered,
-            attrs("dimensionless", "fraction of pixels answered, per seed"),
+        data.update(
+            _over_seeds(
+                f"answered_{name}", name, part["answered"].values, "fraction of pixels answered"
+            )
         )
     # predicted strain noise of the vector method at each SNR (noise-free images, base strain)
     (ref, dfm), k0 = _images(fcfg, seed, [_uniform(0.0), _uniform(base["strain"])])
