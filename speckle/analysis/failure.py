@@ -13,6 +13,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import check_int, check_real
+from ..conventions import depth_range_of
 
 __all__ = ["mean_and_se", "method_options", "predicted_vector_floor", "strain_scores"]
 
@@ -199,7 +200,9 @@ def predicted_vector_floor(
     if not isinstance(spectrum, xr.DataArray) or "n" not in spectrum.coords:
         raise TypeError("spectrum must be a DataArray of speckle.spectrum (coordinate 'n')")
     n = check_int(spectrum.attrs.get("n_pixels", spectrum.size), "spectrum n_pixels", low=8)
-    p = check_real(float(spectrum.attrs["depth"]) / n, "pixel size", low=0, low_inclusive=False)
+    p = check_real(
+        depth_range_of(spectrum, "spectrum") / n, "pixel size", low=0, low_inclusive=False
+    )
     k0 = check_real(float(spectrum.attrs["k0"]), "k0", low=0, low_inclusive=False)
     lag = check_int(lag, "lag", low=1, high=n // 4)
     if not isinstance(window, (tuple, list)) or len(window) != 2:

@@ -49,7 +49,7 @@ def test_predicted_floor_needs_a_spectrum():
 def _relative_errors(seed: int) -> np.ndarray:
     """(estimate - s)/s of the unaligned vector method on a noise-free compressed pair. The
     scene fills [0, H) only (strain=0), so no scatterer is pulled in from below the image."""
-    scene = speckle.deformable_scene(LINES, 4.0, n_pixels=N, depth=N * PIXEL, seed=seed)
+    scene = speckle.deformable_scene(LINES, 4.0, n_pixels=N, depth_range=N * PIXEL, seed=seed)
     a1, a2 = (
         speckle.bscan(speckle.displace(scene, lambda z, x, s=s: -s * z), _source())
         .field.transpose("depth", "aline")
