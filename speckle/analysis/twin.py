@@ -117,8 +117,10 @@ def _weights(shape: str, width: float, n: int) -> np.ndarray:
 def _intensity_psf(weights: np.ndarray) -> np.ndarray:
     """``|P(u)|^2`` of the depth PSF over one period, 8 samples per pixel."""
     n = weights.size
-    u = np.arange(8 * n) / 8.0
-    return np.abs(np.exp(2j * np.pi * np.outer(u, np.arange(n) - n // 2) / n) @ weights) ** 2
+    # P(k/8) = sum_n w_n exp(2 pi i k (n - N//2) / (8 N)): a zero-padded inverse FFT
+    padded = np.zeros(8 * n, complex)
+    padded[(np.arange(n) - n // 2) % (8 * n)] = weights
+    return np.abs(np.fft.ifft(padded) * (8 * n)) ** 2
 
 
 def _depth_theory(lags, weights, snr_db, excess):
@@ -132,7 +134,8 @@ def _depth_theory(lags, weights, snr_db, excess):
         return ac.axial_correlation_theory(lags, weights, snr_db)
     g2 = ac.axial_correlation_theory(lags, weights, None)
     p2 = _intensity_psf(weights)
-    d = np.array([np.sum(p2 * np.roll(p2, 8 * int(m))) for m in lags]) / np.sum(p2**2)
+    circ = np.fft.ifft(np.abs(np.fft.fft(p2)) ** 2).real  # circular autocorrelation of |P|^2
+    d = circ[(8 * np.asarray(lags, dtype=int)) % p2.size] / circ[0]
     inv_r = 0.0 if snr_db is None else 10 ** (-snr_db / 10)
     out = (g2 + excess * d) / ((1 + inv_r) ** 2 + excess)
     return np.where(np.asarray(lags) == 0, 1.0, out)
