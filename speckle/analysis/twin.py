@@ -73,6 +73,7 @@ from . import autocorrelation as ac
 from . import measured as ms
 from .image_files import IMAGE_KINDS
 from .phase import DEFAULT_MAX_BIAS
+from .sparse import depth_intensity_psf, sparse_inverse_density
 from .strain import estimate_strain
 
 __all__ = [
@@ -114,15 +115,6 @@ def _weights(shape: str, width: float, n: int) -> np.ndarray:
     return _gaussian_weights(width, n) if shape == "gaussian" else rectangular_weights(width, n)
 
 
-def _intensity_psf(weights: np.ndarray) -> np.ndarray:
-    """``|P(u)|^2`` of the depth PSF over one period, 8 samples per pixel."""
-    n = weights.size
-    # P(k/8) = sum_n w_n exp(2 pi i k (n - N//2) / (8 N)): a zero-padded inverse FFT
-    padded = np.zeros(8 * n, complex)
-    padded[(np.arange(n) - n // 2) % (8 * n)] = weights
-    return np.abs(np.fft.ifft(padded) * (8 * n)) ** 2
-
-
 def _depth_theory(lags, weights, snr_db, excess):
     """Pearson intensity autocorrelation along depth at finite density (module docstring).
 
@@ -133,7 +125,7 @@ def _depth_theory(lags, weights, snr_db, excess):
     if excess <= 0:
         return ac.axial_correlation_theory(lags, weights, snr_db)
     g2 = ac.axial_correlation_theory(lags, weights, None)
-    p2 = _intensity_psf(weights)
+    p2 = depth_intensity_psf(weights)
     circ = np.fft.ifft(np.abs(np.fft.fft(p2)) ** 2).real  # circular autocorrelation of |P|^2
     d = circ[(8 * np.asarray(lags, dtype=int)) % p2.size] / circ[0]
     inv_r = 0.0 if snr_db is None else 10 ** (-snr_db / 10)
@@ -181,7 +173,7 @@ def _fit_rectangular(acf, n, snr_db, excess) -> tuple[float, float]:
 
 def _psf_excess(shape: str, width: float, waist_pitch: float, n: int) -> float:
     """``A4/A^2`` of the model's point-spread function, per pixel x pitch (module docstring)."""
-    p2 = _intensity_psf(_weights(shape, width, n))  # one period, 8 samples per pixel (exact)
+    p2 = depth_intensity_psf(_weights(shape, width, n))  # one period, 8 samples per pixel (exact)
     depth = np.sum(p2**2) / 8.0 / (np.sum(p2) / 8.0) ** 2
     lateral = np.sqrt(2 / np.pi) / waist_pitch  # int exp(-8x^2/w^2) / (int exp(-4x^2/w^2))^2
     return float(depth * lateral)
@@ -301,7 +293,18 @@ def _estimate(
     shape = "gaussian" if out["gaussian_rms"] <= out["rectangular_rms"] else "rectangular"
     width = out[f"{shape}_{'fwhm' if shape == 'gaussian' else 'width'}_fraction"]
     psf = _psf_excess(shape, float(width), float(out["waist_pitch"]), n_pixels)
-    out["inverse_density"] = float(excess / psf)
+    out["inverse_density_contrast"] = float(excess / psf)
+    # var ln I of sparse speckle (speckle.analysis.sparse): linear data only (for log data the
+    # unknown gain g scales var D = g^2 var ln I, so var ln I is not observed)
+    if data.kind == "log":
+        out["inverse_density_log"] = np.nan
+    else:
+        out["inverse_density_log"] = sparse_inverse_density(
+            float(np.var(log_i)),
+            _weights(shape, float(width), n_pixels),
+            float(out["waist_pitch"]),
+            0.0 if snr is None else 1 / r,
+        )
     return out
 
 
@@ -995,7 +998,7 @@ def fit_system(
     jack = [_estimate(data, blocks[:i] + blocks[i + 1 :], **kw) for i in range(nb)]
     keys = [k for k, v in whole.items()]
     se = _jackknife(jack, keys)
-    params = _parameters(whole, se, data, reg, npx, noise is not None)
+    params = _parameters(whole, se, jack, data, reg, npx, noise is not None)
     # focus: row means of the intensity (linear units of the fit)
     z = np.arange(nz) * data.dz
     rows, rows_se = np.asarray(whole["row_mean_intensity"]), se["row_mean_intensity"]
@@ -1076,7 +1079,7 @@ def _shape(whole: dict) -> str:
     return "gaussian" if whole["gaussian_rms"] <= whole["rectangular_rms"] else "rectangular"
 
 
-def _parameters(whole, se, data: _Data, reg, npx, have_noise) -> dict:
+def _parameters(whole, se, jack, data: _Data, reg, npx, have_noise) -> dict:
     shape = _shape(whole)
     width_key = "gaussian_fwhm_fraction" if shape == "gaussian" else "rectangular_width_fraction"
     p: dict = {}
@@ -1186,10 +1189,23 @@ def _parameters(whole, se, data: _Data, reg, npx, have_noise) -> dict:
         "1",
         "<I_s^2>/<I_s>^2 - 2 (noise and floor removed)",
     )
-    inv, inv_se = whole["inverse_density"], se["inverse_density"]
     put(
-        "inverse_density", inv, inv_se, "1", "1 / scatterers per pixel per pitch, from the contrast"
+        "inverse_density_contrast",
+        whole["inverse_density_contrast"],
+        se["inverse_density_contrast"],
+        "1",
+        "1 / scatterers per pixel per pitch, from the intensity contrast",
     )
+    put(
+        "inverse_density_log",
+        whole["inverse_density_log"],
+        se["inverse_density_log"],
+        "1",
+        "1 / scatterers per pixel per pitch, from var ln I (linear data only)",
+    )
+    inv, inv_se, how = _combined_inverse_density(whole, jack)
+    put("inverse_density", inv, inv_se, "1", f"1 / scatterers per pixel per pitch ({how})")
+    p["inverse_density"][2]["method"] = how
     significant = inv > 2 * inv_se
     put(
         "density",
@@ -1206,3 +1222,36 @@ def _parameters(whole, se, data: _Data, reg, npx, have_noise) -> dict:
     for k in ("skewness", "excess_kurtosis"):
         put(k, whole[k], se[k], "1", f"{k} of the log data")
     return p
+
+
+def _combined_inverse_density(whole: dict, jack: list[dict]) -> tuple[float, float, str]:
+    """Contrast and ``var ln I`` estimates of ``1/rho`` combined by their jackknife covariance.
+
+    Weights ``C^-1 1 / (1' C^-1 1)`` (``C`` the delete-one-block covariance of the two
+    estimates: they share every pixel); the combined SE is the jackknife SE of the weighted
+    sum. One estimate alone when the other is missing (log data) or ``C`` is singular.
+    """
+    keys = ("inverse_density_contrast", "inverse_density_log")
+    est = np.array([whole[k] for k in keys], dtype=float)
+    reps = np.array([[j[k] for k in keys] for j in jack], dtype=float)
+    n = len(jack)
+    ok = np.isfinite(est) & np.all(np.isfinite(reps), axis=0)
+    dev = reps - reps.mean(axis=0)
+    if ok.all():
+        cov = (n - 1) / n * dev.T @ dev
+        if np.linalg.cond(cov) < 1e12:
+            w = np.linalg.solve(cov, np.ones(2))
+            w = w / w.sum()
+            comb = reps @ w
+            se = float(np.sqrt((n - 1) / n * np.sum((comb - comb.mean()) ** 2)))
+            return (
+                float(est @ w),
+                se,
+                (f"contrast and var ln I combined, weights {w[0]:.3f} and {w[1]:.3f}"),
+            )
+    i = int(np.flatnonzero(ok)[0]) if ok.any() else 0
+    se = float(np.sqrt((n - 1) / n * np.sum(dev[:, i] ** 2)))
+    how = "contrast only" if i == 0 else "var ln I only"
+    if i == 0 and not ok[1]:
+        how += " (var ln I not observed: log data with unknown gain)"
+    return float(est[i]), se, how
