@@ -89,6 +89,11 @@ DEFAULT_K0_DK = 10.0
 #: Intensity contrast std/mean below which a linear image is suspected to be log data.
 LOG_AS_LINEAR_CONTRAST = 0.5
 FOCUS_P_VALUE = 0.01
+#: Rows above the region whose mean intensity is this many dB below the region's are candidate
+#: signal-free rows (found when ``noise_rows`` is not given).
+NOISE_ROW_DB = 10.0
+#: Fewest contiguous signal-free rows accepted.
+MIN_NOISE_ROWS = 4
 _UM = COORDS["depth"][0]
 
 
@@ -525,8 +530,9 @@ class SystemFit:
         then match the standard deviation and mean of ``D``.
         """
         p = self.parameters
-        m = self._model(region.shape)
-        a = self._field(m, self._scatterers(m, region.shape[1], 0, m["h"]))[: region.shape[0]]
+        shape = self.template.shape
+        m = self._model(shape)
+        a = self._field(m, self._scatterers(m, shape[1], 0, m["h"]))[: shape[0]]
         if np.isfinite(self._value("snr_db")):
             a = add_complex_noise(a, self._value("snr_db"), seed=1)
         i0 = np.abs(a).ravel() ** 2
@@ -575,6 +581,8 @@ class SystemFit:
         region = _region(_as_image(image), self.settings["region"])
         twin = self.simulate(seed=seed)
         stats_ = [self._statistics(x) for x in (region, twin)]
+        if "frame" in region.dims:  # statistics pooled over frames; panels of the first
+            region = region.isel(frame=0)
         ds = xr.concat(stats_, dim="source").assign_coords(source=["measured", "twin"])
         for k in ("autocorrelation", "skewness", "excess_kurtosis", "contrast_excess"):
             diff = abs(ds[k].sel(source="measured") - ds[k].sel(source="twin"))
@@ -620,7 +628,8 @@ class SystemFit:
     def _statistics(self, image: xr.DataArray) -> xr.Dataset:
         s = self.settings
         data = _data(image, None, s["refractive_index"])
-        blocks = np.array_split(np.arange(image.sizes["x"]), s["n_blocks"])
+        nx, nf = image.sizes["x"], image.sizes.get("frame", 1)
+        blocks = np.array_split(np.arange(nx), s["n_blocks"])
 
         def one(cols):
             inten, _, g, _ = data.pieces(cols)
@@ -639,9 +648,10 @@ class SystemFit:
                 "profile": lg.mean(axis=1) / g,
             }
 
-        whole = one([np.arange(image.sizes["x"])])
+        whole = one(_column_groups(nx, nf, [np.arange(nx)]))
         se = _jackknife(
-            [one(blocks[:i] + blocks[i + 1 :]) for i in range(len(blocks))], list(whole)
+            [one(_column_groups(nx, nf, blocks[:i] + blocks[i + 1 :])) for i in range(len(blocks))],
+            list(whole),
         )
         lag = np.arange(s["max_lag"] + 1)
         acf = np.stack([whole["depth"], whole["lateral"]])
@@ -774,6 +784,18 @@ class SystemFit:
 
 
 def _as_image(image: object) -> xr.DataArray:
+    if (
+        isinstance(image, (list, tuple))
+        and image
+        and all(isinstance(x, xr.DataArray) for x in image)
+    ):
+        shapes = [x.shape for x in image]
+        if len(set(shapes)) > 1:
+            raise ValueError(
+                f"image frames must all have the same shape, got {shapes}; crop them to one "
+                "shape (the frames are fitted together)"
+            )
+        image = xr.concat([_as_image(x) for x in image], dim="frame", join="override")
     if not isinstance(image, xr.DataArray):
         raise TypeError(
             f"image must be an xarray.DataArray from speckle.load_image, got {type(image).__name__}"
@@ -786,13 +808,11 @@ def _as_image(image: object) -> xr.DataArray:
         )
     if "aline" in image.dims:
         image = image.rename({"aline": "x"})
-    if "frame" in image.dims:
-        image = image.isel(frame=0)
-    if set(image.dims) != {"depth", "x"}:
+    if set(image.dims) - {"frame"} != {"depth", "x"}:
         raise ValueError(
             f"image must have dims (depth, x) (and optionally frame), got {image.dims}"
         )
-    return image.transpose("depth", "x")
+    return image.transpose(*(("frame",) if "frame" in image.dims else ()), "depth", "x")
 
 
 def _region(image: xr.DataArray, region: Mapping | None) -> xr.DataArray:
@@ -849,10 +869,21 @@ def _data(image: xr.DataArray, noise: xr.DataArray | None, n_medium: float) -> _
             v = v**2
         return v.astype(float)
 
-    sig = values(image)
-    dz, pitch = (_step(image, k, d) for k, d in (("pixel_size", "depth"), ("pitch", "x")))
-    noise_values = None if noise is None else values(noise)
+    sig = _side_by_side(values(image))
+    one = image.isel(frame=0) if "frame" in image.dims else image
+    dz, pitch = (_step(one, k, d) for k, d in (("pixel_size", "depth"), ("pitch", "x")))
+    noise_values = None if noise is None else _side_by_side(values(noise))
     return _Data(kind, sig, noise_values, dz / n_medium, pitch)
+
+
+def _side_by_side(v: np.ndarray) -> np.ndarray:
+    """``(frame, depth, x)`` -> ``(depth, frame * x)``: frame ``f`` in columns ``f nx ..``."""
+    return v if v.ndim == 2 else np.concatenate(list(v), axis=1)
+
+
+def _column_groups(nx: int, n_frames: int, blocks: list[np.ndarray]) -> list[np.ndarray]:
+    """The column blocks of every frame (no pixel pair crosses a block or a frame edge)."""
+    return [b + f * nx for f in range(n_frames) for b in blocks]
 
 
 def _step(image: xr.DataArray, attr: str, dim: str) -> float:
@@ -867,6 +898,56 @@ def _step(image: xr.DataArray, attr: str, dim: str) -> float:
         f"image has no {attr} attribute and no {dim!r} coordinate; load it with "
         f"speckle.load_image(..., {attr}=...)"
     )
+
+
+def _find_noise_rows(img: xr.DataArray, region: Mapping | None) -> list[int] | None:
+    """Signal-free rows above the region, or ``None`` (module docstring of :func:`fit_system`).
+
+    Rows ``0 .. start`` of the region's columns whose mean intensity is :data:`NOISE_ROW_DB`
+    below the region's; of those, the rows within a factor 2 of their median level (no depth
+    structure: the rising tails of the sample's point-spread function are left out), and of
+    these the longest contiguous run of at least :data:`MIN_NOISE_ROWS` rows.
+    """
+    reg = region or {}
+    start = (reg.get("depth") or [0])[0] or 0
+    if start < MIN_NOISE_ROWS:
+        return None
+    above = _region(img, {"depth": [0, start], "x": reg.get("x")})
+    inside = _region(img, {"depth": reg.get("depth"), "x": reg.get("x")})
+    kind = img.attrs["kind"]
+    if not (np.all(np.isfinite(above.values)) and np.all(np.isfinite(inside.values))):
+        return None
+    if kind == "log":
+        d_in = inside.values.astype(float)
+        g = float(
+            ms.fit_floor(
+                xr.DataArray(
+                    d_in.reshape(-1, d_in.shape[-1]),
+                    attrs={"scale": "log"},
+                    dims=("depth", "aline"),
+                )
+            )["gain"]
+        )
+        i_above, i_in = (np.exp((v.astype(float) - d_in.mean()) / g) for v in (above.values, d_in))
+    else:
+        i_above, i_in = (_data(x, None, 1.0).signal for x in (above, inside))
+    axes = tuple(i for i in range(i_above.ndim) if i != i_above.ndim - 2)  # all but depth
+    level = np.mean(i_above, axis=axes)
+    low = level < np.mean(i_in) * 10 ** (-NOISE_ROW_DB / 10)
+    if not low.any():
+        return None
+    flat = low & (level <= 2 * np.median(level[low]))
+    best, run = None, None
+    for i, ok in enumerate(np.append(flat, False)):
+        if ok and run is None:
+            run = i
+        elif not ok and run is not None:
+            if best is None or i - run > best[1] - best[0]:
+                best = (run, i)
+            run = None
+    if best is None or best[1] - best[0] < MIN_NOISE_ROWS:
+        return None
+    return [int(best[0]), int(best[1])]
 
 
 def _check_values(region: xr.DataArray, name: str, kind: str) -> None:
@@ -899,9 +980,12 @@ def fit_system(
 
     Parameters
     ----------
-    image : xarray.DataArray
-        From :func:`speckle.load_image`: dims ``(depth, x)`` (a ``frame`` dim: the first frame
-        is fitted), ``attrs["kind"]`` one of ``complex``, ``amplitude``, ``intensity``, ``log``.
+    image : xarray.DataArray or sequence of xarray.DataArray
+        From :func:`speckle.load_image`: dims ``(depth, x)``, ``attrs["kind"]`` one of
+        ``complex``, ``amplitude``, ``intensity``, ``log``. A ``frame`` dim (or a list of
+        same-shaped images): every frame is fitted, the statistics pooled over all frames'
+        pixel pairs and the jackknife deleting one block of A-lines from every frame at once
+        (frames of one sample share speckle: their SE is not divided by sqrt(frames)).
     k0 : float, optional
         Central wavenumber in vacuum (rad/µm, > 0); the model uses ``refractive_index * k0``.
         Default: ``k0/delta_k = 10`` (:data:`DEFAULT_K0_DK`). It sets the twin's carrier (the
@@ -913,7 +997,10 @@ def fit_system(
         indices, half-open); default the whole image.
     noise_rows : [start, stop], optional
         Signal-free rows (air above the sample), same columns as the region: SNR and noise
-        floor. Without them ``snr_db`` (if given) is used, else no noise is fitted.
+        floor. Without them and without ``snr_db`` they are looked for above the region
+        (:data:`NOISE_ROW_DB` below its mean intensity, flat, >= :data:`MIN_NOISE_ROWS`
+        contiguous rows); the rows used and how they were chosen are in the attributes
+        ``noise_rows`` and ``noise_rows_source``. None found: a warning, SNR not fitted.
     snr_db : float, optional
         A known SNR (dB) when there are no signal-free rows.
     n_pixels : int
@@ -937,15 +1024,16 @@ def fit_system(
     TypeError
         ``image`` not a DataArray.
     ValueError
-        Unknown kind; a region or noise rows outside the image; NaN, constant or (linear)
-        zero pixels; a region too small for ``max_lag`` and ``n_blocks``; bad settings. All
-        before any fitting.
+        Unknown kind; frames of different shapes; a region or noise rows outside the image;
+        NaN, constant or (linear) zero pixels; a region too small for ``max_lag`` and
+        ``n_blocks``; bad settings. All before any fitting.
 
     Warns
     -----
     UserWarning
         A linear image (amplitude/intensity) whose intensity contrast std/mean is below
-        :data:`LOG_AS_LINEAR_CONTRAST` (fully developed speckle: 1): probably log data.
+        :data:`LOG_AS_LINEAR_CONTRAST` (fully developed speckle: 1): probably log data. No
+        signal-free rows found (``noise_rows`` and ``snr_db`` not given).
     """
     img = _as_image(image)
     kind = img.attrs["kind"]
@@ -959,7 +1047,8 @@ def fit_system(
         raise ValueError("n_bands must be 0 (no per-band waist) or >= 2, got 1")
     rmax = check_real(max_density, "max_density", low=0, low_inclusive=False)
     reg = _region(img, region)
-    nz, nx = reg.shape
+    nz, nx = reg.sizes["depth"], reg.sizes["x"]
+    nf = reg.sizes.get("frame", 1)
     if nz < ml + 4 or nx < nb * (ml + 2):
         raise ValueError(
             f"region of {nz} x {nx} pixels (depth, x) is too small for max_lag = {ml} and "
@@ -970,6 +1059,20 @@ def fit_system(
         raise ValueError(f"n_bands = {nbands} leaves fewer than 2 rows per band in {nz} rows")
     _check_values(reg, "image region", kind)
     noise = None
+    noise_source = "given"
+    if noise_rows is None and snr_db is None:
+        noise_rows = _find_noise_rows(img, region)
+        noise_source = "found automatically" if noise_rows is not None else "none found"
+        if noise_rows is None:
+            warnings.warn(
+                "no signal-free rows found above the region (rows "
+                f"{NOISE_ROW_DB:g} dB below it, >= {MIN_NOISE_ROWS} contiguous): SNR and "
+                "noise floor are not fitted (pass noise_rows=[start, stop] or snr_db=)",
+                UserWarning,
+                stacklevel=2,
+            )
+    elif noise_rows is None:
+        noise_source = "none (snr_db given)"
     if noise_rows is not None:
         if isinstance(noise_rows, str) or len(noise_rows) != 2:
             raise ValueError(f"noise_rows must be [start, stop], got {noise_rows!r}")
@@ -994,8 +1097,13 @@ def fit_system(
             )
     blocks = np.array_split(np.arange(nx), nb)
     kw = {"n_pixels": npx, "max_lag": ml, "n_bands": nbands, "snr_db": snr_db}
-    whole = _estimate(data, [np.arange(nx)], **kw)  # every pair of the region
-    jack = [_estimate(data, blocks[:i] + blocks[i + 1 :], **kw) for i in range(nb)]
+    # every pair of the region (of every frame); the jackknife deletes a block of A-lines from
+    # every frame at once, so frames of one sample (correlated speckle) do not shrink the SE
+    whole = _estimate(data, _column_groups(nx, nf, [np.arange(nx)]), **kw)
+    jack = [
+        _estimate(data, _column_groups(nx, nf, blocks[:i] + blocks[i + 1 :]), **kw)
+        for i in range(nb)
+    ]
     keys = [k for k, v in whole.items()]
     se = _jackknife(jack, keys)
     params = _parameters(whole, se, jack, data, reg, npx, noise is not None)
@@ -1050,6 +1158,7 @@ def fit_system(
         pitch=float(data.pitch),
         region=repr(dict(region or {})),
         noise_rows=repr(None if noise_rows is None else list(noise_rows)),
+        noise_rows_source=noise_source,
         n_pixels=npx,
         max_lag=ml,
         n_blocks=nb,
@@ -1070,7 +1179,8 @@ def fit_system(
         "max_density": rmax,
         "mean_intensity": mean_i,
     }
-    out = SystemFit(ds, reg, settings)
+    ds.attrs["n_frames"] = nf
+    out = SystemFit(ds, reg.isel(frame=0) if "frame" in reg.dims else reg, settings)
     out._fit_detection(reg)
     return out
 
