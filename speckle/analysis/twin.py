@@ -20,7 +20,8 @@ statistics that the model's system parameters set, and inverts their theory:
 * **focus**: the mean intensity per row against ``A exp(-2 mu_t z) (1 + u^2)^(-3/2) + N``,
   ``u = (z - z_f)/z_R`` (the 2-D confocal response of :func:`speckle.beam_scan`), kept when it
   beats the unfocused profile ``A exp(-2 mu_t z) + N`` by an F-test at 1 % (``focus_p_value``);
-* **SNR and noise floor** from signal-free rows (``noise_rows``): ``SNR = <I_region>/<I_noise>
+* **SNR and noise floor** from signal-free rows (``noise_rows``, or found above the region when
+  neither they nor ``snr_db`` are given: :func:`fit_system`): ``SNR = <I_region>/<I_noise>
   - 1`` (the region holds signal plus noise), ``noise_floor`` = mean noise intensity (for log
   data: the mean log level of those rows, data units); white noise multiplies every lag >= 1
   by ``(r/(1 + r))^2``, which the fits include;
@@ -34,18 +35,26 @@ statistics that the model's system parameters set, and inverts their theory:
   floor ``b S``, ``var I = (S + N)^2 + x S^2`` and ``<I> = S (1 + b) + N``, so ``x`` (and so
   ``inverse_density = 1/rho``) follows from the mean and variance of the region. At high
   density ``x`` is small against its error: ``inverse_density`` is then consistent with 0 and
-  ``density_lower_bound`` (at 2 standard errors) is what the image says. The log moments
-  (skewness, excess kurtosis) are compared between the image and its twin in
-  :meth:`SystemFit.compare`, where a too-low density shows.
+  ``density_lower_bound`` (at 2 standard errors) is what the image says. For linear data a
+  second estimate comes from ``var ln I`` (``inverse_density_log``): exact for Poisson
+  scatterers through the fitted PSF with the fitted noise (:mod:`speckle.analysis.sparse`,
+  no floor), it resolves low densities (0.5-4 per pixel per pitch), where the contrast's
+  error grows with the fourth moment of ``I``. The two share every pixel and are combined by
+  the inverse of their jackknife covariance (``inverse_density``; ``density_identified``
+  when it exceeds 2 SE). For log data ``var D = g^2 var ln I`` with the gain ``g`` unknown:
+  ``var ln I`` is not observed and the contrast is used alone (the ``method`` attribute says
+  which).
 
 Estimates use every pixel pair of the region (the autocorrelation is then that of
 :func:`~speckle.analysis.autocorrelation.intensity_autocorrelation`). Standard errors:
 delete-one-block jackknife over ``n_blocks`` contiguous blocks of A-lines (speckle is
 correlated over a few lines, blocks are nearly independent): every quantity above is
 re-estimated without each block (statistics pooled over the remaining blocks, no pair across a
-block edge) and ``SE^2 = (n - 1)/n sum (theta_i - mean theta)^2``. The focus fit
-is repeated on each jackknife sample too (rows are correlated along depth by the point-spread
-function, so the least-squares covariance of the row means would understate its errors).
+block edge) and ``SE^2 = (n - 1)/n sum (theta_i - mean theta)^2``. With a ``frame`` dim the
+statistics pool every frame and each jackknife sample deletes the same block from all frames.
+The focus fit is repeated on each jackknife sample too (rows are correlated along depth by the
+point-spread function, so the least-squares covariance of the row means would understate its
+errors).
 
 :meth:`SystemFit.simulate` images a shared scene of the fitted density through the fitted
 spectrum and scanned (focused) beam (:func:`speckle.beam_scan`), attenuated, with white noise
@@ -1323,6 +1332,11 @@ def _parameters(whole, se, jack, data: _Data, reg, npx, have_noise) -> dict:
         inv_se / inv**2 if significant else np.nan,
         "1",
         "scatterers per pixel per pitch",
+    )
+    p["density_identified"] = (
+        (),
+        int(significant),
+        {"units": "1", "long_name": "1 if the inverse density exceeds 2 SE (density fitted)"},
     )
     p["density_lower_bound"] = (
         (),
