@@ -53,6 +53,7 @@ __getattr__, __dir__, __all__ = attach(
             "ssim_db",
         ],
         "measured": ["compare_measured", "load_measured"],
+        "sparse": ["depth_intensity_psf", "log_intensity_moments", "sparse_inverse_density"],
         "statistics": ["contrast_theory", "fit_exponential", "fit_rayleigh", "speckle_contrast"],
         "strain": ["accumulate_strain", "estimate_displacement", "estimate_strain"],
         "tracking": [

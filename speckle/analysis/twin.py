@@ -20,7 +20,8 @@ statistics that the model's system parameters set, and inverts their theory:
 * **focus**: the mean intensity per row against ``A exp(-2 mu_t z) (1 + u^2)^(-3/2) + N``,
   ``u = (z - z_f)/z_R`` (the 2-D confocal response of :func:`speckle.beam_scan`), kept when it
   beats the unfocused profile ``A exp(-2 mu_t z) + N`` by an F-test at 1 % (``focus_p_value``);
-* **SNR and noise floor** from signal-free rows (``noise_rows``): ``SNR = <I_region>/<I_noise>
+* **SNR and noise floor** from signal-free rows (``noise_rows``, or found above the region when
+  neither they nor ``snr_db`` are given: :func:`fit_system`): ``SNR = <I_region>/<I_noise>
   - 1`` (the region holds signal plus noise), ``noise_floor`` = mean noise intensity (for log
   data: the mean log level of those rows, data units); white noise multiplies every lag >= 1
   by ``(r/(1 + r))^2``, which the fits include;
@@ -34,18 +35,26 @@ statistics that the model's system parameters set, and inverts their theory:
   floor ``b S``, ``var I = (S + N)^2 + x S^2`` and ``<I> = S (1 + b) + N``, so ``x`` (and so
   ``inverse_density = 1/rho``) follows from the mean and variance of the region. At high
   density ``x`` is small against its error: ``inverse_density`` is then consistent with 0 and
-  ``density_lower_bound`` (at 2 standard errors) is what the image says. The log moments
-  (skewness, excess kurtosis) are compared between the image and its twin in
-  :meth:`SystemFit.compare`, where a too-low density shows.
+  ``density_lower_bound`` (at 2 standard errors) is what the image says. For linear data a
+  second estimate comes from ``var ln I`` (``inverse_density_log``): exact for Poisson
+  scatterers through the fitted PSF with the fitted noise (:mod:`speckle.analysis.sparse`,
+  no floor), it resolves low densities (0.5-4 per pixel per pitch), where the contrast's
+  error grows with the fourth moment of ``I``. The two share every pixel and are combined by
+  the inverse of their jackknife covariance (``inverse_density``; ``density_identified``
+  when it exceeds 2 SE). For log data ``var D = g^2 var ln I`` with the gain ``g`` unknown:
+  ``var ln I`` is not observed and the contrast is used alone (the ``method`` attribute says
+  which).
 
 Estimates use every pixel pair of the region (the autocorrelation is then that of
 :func:`~speckle.analysis.autocorrelation.intensity_autocorrelation`). Standard errors:
 delete-one-block jackknife over ``n_blocks`` contiguous blocks of A-lines (speckle is
 correlated over a few lines, blocks are nearly independent): every quantity above is
 re-estimated without each block (statistics pooled over the remaining blocks, no pair across a
-block edge) and ``SE^2 = (n - 1)/n sum (theta_i - mean theta)^2``. The focus fit
-is repeated on each jackknife sample too (rows are correlated along depth by the point-spread
-function, so the least-squares covariance of the row means would understate its errors).
+block edge) and ``SE^2 = (n - 1)/n sum (theta_i - mean theta)^2``. With a ``frame`` dim the
+statistics pool every frame and each jackknife sample deletes the same block from all frames.
+The focus fit is repeated on each jackknife sample too (rows are correlated along depth by the
+point-spread function, so the least-squares covariance of the row means would understate its
+errors).
 
 :meth:`SystemFit.simulate` images a shared scene of the fitted density through the fitted
 spectrum and scanned (focused) beam (:func:`speckle.beam_scan`), attenuated, with white noise
@@ -73,6 +82,7 @@ from . import autocorrelation as ac
 from . import measured as ms
 from .image_files import IMAGE_KINDS
 from .phase import DEFAULT_MAX_BIAS
+from .sparse import depth_intensity_psf, sparse_inverse_density
 from .strain import estimate_strain
 
 __all__ = [
@@ -88,6 +98,11 @@ DEFAULT_K0_DK = 10.0
 #: Intensity contrast std/mean below which a linear image is suspected to be log data.
 LOG_AS_LINEAR_CONTRAST = 0.5
 FOCUS_P_VALUE = 0.01
+#: Rows above the region whose mean intensity is this many dB below the region's are candidate
+#: signal-free rows (found when ``noise_rows`` is not given).
+NOISE_ROW_DB = 10.0
+#: Fewest contiguous signal-free rows accepted.
+MIN_NOISE_ROWS = 4
 _UM = COORDS["depth"][0]
 
 
@@ -114,13 +129,6 @@ def _weights(shape: str, width: float, n: int) -> np.ndarray:
     return _gaussian_weights(width, n) if shape == "gaussian" else rectangular_weights(width, n)
 
 
-def _intensity_psf(weights: np.ndarray) -> np.ndarray:
-    """``|P(u)|^2`` of the depth PSF over one period, 8 samples per pixel."""
-    n = weights.size
-    u = np.arange(8 * n) / 8.0
-    return np.abs(np.exp(2j * np.pi * np.outer(u, np.arange(n) - n // 2) / n) @ weights) ** 2
-
-
 def _depth_theory(lags, weights, snr_db, excess):
     """Pearson intensity autocorrelation along depth at finite density (module docstring).
 
@@ -131,8 +139,9 @@ def _depth_theory(lags, weights, snr_db, excess):
     if excess <= 0:
         return ac.axial_correlation_theory(lags, weights, snr_db)
     g2 = ac.axial_correlation_theory(lags, weights, None)
-    p2 = _intensity_psf(weights)
-    d = np.array([np.sum(p2 * np.roll(p2, 8 * int(m))) for m in lags]) / np.sum(p2**2)
+    p2 = depth_intensity_psf(weights)
+    circ = np.fft.ifft(np.abs(np.fft.fft(p2)) ** 2).real  # circular autocorrelation of |P|^2
+    d = circ[(8 * np.asarray(lags, dtype=int)) % p2.size] / circ[0]
     inv_r = 0.0 if snr_db is None else 10 ** (-snr_db / 10)
     out = (g2 + excess * d) / ((1 + inv_r) ** 2 + excess)
     return np.where(np.asarray(lags) == 0, 1.0, out)
@@ -178,7 +187,7 @@ def _fit_rectangular(acf, n, snr_db, excess) -> tuple[float, float]:
 
 def _psf_excess(shape: str, width: float, waist_pitch: float, n: int) -> float:
     """``A4/A^2`` of the model's point-spread function, per pixel x pitch (module docstring)."""
-    p2 = _intensity_psf(_weights(shape, width, n))  # one period, 8 samples per pixel (exact)
+    p2 = depth_intensity_psf(_weights(shape, width, n))  # one period, 8 samples per pixel (exact)
     depth = np.sum(p2**2) / 8.0 / (np.sum(p2) / 8.0) ** 2
     lateral = np.sqrt(2 / np.pi) / waist_pitch  # int exp(-8x^2/w^2) / (int exp(-4x^2/w^2))^2
     return float(depth * lateral)
@@ -298,7 +307,18 @@ def _estimate(
     shape = "gaussian" if out["gaussian_rms"] <= out["rectangular_rms"] else "rectangular"
     width = out[f"{shape}_{'fwhm' if shape == 'gaussian' else 'width'}_fraction"]
     psf = _psf_excess(shape, float(width), float(out["waist_pitch"]), n_pixels)
-    out["inverse_density"] = float(excess / psf)
+    out["inverse_density_contrast"] = float(excess / psf)
+    # var ln I of sparse speckle (speckle.analysis.sparse): linear data only (for log data the
+    # unknown gain g scales var D = g^2 var ln I, so var ln I is not observed)
+    if data.kind == "log":
+        out["inverse_density_log"] = np.nan
+    else:
+        out["inverse_density_log"] = sparse_inverse_density(
+            float(np.var(log_i)),
+            _weights(shape, float(width), n_pixels),
+            float(out["waist_pitch"]),
+            0.0 if snr is None else 1 / r,
+        )
     return out
 
 
@@ -519,8 +539,9 @@ class SystemFit:
         then match the standard deviation and mean of ``D``.
         """
         p = self.parameters
-        m = self._model(region.shape)
-        a = self._field(m, self._scatterers(m, region.shape[1], 0, m["h"]))[: region.shape[0]]
+        shape = self.template.shape
+        m = self._model(shape)
+        a = self._field(m, self._scatterers(m, shape[1], 0, m["h"]))[: shape[0]]
         if np.isfinite(self._value("snr_db")):
             a = add_complex_noise(a, self._value("snr_db"), seed=1)
         i0 = np.abs(a).ravel() ** 2
@@ -569,6 +590,8 @@ class SystemFit:
         region = _region(_as_image(image), self.settings["region"])
         twin = self.simulate(seed=seed)
         stats_ = [self._statistics(x) for x in (region, twin)]
+        if "frame" in region.dims:  # statistics pooled over frames; panels of the first
+            region = region.isel(frame=0)
         ds = xr.concat(stats_, dim="source").assign_coords(source=["measured", "twin"])
         for k in ("autocorrelation", "skewness", "excess_kurtosis", "contrast_excess"):
             diff = abs(ds[k].sel(source="measured") - ds[k].sel(source="twin"))
@@ -614,7 +637,8 @@ class SystemFit:
     def _statistics(self, image: xr.DataArray) -> xr.Dataset:
         s = self.settings
         data = _data(image, None, s["refractive_index"])
-        blocks = np.array_split(np.arange(image.sizes["x"]), s["n_blocks"])
+        nx, nf = image.sizes["x"], image.sizes.get("frame", 1)
+        blocks = np.array_split(np.arange(nx), s["n_blocks"])
 
         def one(cols):
             inten, _, g, _ = data.pieces(cols)
@@ -633,9 +657,10 @@ class SystemFit:
                 "profile": lg.mean(axis=1) / g,
             }
 
-        whole = one([np.arange(image.sizes["x"])])
+        whole = one(_column_groups(nx, nf, [np.arange(nx)]))
         se = _jackknife(
-            [one(blocks[:i] + blocks[i + 1 :]) for i in range(len(blocks))], list(whole)
+            [one(_column_groups(nx, nf, blocks[:i] + blocks[i + 1 :])) for i in range(len(blocks))],
+            list(whole),
         )
         lag = np.arange(s["max_lag"] + 1)
         acf = np.stack([whole["depth"], whole["lateral"]])
@@ -768,6 +793,18 @@ class SystemFit:
 
 
 def _as_image(image: object) -> xr.DataArray:
+    if (
+        isinstance(image, (list, tuple))
+        and image
+        and all(isinstance(x, xr.DataArray) for x in image)
+    ):
+        shapes = [x.shape for x in image]
+        if len(set(shapes)) > 1:
+            raise ValueError(
+                f"image frames must all have the same shape, got {shapes}; crop them to one "
+                "shape (the frames are fitted together)"
+            )
+        image = xr.concat([_as_image(x) for x in image], dim="frame", join="override")
     if not isinstance(image, xr.DataArray):
         raise TypeError(
             f"image must be an xarray.DataArray from speckle.load_image, got {type(image).__name__}"
@@ -780,13 +817,11 @@ def _as_image(image: object) -> xr.DataArray:
         )
     if "aline" in image.dims:
         image = image.rename({"aline": "x"})
-    if "frame" in image.dims:
-        image = image.isel(frame=0)
-    if set(image.dims) != {"depth", "x"}:
+    if set(image.dims) - {"frame"} != {"depth", "x"}:
         raise ValueError(
             f"image must have dims (depth, x) (and optionally frame), got {image.dims}"
         )
-    return image.transpose("depth", "x")
+    return image.transpose(*(("frame",) if "frame" in image.dims else ()), "depth", "x")
 
 
 def _region(image: xr.DataArray, region: Mapping | None) -> xr.DataArray:
@@ -843,10 +878,21 @@ def _data(image: xr.DataArray, noise: xr.DataArray | None, n_medium: float) -> _
             v = v**2
         return v.astype(float)
 
-    sig = values(image)
-    dz, pitch = _step(image, "depth"), _step(image, "x")
-    noise_values = None if noise is None else values(noise)
+    sig = _side_by_side(values(image))
+    one = image.isel(frame=0) if "frame" in image.dims else image
+    dz, pitch = _step(one, "depth"), _step(one, "x")
+    noise_values = None if noise is None else _side_by_side(values(noise))
     return _Data(kind, sig, noise_values, dz / n_medium, pitch)
+
+
+def _side_by_side(v: np.ndarray) -> np.ndarray:
+    """``(frame, depth, x)`` -> ``(depth, frame * x)``: frame ``f`` in columns ``f nx ..``."""
+    return v if v.ndim == 2 else np.concatenate(list(v), axis=1)
+
+
+def _column_groups(nx: int, n_frames: int, blocks: list[np.ndarray]) -> list[np.ndarray]:
+    """The column blocks of every frame (no pixel pair crosses a block or a frame edge)."""
+    return [b + f * nx for f in range(n_frames) for b in blocks]
 
 
 def _step(image: xr.DataArray, dim: str) -> float:
@@ -867,6 +913,56 @@ def _step(image: xr.DataArray, dim: str) -> float:
             "speckle.load_image(..., pixel_size=..., pitch=...)"
         )
     return spacing(image, dim)
+
+
+def _find_noise_rows(img: xr.DataArray, region: Mapping | None) -> list[int] | None:
+    """Signal-free rows above the region, or ``None`` (module docstring of :func:`fit_system`).
+
+    Rows ``0 .. start`` of the region's columns whose mean intensity is :data:`NOISE_ROW_DB`
+    below the region's; of those, the rows within a factor 2 of their median level (no depth
+    structure: the rising tails of the sample's point-spread function are left out), and of
+    these the longest contiguous run of at least :data:`MIN_NOISE_ROWS` rows.
+    """
+    reg = region or {}
+    start = (reg.get("depth") or [0])[0] or 0
+    if start < MIN_NOISE_ROWS:
+        return None
+    above = _region(img, {"depth": [0, start], "x": reg.get("x")})
+    inside = _region(img, {"depth": reg.get("depth"), "x": reg.get("x")})
+    kind = img.attrs["kind"]
+    if not (np.all(np.isfinite(above.values)) and np.all(np.isfinite(inside.values))):
+        return None
+    if kind == "log":
+        d_in = inside.values.astype(float)
+        g = float(
+            ms.fit_floor(
+                xr.DataArray(
+                    d_in.reshape(-1, d_in.shape[-1]),
+                    attrs={"scale": "log"},
+                    dims=("depth", "aline"),
+                )
+            )["gain"]
+        )
+        i_above, i_in = (np.exp((v.astype(float) - d_in.mean()) / g) for v in (above.values, d_in))
+    else:
+        i_above, i_in = (_data(x, None, 1.0).signal for x in (above, inside))
+    axes = tuple(i for i in range(i_above.ndim) if i != i_above.ndim - 2)  # all but depth
+    level = np.mean(i_above, axis=axes)
+    low = level < np.mean(i_in) * 10 ** (-NOISE_ROW_DB / 10)
+    if not low.any():
+        return None
+    flat = low & (level <= 2 * np.median(level[low]))
+    best, run = None, None
+    for i, ok in enumerate(np.append(flat, False)):
+        if ok and run is None:
+            run = i
+        elif not ok and run is not None:
+            if best is None or i - run > best[1] - best[0]:
+                best = (run, i)
+            run = None
+    if best is None or best[1] - best[0] < MIN_NOISE_ROWS:
+        return None
+    return [int(best[0]), int(best[1])]
 
 
 def _check_values(region: xr.DataArray, name: str, kind: str) -> None:
@@ -899,9 +995,12 @@ def fit_system(
 
     Parameters
     ----------
-    image : xarray.DataArray
-        From :func:`speckle.load_image`: dims ``(depth, x)`` (a ``frame`` dim: the first frame
-        is fitted), ``attrs["kind"]`` one of ``complex``, ``amplitude``, ``intensity``, ``log``.
+    image : xarray.DataArray or sequence of xarray.DataArray
+        From :func:`speckle.load_image`: dims ``(depth, x)``, ``attrs["kind"]`` one of
+        ``complex``, ``amplitude``, ``intensity``, ``log``. A ``frame`` dim (or a list of
+        same-shaped images): every frame is fitted, the statistics pooled over all frames'
+        pixel pairs and the jackknife deleting one block of A-lines from every frame at once
+        (frames of one sample share speckle: their SE is not divided by sqrt(frames)).
     k0 : float, optional
         Central wavenumber in vacuum (rad/µm, > 0); the model uses ``refractive_index * k0``.
         Default: ``k0/delta_k = 10`` (:data:`DEFAULT_K0_DK`). It sets the twin's carrier (the
@@ -913,7 +1012,10 @@ def fit_system(
         indices, half-open); default the whole image.
     noise_rows : [start, stop], optional
         Signal-free rows (air above the sample), same columns as the region: SNR and noise
-        floor. Without them ``snr_db`` (if given) is used, else no noise is fitted.
+        floor. Without them and without ``snr_db`` they are looked for above the region
+        (:data:`NOISE_ROW_DB` below its mean intensity, flat, >= :data:`MIN_NOISE_ROWS`
+        contiguous rows); the rows used and how they were chosen are in the attributes
+        ``noise_rows`` and ``noise_rows_source``. None found: a warning, SNR not fitted.
     snr_db : float, optional
         A known SNR (dB) when there are no signal-free rows.
     n_pixels : int
@@ -937,15 +1039,16 @@ def fit_system(
     TypeError
         ``image`` not a DataArray.
     ValueError
-        Unknown kind; a region or noise rows outside the image; NaN, constant or (linear)
-        zero pixels; a region too small for ``max_lag`` and ``n_blocks``; bad settings. All
-        before any fitting.
+        Unknown kind; frames of different shapes; a region or noise rows outside the image;
+        NaN, constant or (linear) zero pixels; a region too small for ``max_lag`` and
+        ``n_blocks``; bad settings. All before any fitting.
 
     Warns
     -----
     UserWarning
         A linear image (amplitude/intensity) whose intensity contrast std/mean is below
-        :data:`LOG_AS_LINEAR_CONTRAST` (fully developed speckle: 1): probably log data.
+        :data:`LOG_AS_LINEAR_CONTRAST` (fully developed speckle: 1): probably log data. No
+        signal-free rows found (``noise_rows`` and ``snr_db`` not given).
     """
     img = _as_image(image)
     kind = img.attrs["kind"]
@@ -959,7 +1062,8 @@ def fit_system(
         raise ValueError("n_bands must be 0 (no per-band waist) or >= 2, got 1")
     rmax = check_real(max_density, "max_density", low=0, low_inclusive=False)
     reg = _region(img, region)
-    nz, nx = reg.shape
+    nz, nx = reg.sizes["depth"], reg.sizes["x"]
+    nf = reg.sizes.get("frame", 1)
     if nz < ml + 4 or nx < nb * (ml + 2):
         raise ValueError(
             f"region of {nz} x {nx} pixels (depth, x) is too small for max_lag = {ml} and "
@@ -970,6 +1074,20 @@ def fit_system(
         raise ValueError(f"n_bands = {nbands} leaves fewer than 2 rows per band in {nz} rows")
     _check_values(reg, "image region", kind)
     noise = None
+    noise_source = "given"
+    if noise_rows is None and snr_db is None:
+        noise_rows = _find_noise_rows(img, region)
+        noise_source = "found automatically" if noise_rows is not None else "none found"
+        if noise_rows is None:
+            warnings.warn(
+                "no signal-free rows found above the region (rows "
+                f"{NOISE_ROW_DB:g} dB below it, >= {MIN_NOISE_ROWS} contiguous): SNR and "
+                "noise floor are not fitted (pass noise_rows=[start, stop] or snr_db=)",
+                UserWarning,
+                stacklevel=2,
+            )
+    elif noise_rows is None:
+        noise_source = "none (snr_db given)"
     if noise_rows is not None:
         if isinstance(noise_rows, str) or len(noise_rows) != 2:
             raise ValueError(f"noise_rows must be [start, stop], got {noise_rows!r}")
@@ -994,11 +1112,16 @@ def fit_system(
             )
     blocks = np.array_split(np.arange(nx), nb)
     kw = {"n_pixels": npx, "max_lag": ml, "n_bands": nbands, "snr_db": snr_db}
-    whole = _estimate(data, [np.arange(nx)], **kw)  # every pair of the region
-    jack = [_estimate(data, blocks[:i] + blocks[i + 1 :], **kw) for i in range(nb)]
+    # every pair of the region (of every frame); the jackknife deletes a block of A-lines from
+    # every frame at once, so frames of one sample (correlated speckle) do not shrink the SE
+    whole = _estimate(data, _column_groups(nx, nf, [np.arange(nx)]), **kw)
+    jack = [
+        _estimate(data, _column_groups(nx, nf, blocks[:i] + blocks[i + 1 :]), **kw)
+        for i in range(nb)
+    ]
     keys = [k for k, v in whole.items()]
     se = _jackknife(jack, keys)
-    params = _parameters(whole, se, data, reg, npx, noise is not None)
+    params = _parameters(whole, se, jack, data, reg, npx, noise is not None)
     # focus: row means of the intensity (linear units of the fit)
     z = np.arange(nz) * data.dz
     rows, rows_se = np.asarray(whole["row_mean_intensity"]), se["row_mean_intensity"]
@@ -1050,6 +1173,7 @@ def fit_system(
         pitch=float(data.pitch),
         region=repr(dict(region or {})),
         noise_rows=repr(None if noise_rows is None else list(noise_rows)),
+        noise_rows_source=noise_source,
         n_pixels=npx,
         max_lag=ml,
         n_blocks=nb,
@@ -1070,7 +1194,8 @@ def fit_system(
         "max_density": rmax,
         "mean_intensity": mean_i,
     }
-    out = SystemFit(ds, reg, settings)
+    ds.attrs["n_frames"] = nf
+    out = SystemFit(ds, reg.isel(frame=0) if "frame" in reg.dims else reg, settings)
     out._fit_detection(reg)
     return out
 
@@ -1079,7 +1204,7 @@ def _shape(whole: dict) -> str:
     return "gaussian" if whole["gaussian_rms"] <= whole["rectangular_rms"] else "rectangular"
 
 
-def _parameters(whole, se, data: _Data, reg, npx, have_noise) -> dict:
+def _parameters(whole, se, jack, data: _Data, reg, npx, have_noise) -> dict:
     shape = _shape(whole)
     width_key = "gaussian_fwhm_fraction" if shape == "gaussian" else "rectangular_width_fraction"
     p: dict = {}
@@ -1189,10 +1314,23 @@ def _parameters(whole, se, data: _Data, reg, npx, have_noise) -> dict:
         "1",
         "<I_s^2>/<I_s>^2 - 2 (noise and floor removed)",
     )
-    inv, inv_se = whole["inverse_density"], se["inverse_density"]
     put(
-        "inverse_density", inv, inv_se, "1", "1 / scatterers per pixel per pitch, from the contrast"
+        "inverse_density_contrast",
+        whole["inverse_density_contrast"],
+        se["inverse_density_contrast"],
+        "1",
+        "1 / scatterers per pixel per pitch, from the intensity contrast",
     )
+    put(
+        "inverse_density_log",
+        whole["inverse_density_log"],
+        se["inverse_density_log"],
+        "1",
+        "1 / scatterers per pixel per pitch, from var ln I (linear data only)",
+    )
+    inv, inv_se, how = _combined_inverse_density(whole, jack)
+    put("inverse_density", inv, inv_se, "1", f"1 / scatterers per pixel per pitch ({how})")
+    p["inverse_density"][2]["method"] = how
     significant = inv > 2 * inv_se
     put(
         "density",
@@ -1200,6 +1338,11 @@ def _parameters(whole, se, data: _Data, reg, npx, have_noise) -> dict:
         inv_se / inv**2 if significant else np.nan,
         "1",
         "scatterers per pixel per pitch",
+    )
+    p["density_identified"] = (
+        (),
+        int(significant),
+        {"units": "1", "long_name": "1 if the inverse density exceeds 2 SE (density fitted)"},
     )
     p["density_lower_bound"] = (
         (),
@@ -1209,3 +1352,36 @@ def _parameters(whole, se, data: _Data, reg, npx, have_noise) -> dict:
     for k in ("skewness", "excess_kurtosis"):
         put(k, whole[k], se[k], "1", f"{k} of the log data")
     return p
+
+
+def _combined_inverse_density(whole: dict, jack: list[dict]) -> tuple[float, float, str]:
+    """Contrast and ``var ln I`` estimates of ``1/rho`` combined by their jackknife covariance.
+
+    Weights ``C^-1 1 / (1' C^-1 1)`` (``C`` the delete-one-block covariance of the two
+    estimates: they share every pixel); the combined SE is the jackknife SE of the weighted
+    sum. One estimate alone when the other is missing (log data) or ``C`` is singular.
+    """
+    keys = ("inverse_density_contrast", "inverse_density_log")
+    est = np.array([whole[k] for k in keys], dtype=float)
+    reps = np.array([[j[k] for k in keys] for j in jack], dtype=float)
+    n = len(jack)
+    ok = np.isfinite(est) & np.all(np.isfinite(reps), axis=0)
+    dev = reps - reps.mean(axis=0)
+    if ok.all():
+        cov = (n - 1) / n * dev.T @ dev
+        if np.linalg.cond(cov) < 1e12:
+            w = np.linalg.solve(cov, np.ones(2))
+            w = w / w.sum()
+            comb = reps @ w
+            se = float(np.sqrt((n - 1) / n * np.sum((comb - comb.mean()) ** 2)))
+            return (
+                float(est @ w),
+                se,
+                (f"contrast and var ln I combined, weights {w[0]:.3f} and {w[1]:.3f}"),
+            )
+    i = int(np.flatnonzero(ok)[0]) if ok.any() else 0
+    se = float(np.sqrt((n - 1) / n * np.sum(dev[:, i] ** 2)))
+    how = "contrast only" if i == 0 else "var ln I only"
+    if i == 0 and not ok[1]:
+        how += " (var ln I not observed: log data with unknown gain)"
+    return float(est[i]), se, how

