@@ -69,7 +69,7 @@ from scipy import ndimage
 from .._validate import check_choice, check_int, check_real
 from ..system.source import spectrum
 from ._common import parse_window
-from .correlation import correlation_array, expected_correlation, resample_depth
+from .correlation import amplitude_from_gamma, correlation_array, expected_gamma, resample_depth
 from .phase import DEFAULT_MAX_BIAS, choose_lag, depth_autocorrelation
 from .tracking import interpolate_windows, track_array
 
@@ -156,7 +156,8 @@ def _as_images(reference: object, deformed: object) -> tuple[np.ndarray, np.ndar
                 f"{name} holds {int(finite.size - finite.sum())} NaN or infinite pixels of "
                 f"{finite.size}; the phase methods cannot bridge them (crop or fill them first)"
             )
-        arrays.append(values.astype(np.complex128, copy=False))
+        # C order (A-lines side by side in memory): row slices along depth stay contiguous
+        arrays.append(np.ascontiguousarray(values, dtype=np.complex128))
     if arrays[0].shape != arrays[1].shape:
         raise ValueError(
             f"reference and deformed must have the same shape, got {arrays[0].shape} and "
@@ -253,17 +254,22 @@ def _place(values: np.ndarray, offset: int, n: int) -> np.ndarray:
     return out
 
 
-def _pooled_slope(y: np.ndarray, w: np.ndarray, wz: int, wx: int) -> np.ndarray:
+def _pooled_slope(
+    y: np.ndarray, w: np.ndarray, wz: int, wx: int, *, weight_sums: bool = False
+) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """Weighted least-squares slope of ``y`` against depth index in each (wz, wx) window.
 
     One intercept per A-line, one slope per window: minimises
-    ``sum_lines sum_depth w (y - a_line - b q)^2``. NaN where the window leaves the image or
-    holds NaN.
+    ``sum_lines sum_depth w (y - a_line - b q)^2``, in closed form from running sums of the
+    moments ``w q^k`` and ``w q^k y`` (every window at once). NaN where the window leaves the
+    image or holds NaN. With ``weight_sums``, also the per-line window sums of ``w``.
     """
     q = np.arange(y.shape[0], dtype=float)[:, None] - 0.5 * y.shape[0]
-    bad = ~np.isfinite(y) | ~np.isfinite(w)
-    w = np.where(bad, 0.0, w)
-    y = np.where(bad, 0.0, y)
+    bad = None
+    if not (np.isfinite(y).all() and np.isfinite(w).all()):
+        bad = ~np.isfinite(y) | ~np.isfinite(w)
+        w = np.where(bad, 0.0, w)
+        y = np.where(bad, 0.0, y)
     s0, s1, s2 = (_box(w * q**k, wz, 1) for k in range(3))
     t0, t1 = _box(w * y, wz, 1), _box(w * q * y, wz, 1)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -271,8 +277,9 @@ def _pooled_slope(y: np.ndarray, w: np.ndarray, wz: int, wx: int) -> np.ndarray:
         den = s2 - s1**2 / s0
     num = np.where(s0 > 0, num, np.nan)
     slope = _box(num, 1, wx) / _box(den, 1, wx)
-    nbad = _box(bad.astype(float), wz, wx)
-    return np.where(nbad == 0, slope, np.nan)
+    if bad is not None:
+        slope = np.where(_box(bad.astype(float), wz, wx) == 0, slope, np.nan)
+    return (slope, s0) if weight_sums else slope
 
 
 # --------------------------------------------------------------------------------------------
@@ -328,57 +335,66 @@ def _smoothed_phasor(a1, a2, lag):
     i1, i2 = np.abs(a1) ** 2, np.abs(a2) ** 2
     with np.errstate(invalid="ignore", divide="ignore"):
         w = np.where(i1 + i2 > 0, i1 * i2 / (i1 + i2), 0.0)
-
-    def smooth(v):
-        if np.iscomplexobj(v):
-            return smooth(v.real) + 1j * smooth(v.imag)
-        return ndimage.uniform_filter1d(v, lag, axis=0, mode="nearest") * lag
-
-    return smooth(c), smooth(np.abs(c)), smooth(w)
+    # one filter call for the real part, the imaginary part and the weights
+    parts = (
+        ndimage.uniform_filter1d(np.stack([c.real, c.imag, w]), lag, axis=1, mode="nearest") * lag
+    )
+    return parts[0] + 1j * parts[1], parts[2]
 
 
 def _unwrapped_phase(a1, a2, lag):
-    cs, cabs, w = _smoothed_phasor(a1, a2, lag)
-    phase = np.unwrap(np.angle(cs), axis=0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        coherence = np.abs(cs) / cabs
-    return phase, coherence, w
+    """Unwrapped (along depth) phase of the smoothed interframe phasor, and its weights."""
+    cs, w = _smoothed_phasor(a1, a2, lag)
+    return np.unwrap(np.angle(cs), axis=0), w
 
 
-def _fit_coherence(phase, w, slope, wz, wx):
+def _fit_coherence(phasor, w, w_sums, slope, wz, wx):
     """``|sum w exp(i(phase - slope q))| / sum w`` per A-line, averaged over ``wx`` lines.
 
-    1 when the (wrapped) phasors follow the fitted line; an unwrapping error inside the
-    window gives a wrong slope and a low value.
+    ``phasor`` carries the phase (``exp(i phase) = phasor/|phasor|``), ``w_sums`` the window sums
+    of ``w`` (:func:`_pooled_slope`). 1 when the (wrapped) phasors follow the fitted line; an
+    unwrapping error inside the window gives a wrong slope and a low value. The window sum at
+    pixel ``q`` is the polynomial ``sum_k u(q - wz//2 + k) E^k`` in ``E = exp(-i slope(q))``
+    (``u = w exp(i phase)``; the factor ``E^(-wz//2)`` has modulus 1), evaluated by Horner's
+    rule for all pixels at once: ``wz - 1`` multiply-adds of whole images. NaN where the window
+    leaves the image.
     """
-    n = phase.shape[0]
-    acc = np.zeros(phase.shape, complex)
-    norm = np.zeros(phase.shape)
-    q = np.arange(n, dtype=float)[:, None]
-    z = np.exp(1j * phase)
-    for k in range(wz):
-        shift = k - wz // 2
-        idx = np.clip(np.arange(n) + shift, 0, n - 1)
-        acc += w[idx] * z[idx] * np.exp(-1j * slope * (q[idx] - q))
-        norm += w[idx]
+    n = phasor.shape[0]
+    rows = n - wz + 1  # windows inside the image: rows h ... h + rows - 1 of the output
+    h = wz // 2
+    per_line = np.full(phasor.shape, np.nan)
+    if rows < 1:
+        return per_line
     with np.errstate(invalid="ignore", divide="ignore"):
-        per_line = np.abs(acc) / norm
+        u = np.where(w > 0, phasor * (w / np.abs(phasor)), 0.0).astype(np.complex64)
+    b = slope[h : h + rows]
+    e = np.empty(b.shape, dtype=np.complex64)
+    np.cos(b, out=e.real)
+    np.sin(-b, out=e.imag)
+    acc = u[wz - 1 : wz - 1 + rows].copy()
+    for k in range(wz - 2, -1, -1):
+        acc *= e
+        acc += u[k : k + rows]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        per_line[h : h + rows] = np.abs(acc) / w_sums[h : h + rows]
     return _box(per_line, 1, wx) / wx
 
 
 def _wls(a1, a2, k0, p, wz, wx, opts):
     lag = _lag(a1, opts)
     a2 = _aligned(a1, a2, p, opts)
-    phase, _, w = _unwrapped_phase(a1, a2, lag)
-    slope = _pooled_slope(phase, w, wz, wx)
+    phasor, w = _smoothed_phasor(a1, a2, lag)
+    phase = np.unwrap(np.angle(phasor), axis=0)
+    slope, w_sums = _pooled_slope(phase, w, wz, wx, weight_sums=True)
     strain = -slope / (2 * k0 * p)
-    quality = _fit_coherence(phase, w, np.nan_to_num(slope), wz, wx)
+    quality = _fit_coherence(phasor, w, w_sums, np.nan_to_num(slope), wz, wx)
     quality = np.where(np.isfinite(slope), quality, np.nan)
     # unwrapping guard: the fitted phase step per pixel must agree (within pi/4) with the
     # complex-averaged lag-1 step (Gaussian cross term removed), which needs no unwrapping
     s1, count = _four_product_sums(a1, a2, 1, wz, wx, ("C", "R1", "R2"))
     step = np.angle(s1["C"] - s1["R1"] * np.conj(s1["R2"]) / count)
-    unwrap_failed = np.abs(np.angle(np.exp(1j * (step - slope)))) > np.pi / 4
+    with np.errstate(invalid="ignore"):
+        unwrap_failed = np.abs(np.remainder(step - slope + np.pi, 2 * np.pi) - np.pi) > np.pi / 4
     strain = np.where((quality >= opts["min_quality"]) & ~unwrap_failed, strain, np.nan)
     return strain, quality, {"lag": lag}
 
@@ -439,20 +455,26 @@ def _measured_spectrum(a1: np.ndarray, k0: float, p: float) -> xr.DataArray:
     return spectrum(n, n * p, k0=k0, shape="array", weights=weights / weights.max())
 
 
-def correlation_theory(spectrum: xr.DataArray, num: int = 81) -> xr.DataArray:
+def correlation_theory(spectrum: xr.DataArray, num: int = 81) -> tuple[np.ndarray, np.ndarray]:
     """Amplitude correlation after exact compensation versus strain, up to its first minimum.
 
-    :func:`speckle.expected_correlation` (Gaussian-speckle amplitude correlation, independent
-    of density) on strains ``0 ... 1.5/R`` (``R = k0/delta_k``), cut at the first minimum so
-    that it is monotonic and can be inverted.
+    The Gaussian-speckle amplitude correlation (independent of density) of
+    :func:`speckle.expected_correlation`, computed by
+    :func:`speckle.analysis.correlation.expected_gamma` (the same integrals, one NUFFT for every
+    strain), on strains ``0 ... 1.5/R`` (``R = k0/delta_k``), cut at the first minimum so that
+    it is monotonic and can be inverted.
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray)
+        Strains and the amplitude correlation at each.
     """
     r = max(float(spectrum.attrs["k0_dk"]), 1.0)
     grid = np.linspace(0.0, min(0.9, 1.5 / r), num)
-    th = expected_correlation(grid, spectrum=spectrum, density=1.0)["amplitude"]
-    vals = th.values
+    vals = amplitude_from_gamma(expected_gamma(grid, spectrum=spectrum))
     rising = np.flatnonzero(np.diff(vals) >= 0)
     stop = rising[0] + 1 if rising.size else len(vals)
-    return th.isel(strain=slice(0, stop))
+    return grid[:stop], vals[:stop]
 
 
 def _resampled(a2, uz_pixels):
@@ -527,8 +549,7 @@ def _correlation(a1, a2, k0, p, wz, wx, opts):
     filled, _ = _alignment_fill(uz)
     comp = _resampled(a2, filled)
     r = correlation_array(np.abs(a1), np.abs(comp), (wz, wx))
-    th = correlation_theory(_measured_spectrum(a1, k0, p))
-    tv, ts = th.values[::-1], th.strain.values[::-1]
+    ts, tv = (x[::-1] for x in correlation_theory(_measured_spectrum(a1, k0, p)))
     strain = np.interp(r, tv, ts, left=np.nan, right=0.0)
     strain = np.where(covered & np.isfinite(r), strain, np.nan)
     return strain, r, {"theory_min_correlation": float(tv[0])}
@@ -813,7 +834,7 @@ def estimate_displacement(
         if unknown:
             raise TypeError(f"method 'phase' takes options {sorted(allowed)}; got {unknown}")
         opts = {**allowed, **options}
-        phase, _, _ = _unwrapped_phase(a1, a2, _lag(a1, opts))
+        phase, _ = _unwrapped_phase(a1, a2, _lag(a1, opts))
         uz = phase / (2 * k)
     attrs = {"units": "um", "long_name": "axial displacement (+z deeper)", "method": method}
     return _wrap(uz, template, "uz", attrs)

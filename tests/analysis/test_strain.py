@@ -94,6 +94,34 @@ def test_uniform_compression_median_within_one_percent(method):
         assert np.nanmedian(e) == pytest.approx(s, rel=0.01), (method, s)
 
 
+def test_wls_fit_coherence_equals_the_window_definition():
+    """The wls quality, ``|sum_window w exp(i(phase - b q))| / sum w`` per A-line averaged over
+    ``wx`` lines (``b`` = the pixel's fitted slope), is evaluated for every pixel at once by
+    Horner's rule in single precision: it equals the per-window sum to 1e-5 (the threshold is
+    0.5), and is NaN exactly where the window leaves the image."""
+    from speckle.analysis.strain import _box, _fit_coherence  # private: the wls quality core
+
+    rng = np.random.default_rng(4)
+    n, m, wz, wx = 80, 6, 16, 3
+    phasor = rng.normal(size=(n, m)) + 1j * rng.normal(size=(n, m))
+    w = rng.uniform(0.1, 2.0, (n, m))
+    slope = rng.uniform(-1.0, 1.0, (n, m))
+    got = _fit_coherence(phasor, w, _box(w, wz, 1), slope, wz, wx)
+    h = wz // 2
+    want = np.full((n, m), np.nan)
+    for q in range(h, n - wz + 1 + h):
+        k = np.arange(q - h, q - h + wz)
+        line = [
+            abs(np.sum(w[k, j] * np.exp(1j * (np.angle(phasor[k, j]) - slope[q, j] * (k - q)))))
+            / np.sum(w[k, j])
+            for j in range(m)
+        ]
+        for c in range(wx // 2, m - (wx - 1) // 2):
+            want[q, c] = np.mean(line[c - wx // 2 : c - wx // 2 + wx])
+    np.testing.assert_array_equal(np.isnan(got), np.isnan(want))
+    np.testing.assert_allclose(got[~np.isnan(want)], want[~np.isnan(want)], rtol=0, atol=1e-5)
+
+
 def test_default_is_vector_and_dataarray_round_trip():
     ref, dfm = pair((1e-3,))
     da = lambda a: xr.DataArray(  # noqa: E731
