@@ -255,7 +255,7 @@ def _place(values: np.ndarray, offset: int, n: int) -> np.ndarray:
 
 
 def _pooled_slope(
-    y: np.ndarray, w: np.ndarray, wz: int, wx: int, *, weight_sums: bool = False
+    y: np.ndarray, w: np.ndarray | None, wz: int, wx: int, *, weight_sums: bool = False
 ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """Weighted least-squares slope of ``y`` against depth index in each (wz, wx) window.
 
@@ -263,7 +263,10 @@ def _pooled_slope(
     ``sum_lines sum_depth w (y - a_line - b q)^2``, in closed form from running sums of the
     moments ``w q^k`` and ``w q^k y`` (every window at once). NaN where the window leaves the
     image or holds NaN. With ``weight_sums``, also the per-line window sums of ``w``.
+    ``w=None``: unit weights (:func:`_unit_weight_slope`).
     """
+    if w is None:
+        return _unit_weight_slope(y, wz, wx)
     q = np.arange(y.shape[0], dtype=float)[:, None] - 0.5 * y.shape[0]
     bad = None
     if not (np.isfinite(y).all() and np.isfinite(w).all()):
@@ -280,6 +283,27 @@ def _pooled_slope(
     if bad is not None:
         slope = np.where(_box(bad.astype(float), wz, wx) == 0, slope, np.nan)
     return (slope, s0) if weight_sums else slope
+
+
+def _unit_weight_slope(y: np.ndarray, wz: int, wx: int) -> np.ndarray:
+    """:func:`_pooled_slope` with unit weights: ``sum_k (k - kbar) y_k / sum_k (k - kbar)^2``.
+
+    With unit weights the depth moments of a window are known exactly
+    (``sum (k - kbar)^2 = wz (wz^2 - 1)/12``), so two running sums (of ``y`` and ``q y``) give
+    every window's numerator. NaN where the window leaves the image or holds NaN.
+    """
+    bad = ~np.isfinite(y)
+    has_bad = bool(bad.any())
+    y0 = np.where(bad, 0.0, y) if has_bad else y
+    n = y.shape[0]
+    q = np.arange(n, dtype=float)[:, None]
+    t0, t1 = _box(y0, wz, 1), _box(q * y0, wz, 1)
+    centre = np.arange(n, dtype=float)[:, None] - wz // 2 + 0.5 * (wz - 1)  # mean row index
+    num = t1 - centre * t0
+    slope = _box(num, 1, wx) / (wx * wz * (wz**2 - 1) / 12.0)
+    if has_bad:
+        slope = np.where(_box(bad.astype(float), wz, wx) == 0, slope, np.nan)
+    return slope
 
 
 # --------------------------------------------------------------------------------------------
@@ -430,18 +454,21 @@ def _tracked(a1, a2, window, step, upsample, oversample, lateral=True, outside="
 def _track_options(a1, wx, opts):
     tw = check_int(opts["track_window"], "track_window", low=4, high=a1.shape[0])
     step = check_int(opts["step"], "step", low=1, high=tw)
+    # windows side by side in aline (A-line-independent images: overlapping them laterally
+    # doubled the registrations for no lower error, measured), depth refined only (uz is used)
     return {
         "window": (tw, wx),
-        "step": (step, max(1, wx // 2)),
+        "step": (step, wx),
         "upsample": check_int(opts["upsample"], "upsample", low=1),
         "oversample": check_int(opts["oversample"], "oversample", low=1),
+        "lateral": False,
     }
 
 
 def _tracking(a1, a2, k0, p, wz, wx, opts):
     kw = _track_options(a1, wx, opts)
     uz, quality, _ = _tracked(a1, a2, **kw)
-    strain = -_pooled_slope(uz, np.ones_like(uz), wz, 1)
+    strain = -_pooled_slope(uz, None, wz, 1)
     return strain, quality, {"track_window": kw["window"][0]}
 
 
@@ -544,9 +571,14 @@ def _auto_aligned(method, a1, a2, k0, p, wz, wx, opts):
 
 
 def _correlation(a1, a2, k0, p, wz, wx, opts):
-    uz, _, _ = _tracked(a1, a2, **_track_options(a1, wx, opts))
-    covered = np.isfinite(uz)
-    filled, _ = _alignment_fill(uz)
+    # nearest-centre values beyond the outer windows compensate the image edges too; the
+    # strain is given only between the outer centres (as the tracked displacement is)
+    uz, _, tr = _tracked(a1, a2, outside="nearest", **_track_options(a1, wx, opts))
+    cz, cx = tr["centre_depth"], tr["centre_aline"]
+    qz, qx = np.arange(a1.shape[0]), np.arange(a1.shape[1])
+    inside = ((qz >= cz[0]) & (qz <= cz[-1]))[:, None] & ((qx >= cx[0]) & (qx <= cx[-1]))
+    covered = inside & np.isfinite(uz)
+    filled, _ = _alignment_fill(uz)  # failed windows: filled from their neighbours in depth
     comp = _resampled(a2, filled)
     r = correlation_array(np.abs(a1), np.abs(comp), (wz, wx))
     ts, tv = (x[::-1] for x in correlation_theory(_measured_spectrum(a1, k0, p)))

@@ -122,6 +122,32 @@ def test_wls_fit_coherence_equals_the_window_definition():
     np.testing.assert_allclose(got[~np.isnan(want)], want[~np.isnan(want)], rtol=0, atol=1e-5)
 
 
+def test_unit_weight_slope_is_the_least_squares_slope():
+    """The tracking method's strain fit (unit weights, known window moments): the slope of a
+    line exactly; equal to the general weighted fit with weights 1 on noisy data; NaN exactly
+    where the window leaves the image or holds a NaN displacement."""
+    from speckle.analysis.strain import _pooled_slope  # private: the closed-form LS core
+
+    rng = np.random.default_rng(8)
+    n, m, wz = 200, 5, 64
+    q = np.arange(n, dtype=float)[:, None]
+    y = 3.0 + 0.7 * q + rng.normal(0, 1e-3, (1, m)) + np.zeros((n, m))
+    y[:10] = np.nan  # beyond the outer window centre
+    y[120, 2] = np.nan  # a failed window
+    exact = _pooled_slope(y, None, wz, 1)
+    ok = np.isfinite(exact)
+    np.testing.assert_allclose(exact[ok], 0.7, rtol=1e-12)
+    noisy = y + rng.normal(0, 0.5, y.shape)
+    fast, general = _pooled_slope(noisy, None, wz, 1), _pooled_slope(noisy, np.ones((n, m)), wz, 1)
+    np.testing.assert_array_equal(np.isnan(fast), np.isnan(general))
+    np.testing.assert_allclose(fast[ok], general[ok], rtol=1e-9)
+    rows = np.arange(n)
+    start = rows - wz // 2
+    fits = (start >= 10) & (start + wz <= n)
+    np.testing.assert_array_equal(ok[:, 0], fits)
+    assert not ok[120 - wz // 2 + 1 : 120 + wz // 2, 2].any()  # every window holding it
+
+
 def test_default_is_vector_and_dataarray_round_trip():
     ref, dfm = pair((1e-3,))
     da = lambda a: xr.DataArray(  # noqa: E731
