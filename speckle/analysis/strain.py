@@ -105,7 +105,9 @@ OPTIONS = {
     },
     "wls": {"lag": None, "max_bias": DEFAULT_MAX_BIAS, "min_quality": 0.5, "align": "auto"},
     "tracking": {"track_window": 32, "step": 8, "upsample": 20, "oversample": 2},
-    "correlation": {"track_window": 32, "step": 8, "upsample": 20, "oversample": 2},
+    # the correlation method tracks only to compensate: a smooth displacement, so coarser steps
+    # do (step 16: same rms error as 8 on the benchmark pair, half the registrations)
+    "correlation": {"track_window": 32, "step": 16, "upsample": 20, "oversample": 2},
 }
 #: Tracking that aligns the pair for the phase methods (``align``): window (depth, aline)
 #: pixels, step (depth, aline) pixels; the displacement field is smooth, so coarse steps do.
