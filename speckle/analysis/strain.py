@@ -32,17 +32,23 @@ Methods (``method=``)
     noise power). ``s = -b / (2 k0 p)``. Unwrapping needs ``2 pi R |s| < pi`` per pixel plus
     the speckle phase noise; NaN where the fitted step disagrees by more than ``pi/4`` with the
     complex-averaged lag-1 step (Gaussian cross term removed) or the phasors do not follow the
-    fitted line (quality = their coherence, below ``min_quality``).
+    fitted line (quality = their coherence, below ``min_quality``). Every window is fitted at
+    once (running sums of the moments); the coherence is a polynomial in ``exp(-i slope)``
+    evaluated by Horner's rule over the window (single precision: 1e-6).
 ``"tracking"``
-    :func:`speckle.track` (sub-pixel amplitude registration) in windows stepped by a few pixels,
-    interpolated to every pixel, then a least-squares gradient over the window. Serves
-    supra-pixel displacements; its noise floor is set by the registration error.
+    :func:`speckle.track` (sub-pixel amplitude registration, axial refinement only) in windows
+    stepped by ``step`` pixels in depth and side by side in aline, interpolated to every pixel,
+    then a least-squares gradient over the window (unit weights: closed form from two running
+    sums). Serves supra-pixel displacements; its noise floor is set by the registration error.
 ``"correlation"``
     Correlation stability: the deformed image is compensated with the tracked displacement
-    (:func:`speckle.compensate`, no carrier), the local amplitude correlation is measured
+    (:func:`speckle.compensate`, no carrier; tracked every 16 px by default, the displacement
+    being smooth), the local amplitude correlation is measured
     (:func:`speckle.correlation_map`) and the theory :func:`speckle.expected_correlation` for
-    the spectrum measured from the reference image is inverted: returns the strain *magnitude*.
-    Quality = the local correlation; NaN where it is below the theory's range.
+    the spectrum measured from the reference image (computed by
+    :func:`speckle.analysis.expected_gamma`: the same integrals, one NUFFT for every strain)
+    is inverted: returns the strain *magnitude*. Quality = the local correlation; NaN where it
+    is below the theory's range.
 
 Alignment (``align=``, vector and wls)
 -------------------------------------
