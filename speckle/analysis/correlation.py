@@ -114,19 +114,29 @@ def oversample_depth(field: np.ndarray, factor: int, axis: int = 0) -> np.ndarra
     complex128 otherwise.
     """
     a = np.asarray(field)
-    a = np.moveaxis(a if a.dtype == np.complex64 else a.astype(np.complex128), axis, 0)
+    a = a if a.dtype == np.complex64 else a.astype(np.complex128)
     f = check_int(factor, "oversample", low=1)
     if f == 1:
-        return np.moveaxis(a, 0, axis)
-    n = a.shape[0]
-    spec = sfft.fft(a, axis=0)  # spec[m] = N F_{-m}: index -n of the model at m (mod N)
-    pad = np.zeros((f * n, *a.shape[1:]), dtype=a.dtype)
+        return a
+    ax = axis % a.ndim
+    n = a.shape[ax]
+    # the transforms run along ``axis`` in the input's own layout (no moved, strided copies)
+    spec = sfft.fft(a, axis=ax)  # spec[m] = N F_{-m}: index -n of the model at m (mod N)
+    shape = list(a.shape)
+    shape[ax] = f * n
+    pad = np.zeros(shape, dtype=a.dtype)
     neg = n // 2  # model indices -1 ... -(N//2) sit at m = 1 ... N//2
     pos = n - 1 - neg  # model indices 1 ... N-1-N//2 sit at m = N-1 ... N//2+1
-    pad[: neg + 1] = spec[: neg + 1]
+
+    def at(sl: slice) -> tuple:
+        return (slice(None),) * ax + (sl,)
+
+    pad[at(slice(0, neg + 1))] = spec[at(slice(0, neg + 1))]
     if pos:
-        pad[-pos:] = spec[n - pos :]
-    return np.moveaxis(sfft.ifft(pad, axis=0) * f, 0, axis)
+        pad[at(slice(f * n - pos, None))] = spec[at(slice(n - pos, None))]
+    out = sfft.ifft(pad, axis=ax)
+    out *= f
+    return out
 
 
 #: Oversampling and Lagrange taps of :func:`resample_depth`.
