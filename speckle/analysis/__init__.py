@@ -32,10 +32,12 @@ __getattr__, __dir__, __all__ = attach(
             "window_correlation",
         ],
         "correlation": [
+            "amplitude_from_gamma",
             "compensate",
             "correlation_array",
             "correlation_map",
             "expected_correlation",
+            "expected_gamma",
             "oversample_depth",
             "pearson",
             "resample_depth",

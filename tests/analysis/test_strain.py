@@ -94,6 +94,60 @@ def test_uniform_compression_median_within_one_percent(method):
         assert np.nanmedian(e) == pytest.approx(s, rel=0.01), (method, s)
 
 
+def test_wls_fit_coherence_equals_the_window_definition():
+    """The wls quality, ``|sum_window w exp(i(phase - b q))| / sum w`` per A-line averaged over
+    ``wx`` lines (``b`` = the pixel's fitted slope), is evaluated for every pixel at once by
+    Horner's rule in single precision: it equals the per-window sum to 1e-5 (the threshold is
+    0.5), and is NaN exactly where the window leaves the image."""
+    from speckle.analysis.strain import _box, _fit_coherence  # private: the wls quality core
+
+    rng = np.random.default_rng(4)
+    n, m, wz, wx = 80, 6, 16, 3
+    phasor = rng.normal(size=(n, m)) + 1j * rng.normal(size=(n, m))
+    w = rng.uniform(0.1, 2.0, (n, m))
+    slope = rng.uniform(-1.0, 1.0, (n, m))
+    got = _fit_coherence(phasor, w, _box(w, wz, 1), slope, wz, wx)
+    h = wz // 2
+    want = np.full((n, m), np.nan)
+    for q in range(h, n - wz + 1 + h):
+        k = np.arange(q - h, q - h + wz)
+        line = [
+            abs(np.sum(w[k, j] * np.exp(1j * (np.angle(phasor[k, j]) - slope[q, j] * (k - q)))))
+            / np.sum(w[k, j])
+            for j in range(m)
+        ]
+        for c in range(wx // 2, m - (wx - 1) // 2):
+            want[q, c] = np.mean(line[c - wx // 2 : c - wx // 2 + wx])
+    np.testing.assert_array_equal(np.isnan(got), np.isnan(want))
+    np.testing.assert_allclose(got[~np.isnan(want)], want[~np.isnan(want)], rtol=0, atol=1e-5)
+
+
+def test_unit_weight_slope_is_the_least_squares_slope():
+    """The tracking method's strain fit (unit weights, known window moments): the slope of a
+    line exactly; equal to the general weighted fit with weights 1 on noisy data; NaN exactly
+    where the window leaves the image or holds a NaN displacement."""
+    from speckle.analysis.strain import _pooled_slope  # private: the closed-form LS core
+
+    rng = np.random.default_rng(8)
+    n, m, wz = 200, 5, 64
+    q = np.arange(n, dtype=float)[:, None]
+    y = 3.0 + 0.7 * q + rng.normal(0, 1e-3, (1, m)) + np.zeros((n, m))
+    y[:10] = np.nan  # beyond the outer window centre
+    y[120, 2] = np.nan  # a failed window
+    exact = _pooled_slope(y, None, wz, 1)
+    ok = np.isfinite(exact)
+    np.testing.assert_allclose(exact[ok], 0.7, rtol=1e-12)
+    noisy = y + rng.normal(0, 0.5, y.shape)
+    fast, general = _pooled_slope(noisy, None, wz, 1), _pooled_slope(noisy, np.ones((n, m)), wz, 1)
+    np.testing.assert_array_equal(np.isnan(fast), np.isnan(general))
+    np.testing.assert_allclose(fast[ok], general[ok], rtol=1e-9)
+    rows = np.arange(n)
+    start = rows - wz // 2
+    fits = (start >= 10) & (start + wz <= n)
+    np.testing.assert_array_equal(ok[:, 0], fits)
+    assert not ok[120 - wz // 2 + 1 : 120 + wz // 2, 2].any()  # every window holding it
+
+
 def test_default_is_vector_and_dataarray_round_trip():
     ref, dfm = pair((1e-3,))
     da = lambda a: xr.DataArray(  # noqa: E731
