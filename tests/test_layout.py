@@ -28,8 +28,10 @@ ALLOWED = {
     "imaging": {"numpy", "xarray", "dask", "scipy", "numba", "finufft"},  # fast synthesis
     # statistics, registration and filters (skimage), reading PNG measured images
     # (matplotlib.image), the optional BM3D filter (bm3d: non-commercial licence, not required),
-    # reading users' files (h5py: MATLAB v7.3, zarr, tifffile)
+    # reading users' files (h5py: MATLAB v7.3, zarr, tifffile), the strain estimators' fused
+    # window sums (numba: speckle.analysis._kernels)
     "analysis": {
+        "numba",
         "numpy",
         "xarray",
         "scipy",

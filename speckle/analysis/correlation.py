@@ -46,6 +46,7 @@ from .._validate import as_finite_array, check_choice, check_int, check_real
 from ..conventions import spacing
 from ..system.source import index_shift_phase, spectral_index
 from ._common import field_of, matched, parse_window, same_grid
+from ._kernels import lagrange_resample
 
 __all__ = [
     "KINDS",
@@ -111,19 +112,22 @@ def oversample_depth(field: np.ndarray, factor: int, axis: int = 0) -> np.ndarra
     complex128 otherwise.
     """
     a = np.asarray(field)
-    a = np.moveaxis(a if a.dtype == np.complex64 else a.astype(np.complex128), axis, 0)
+    a = np.moveaxis(a if a.dtype == np.complex64 else a.astype(np.complex128), axis, -1)
     f = check_int(factor, "oversample", low=1)
     if f == 1:
-        return np.moveaxis(a, 0, axis)
-    n = a.shape[0]
-    spec = sfft.fft(a, axis=0)  # spec[m] = N F_{-m}: index -n of the model at m (mod N)
-    pad = np.zeros((f * n, *a.shape[1:]), dtype=a.dtype)
+        return np.moveaxis(a, -1, axis)
+    n = a.shape[-1]
+    # the transforms run along the last (contiguous) axis; norm="forward" puts the 1/N on the
+    # forward transform, so the zero-padded inverse needs no rescaling pass
+    spec = sfft.fft(a, axis=-1, norm="forward")  # spec[m] = F_{-m}: model index -n at m mod N
+    pad = np.zeros((*a.shape[:-1], f * n), dtype=spec.dtype)
     neg = n // 2  # model indices -1 ... -(N//2) sit at m = 1 ... N//2
     pos = n - 1 - neg  # model indices 1 ... N-1-N//2 sit at m = N-1 ... N//2+1
-    pad[: neg + 1] = spec[: neg + 1]
+    pad[..., : neg + 1] = spec[..., : neg + 1]
     if pos:
-        pad[-pos:] = spec[n - pos :]
-    return np.moveaxis(sfft.ifft(pad, axis=0) * f, 0, axis)
+        pad[..., -pos:] = spec[..., n - pos :]
+    out = sfft.ifft(pad, axis=-1, norm="forward", overwrite_x=True)
+    return np.moveaxis(out, -1, axis)
 
 
 #: Oversampling and Lagrange taps of :func:`resample_depth`.
@@ -158,30 +162,11 @@ def resample_depth(field: object, positions: object) -> np.ndarray:
     y = as_finite_array(positions, "positions")
     if y.shape != a.shape:
         raise ValueError(f"positions must have the field's shape {a.shape}, got {y.shape}")
-    f = RESAMPLE_OVERSAMPLE
     # single precision: 1e-7 relative, far below the interpolation error
-    fine = oversample_depth(np.ascontiguousarray(a.T, dtype=np.complex64), f, axis=1).ravel()
-    nf = f * a.shape[0]
-    yf = np.mod(y.T * f, nf)
-    i0 = np.floor(yf).astype(np.intp)
-    t = (yf - i0).astype(np.float32)
-    start = (np.arange(a.shape[1]) * nf)[:, None]  # flat index of each A-line's first sample
-    nodes = list(range(-(RESAMPLE_TAPS // 2 - 1), RESAMPLE_TAPS // 2 + 1))  # -2 ... 3
-    # Lagrange basis w_k(t) = prod_{m != k} (t - m)/(k - m), from prefix and suffix products
-    d = [t - np.float32(m) for m in nodes]
-    left = [np.ones_like(t)]
-    for x in d[:-1]:
-        left.append(left[-1] * x)
-    right = np.ones_like(t)
-    out = np.zeros(t.shape, dtype=np.complex128)
-    for i in range(len(nodes) - 1, -1, -1):
-        k = nodes[i]
-        scale = 1.0 / np.prod([k - m for m in nodes if m != k])
-        w = left[i] * right * np.float32(scale)
-        out += w * np.take(fine, (i0 + k) % nf + start)  # periodic in depth, as sample_field
-        right = right * d[i]
-    out = out.T
-    return out
+    fine = oversample_depth(np.ascontiguousarray(a.T, dtype=np.complex64), RESAMPLE_OVERSAMPLE, -1)
+    out = np.empty(a.shape[::-1], dtype=np.complex128)  # (aline, depth): each A-line contiguous
+    lagrange_resample(fine, np.asarray(y, dtype=float).T, RESAMPLE_OVERSAMPLE, RESAMPLE_TAPS, out)
+    return out.T
 
 
 def _horner(coef: np.ndarray, w: np.ndarray) -> np.ndarray:
