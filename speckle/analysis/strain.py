@@ -49,10 +49,11 @@ Alignment (``align=``, vector and wls)
 The phase methods compare pixel ``z`` of both images; once the displacement ``|u|`` reaches a
 fair fraction of the speckle size the pair decorrelates there (at 1 % strain and 256 pixels,
 half of the depth is lost without alignment). ``align=True`` first resamples the deformed image
-at the tracked displacement (:func:`speckle.track`, :func:`speckle.compensate` without carrier
-removal, so the strain phase ``2 k0 u`` is kept); ``"auto"`` (default) does this only when the
-displacement integrated from an unaligned first estimate exceeds :data:`AUTO_ALIGN_PIXELS`
-(0.5 px) somewhere (or most of the image has no answer). Alignment costs ~40x the vector sum.
+at the tracked displacement (:func:`speckle.analysis.tracking.track_axial` on
+:data:`ALIGN_TRACKING` windows, interpolated once, :func:`speckle.analysis.resample_depth`
+without carrier removal, so the strain phase ``2 k0 u`` is kept); ``"auto"`` (default) does
+this only when the tracked displacement exceeds :data:`AUTO_ALIGN_PIXELS` (0.5 px) somewhere.
+Alignment costs about twice the vector pass (``benchmarks/bench_strain.py``).
 
 Every method returns NaN where its window does not fit in the image or it has no answer.
 """

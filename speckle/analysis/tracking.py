@@ -6,11 +6,11 @@ Two methods (``method=``), the same estimator:
     Every window in one vectorised pass. The complex A-scans are oversampled in depth exactly
     (zero-padding of their spectrum: the same trigonometric interpolant as
     :func:`speckle.analysis.correlation.sample_field`), the amplitude windows (means removed)
-    are cross-correlated by one batched FFT, the whole-pixel peak is taken, and the peak is
-    refined on a ``1/upsample`` grid by matrix-multiply DFTs around it (Guizar-Sicairos et al.
-    2008), batched over windows: axial offsets at the lateral peak, then lateral offsets at the
-    axial one, then axial again. The DFT phase factors factor into one per window and one table
-    shared by all windows, so the refinement is two matrix products.
+    are cross-correlated by batched FFTs (each A-line's depth transform shared by the windows
+    that overlap it), the whole-pixel peak is taken, and the peak is refined on a ``1/upsample``
+    grid by the upsampled DFT around it (Guizar-Sicairos et al. 2008): axial offsets at the
+    lateral peak, then lateral offsets at the axial one, then axial again, one window at a time
+    in a numba kernel, the phase factors split into one per window and one table shared by all.
 ``"reference"``
     One :func:`skimage.registration.phase_cross_correlation` per window (the same plain,
     not phase-normalised, cross-correlation with a 2-D ``1.5 upsample``-point search region):
@@ -18,7 +18,8 @@ Two methods (``method=``), the same estimator:
 
 The two agree to the registration grid ``1/(upsample*oversample)`` pixel where the peak is well
 defined (``tests/analysis/test_tracking_fast.py``). :func:`track_array` is the numpy core;
-:func:`track` its labelled wrapper. The estimates, interpolated to every pixel by
+:func:`track` its labelled wrapper; :func:`track_axial` the same estimator at lateral offset 0
+(the alignment of the phase strain methods). The estimates, interpolated to every pixel by
 :func:`interpolate_displacement` (the only displacement interpolation of
 :mod:`speckle.analysis`), feed :func:`speckle.analysis.correlation.compensate`.
 """
