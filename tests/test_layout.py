@@ -29,9 +29,11 @@ ALLOWED = {
     # statistics, registration and filters (skimage), reading PNG measured images
     # (matplotlib.image), the optional BM3D filter (bm3d: non-commercial licence, not required),
     # reading users' files (h5py: MATLAB v7.3, zarr, tifffile), the correlation theory's
-    # Fourier series at non-uniform frequencies (finufft, expected_gamma)
+    # Fourier series at non-uniform frequencies (finufft, expected_gamma), the strain
+    # estimators' fused window sums (numba: speckle.analysis._kernels)
     "analysis": {
         "finufft",
+        "numba",
         "numpy",
         "xarray",
         "scipy",

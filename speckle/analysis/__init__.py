@@ -64,6 +64,7 @@ __getattr__, __dir__, __all__ = attach(
             "interpolate_windows",
             "track",
             "track_array",
+            "track_axial",
         ],
         "twin": ["SystemFit", "fit_system"],
     },

@@ -13,7 +13,7 @@ import xarray as xr
 from .._validate import check_int
 from ..conventions import spacing
 
-__all__ = ["field_of", "grid_spacing", "matched", "parse_window", "same_grid"]
+__all__ = ["depth_major", "field_of", "grid_spacing", "matched", "parse_window", "same_grid"]
 
 
 def field_of(data: xr.Dataset | xr.DataArray) -> xr.DataArray:
@@ -28,6 +28,15 @@ def field_of(data: xr.Dataset | xr.DataArray) -> xr.DataArray:
     if not isinstance(data, xr.DataArray):
         raise TypeError(f"expected a B-scan Dataset or DataArray, got {type(data).__name__}")
     return data
+
+
+def depth_major(image: object) -> np.ndarray:
+    """A (depth, aline) image as complex128 with depth the contiguous axis (the layout the
+    kernels of :mod:`speckle.analysis._kernels` read fastest; no copy when it already is)."""
+    a = np.asarray(image)
+    if a.flags.f_contiguous and a.dtype == np.complex128:
+        return a
+    return np.asfortranarray(a, dtype=np.complex128)
 
 
 def same_grid(x: xr.DataArray, y: xr.DataArray, names: tuple[str, str]) -> None:

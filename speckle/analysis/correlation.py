@@ -46,6 +46,7 @@ from scipy import ndimage, special
 from .._validate import as_finite_array, check_choice, check_int, check_real
 from ..system.source import index_shift_phase, spectral_index
 from ._common import field_of, grid_spacing, matched, parse_window, same_grid
+from ._kernels import lagrange_resample
 
 __all__ = [
     "KINDS",
@@ -119,8 +120,10 @@ def oversample_depth(field: np.ndarray, factor: int, axis: int = 0) -> np.ndarra
         return a
     ax = axis % a.ndim
     n = a.shape[ax]
-    # the transforms run along ``axis`` in the input's own layout (no moved, strided copies)
-    spec = sfft.fft(a, axis=ax)  # spec[m] = N F_{-m}: index -n of the model at m (mod N)
+    # the transforms run along ``axis`` in the input's own layout (no moved, strided copies);
+    # norm="forward" puts the 1/N on the forward transform: the zero-padded inverse needs no
+    # rescaling pass
+    spec = sfft.fft(a, axis=ax, norm="forward")  # spec[m] = F_{-m}: model index -n at m mod N
     shape = list(a.shape)
     shape[ax] = f * n
     pad = np.zeros(shape, dtype=a.dtype)
@@ -133,9 +136,7 @@ def oversample_depth(field: np.ndarray, factor: int, axis: int = 0) -> np.ndarra
     pad[at(slice(0, neg + 1))] = spec[at(slice(0, neg + 1))]
     if pos:
         pad[at(slice(f * n - pos, None))] = spec[at(slice(n - pos, None))]
-    out = sfft.ifft(pad, axis=ax)
-    out *= f
-    return out
+    return sfft.ifft(pad, axis=ax, norm="forward", overwrite_x=True)
 
 
 #: Oversampling and Lagrange taps of :func:`resample_depth`.
@@ -170,30 +171,11 @@ def resample_depth(field: object, positions: object) -> np.ndarray:
     y = as_finite_array(positions, "positions")
     if y.shape != a.shape:
         raise ValueError(f"positions must have the field's shape {a.shape}, got {y.shape}")
-    f = RESAMPLE_OVERSAMPLE
     # single precision: 1e-7 relative, far below the interpolation error
-    fine = oversample_depth(np.ascontiguousarray(a.T, dtype=np.complex64), f, axis=1).ravel()
-    nf = f * a.shape[0]
-    yf = np.mod(y.T * f, nf)
-    i0 = np.floor(yf).astype(np.intp)
-    t = (yf - i0).astype(np.float32)
-    start = (np.arange(a.shape[1]) * nf)[:, None]  # flat index of each A-line's first sample
-    nodes = list(range(-(RESAMPLE_TAPS // 2 - 1), RESAMPLE_TAPS // 2 + 1))  # -2 ... 3
-    # Lagrange basis w_k(t) = prod_{m != k} (t - m)/(k - m), from prefix and suffix products
-    d = [t - np.float32(m) for m in nodes]
-    left = [np.ones_like(t)]
-    for x in d[:-1]:
-        left.append(left[-1] * x)
-    right = np.ones_like(t)
-    out = np.zeros(t.shape, dtype=np.complex128)
-    for i in range(len(nodes) - 1, -1, -1):
-        k = nodes[i]
-        scale = 1.0 / np.prod([k - m for m in nodes if m != k])
-        w = left[i] * right * np.float32(scale)
-        out += w * np.take(fine, (i0 + k) % nf + start)  # periodic in depth, as sample_field
-        right = right * d[i]
-    out = out.T
-    return out
+    fine = oversample_depth(np.ascontiguousarray(a.T, dtype=np.complex64), RESAMPLE_OVERSAMPLE, -1)
+    out = np.empty(a.shape[::-1], dtype=np.complex128)  # (aline, depth): each A-line contiguous
+    lagrange_resample(fine, np.asarray(y, dtype=float).T, RESAMPLE_OVERSAMPLE, RESAMPLE_TAPS, out)
+    return out.T
 
 
 def _horner(coef: np.ndarray, w: np.ndarray) -> np.ndarray:

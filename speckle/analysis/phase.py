@@ -37,8 +37,10 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import check_int, check_real
+from ._common import depth_major
+from ._kernels import lag_sums
 
-__all__ = ["DEFAULT_MAX_BIAS", "choose_lag", "depth_autocorrelation", "noise_power"]
+__all__ = ["DEFAULT_MAX_BIAS", "choose_lag", "depth_autocorrelation", "lag_and_rho", "noise_power"]
 
 #: Largest relative low bias ``rho(L)^2`` accepted by :func:`choose_lag` (0.5 %).
 DEFAULT_MAX_BIAS = 0.005
@@ -56,14 +58,51 @@ def depth_autocorrelation(image: np.ndarray, max_lag: int) -> np.ndarray:
     ``rho(L) = sum A(z) A*(z+L) / sqrt(sum |A(z)|^2 sum |A(z+L)|^2)`` over all pixel pairs of
     every A-line (axis 0 is depth).
     """
-    a = np.asarray(image)
-    m = check_int(max_lag, "max_lag", low=0, high=a.shape[0] - 1)
-    out = np.empty(m + 1)
-    for lag in range(m + 1):
-        x, y = a[: a.shape[0] - lag], a[lag:]
-        num = np.abs(np.sum(x * np.conj(y)))
-        out[lag] = num / np.sqrt(np.sum(np.abs(x) ** 2) * np.sum(np.abs(y) ** 2))
-    return out
+    m = check_int(max_lag, "max_lag", low=0, high=np.shape(image)[0] - 1)
+    a = depth_major(image)
+    power = np.empty(a.shape[0])
+    sums = lag_sums(a, 0, m + 1, power)
+    head, tail = _norms(power)
+    lags = np.arange(m + 1)
+    return np.abs(sums) / np.sqrt(head[lags] * tail[lags])
+
+
+def _norms(power: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``sum |A|^2`` over depth rows ``[0, n - L)`` and ``[L, n)`` for every lag ``L`` (index)
+    from the power per depth row."""
+    total = power.sum()
+    head = total - np.concatenate([[0.0], np.cumsum(power[::-1])])
+    tail = total - np.concatenate([[0.0], np.cumsum(power)])
+    return head, tail
+
+
+#: Lags measured per pass over the image by :func:`lag_and_rho`.
+_LAG_BLOCK = 4
+
+
+def lag_and_rho(
+    image: np.ndarray, *, max_bias: float = DEFAULT_MAX_BIAS, max_lag: int = 64
+) -> tuple[int, np.ndarray]:
+    """:func:`choose_lag` and ``|rho(L)|`` for ``L = 0 ... lag`` (the lags it measured).
+
+    Same parameters and errors as :func:`choose_lag`.
+    """
+    eps = check_real(max_bias, "max_bias", low=0, high=1, low_inclusive=False, high_inclusive=False)
+    cap = min(check_int(max_lag, "max_lag", low=1), max(1, np.shape(image)[0] // 4))
+    a = depth_major(image)
+    power = np.empty(a.shape[0])
+    rho = [1.0]
+    for lo in range(1, cap + 1, _LAG_BLOCK):  # a few lags per pass; stop at the first that
+        sums = lag_sums(a, lo, min(lo + _LAG_BLOCK, cap + 1), power if lo == 1 else power[:0])
+        head, tail = _norms(power)
+        for k, lag in enumerate(range(lo, lo + sums.size)):  # decorrelates
+            rho.append(float(np.abs(sums[k]) / np.sqrt(head[lag] * tail[lag])))
+            if rho[-1] ** 2 <= eps:
+                return lag, np.array(rho)
+    raise ValueError(
+        f"the field stays correlated (|rho| = {rho[-1]:.3f}) up to lag {cap} pixels; give "
+        "lag= explicitly or a deeper image"
+    )
 
 
 def choose_lag(image: np.ndarray, *, max_bias: float = DEFAULT_MAX_BIAS, max_lag: int = 64) -> int:
@@ -78,24 +117,14 @@ def choose_lag(image: np.ndarray, *, max_bias: float = DEFAULT_MAX_BIAS, max_lag
     max_lag : int
         Largest lag considered; capped at a quarter of the image depth.
 
+    Returns
+    -------
+    int
+        The lag (see :func:`lag_and_rho` for the correlations measured on the way).
+
     Raises
     ------
     ValueError
         If no lag up to the cap decorrelates enough (speckle larger than the image allows).
     """
-    eps = check_real(max_bias, "max_bias", low=0, high=1, low_inclusive=False, high_inclusive=False)
-    cap = min(check_int(max_lag, "max_lag", low=1), max(1, image.shape[0] // 4))
-    a = np.asarray(image)
-    rows = np.sum(np.abs(a) ** 2, axis=1)  # power per depth row: each lag's norms from it
-    total, n = rows.sum(), a.shape[0]
-    head = total - np.concatenate([[0.0], np.cumsum(rows[::-1])])  # sum of rows[: n - lag]
-    tail = total - np.concatenate([[0.0], np.cumsum(rows)])  # sum of rows[lag:]
-    rho = 1.0
-    for lag in range(1, cap + 1):  # the first lag that decorrelates: later lags are not needed
-        rho = np.abs(np.vdot(a[lag:], a[: n - lag])) / np.sqrt(head[lag] * tail[lag])
-        if rho**2 <= eps:
-            return lag
-    raise ValueError(
-        f"the field stays correlated (|rho| = {rho:.3f}) up to lag {cap} pixels; give "
-        "lag= explicitly or a deeper image"
-    )
+    return lag_and_rho(image, max_bias=max_bias, max_lag=max_lag)[0]

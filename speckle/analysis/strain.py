@@ -55,10 +55,11 @@ Alignment (``align=``, vector and wls)
 The phase methods compare pixel ``z`` of both images; once the displacement ``|u|`` reaches a
 fair fraction of the speckle size the pair decorrelates there (at 1 % strain and 256 pixels,
 half of the depth is lost without alignment). ``align=True`` first resamples the deformed image
-at the tracked displacement (:func:`speckle.track`, :func:`speckle.compensate` without carrier
-removal, so the strain phase ``2 k0 u`` is kept); ``"auto"`` (default) does this only when the
-displacement integrated from an unaligned first estimate exceeds :data:`AUTO_ALIGN_PIXELS`
-(0.5 px) somewhere (or most of the image has no answer). Alignment costs ~40x the vector sum.
+at the tracked displacement (:func:`speckle.analysis.tracking.track_axial` on
+:data:`ALIGN_TRACKING` windows, interpolated once, :func:`speckle.analysis.resample_depth`
+without carrier removal, so the strain phase ``2 k0 u`` is kept); ``"auto"`` (default) does
+this only when the tracked displacement exceeds :data:`AUTO_ALIGN_PIXELS` (0.5 px) somewhere.
+Alignment costs about twice the vector pass (``benchmarks/bench_strain.py``).
 
 Every method returns NaN where its window does not fit in the image or it has no answer.
 """
@@ -74,10 +75,11 @@ from scipy import ndimage
 
 from .._validate import check_choice, check_int, check_real
 from ..system.source import spectrum
-from ._common import parse_window
+from ._common import depth_major, parse_window
+from ._kernels import MARGIN, vector_phase
 from .correlation import amplitude_from_gamma, correlation_array, expected_gamma, resample_depth
-from .phase import DEFAULT_MAX_BIAS, choose_lag, depth_autocorrelation
-from .tracking import interpolate_windows, track_array
+from .phase import DEFAULT_MAX_BIAS, choose_lag, depth_autocorrelation, lag_and_rho
+from .tracking import interpolate_windows, track_array, track_axial
 
 __all__ = [
     "DEFAULT_METHOD",
@@ -117,13 +119,7 @@ OPTIONS = {
 }
 #: Tracking that aligns the pair for the phase methods (``align``): window (depth, aline)
 #: pixels, step (depth, aline) pixels; the displacement field is smooth, so coarse steps do.
-ALIGN_TRACKING = {
-    "window": (32, 8),
-    "step": (16, 8),
-    "upsample": 20,
-    "oversample": 2,
-    "lateral": False,
-}
+ALIGN_TRACKING = {"window": (64, 8), "step": (64, 8), "upsample": 20, "oversample": 2}
 
 
 # --------------------------------------------------------------------------------------------
@@ -342,22 +338,35 @@ def _four_product_sums(a1, a2, lag, wz, wx, terms=("C", "absC", "R1", "R2")):
 
 
 def _vector(a1, a2, k0, p, wz, wx, opts):
-    lag = _lag(a1, opts)
+    if opts["lag"] is None:
+        lag, rho = lag_and_rho(a1, max_bias=opts["max_bias"])
+    else:
+        lag, rho = _lag(a1, opts), None
     a2 = _aligned(a1, a2, p, opts)
-    s, _ = _four_product_sums(a1, a2, lag, wz, wx, ("C", "absC"))
-    phase = np.angle(s["C"])
-    with np.errstate(invalid="ignore", divide="ignore"):
-        quality = np.abs(s["C"]) / s["absC"]
-    if opts["wrap_check"] and lag > 1:
-        # the lag-1 phase wraps only at 1/(2R); scaled by L and by its known low bias
-        # 1 + rho(1)^2 (image autocorrelation) it picks the 2 pi branch of the lag-L phase
-        # (multi-lag unwrapping); a branch error needs a predictor error > pi
-        s1, _ = _four_product_sums(a1, a2, 1, wz, wx, ("C",))
-        rho1 = depth_autocorrelation(a1, 1)[1]
-        predictor = lag * np.angle(s1["C"]) * (1 + rho1**2)
-        phase = phase + 2 * np.pi * np.round((predictor - phase) / (2 * np.pi))
-    strain = -phase / (2 * k0 * lag * p)
-    strain = np.where(quality >= opts["min_quality"], strain, np.nan)
+    wrap = bool(opts["wrap_check"]) and lag > 1
+    if wrap and rho is None:
+        rho = depth_autocorrelation(a1, 1)
+    # the lag-1 phase wraps only at 1/(2R); scaled by L and by its known low bias
+    # 1 + rho(1)^2 (image autocorrelation) it picks the 2 pi branch of the lag-L phase
+    # (multi-lag unwrapping); a branch error needs a predictor error > pi
+    cfac = lag * (1 + rho[1] ** 2) if wrap else 1.0
+    n, m = a1.shape
+    strain = np.full((m, n), np.nan).T  # depth contiguous, as the kernel writes
+    quality = np.full((m, n), np.nan).T
+    vector_phase(
+        depth_major(a1),
+        depth_major(a2),
+        lag,
+        wz,
+        wx,
+        2 * k0 * lag * p,
+        cfac,
+        np.tan(MARGIN * 0.5 * np.pi / cfac),
+        opts["min_quality"],
+        wrap,
+        strain,
+        quality,
+    )
     return strain, quality, {"lag": lag}
 
 
@@ -533,8 +542,16 @@ def _align_tracking(a1: np.ndarray) -> dict:
 def _alignment(a1, a2):
     """Tracked displacement (pixels) at every pixel for the alignment (nearest-centre values
     beyond the outer windows; failed windows filled from their neighbours), and the largest
-    row median of its magnitude."""
-    uz, _, tr = _tracked(a1, a2, outside="nearest", **_align_tracking(a1))
+    row median of its magnitude and the steepest tracked strain.
+
+    One coarse tracking pass (:data:`ALIGN_TRACKING`: displacement only, no registration
+    error), interpolated once, laid out with depth contiguous for the resampling.
+    """
+    tr = track_axial(a1, a2, **_align_tracking(a1))
+    qz, qx = np.arange(a1.shape[0], dtype=float), np.arange(a1.shape[1], dtype=float)
+    uz = interpolate_windows(  # transposed: (aline, depth), each A-line contiguous
+        tr["uz"].T, tr["centre_aline"], tr["centre_depth"], qx, qz, outside="nearest"
+    ).T
     uz, _ = _alignment_fill(uz)  # windows without texture: filled from their neighbours
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN rows
@@ -599,7 +616,7 @@ def _alignment_fill(uz):
     """NaN displacements (outside the tracked windows) filled by the nearest value along depth
     (constant extrapolation, only for resampling); and the mask of original values."""
     ok = np.isfinite(uz)
-    out = uz.copy()
+    out = uz.copy(order="K")
     for j in np.flatnonzero(~ok.all(axis=0)):
         col, good = uz[:, j], np.flatnonzero(ok[:, j])
         out[:, j] = np.interp(np.arange(col.size), good, col[good]) if good.size else 0.0

@@ -6,11 +6,11 @@ Two methods (``method=``), the same estimator:
     Every window in one vectorised pass. The complex A-scans are oversampled in depth exactly
     (zero-padding of their spectrum: the same trigonometric interpolant as
     :func:`speckle.analysis.correlation.sample_field`), the amplitude windows (means removed)
-    are cross-correlated by one batched FFT, the whole-pixel peak is taken, and the peak is
-    refined on a ``1/upsample`` grid by matrix-multiply DFTs around it (Guizar-Sicairos et al.
-    2008), batched over windows: axial offsets at the lateral peak, then lateral offsets at the
-    axial one, then axial again. The DFT phase factors factor into one per window and one table
-    shared by all windows, so the refinement is two matrix products.
+    are cross-correlated by batched FFTs (each A-line's depth transform shared by the windows
+    that overlap it), the whole-pixel peak is taken, and the peak is refined on a ``1/upsample``
+    grid by the upsampled DFT around it (Guizar-Sicairos et al. 2008): axial offsets at the
+    lateral peak, then lateral offsets at the axial one, then axial again, one window at a time
+    in a numba kernel, the phase factors split into one per window and one table shared by all.
 ``"reference"``
     One :func:`skimage.registration.phase_cross_correlation` per window (the same plain,
     not phase-normalised, cross-correlation with a 2-D ``1.5 upsample``-point search region):
@@ -18,7 +18,8 @@ Two methods (``method=``), the same estimator:
 
 The two agree to the registration grid ``1/(upsample*oversample)`` pixel where the peak is well
 defined (``tests/analysis/test_tracking_fast.py``). :func:`track_array` is the numpy core;
-:func:`track` its labelled wrapper. The estimates, interpolated to every pixel by
+:func:`track` its labelled wrapper; :func:`track_axial` the same estimator at lateral offset 0
+(the alignment of the phase strain methods). The estimates, interpolated to every pixel by
 :func:`interpolate_displacement` (the only displacement interpolation of
 :mod:`speckle.analysis`), feed :func:`speckle.analysis.correlation.compensate`.
 """
@@ -33,6 +34,7 @@ from skimage.registration import phase_cross_correlation
 from .._validate import check_choice, check_int, check_real
 from ..conventions import coord
 from ._common import field_of, grid_spacing, matched, parse_window
+from ._kernels import refine_shifts, window_moments
 from .correlation import oversample_depth, sample_field
 
 __all__ = [
@@ -41,6 +43,7 @@ __all__ = [
     "interpolate_windows",
     "track",
     "track_array",
+    "track_axial",
 ]
 
 #: Tracking methods: the vectorised pass and the per-window skimage reference.
@@ -61,66 +64,112 @@ def _windows(img: np.ndarray, step: tuple[int, int], count: tuple[int, int], wz:
     return view[: (count[0] - 1) * step[0] + 1 : step[0], : (count[1] - 1) * step[1] + 1 : step[1]]
 
 
-def _refine(p: np.ndarray, shift: np.ndarray, axis: int, other: np.ndarray, m, up: int):
-    """Upsampled cross-correlation along ``axis`` (0 aline, 1 depth) around ``shift`` at the
-    offset ``other`` along the other axis; returns (best offset, its CC value).
+def _depth_spectra(h: np.ndarray, nz: int, mz: int, sz: int) -> np.ndarray:
+    """Half spectra of the ``nz`` depth windows (``mz`` samples every ``sz``) of every A-line
+    of ``h`` (aline, depth): shape (aline, nz, mz//2 + 1)."""
+    cols = np.lib.stride_tricks.sliding_window_view(h, mz, axis=1)[:, : (nz - 1) * sz + 1 : sz]
+    return sfft.rfft(cols, axis=-1)
 
-    ``p``: half cross-power spectra (W, Mx, Mz//2+1) of real windows of shape ``m = (Mx, Mz)``
-    (depth last), weighted by the multiplicity of each depth frequency, so that
-    ``CC(s) = Re sum_f p_f exp(2i pi f.s/M)`` (the depth Nyquist term taken as a cosine).
+
+def _multiplicity(nf: int, mz: int) -> np.ndarray:
+    """Weight of each depth frequency of a real window's half spectrum: 2 (f and -f), 1 for
+    0 and the Nyquist term (``mz`` even)."""
+    mult = np.full(nf, 2.0)
+    mult[0] = 1.0
+    if mz % 2 == 0:
+        mult[-1] = 1.0
+    return mult
+
+
+def _abs_argmax(flat: np.ndarray) -> np.ndarray:
+    """Index of the largest ``|value|`` of every row (the maximum and the minimum compared)."""
+    hi, lo = np.argmax(flat, axis=1), np.argmin(flat, axis=1)
+    rows = np.arange(flat.shape[0])
+    return np.where(flat[rows, hi] >= -flat[rows, lo], hi, lo)
+
+
+def _column_spectra(h: np.ndarray, count: tuple[int, int], size: tuple[int, int], step):
+    """2-D spectra of every window of ``h`` (aline, depth), shape (windows in aline, windows in
+    depth, depth frequencies, aline frequencies).
+
+    The depth transform of each A-line's window is computed once and shared by the windows
+    that overlap it laterally (real input: a half spectrum); the lateral transform of every
+    window follows, batched.
     """
-    mx, mz = m
-    ctype = p.dtype
-    fx = np.fft.fftfreq(mx, 1 / mx)
-    fz = np.arange(p.shape[2], dtype=float)
-    if axis == 1:  # depth: contract the aline frequencies at the aline offset
-        e = np.exp(2j * np.pi * other[:, None] * fx[None] / mx).astype(ctype)
-        q = np.einsum("wx,wxz->wz", e, p)
-        f, size = fz, mz
-    else:
-        e = np.exp(2j * np.pi * other[:, None] * fz[None] / mz).astype(ctype)
-        q = np.einsum("wxz,wz->wx", p, e)
-        f, size = fx, mx
-    region = int(np.ceil(1.5 * up))
-    centre = region // 2
-    base = np.round(shift * up) / up
-    # exp(2i pi f (base + (u - centre)/up)/M) = exp(2i pi f base/M) * table[f, u]
-    q = q * np.exp(2j * np.pi * base[:, None] * f[None] / size).astype(ctype)
-    table = np.exp(2j * np.pi * f[:, None] * (np.arange(region) - centre)[None] / (up * size))
-    cc = (q @ table.astype(ctype)).real
-    best = np.argmax(np.abs(cc), axis=1)
-    return base + (best - centre) / up, cc[np.arange(p.shape[0]), best].astype(float)
+    (nx, nz), (mx, mz), (sx, sz) = count, size, step
+    spec = _depth_spectra(h, nz, mz, sz)
+    lat = np.lib.stride_tricks.sliding_window_view(spec, mx, axis=0)[: (nx - 1) * sx + 1 : sx]
+    return sfft.fft(lat, axis=-1)  # (windows in aline, windows in depth, fz, fx)
 
 
-def _fft_shifts(pa, pb, up: int, va, vb, lateral: bool = True):
-    """Displacement (pixels, aline and depth) of ``pb`` relative to ``pa`` for every window, and
-    the normalised RMS error ``sqrt(1 - CC^2/(|a|^2 |b|^2))``; pa, pb: real (W, Mx, Mz),
-    va, vb: their sums of squares."""
-    w, mx, mz = pa.shape
-    fa = sfft.rfft2(pa)
-    fb = sfft.rfft2(pb)
-    p = np.conj(fa) * fb  # CC(s) = sum a(z) b(z+s): peaks at the displacement
-    cc = sfft.irfft2(p, s=(mx, mz))
-    peak = np.argmax(np.abs(cc).reshape(w, -1), axis=1)
-    ix, iz = np.unravel_index(peak, (mx, mz))
+def _fft_shifts(ha, hb, count, size, step, up: int, lateral: bool, want_error: bool):
+    """Displacement (samples, depth and aline) of ``hb`` relative to ``ha`` for every window,
+    and the normalised RMS error ``sqrt(1 - CC^2/(|a|^2 |b|^2))`` (windows' means removed);
+    ha, hb: real (aline, depth samples) images, windows ``count`` x ``size`` every ``step``
+    (aline, depth). Outputs are flat over windows ordered (depth, aline)."""
+    (nx, nz), (mx, mz) = count, size
+    w = nx * nz
+    p = np.conj(_column_spectra(ha, count, size, step))
+    p *= _column_spectra(hb, count, size, step)  # CC(s) = sum a(z) b(z+s): peaks at the shift
+    p[:, :, 0, 0] = 0  # the windows' means removed
+    h = sfft.ifft(p, axis=-1)  # lateral offsets (whole pixels), depth frequencies
+    cc = sfft.irfft(h, n=mz, axis=-2)  # (nx, nz, mz, mx)
+    flat = cc.reshape(w, mz * mx)
+    rows = np.arange(w)
+    peak = _abs_argmax(flat)
+    iz, ix = np.divmod(peak, mx)
     sz = np.where(iz > mz // 2, iz - mz, iz).astype(float)
     sx = np.where(ix > mx // 2, ix - mx, ix).astype(float)
     if mx == 1:
         sx[:] = 0.0
-    value = cc.reshape(w, -1)[np.arange(w), peak].astype(float) * (mz * mx)
+    value = flat[rows, peak].astype(float) * (mz * mx)
     if up > 1:
-        mult = np.full(p.shape[2], 2.0, dtype=pa.dtype)  # depth frequencies f, -f: one column
-        mult[0] = 1.0
-        if mz % 2 == 0:
-            mult[-1] = 1.0
-        p = p * mult
-        sz, value = _refine(p, sz, 1, sx, (mx, mz), up)
-        if mx > 1 and lateral:
-            sx, value = _refine(p, sx, 0, sz, (mx, mz), up)
-            sz, value = _refine(p, sz, 1, sx, (mx, mz), up)
+        mult = _multiplicity(p.shape[2], mz)
+        fz, fx = np.arange(p.shape[2], dtype=float), np.fft.fftfreq(mx, 1 / mx)
+        tz, tx = _table(fz, mz, up), _table(fx, mx, up)
+        refine_shifts(
+            p.reshape(w, p.shape[2], mx),
+            mult,
+            fz,
+            fx,
+            mz,
+            mx,
+            up,
+            bool(lateral),
+            tz.real.copy(),
+            tz.imag.copy(),
+            tx.real.copy(),
+            tx.imag.copy(),
+            sz,
+            sx,
+            value,
+        )
+
+    def order(v):  # (aline, depth) windows -> flat over (depth, aline)
+        return v.reshape(nx, nz).T.ravel()
+
+    if not want_error:
+        return order(sz), order(sx), np.full(w, np.nan)
+    va, vb = (_window_power(x, count, size, step).ravel() for x in (ha, hb))
     with np.errstate(invalid="ignore", divide="ignore"):  # Parseval: |F|^2 = M sum a^2
         err = np.sqrt(np.abs(1.0 - value**2 / ((mz * mx) ** 2 * va * vb)))
-    return sz, sx, err
+    return order(sz), order(sx), order(err)
+
+
+def _window_power(x: np.ndarray, count, size, step) -> np.ndarray:
+    """Sum of squares of every window of ``x`` (aline, depth) with its mean removed, shape
+    (windows in aline, windows in depth); float64 sums."""
+    s1, s2 = np.empty(count), np.empty(count)
+    window_moments(x, *count, *size, *step, s1, s2)
+    return np.maximum(s2 - s1 * s1 / (size[0] * size[1]), 0.0)
+
+
+def _table(f: np.ndarray, size: int, up: int) -> np.ndarray:
+    """``exp(2i pi f (u - centre)/(up size))`` for the ``ceil(1.5 up)`` offsets ``u`` of the
+    refinement region (centre ``region//2``): the factor shared by every window."""
+    region = int(np.ceil(1.5 * up))
+    u = np.arange(region) - region // 2
+    return np.exp(2j * np.pi * f[:, None] * u[None] / (up * size))
 
 
 def _reference_shifts(pa: np.ndarray, pb: np.ndarray, up: int):
@@ -145,6 +194,7 @@ def track_array(
     quantity: str = "amplitude",
     method: str = "fft",
     lateral: bool = True,
+    error: bool = True,
 ) -> dict[str, np.ndarray]:
     """Displacement of every window between two complex images (numpy core of :func:`track`).
 
@@ -171,6 +221,9 @@ def track_array(
         ``"fft"``: refine the lateral offset too (default). ``False`` keeps the lateral
         estimate at the whole-pixel peak and refines depth only (A-line-independent images,
         or when only ``uz`` is used: one refinement instead of three).
+    error : bool
+        ``"fft"``: compute the registration error (default). ``False`` leaves ``error`` NaN
+        and skips the windows' power sums (when only the displacement is used).
 
     Returns
     -------
@@ -186,6 +239,141 @@ def track_array(
     TypeError, ValueError
         Real or mismatched images, a window larger than the image, bad parameters.
     """
+    a, b = _pair(reference, deformed)
+    check_choice(quantity, "quantity", ("amplitude", "intensity"))
+    check_choice(method, "method", TRACK_METHODS)
+    for name, flag in (("lateral", lateral), ("error", error)):
+        if not isinstance(flag, (bool, np.bool_)):
+            raise TypeError(f"{name} must be True or False, got {flag!r}")
+    wz, wx = parse_window(window, shape=a.shape)
+    stz, stx = parse_window(step, "step", low=1)
+    up = check_int(upsample, "upsample", low=1)
+    ov = check_int(oversample, "oversample", low=1)
+    a, b, bad = _zero_bad(a, b)
+    if method == "reference":  # today's path: per-sample trigonometric interpolation
+        fine = np.arange(0, a.shape[0], 1 / ov)
+        ha, hb = np.abs(sample_field(a.T, fine)), np.abs(sample_field(b.T, fine))
+    else:
+        ha, hb = _amplitudes(a, b, ov)
+    if quantity == "intensity":
+        ha, hb = ha**2, hb**2
+    nz, nx = a.shape
+    z0, x0 = _starts(nz, wz, stz), _starts(nx, wx, stx)
+    shape = (z0.size, x0.size)
+    if method == "fft":
+        count, size, steps = (x0.size, z0.size), (wx, wz * ov), (stx, stz * ov)
+        uz, ux, err = _fft_shifts(ha, hb, count, size, steps, up, lateral, bool(error))
+    else:
+        pa = _windows(ha, (stx, stz * ov), shape[::-1], wx, wz * ov)
+        pb = _windows(hb, (stx, stz * ov), shape[::-1], wx, wz * ov)
+        pa = pa.transpose(1, 0, 2, 3).reshape(-1, wx, wz * ov)
+        pb = pb.transpose(1, 0, 2, 3).reshape(-1, wx, wz * ov)
+        pa = pa - pa.mean(axis=(1, 2), keepdims=True, dtype=float).astype(pa.dtype)
+        pb = pb - pb.mean(axis=(1, 2), keepdims=True, dtype=float).astype(pb.dtype)
+        uz, ux, err = _reference_shifts(pa, pb, up)
+    textured = _textured(ha, hb, ov, bad, (z0.size, x0.size), (wz, wx), (stz, stx))
+    return {
+        "uz": np.where(textured, uz / ov, np.nan).reshape(shape),
+        "ux": np.where(textured, ux, np.nan).reshape(shape),
+        "error": np.where(textured, err, np.nan).reshape(shape),
+        "centre_depth": z0 + (wz - 1) / 2,
+        "centre_aline": x0 + (wx - 1) / 2,
+    }
+
+
+def track_axial(
+    reference: np.ndarray,
+    deformed: np.ndarray,
+    *,
+    window: int | tuple[int, int] = (32, 8),
+    step: int | tuple[int, int] = (16, 8),
+    upsample: int = 20,
+    oversample: int = 2,
+) -> dict[str, np.ndarray]:
+    """Axial displacement of every window, each A-line compared with itself (no lateral search).
+
+    The estimator of :func:`track_array` (``method="fft"``, amplitude) restricted to lateral
+    offset 0: the cross-correlation of a window is the sum of its A-lines' depth
+    cross-correlations (windows' means removed), so one depth transform per A-line window and
+    no lateral transform are needed. Serves the alignment of the phase strain methods, which
+    compare A-line ``j`` of both images in place as well.
+
+    Parameters
+    ----------
+    reference, deformed : numpy.ndarray
+        Complex images ``(depth, aline)`` of the same shape; NaN pixels as in
+        :func:`track_array`.
+    window, step, upsample, oversample
+        As in :func:`track_array` (window default (32, 8)).
+
+    Returns
+    -------
+    dict
+        ``uz`` (pixels, windows in depth x windows in aline; NaN without texture or with a NaN
+        pixel), ``centre_depth``, ``centre_aline`` (pixels).
+
+    Raises
+    ------
+    TypeError, ValueError
+        As :func:`track_array`.
+    """
+    a, b = _pair(reference, deformed)
+    wz, wx = parse_window(window, shape=a.shape)
+    stz, stx = parse_window(step, "step", low=1)
+    up = check_int(upsample, "upsample", low=1)
+    ov = check_int(oversample, "oversample", low=1)
+    a, b, bad = _zero_bad(a, b)
+    ha, hb = _amplitudes(a, b, ov)
+    nz, nx = a.shape
+    z0, x0 = _starts(nz, wz, stz), _starts(nx, wx, stx)
+    mz, sz = wz * ov, stz * ov
+    sa, sb = (_depth_spectra(h, z0.size, mz, sz) for h in (ha, hb))  # (aline, nz, f)
+    cross = np.conj(sa)
+    cross *= sb
+    last = (x0.size - 1) * stx + 1
+    p = sum(cross[k : k + last : stx] for k in range(wx))  # (windows in aline, nz, f)
+    dc_a = sum(sa[k : k + last : stx, :, 0].real for k in range(wx))
+    dc_b = sum(sb[k : k + last : stx, :, 0].real for k in range(wx))
+    p[:, :, 0] -= dc_a * dc_b / wx  # the window's mean removed (its 2-D mean, every A-line)
+    cc = sfft.irfft(p, n=mz, axis=-1)  # (windows in aline, nz, mz): CC(s) / mz
+    flat = cc.reshape(-1, mz)
+    peak = _abs_argmax(flat)
+    shift = np.where(peak > mz // 2, peak - mz, peak).astype(float)
+    if up > 1:
+        w = flat.shape[0]
+        fz = np.arange(p.shape[2], dtype=float)
+        tz = _table(fz, mz, up)
+        value = np.empty(w)
+        zero = np.zeros(w)
+        refine_shifts(
+            p.reshape(w, -1, 1),
+            _multiplicity(p.shape[2], mz),
+            fz,
+            np.zeros(1),
+            mz,
+            1,
+            up,
+            False,
+            tz.real.copy(),
+            tz.imag.copy(),
+            np.ones((1, 1)),
+            np.zeros((1, 1)),
+            shift,
+            zero,
+            value,
+        )
+    uz = shift.reshape(x0.size, z0.size).T.ravel()
+    shape = (z0.size, x0.size)
+    textured = _textured(ha, hb, ov, bad, shape, (wz, wx), (stz, stx))
+    return {
+        "uz": np.where(textured, uz / ov, np.nan).reshape(shape),
+        "centre_depth": z0 + (wz - 1) / 2,
+        "centre_aline": x0 + (wx - 1) / 2,
+    }
+
+
+def _pair(reference, deformed) -> tuple[np.ndarray, np.ndarray]:
+    """Both images as 2-D complex arrays of the same shape (else TypeError/ValueError)."""
     a = np.asarray(reference)
     b = np.asarray(deformed)
     for name, x in (("reference", a), ("deformed", b)):
@@ -195,58 +383,65 @@ def track_array(
             raise TypeError(f"{name} must be a complex image, got dtype {x.dtype}")
     if a.shape != b.shape:
         raise ValueError(f"reference and deformed differ in shape: {a.shape} vs {b.shape}")
-    check_choice(quantity, "quantity", ("amplitude", "intensity"))
-    check_choice(method, "method", TRACK_METHODS)
-    if not isinstance(lateral, (bool, np.bool_)):
-        raise TypeError(f"lateral must be True or False, got {lateral!r}")
-    wz, wx = parse_window(window, shape=a.shape)
-    stz, stx = parse_window(step, "step", low=1)
-    up = check_int(upsample, "upsample", low=1)
-    ov = check_int(oversample, "oversample", low=1)
+    return a, b
+
+
+def _zero_bad(a, b):
+    """NaN/inf pixels of either image zeroed in both, and their mask (None when all finite:
+    a finite sum means every pixel is, one pass without a mask)."""
+    if np.isfinite(a.sum()) and np.isfinite(b.sum()):
+        return a, b, None
     bad = ~(np.isfinite(a) & np.isfinite(b))
-    if bad.any():
-        a, b = np.where(bad, 0, a), np.where(bad, 0, b)
-    # (aline, depth) layout: depth, the long axis, is contiguous for the FFTs
-    if method == "reference":  # today's path: per-sample trigonometric interpolation
-        fine = np.arange(0, a.shape[0], 1 / ov)
-        ha, hb = np.abs(sample_field(a.T, fine)), np.abs(sample_field(b.T, fine))
-    else:  # the same interpolant by zero-padded FFT, in single precision
-        ha = np.abs(oversample_depth(a.T.astype(np.complex64), ov, axis=-1))
-        hb = np.abs(oversample_depth(b.T.astype(np.complex64), ov, axis=-1))
-    if quantity == "intensity":
-        ha, hb = ha**2, hb**2
-    nz, nx = a.shape
-    z0, x0 = _starts(nz, wz, stz), _starts(nx, wx, stx)
-    shape = (z0.size, x0.size)
-    pa = _windows(ha, (stx, stz * ov), shape[::-1], wx, wz * ov)
-    pb = _windows(hb, (stx, stz * ov), shape[::-1], wx, wz * ov)
-    pa = pa.transpose(1, 0, 2, 3).reshape(-1, wx, wz * ov)
-    pb = pb.transpose(1, 0, 2, 3).reshape(-1, wx, wz * ov)
-    pa = pa - pa.mean(axis=(1, 2), keepdims=True, dtype=float).astype(pa.dtype)
-    pb = pb - pb.mean(axis=(1, 2), keepdims=True, dtype=float).astype(pb.dtype)
-    va = np.einsum("wij,wij->w", pa, pa, dtype=float)
-    vb = np.einsum("wij,wij->w", pb, pb, dtype=float)
-    if method == "fft":
-        uz, ux, err = _fft_shifts(pa, pb, up, va, vb, lateral)
-    else:
-        uz, ux, err = _reference_shifts(pa, pb, up)
-    # texture from the whole-pixel samples (there the interpolant is the data, exactly: a
-    # region without signal is zero there, whatever the band-limited ringing between pixels)
-    ta, tb = (np.var(x[:, :, ::ov], axis=(1, 2), dtype=float) for x in (pa, pb))
-    textured = (ta > LOW_SIGNAL * max(ta.mean(), 1e-300)) & (
-        tb > LOW_SIGNAL * max(tb.mean(), 1e-300)
-    )
-    if bad.any():
+    return np.where(bad, 0, a), np.where(bad, 0, b), bad
+
+
+def _amplitudes(a, b, ov: int):
+    """``|A|`` of both images oversampled ``ov`` times in depth (zero-padded spectrum, single
+    precision), laid out (aline, depth samples): depth contiguous for the FFTs.
+
+    For ``ov = 2`` the whole-pixel samples are the data and only the half-pixel ones are
+    transformed: ``A(q + 1/2)`` is the N-point inverse transform of the spectrum times the
+    half-pixel phase ramp (the same interpolant as :func:`oversample_depth`, half the work).
+    """
+    out = []
+    for x in (a, b):
+        lines = np.ascontiguousarray(x.T, dtype=np.complex64)
+        if ov != 2:
+            out.append(np.abs(oversample_depth(lines, ov, axis=-1)))
+            continue
+        n = lines.shape[1]
+        h = np.empty((lines.shape[0], 2 * n), dtype=np.float32)
+        np.abs(lines, out=h[:, 0::2])
+        spec = sfft.fft(lines, axis=-1)
+        spec *= _half_pixel_ramp(n)
+        np.abs(sfft.ifft(spec, axis=-1, overwrite_x=True), out=h[:, 1::2])
+        out.append(h)
+    return tuple(out)
+
+
+def _half_pixel_ramp(n: int) -> np.ndarray:
+    """``exp(-i pi n_m / N)`` for FFT bin ``m`` of model index ``n_m`` (``-m`` up to
+    ``m = N//2``, ``N - m`` above, as in :func:`oversample_depth`): shifts by half a pixel."""
+    m = np.arange(n)
+    index = np.where(m <= n // 2, -m, n - m)
+    return np.exp(-1j * np.pi * index / n).astype(np.complex64)
+
+
+def _textured(ha, hb, ov, bad, shape, window, step) -> np.ndarray:
+    """Windows with texture in both images and no bad pixel, flat over (depth, aline).
+
+    Texture from the whole-pixel samples (there the interpolant is the data, exactly: a region
+    without signal is zero there, whatever the band-limited ringing between pixels): the
+    window's variance above :data:`LOW_SIGNAL` of the image's mean.
+    """
+    (nz, nx), (wz, wx), (stz, stx) = shape, window, step
+    whole = ((nx, nz), (wx, wz), (stx, stz))
+    ta, tb = (_window_power(h[:, ::ov], *whole).T.ravel() for h in (ha, hb))
+    ok = (ta > LOW_SIGNAL * max(ta.mean(), 1e-300)) & (tb > LOW_SIGNAL * max(tb.mean(), 1e-300))
+    if bad is not None:
         nbad = _windows(bad.astype(np.int32), (stz, stx), shape, wz, wx).sum(axis=(2, 3))
-        textured &= nbad.ravel() == 0
-    out = {
-        "uz": np.where(textured, uz / ov, np.nan).reshape(shape),
-        "ux": np.where(textured, ux, np.nan).reshape(shape),
-        "error": np.where(textured, err, np.nan).reshape(shape),
-        "centre_depth": z0 + (wz - 1) / 2,
-        "centre_aline": x0 + (wx - 1) / 2,
-    }
-    return out
+        ok &= nbad.ravel() == 0
+    return ok
 
 
 def track(

@@ -1,0 +1,176 @@
+"""The fused numba paths of the strain estimators against plain-numpy references.
+
+The vector method's window sums, its phase and quality, the multi-lag branch (with its
+pre-test), the lag's autocorrelation, the resampling and the axial tracker are each compared
+with the direct formula they replace (exact references, or the analytic displacement).
+"""
+
+import numpy as np
+import pytest
+
+import speckle
+from speckle.analysis import correlation, phase, sample_field, tracking
+from speckle.analysis._kernels import atan2_array  # private: the kernels' atan2, tested here
+from speckle.scene import deformation as D
+
+N, PIXEL, R = 256, 8.0, 10.0
+H = N * PIXEL
+
+
+def source(shape="gaussian"):
+    if shape == "gaussian":
+        return speckle.spectrum(N, H, k0_dk=R, shape="gaussian", fwhm=0.5 * N * np.pi / H)
+    return speckle.spectrum(N, H, k0_dk=R)
+
+
+def pair(strain, lines=16, shape="gaussian", seed=4):
+    scene = D.deformable_scene(lines, 4.0, n_pixels=N, depth=H, seed=seed, strain=[0.0, strain])
+    b = speckle.bscan(D.uniaxial_strain(scene, [0.0, strain]), source(shape), method="nufft")
+    img = b.field.transpose("strain", "depth", "aline").values
+    return img[0], img[1]
+
+
+def vector_reference(a1, a2, k0, lag, wz, wx, min_quality=0.5, wrap=True):
+    """The vector method written out: window sums of C_L = A1 A2* A1*(z+L) A2(z+L) and |C_L|
+    by explicit slices, the lag-1 predictor evaluated at every window (no pre-test)."""
+    n, m = a1.shape
+
+    def sums(lag_):
+        c = a1[:-lag_] * np.conj(a2[:-lag_]) * np.conj(a1[lag_:]) * a2[lag_:]
+        rows = c.shape[0] - wz + 1
+        out_c = np.array([c[i : i + wz].sum(axis=0) for i in range(rows)])
+        out_a = np.array([np.abs(c[i : i + wz]).sum(axis=0) for i in range(rows)])
+        cols = m - wx + 1
+        lat = [
+            np.stack([x[:, j : j + wx].sum(axis=1) for j in range(cols)], 1) for x in (out_c, out_a)
+        ]
+        return lat
+
+    s, a = sums(lag)
+    phase_ = np.angle(s)
+    quality = np.abs(s) / a
+    if wrap and lag > 1:
+        s1, _ = sums(1)
+        h = lag // 2
+        rho1 = phase.depth_autocorrelation(a1, 1)[1]
+        pred = lag * np.angle(s1[h : h + s.shape[0]]) * (1 + rho1**2)
+        phase_ = phase_ + 2 * np.pi * np.round((pred - phase_) / (2 * np.pi))
+    strain = np.where(quality >= min_quality, -phase_ / (2 * k0 * lag * PIXEL), np.nan)
+    full_s, full_q = np.full((n, m), np.nan), np.full((n, m), np.nan)
+    r0, c0 = wz // 2 + lag // 2, wx // 2
+    full_s[r0 : r0 + s.shape[0], c0 : c0 + s.shape[1]] = strain
+    full_q[r0 : r0 + s.shape[0], c0 : c0 + s.shape[1]] = quality
+    return full_s, full_q
+
+
+def test_atan2_within_two_ulp_of_numpy():
+    rng = np.random.default_rng(1)
+    y = rng.normal(size=200_000) * np.exp(4 * rng.normal(size=200_000))
+    x = rng.normal(size=200_000)
+    edges = [(0.0, 1.0), (1.0, 0.0), (-1.0, 0.0), (0.0, -1.0), (-0.0, -1.0), (0.0, 0.0)]
+    edges += [(1.0, 1.0), (-1.0, -1.0), (1e-300, 1.0), (1.0, -1e-300), (3.0, -3.0)]
+    y = np.concatenate([y, [e[0] for e in edges]])
+    x = np.concatenate([x, [e[1] for e in edges]])
+    out = np.empty_like(y)
+    atan2_array(y, x, out)
+    exact = np.arctan2(y, x)
+    assert np.all(np.abs(out - exact) <= 2 * np.spacing(np.abs(exact)) + 1e-300)
+    assert np.array_equal(np.signbit(out), np.signbit(exact))
+
+
+@pytest.mark.parametrize("strain, wrap", [(2e-3, True), (2e-3, False), (2.2e-2, True)])
+@pytest.mark.parametrize("layout", ["F", "C"])
+def test_vector_kernel_equals_the_written_out_method(strain, wrap, layout):
+    """Bit-level agreement (1e-12) with the direct formula, also where the lag-3 phase wraps
+    (2.2 %: beyond 1/(2 R L) = 1.7 %, the multi-lag branch is needed) and for C-ordered
+    images."""
+    a1, a2 = pair(strain)
+    a1, a2 = (np.asarray(x, order=layout) for x in (a1, a2))
+    k0 = float(source().attrs["k0"])
+    got, q = speckle.estimate_strain(
+        a1, a2, k0=k0, pixel_size=PIXEL, align=False, wrap_check=wrap, return_quality=True
+    )
+    want, wq = vector_reference(a1, a2, k0, phase.choose_lag(a1), 32, 4, wrap=wrap)
+    assert np.array_equal(np.isnan(got), np.isnan(want))
+    assert np.array_equal(np.isnan(q), np.isnan(wq))
+    ok = np.isfinite(want)
+    np.testing.assert_allclose(got[ok], want[ok], rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(q[np.isfinite(wq)], wq[np.isfinite(wq)], rtol=1e-12)
+    if strain > 1 / (2 * R * 3):
+        assert np.nanmedian(got) == pytest.approx(strain, rel=0.05)  # unwrapped
+
+
+@pytest.mark.parametrize("layout", ["F", "C"])
+def test_lag_autocorrelation_equals_its_definition(layout):
+    a1, _ = pair(1e-3)
+    a = np.asarray(a1, order=layout)
+    lag, rho = phase.lag_and_rho(a)
+    for k in range(lag + 1):
+        x, y = a[: a.shape[0] - k], a[k:]
+        exact = np.abs(np.sum(x * np.conj(y))) / np.sqrt(
+            np.sum(np.abs(x) ** 2) * np.sum(np.abs(y) ** 2)
+        )
+        assert rho[k] == pytest.approx(exact, rel=1e-12)
+    assert lag == phase.choose_lag(a) == 3
+    np.testing.assert_allclose(phase.depth_autocorrelation(a, lag), rho, rtol=1e-12)
+
+
+@pytest.mark.parametrize("shape, bound", [("gaussian", 1e-4), ("rectangular", 4e-4)])
+def test_resample_depth_matches_the_exact_interpolant(shape, bound):
+    """Within the bound of its docstring of the exact trigonometric interpolant, at positions
+    that wrap around the period and move by up to 3 px."""
+    a1, _ = pair(1e-3, lines=6, shape=shape)
+    q = np.arange(N, dtype=float)[:, None]
+    y = q * 1.004 + 3 * np.sin(np.arange(6))[None] - 1.5
+    got = correlation.resample_depth(a1, y)
+    exact = sample_field(a1.T, y.T).T
+    assert np.abs(got - exact).max() / np.abs(exact).max() < bound
+
+
+@pytest.mark.parametrize("shift", [0.3, -1.7])
+def test_track_axial_rigid_shift_and_uniform_strain(shift):
+    scene = D.deformable_scene(32, 4.0, n_pixels=N, depth=H, seed=9)
+    ref = speckle.bscan(D.translate(scene, 0.0, wrap=True), source()).field.values
+    moved = speckle.bscan(D.translate(scene, shift * PIXEL, wrap=True), source()).field.values
+    out = tracking.track_axial(ref, moved, window=(64, 8), step=(32, 8))
+    err = out["uz"] - shift
+    assert abs(float(err.mean())) < 0.02 and float(np.sqrt((err**2).mean())) < 0.05
+    # uniaxial strain: u = -s z at the window centres
+    s = 0.01
+    a1, a2 = pair(s, lines=32)
+    tr = tracking.track_axial(a1, a2, window=(64, 8), step=(32, 8))
+    exact = -s * tr["centre_depth"][:, None]
+    assert float(np.sqrt(np.mean((tr["uz"] - exact) ** 2))) < 0.05
+
+
+def test_track_axial_equals_track_array_where_the_lateral_peak_is_zero():
+    """The same estimator restricted to lateral offset 0: where track_array (depth refined at
+    the whole-pixel lateral peak) finds that peak at 0, both give the same grid point."""
+    a1, a2 = pair(5e-3, lines=32)
+    kw = {"window": (32, 8), "step": (16, 8)}
+    axial = tracking.track_axial(a1, a2, **kw)
+    full = tracking.track_array(a1, a2, lateral=False, **kw)
+    at_zero = full["ux"] == 0
+    assert at_zero.mean() > 0.95
+    diff = np.abs(axial["uz"] - full["uz"])[at_zero]
+    assert np.mean(diff < 1e-9) > 0.95 and diff.max() <= 1 / 40 + 1e-9
+
+
+def test_track_axial_low_signal_nan_and_bad_input():
+    a1, a2 = pair(2e-3, lines=16)
+    a, b = a1.copy(), a2.copy()
+    a[:64] = b[:64] = 0.0
+    a[150, 5] = np.nan
+    out = tracking.track_axial(a, b, window=(32, 8), step=(16, 8))
+    z0 = out["centre_depth"] - 15.5
+    assert np.isnan(out["uz"][z0 + 32 <= 64]).all()
+    x0 = out["centre_aline"] - 3.5
+    holds = ((z0 <= 150) & (z0 + 32 > 150))[:, None] & ((x0 <= 5) & (x0 + 8 > 5))[None]
+    assert np.isnan(out["uz"][holds]).all()
+    assert np.isfinite(out["uz"][(z0 >= 64)[:, None] & ~holds]).all()
+    with pytest.raises(TypeError, match="complex"):
+        tracking.track_axial(a1.real, a2.real)
+    with pytest.raises(ValueError, match="shape"):
+        tracking.track_axial(a1, a2[:-1])
+    with pytest.raises(ValueError, match="window"):
+        tracking.track_axial(a1, a2, window=(512, 8))
