@@ -299,17 +299,17 @@ def _gauss(s, b, lo, hi, out):
 
 
 @numba.njit(fastmath=True, cache=True)
-def _line_weights(c, s, b, lo, hi, per, wr, wi):
+def _line_weights(c, s, b, lo, hi, focused, wr, wi):
     """``wr + i wi = c exp(-b (s - o)^2)`` for lines ``o = lo ... hi`` (index ``o - lo``).
 
     Recurrence ``g(o + 1) = g(o) r(o)``, ``r(o + 1) = r(o) exp(-2b)`` with
     ``r(o) = exp(b (2 (s - o) - 1))``, re-anchored by direct exponentials every
     :data:`_ANCHOR` lines (every line when ``Re b > 50``: a beam so narrow that ``r`` could
-    overflow, at most two lines within reach). Real arithmetic without focus (``per`` False:
-    ``b`` real).
+    overflow, at most two lines within reach). Real arithmetic without focus (``focused``
+    False: ``b`` real).
     """
     every = 1 if b.real > 50.0 else _ANCHOR
-    if per:
+    if focused:
         step = cmath.exp(-2.0 * b)
         k = 0
         while k <= hi - lo:
@@ -362,6 +362,9 @@ def _spread_beam(
     nblocks = (n_outer + block - 1) // block
     nbo = (starts.size - 1) // nbi
     per = gam.size > 1
+    # complex weights with focus: gam is per scatterer, or the one scatterer's (never ones(1)
+    # then unless it sits at the focus, where gamma = 1 is real)
+    focused = per or gam[0].imag != 0.0
     kmax_o = 2 * halo + 2
     for blk in numba.prange(nblocks):
         r0 = blk * block
@@ -409,7 +412,7 @@ def _spread_beam(
                 if ilo > ihi:
                     continue
                 _gauss(s_i, bi, ilo, ihi, gi)
-            _line_weights(complex(cr[t], ci[t]) * gm * gm, s_o, bo, lo, hi, per, wr, wi)
+            _line_weights(complex(cr[t], ci[t]) * gm * gm, s_o, bo, lo, hi, focused, wr, wi)
             for i in range(w):
                 kv[i] = ker[i, t]
             st = np.int64(math.ceil(u[t] - half)) + pad

@@ -11,9 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import speckle
-from speckle.imaging.beam import beam_problem, beam_weight
-from speckle.imaging.beam_nufft import choose_beam_method, line_grid, uses_row_path
-from speckle.imaging.methods import BEAM_METHODS
+from speckle.imaging.beam import beam_weight
 
 N, H = 32, 256.0  # pixels, depth (µm): 8 µm pixels
 K0 = 10 * N * np.pi / H  # k0/delta_k = 10
@@ -240,106 +238,6 @@ def test_fast_methods_stay_within_tol(
         assert method == "nufft32" and "rounding" in str(exc)
         return
     assert rel_err(out, ref) <= tol
-
-
-@pytest.mark.parametrize("tol", [1e-6, 1e-10])
-@pytest.mark.parametrize(
-    ("waist_pitch", "row"),
-    [(0.15, False), (0.2, True), (1.0, True), (2.0, True), (6.0, True)],
-)
-def test_row_path_stays_within_tol_and_agrees_with_the_general_path(waist_pitch, row, tol):
-    """The row path (2-D, no focus, b = 2 p^2/w0^2 <= 64) against direct, on lines with gaps
-    and scatterers beyond both ends of the scan (within and beyond the beam's reach); a beam
-    narrower than p/sqrt(32) takes the general path. Both paths meet tol on the same scene."""
-    rng = np.random.default_rng(11)
-    pitch = 3.0
-    w0 = waist_pitch * pitch
-    lines = np.array([0, 1, 2, 5, 6, 9, 10, 11]) * pitch + 7.0  # a grid with gaps
-    reach = w0 * np.sqrt(np.log(8 / tol) / 2)
-    m = 3000
-    x = rng.uniform(lines[0] - reach - 2 * pitch, lines[-1] + reach + 2 * pitch, m)
-    z = rng.uniform(-H, 2 * H, m)
-    a = rng.normal(size=m) + 1j * rng.normal(size=m)
-    kw = dict(lines=lines, waist=w0, n_pixels=N, depth_range=H, k0=K0)
-    ref = speckle.beam_scan(z, x, a, **kw)
-    sc, beam, _ = beam_problem(z, x, a, lines=lines, waist=w0, n_pixels=N, depth_range=H, k0=K0)
-    assert uses_row_path(beam, line_grid(sc.lines, w0), 0.5 * tol) is row
-    fast = speckle.beam_scan(z, x, a, method="nufft", tol=tol, **kw)
-    assert rel_err(fast, ref) <= tol
-    if row:  # the same scene on the general path
-        general = BEAM_METHODS["nufft"](sc, beam, tol, path="general")
-        assert rel_err(general, ref) <= tol
-        assert rel_err(fast, general) <= 2 * tol
-
-
-@pytest.mark.parametrize("method", ["nufft", "nufft32"])
-@pytest.mark.parametrize(("n_y", "pitch_y"), [(1, 3.0), (5, 2.0), (4, 5.0)])
-def test_raster_row_path_stays_within_tol_and_agrees_with_the_general_path(n_y, pitch_y, method):
-    """C-scans without focus take the row path too (outer x inner weights): against direct on
-    a raster with different pitches per axis (and a single y line), scatterers beyond every
-    edge; the general path on the same scene meets tol as well."""
-    rng = np.random.default_rng(12)
-    tol = {"nufft": 1e-6, "nufft32": 1e-5}[method]  # float32 rounding ~7e-7 on this scene
-    w0, pitch_x = 6.0, 3.0
-    xs, ys = np.arange(7) * pitch_x, np.arange(n_y) * pitch_y - 4.0
-    gx, gy = np.meshgrid(xs, ys)
-    lines = np.stack([gx.ravel(), gy.ravel()], 1)[rng.permutation(gx.size)]
-    m = 4000
-    x = rng.uniform(xs[0] - 4 * w0, xs[-1] + 4 * w0, m)
-    y = rng.uniform(ys[0] - 4 * w0, ys[-1] + 4 * w0, m)
-    z = rng.uniform(0, H, m)
-    a = rng.normal(size=m) + 1j * rng.normal(size=m)
-    kw = dict(y=y, lines=lines, waist=w0, n_pixels=N, depth_range=H, k0=K0)
-    ref = speckle.beam_scan(z, x, a, **kw)
-    sc, beam, _ = beam_problem(
-        z, x, a, y=y, lines=lines, waist=w0, n_pixels=N, depth_range=H, k0=K0
-    )
-    assert uses_row_path(beam, line_grid(sc.lines, w0), 0.25 * tol)
-    fast = speckle.beam_scan(z, x, a, method=method, tol=tol, **kw)
-    assert rel_err(fast, ref) <= tol
-    general = BEAM_METHODS[method](sc, beam, tol, path="general")
-    assert rel_err(general, ref) <= tol
-    np.testing.assert_array_equal(BEAM_METHODS[method](sc, beam, tol, path="row"), fast)
-
-
-def test_finufft_reference_within_tol():
-    rng = np.random.default_rng(5)
-    m = 4 * N * 30
-    x, z = rng.uniform(-2, 60, m), rng.uniform(0, 2 * H, m)
-    a = rng.normal(size=m) + 1j * rng.normal(size=m)
-    kw = dict(lines=np.arange(30) * 2.0, waist=4.0, n_pixels=N, depth_range=H, k0=K0)
-    ref = speckle.beam_scan(z, x, a, **kw)
-    for tol in (1e-4, 1e-8):
-        assert rel_err(speckle.beam_scan(z, x, a, method="finufft", tol=tol, **kw), ref) <= tol
-
-
-def test_irregular_lines_fall_back_to_direct_or_are_refused():
-    rng = np.random.default_rng(6)
-    z, x = rng.uniform(0, H, 100), rng.uniform(0, 10, 100)
-    a = rng.normal(size=100) + 0j
-    lines = np.array([0.0, 1.0, 2.5, 7.3])  # no uniform grid holds them
-    kw = dict(lines=lines, waist=2.0, n_pixels=N, depth_range=H, k0=K0)
-    sc, beam, _ = beam_problem(z, x, a, **kw)
-    assert line_grid(sc.lines, 2.0) is None
-    assert choose_beam_method(sc, beam, 1e-6) == "direct"
-    np.testing.assert_array_equal(
-        speckle.beam_scan(z, x, a, method="auto", tol=1e-6, **kw), speckle.beam_scan(z, x, a, **kw)
-    )
-    with pytest.raises(ValueError, match="uniform grid"):
-        speckle.beam_scan(z, x, a, method="nufft", tol=1e-6, **kw)
-
-
-def test_auto_picks_a_fast_method_on_a_large_scan_and_direct_on_a_tiny_one():
-    rng = np.random.default_rng(7)
-    m = 4 * 512 * 512
-    x, z = rng.uniform(0, 511, m), rng.uniform(0, 4096, m)
-    lines = np.arange(512.0)
-    big = beam_problem(z, x, np.ones(m), lines=lines, waist=2.0, n_pixels=512, depth_range=4096.0,
-                       k0=3.9, tol=1e-6)  # fmt: skip
-    assert choose_beam_method(*big) in ("nufft", "nufft32")
-    tiny = beam_problem(z[:3], x[:3], np.ones(3), lines=[0.0], waist=2.0, n_pixels=16,
-                        depth_range=128.0, k0=3.9, tol=1e-6)  # fmt: skip
-    assert choose_beam_method(*tiny) == "direct"
 
 
 # --- bad input ----------------------------------------------------------------------------
