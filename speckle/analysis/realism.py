@@ -33,6 +33,7 @@ import xarray as xr
 from scipy import stats
 
 from .._validate import check_choice, check_int, check_real
+from ..conventions import attrs
 from ..imaging.beam_lines import beam_lines, shared_scatterers
 from ..imaging.bscan import bscan
 from ..scene.scatterers import random_scatterers
@@ -292,7 +293,7 @@ def realism_study(
     else:
         model_acf = cum.autocorrelation.isel(step=-1, drop=True)
     out["model_autocorrelation"] = model_acf.assign_attrs(
-        long_name="intensity autocorrelation of the final (smallest sufficient) model", units="1"
+        attrs("correlation", "intensity autocorrelation of the final (smallest sufficient) model")
     )
     ds = xr.Dataset(out)
     for k, v in fit.items():

@@ -25,6 +25,7 @@ from ..analysis.correlation import expected_correlation
 from ..analysis.failure import method_options, strain_scores
 from ..analysis.phase import choose_lag, depth_autocorrelation, noise_power
 from ..analysis.strain import accumulate_strain, estimate_strain, predicted_strain_std
+from ..conventions import attrs, coord
 from ..imaging.bscan import bscan
 from ..provenance import provenance_attrs
 from ..scene.deformation import deformable_scene, displace
@@ -49,7 +50,7 @@ __all__ = [
     "speed_data",
 ]
 
-STRAIN = {"units": "1", "long_name": "axial strain (compression > 0)"}
+STRAIN = attrs("strain", "axial strain (compression > 0)")
 
 
 def _source(cfg: Mapping, k0_dk: float | None = None, fwhm: float | None = None):
@@ -147,14 +148,14 @@ def _maps(cfg, seed, fields, modulus, truth, n_alines=None) -> xr.Dataset:
     p = float(cfg["pixel_size"])
     return xr.Dataset(
         {
-            "modulus": (("depth", "aline"), modulus, {"units": "kPa", "long_name": "modulus"}),
+            "modulus": (("depth", "aline"), modulus, attrs("modulus")),
             "true_strain": (("depth", "aline"), truth, STRAIN),
             "strain": (dims, est, STRAIN),
-            "error": (dims, est - truth, {"units": "1", "long_name": "estimate minus truth"}),
+            "error": (dims, est - truth, attrs("strain", "estimate minus truth")),
         },
         coords={
             "method": list(cfg["methods"]),
-            "depth": ("depth", np.arange(ref.shape[0]) * p, {"units": "um"}),
+            "depth": coord("depth", np.arange(ref.shape[0]) * p),
             "aline": np.arange(ref.shape[1]),
         },
         attrs={"k0": k0, "pixel_size": p, "seed": seed, **provenance_attrs()},
@@ -331,9 +332,13 @@ def failure_data(cfg: Mapping, seed: int) -> xr.Dataset:
     for name, points in sweeps.items():
         res = np.array([_failure_point(cfg, seed, methods, **{**base, **pt}) for pt in points])
         dims = (name, "method")
-        data[f"median_error_{name}"] = (dims, res[..., 0], {"units": "1"})
-        data[f"rms_error_{name}"] = (dims, res[..., 1], {"units": "1"})
-        data[f"answered_{name}"] = (dims, res[..., 2], {"units": "1"})
+        data[f"median_error_{name}"] = (dims, res[..., 0], attrs("strain", "median error"))
+        data[f"rms_error_{name}"] = (dims, res[..., 1], attrs("strain", "rms error"))
+        data[f"answered_{name}"] = (
+            dims,
+            res[..., 2],
+            attrs("dimensionless", "fraction of pixels answered"),
+        )
     # predicted strain noise of the vector method at each SNR (noise-free images, base strain)
     (ref, dfm), k0 = _images(cfg, seed, [_uniform(0.0), _uniform(base["strain"])])
     pred = []
@@ -353,7 +358,7 @@ def failure_data(cfg: Mapping, seed: int) -> xr.Dataset:
     data["predicted_noise_snr_db"] = (
         ("snr_db",),
         np.array(pred),
-        {"units": "1", "long_name": "predicted rms strain noise, vector method"},
+        attrs("strain", "predicted rms strain noise, vector method"),
     )
     limits = predicted_limits(cfg)
     return xr.Dataset(
@@ -433,8 +438,16 @@ def speed_data(cfg: Mapping, seed: int) -> xr.Dataset:
             errors[i, j] = strain_scores(est, s)[1] / s
     return xr.Dataset(
         {
-            "time_per_megapixel": (("method", "window"), times, {"units": "s"}),
-            "relative_rms_error": (("method", "window"), errors, {"units": "1"}),
+            "time_per_megapixel": (
+                ("method", "window"),
+                times,
+                attrs("time", "time per megapixel"),
+            ),
+            "relative_rms_error": (
+                ("method", "window"),
+                errors,
+                attrs("dimensionless", "rms strain error / strain"),
+            ),
         },
         coords={"method": methods, "window": windows},
         attrs={"strain": s, "image_pixels": ref.size, "seed": seed, **provenance_attrs()},
@@ -483,7 +496,11 @@ def sequence_data(cfg: Mapping, seed: int) -> xr.Dataset:
     rms = np.array([np.sqrt(np.nanmean((c - t) ** 2)) for c, t in zip(cum, truth, strict=True)])
     out["true_cumulative"] = ("frame", truth, STRAIN)
     out["median_cumulative"] = ("frame", med, STRAIN)
-    out["rms_error_cumulative"] = ("frame", rms, {"units": "1"})
+    out["rms_error_cumulative"] = (
+        "frame",
+        rms,
+        attrs("strain", "rms error of the cumulative strain"),
+    )
     out.attrs.update({"interframe_strain": s, "seed": seed, **provenance_attrs()})
     return out
 

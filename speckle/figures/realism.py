@@ -16,6 +16,7 @@ from matplotlib.figure import Figure
 
 from ..analysis.realism import EFFECTS, realism_study
 from ..analysis.twin import SystemFit
+from ..conventions import attrs
 from ..imaging.beam import beam_scan
 from ..scene.regions import cell_density, ellipse, layer, make_regions, rasterize
 from ..scene.shared import shared_scene
@@ -202,7 +203,9 @@ def showcase_dataset(cfg: Mapping, seed: int) -> xr.Dataset:
     system = add_noise(system, cfg["snr_db"], seed=seed, signal_intensity=ref)
 
     def db(img):
-        return (10 * np.log10(img.intensity / ref)).assign_attrs(units="dB re mean tissue")
+        return (10 * np.log10(img.intensity / ref)).assign_attrs(
+            attrs("level", "10 log10 intensity re mean tissue intensity")
+        )
 
     label = rasterize(regions, pure.depth.values, lines)
     return xr.Dataset(
@@ -210,8 +213,8 @@ def showcase_dataset(cfg: Mapping, seed: int) -> xr.Dataset:
             "pure_db": db(pure),
             "system_db": db(system),
             "label": label.drop_attrs(),
-            "attenuation": regions.attenuation.assign_attrs(units="1/um"),
-            "backscatter": regions.backscatter.assign_attrs(units="1"),
+            "attenuation": regions.attenuation,  # units and long name from the regions table
+            "backscatter": regions.backscatter,
         },
         attrs={
             "snr_db": float(cfg["snr_db"]),

@@ -20,6 +20,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
+from ..conventions import attrs, coord, units_of
 
 __all__ = [
     "SPECTRUM_SHAPES",
@@ -185,18 +186,17 @@ def spectrum(
         s,
         dims=("wavenumber",),
         coords={
-            "wavenumber": ("wavenumber", k, {"units": "rad/um", "long_name": "wavenumber k_n"}),
-            "n": ("wavenumber", idx, {"long_name": "spectral index"}),
+            "wavenumber": coord("wavenumber", k, "wavenumber k_n"),
+            "n": coord("n", idx, dims="wavenumber"),
         },
         name="spectrum",
         attrs={
-            "long_name": "spectral weight S(k_n)",
-            "units": "1",
+            **attrs("weight"),
             "n_pixels": n,
             "depth": h,
-            "depth_units": "um",
+            "depth_units": units_of("length"),
             "k0": k0v,
-            "k0_units": "rad/um",
+            "k0_units": units_of("wavenumber"),
             "delta_k": dk_total,
             "k0_dk": k0v / dk_total,
             "shape": shape,
