@@ -31,7 +31,7 @@ from ..provenance import provenance_attrs
 from ..scene.deformation import deformable_scene, displace
 from ..scene.mechanics import compress, inclusion_labels
 from ..system.noise import add_complex_noise
-from ..system.source import spectrum
+from ._config import scene_kwargs, source_spectrum
 from ._style import new_figure
 
 __all__ = [
@@ -54,11 +54,34 @@ STRAIN = attrs("strain", "axial strain (compression > 0)")
 
 
 def _source(cfg: Mapping, k0_dk: float | None = None, fwhm: float | None = None):
-    n = int(cfg["n_pixels"])
-    h = n * float(cfg["pixel_size"])
-    frac = float(cfg["fwhm_fraction"] if fwhm is None else fwhm)
-    r = float(cfg["k0_dk"] if k0_dk is None else k0_dk)
-    return spectrum(n, h, k0_dk=r, shape="gaussian", fwhm=frac * n * np.pi / h)
+    """The section's Gaussian spectrum, ``k0_dk``/``fwhm_fraction`` optionally replaced."""
+    override = {"k0_dk": k0_dk, "fwhm_fraction": fwhm}
+    return source_spectrum(
+        cfg, shape="gaussian", **{k: v for k, v in override.items() if v is not None}
+    )
+
+
+def _scene(cfg: Mapping, seed: int, n_alines: int, density: float, max_strain: float):
+    """The seeded deformable scene of the section's grid (:func:`speckle.deformable_scene`)."""
+    return deformable_scene(n_alines, density, **scene_kwargs(cfg), seed=seed, strain=max_strain)
+
+
+def _inclusion_fe(cfg: Mapping, lines: int, strain: float) -> tuple[xr.DataArray, xr.Dataset]:
+    """Label image and plane-strain FE solution of the section's circular inclusion on
+    ``lines`` A-lines."""
+    ic, n, p = cfg["inclusion"], int(cfg["n_pixels"]), float(cfg["pixel_size"])
+    depth = np.arange(n) * p
+    x = np.arange(lines) * p  # A-line positions of speckle.deformable_scene (pitch = pixel)
+    labels = inclusion_labels(
+        depth, x, (float(ic["depth_fraction"]) * n * p, x.mean()), float(ic["radius"])
+    )
+    return labels, compress(
+        labels,
+        {0: float(ic["youngs_modulus"][0]), 1: float(ic["youngs_modulus"][1])},
+        float(ic["poisson_ratio"]),
+        strain=strain,
+        contact=ic["contact"],
+    )
 
 
 def _images(
@@ -74,14 +97,12 @@ def _images(
 ) -> tuple[list[np.ndarray], float]:
     """Complex images (depth, aline) of one seeded scene under each displacement field."""
     src = _source(cfg, k0_dk, fwhm)
-    n = int(cfg["n_pixels"])
-    scene = deformable_scene(
+    scene = _scene(
+        cfg,
+        seed,
         int(cfg["n_alines"] if n_alines is None else n_alines),
         float(cfg["density"] if density is None else density),
-        n_pixels=n,
-        depth=n * float(cfg["pixel_size"]),
-        seed=seed,
-        strain=max_strain,
+        max_strain,
     )
     out = []
     for f in fields:
@@ -180,20 +201,8 @@ def inclusion_data(cfg: Mapping, seed: int) -> xr.Dataset:
     finite elements): modulus, FE strain ``strain_zz`` as the truth, strain and error maps, and
     the truth averaged over each method's window (what a windowed estimator can resolve)."""
     ic = cfg["inclusion"]
-    n, lines = int(cfg["n_pixels"]), int(ic.get("n_alines", cfg["n_alines"]))
-    p = float(cfg["pixel_size"])
-    depth = np.arange(n) * p
-    x = np.arange(lines) * p  # A-line positions of speckle.deformable_scene (pitch = pixel)
-    labels = inclusion_labels(
-        depth, x, (float(ic["depth_fraction"]) * n * p, x.mean()), float(ic["radius"])
-    )
-    fe = compress(
-        labels,
-        {0: float(ic["youngs_modulus"][0]), 1: float(ic["youngs_modulus"][1])},
-        float(ic["poisson_ratio"]),
-        strain=float(ic["strain"]),
-        contact=ic["contact"],
-    )
+    lines = int(ic.get("n_alines", cfg["n_alines"]))
+    labels, fe = _inclusion_fe(cfg, lines, float(ic["strain"]))
     disp = fe[["uz", "ux"]].rename(x="aline")
     truth = fe["strain_zz"].values
     ds = _maps(cfg, seed, [_uniform(0.0), disp], fe["youngs_modulus"].values, truth, lines)
@@ -530,16 +539,9 @@ def plot_sequence(ds: xr.Dataset) -> Figure:
 def _inclusion_frame(cfg: Mapping, seed: int, disp: xr.Dataset, k: int, max_strain: float):
     """Frame ``k``: the seeded inclusion scene displaced by ``k`` times the per-frame FE field
     (linear elasticity: the displacement is proportional to the applied strain)."""
-    ic, n = cfg["inclusion"], int(cfg["n_pixels"])
+    ic = cfg["inclusion"]
     lines = int(cfg["sequence_large"].get("n_alines", ic.get("n_alines", cfg["n_alines"])))
-    scene = deformable_scene(
-        lines,
-        float(cfg["density"]),
-        n_pixels=n,
-        depth=n * float(cfg["pixel_size"]),
-        seed=seed,
-        strain=max_strain,
-    )
+    scene = _scene(cfg, seed, lines, float(cfg["density"]), max_strain)
     img = bscan(
         displace(scene, disp * k), _source(cfg, None, None), method=cfg["method"], tol=cfg["tol"]
     )
@@ -553,20 +555,12 @@ def sequence_large_frames(cfg: Mapping, seed: int) -> tuple[xr.DataArray, float]
     import dask.array as da
 
     sq, ic = cfg["sequence_large"], cfg["inclusion"]
-    n, p = int(cfg["n_pixels"]), float(cfg["pixel_size"])
+    n = int(cfg["n_pixels"])
     lines = int(sq.get("n_alines", ic.get("n_alines", cfg["n_alines"])))
     n_frames, s = int(sq["n_frames"]), float(sq["strain"])
+    p = float(cfg["pixel_size"])
     depth, x = np.arange(n) * p, np.arange(lines) * p
-    labels = inclusion_labels(
-        depth, x, (float(ic["depth_fraction"]) * n * p, x.mean()), float(ic["radius"])
-    )
-    fe = compress(
-        labels,
-        {0: float(ic["youngs_modulus"][0]), 1: float(ic["youngs_modulus"][1])},
-        float(ic["poisson_ratio"]),
-        strain=s,
-        contact=ic["contact"],
-    )
+    _, fe = _inclusion_fe(cfg, lines, s)
     disp = fe[["uz", "ux"]].rename(x="aline").load()
     max_strain = min(0.5, 2 * n_frames * s)
     parts = [
