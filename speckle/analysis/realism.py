@@ -32,6 +32,7 @@ import numpy as np
 import xarray as xr
 from scipy import stats
 
+from .._adapters import scene_kwargs, spectrum_kwargs
 from .._validate import check_choice, check_int, check_real
 from ..conventions import attrs
 from ..imaging.beam_lines import beam_lines, shared_scatterers
@@ -153,23 +154,18 @@ def simulate(
     """Log data ``(depth, aline)`` of a model image with the given effects on."""
     for e in effects:
         check_choice(e, "effect", EFFECTS)
-    h = n_pixels * pixel_size
+    section = {"n_pixels": n_pixels, "pixel_size": pixel_size, "k0_dk": k0_dk}
     if "spectral_width" in effects:
-        src = spectrum(
-            n_pixels, h, k0_dk=k0_dk, shape="gaussian", fwhm_fraction=fit["fwhm_fraction"]
-        )
-    else:
-        src = spectrum(n_pixels, h, k0_dk=k0_dk)
-    attrs = {"depth": h, "n_pixels": n_pixels, "density": density}
+        section.update(shape="gaussian", fwhm_fraction=fit["fwhm_fraction"])
+    src = spectrum(**spectrum_kwargs(section))
+    grid = scene_kwargs(section)
     if "beam" in effects:
         w0 = fit["waist"] * pixel_size  # lines one pixel_size apart: only w0/pitch matters
-        sc = shared_scatterers(
-            n_alines, pixel_size, density, n_pixels=n_pixels, depth=h, waist=w0, seed=seed
-        )
+        sc = shared_scatterers(n_alines, pixel_size, density, **grid, waist=w0, seed=seed)
         scene = beam_lines(sc["z"], sc["x"], sc["amplitude"], lines=sc["lines"], waist=w0)
-        scene = scene.assign_attrs(attrs)
+        scene = scene.assign_attrs(**grid, density=density)
     else:
-        scene = random_scatterers(n_alines, density, n_pixels=n_pixels, depth=h, seed=seed)
+        scene = random_scatterers(n_alines, density, **grid, seed=seed)
     if "attenuation" in effects:
         scene = attenuate(scene, fit["attenuation"])
     if "phase" in effects:
