@@ -324,7 +324,7 @@ def image(
         return dask.delayed(kernel, pure=True)(get_part(*bounds), cx, cy)
 
     field = _blocks(make_task, xs, ys, c, src["n_pixels"])
-    attrs.update({f"scene_{k}": v for k, v in scene.attrs.items()})
+    meta.update({f"scene_{k}": v for k, v in scene.attrs.items()})
     return _dataset(field, xs, ys, src, meta)
 
 
