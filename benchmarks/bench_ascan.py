@@ -40,10 +40,10 @@ def scene(n_pixels, n_lines, density, seed=1):
     return z, a, depth, k0
 
 
-def numpy_eq4(z, a, n_pixels, depth, k0, spectrum):
+def numpy_eq4(z, a, n_pixels, depth_range, k0, spectrum):
     """The literal Eq. 4: an (M, N) phase matrix and an (N, N) DFT matrix per A-line."""
     n = np.arange(n_pixels) - n_pixels // 2
-    k = k0 + n * np.pi / depth
+    k = k0 + n * np.pi / depth_range
     q = np.arange(n_pixels)
     dft = np.exp(-2j * np.pi * np.outer(q, n) / n_pixels)  # (N pixels, N wavenumbers)
     out = np.empty((z.shape[0], n_pixels), dtype=complex)
@@ -57,18 +57,18 @@ def numpy_eq4(z, a, n_pixels, depth, k0, spectrum):
 # --- FINUFFT called directly on a whole B-scan, every way we found -----------------------
 
 
-def finufft_guru_threads(z, a, n_pixels, depth, k0, spectrum, tol, workers=2):
+def finufft_guru_threads(z, a, n_pixels, depth_range, k0, spectrum, tol, workers=2):
     """Lines split over ``workers`` Python threads, one guru plan each (ctypes drops the GIL)."""
     parts = np.array_split(np.arange(z.shape[0]), workers)
     with concurrent.futures.ThreadPoolExecutor(workers) as ex:
         res = ex.map(
-            lambda idx: finufft_ascan(z[idx], a[idx], n_pixels, depth, k0, spectrum, eps=tol),
+            lambda idx: finufft_ascan(z[idx], a[idx], n_pixels, depth_range, k0, spectrum, eps=tol),
             parts,
         )
         return np.concatenate(list(res))
 
 
-def finufft_2d(z, a, n_pixels, depth, k0, spectrum, tol):
+def finufft_2d(z, a, n_pixels, depth_range, k0, spectrum, tol):
     """One 2-D type-1 transform: line index b as second coordinate 2 pi b/B on an integer grid.
 
     ``F[n, m] = sum_j c_j e^{i n x_j} e^{2i pi m b_j/B}``; an exact inverse DFT over ``m``
@@ -76,7 +76,7 @@ def finufft_2d(z, a, n_pixels, depth, k0, spectrum, tol):
     """
     nl, m = z.shape
     c = (a * np.exp(2j * k0 * z)).ravel()
-    x = (np.mod(z, depth) * (2 * np.pi / depth)).ravel()
+    x = (np.mod(z, depth_range) * (2 * np.pi / depth_range)).ravel()
     y = np.repeat(2 * np.pi * np.arange(nl) / nl, m)
     f = finufft.nufft2d1(x, y, c, (n_pixels, nl), eps=tol, isign=1, nthreads=2)
     field = np.fft.fft(np.fft.ifftshift(f, axes=1), axis=1) / nl  # (N, B): back to lines
@@ -86,10 +86,10 @@ def finufft_2d(z, a, n_pixels, depth, k0, spectrum, tol):
     return np.fft.fft(field * spectrum, axis=-1) * shift
 
 
-def finufft_calls(z, a, n_pixels, depth, k0, spectrum, tol):
+def finufft_calls(z, a, n_pixels, depth_range, k0, spectrum, tol):
     """One simple-interface ``nufft1d1`` call per A-line (the obvious way)."""
     c = a * np.exp(2j * k0 * z)
-    x = np.mod(z, depth) * (2 * np.pi / depth)
+    x = np.mod(z, depth_range) * (2 * np.pi / depth_range)
     field = np.stack(
         [
             finufft.nufft1d1(x[b], c[b], n_pixels, eps=tol, isign=1, nthreads=1)
@@ -118,7 +118,7 @@ def rss_child(kind, n_pixels, n_lines, density, method, tol):
             n_lines,
             density,
             n_pixels=n_pixels,
-            depth=depth,
+            depth_range=depth,
             k0=k0,
             seed=1,
             method=method,
@@ -127,7 +127,7 @@ def rss_child(kind, n_pixels, n_lines, density, method, tol):
         )
     else:
         z, a, depth, k0 = scene(n_pixels, n_lines, density)
-        ascan(z, a, n_pixels=n_pixels, depth=depth, k0=k0, method=method, tol=tol)
+        ascan(z, a, n_pixels=n_pixels, depth_range=depth, k0=k0, method=method, tol=tol)
     print(_peak_rss_mib())
 
 
@@ -177,7 +177,7 @@ def main():
                 zw,
                 aw,
                 n_pixels=32,
-                depth=hw_,
+                depth_range=hw_,
                 k0=kw,
                 method=name,
                 tol=1e-3,
@@ -197,14 +197,14 @@ def main():
     )
     print(f"  {'method':<28s} {'time':>13s} {'vs numpy':>10s} {'rel.err':>10s} {'scat/s':>10s}")
     t_np, _, a_np = best_time(lambda: numpy_eq4(z, a, n_pix, depth, k0, s), 1)
-    t_ref, _, ref = best_time(lambda: ascan(z, a, n_pixels=n_pix, depth=depth, k0=k0), 1)
+    t_ref, _, ref = best_time(lambda: ascan(z, a, n_pixels=n_pix, depth_range=depth, k0=k0), 1)
     row("numpy Eq. 4 (baseline)", t_np, rel_err(a_np, ref), n_scat, t_np)
     row("direct", t_ref, 0.0, n_scat, t_np)
     for name in ("finufft", "nufft", "nufft32", "psf", "auto"):
         try:
             t, _, out = best_time(
                 lambda name=name: ascan(
-                    z, a, n_pixels=n_pix, depth=depth, k0=k0, method=name, tol=tol
+                    z, a, n_pixels=n_pix, depth_range=depth, k0=k0, method=name, tol=tol
                 ),
                 args.repeat,
             )
@@ -224,7 +224,7 @@ def main():
     s = np.ones(n_pix)
     n_scat = z.size
     nr = min(args.ref_lines, n_lines)
-    ref = ascan(z[:nr], a[:nr], n_pixels=n_pix, depth=depth, k0=k0)
+    ref = ascan(z[:nr], a[:nr], n_pixels=n_pix, depth_range=depth, k0=k0)
     print(
         f"\nB: {n_pix} px x {n_lines} lines x {rho}/px = {n_scat} scatterers (error on the "
         f"first {nr} lines)"
@@ -246,7 +246,9 @@ def main():
         row(label + (" *" if label == best_label else ""), t, err, n_scat, t_fin)
     for name in ("nufft", "nufft32", "auto"):
         t, _, out = best_time(
-            lambda name=name: ascan(z, a, n_pixels=n_pix, depth=depth, k0=k0, method=name, tol=tol),
+            lambda name=name: ascan(
+                z, a, n_pixels=n_pix, depth_range=depth, k0=k0, method=name, tol=tol
+            ),
             args.repeat,
         )
         extra = (

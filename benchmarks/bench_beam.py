@@ -94,7 +94,7 @@ def main():
         f"scene: {n_pix} px x {n_lines} lines x {rho}/px/line = {n_scat} scatterers, pitch "
         f"{pitch} µm, w0 = {w0} µm (2 pitches), rectangular spectrum, k0/dk = 10; tol = {tol:g}"
     )
-    kw = dict(lines=lines, waist=w0, n_pixels=n_pix, depth=depth, k0=k0)
+    kw = dict(lines=lines, waist=w0, n_pixels=n_pix, depth_range=depth, k0=k0)
     # warm-up: numba compilation is not part of any timing
     for name in ("nufft", "nufft32"):
         speckle.beam_scan(z[:64], x[:64], a[:64], method=name, tol=1e-3, **kw)
@@ -163,7 +163,7 @@ def tile_3d(n_tile, tol, repeat, n_pix=512, pitch=4.0):
     a = (rng.normal(size=m) + 1j * rng.normal(size=m)) / np.sqrt(2)
     gx, gy = np.meshgrid(np.arange(n_tile) * pitch, np.arange(n_tile) * pitch)
     lines = np.stack([gx.ravel(), gy.ravel()], 1)
-    kw = dict(y=y, lines=lines, waist=w0, n_pixels=n_pix, depth=depth, k0=k0)
+    kw = dict(y=y, lines=lines, waist=w0, n_pixels=n_pix, depth_range=depth, k0=k0)
     sl = slice(0, 64)
     speckle.beam_scan(z[sl], x[sl], a[sl], **{**kw, "y": y[sl]}, method="nufft32", tol=1e-3)
     ref_lines = lines[[0, n_tile * n_tile // 2 + n_tile // 2]]

@@ -44,7 +44,7 @@ def main(argv=None):
         rows.append((label, t, None if ref_time is None else t / ref_time))
         return t, out
 
-    kw = dict(n_pixels=n_pixels, depth=system.depth, k0=system.k0, spectrum=src.values)
+    kw = dict(n_pixels=n_pixels, depth_range=system.depth_range, k0=system.k0, spectrum=src.values)
     t_direct, ref = add("speckle.ascan direct (ideal Eq. 4)", lambda: speckle.ascan(z, a, **kw))
     rows[-1] = (*rows[-1][:2], 1.0)
     add(

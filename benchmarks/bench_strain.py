@@ -77,7 +77,9 @@ def main() -> None:
     pixel = 8.0
     h = n * pixel
     src = speckle.spectrum(n, h, k0_dk=10.0, shape="gaussian", fwhm=0.5 * n * np.pi / h)
-    scene = speckle.deformable_scene(lines, 4.0, n_pixels=n, depth=h, seed=1, strain=args.strain)
+    scene = speckle.deformable_scene(
+        lines, 4.0, n_pixels=n, depth_range=h, seed=1, strain=args.strain
+    )
     img = (
         speckle.bscan(
             speckle.uniaxial_strain(scene, [0.0, args.strain]), src, method="nufft", tol=1e-9

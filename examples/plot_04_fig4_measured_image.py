@@ -27,7 +27,7 @@ options = {"k0_dk": source["k0_dk"], "seed": config["seed"], **static.source_opt
 
 # a stand-in for a measured image: 64 rows x 256 A-lines, floor 0.01 <I>, 8-bit log scale
 src = speckle.spectrum(64, 512.0, k0_dk=source["k0_dk"])
-scene = speckle.random_scatterers(256, 4.0, n_pixels=64, depth=512.0, seed=7)
+scene = speckle.random_scatterers(256, 4.0, n_pixels=64, depth_range=512.0, seed=7)
 intensity = speckle.add_floor(speckle.bscan(scene, src).intensity, 0.01)
 stored = speckle.log_compress(intensity / intensity.mean(), gain=21.85, offset=120.0)
 with tempfile.TemporaryDirectory() as tmp:

@@ -22,7 +22,9 @@ import speckle.analysis as sa
 from speckle.imaging import speckle_free_image
 
 src = speckle.spectrum(128, 1024.0, k0_dk=10)
-scene = speckle.random_scatterers(96, 16.0, n_pixels=128, depth=1024.0, seed=1, count="poisson")
+scene = speckle.random_scatterers(
+    96, 16.0, n_pixels=128, depth_range=1024.0, seed=1, count="poisson"
+)
 tissue = speckle.layers([0.0, 300.0, 640.0], backscatter=[1.0, 4.0, 0.5])
 scene = speckle.backscatter(scene, tissue)
 img = speckle.bscan(scene, src, method="finufft", tol=1e-9)

@@ -43,7 +43,8 @@ def spectrum_kwargs(source: Mapping, **override: object) -> dict:
     Returns
     -------
     dict
-        ``n_pixels``, ``depth`` (``H = n_pixels * pixel_size``, µm), ``k0_dk``, ``shape`` and,
+        ``n_pixels``, ``depth_range`` (``H = n_pixels * pixel_size``, µm), ``k0_dk``, ``shape``
+        and,
         for a Gaussian, ``fwhm_fraction`` (a fraction of ``delta_k``) or, for an array,
         ``weights``.
 
@@ -58,7 +59,7 @@ def spectrum_kwargs(source: Mapping, **override: object) -> dict:
     if s.get("k0_dk") is None:
         raise ValueError(f"the source section needs 'k0_dk' (it has {sorted(s)})")
     shape = s.get("shape") or "rectangular"
-    out = {"n_pixels": n, "depth": h, "k0_dk": s["k0_dk"], "shape": shape}
+    out = {"n_pixels": n, "depth_range": h, "k0_dk": s["k0_dk"], "shape": shape}
     if shape == "gaussian":
         out["fwhm_fraction"] = s.get("fwhm_fraction")
     elif shape == "array":
@@ -67,7 +68,7 @@ def spectrum_kwargs(source: Mapping, **override: object) -> dict:
 
 
 def scene_kwargs(source: Mapping, **override: object) -> dict:
-    """Keyword arguments ``n_pixels`` and ``depth`` (``H``, µm) of the scene builders
+    """Keyword arguments ``n_pixels`` and ``depth_range`` (``H``, µm) of the scene builders
     (:func:`speckle.random_scatterers`, :func:`speckle.deformable_scene`) from a ``source``
     section, so that a scene and the spectrum of :func:`spectrum_kwargs` share one grid.
 
@@ -77,4 +78,4 @@ def scene_kwargs(source: Mapping, **override: object) -> dict:
         As :func:`spectrum_kwargs`, for ``n_pixels`` and ``pixel_size``.
     """
     n, h = _grid({**source, **override})
-    return {"n_pixels": n, "depth": h}
+    return {"n_pixels": n, "depth_range": h}

@@ -30,16 +30,20 @@ reflector     um          depth of a point reflector
 
 Data variables (:data:`QUANTITIES`): ``field``, ``amplitude``, ``weight``, ``correlation``,
 ``contrast``, ``dimensionless``, ``label``, ``count``, ``probability`` (1); ``length``,
-``displacement`` (um); ``area_density`` (um-2); ``level`` (dB, ``20 log10 |A|``);
-``pixels`` (pixel); ``line_density`` (1/pixel) and ``beam_density`` (1/(pixel line));
-``modulus``, ``stress`` (kPa); ``attenuation`` (1/um); ``diffusion`` (um^2/s); ``time`` (s);
-``rate`` (1/s); ``angle`` (degree); and, for measured images of unknown calibration,
-``data``, ``data_slope``, ``mean_intensity`` and ``log_data``.
+``displacement``, ``depth_range`` (um); ``area_density`` (um-2); ``level`` (dB,
+``20 log10 |A|``); ``pixels`` (pixel); ``line_density`` (1/pixel) and ``beam_density``
+(1/(pixel line)); ``modulus``, ``stress`` (kPa); ``attenuation`` (1/um); ``diffusion``
+(um^2/s); ``time`` (s); ``rate`` (1/s); ``angle`` (degree); and, for measured images of
+unknown calibration, ``data``, ``data_slope``, ``mean_intensity`` and ``log_data``.
 
 A quantity whose units are carried over from an input (a histogram of a variable in µm, a
 column of a property table) takes :func:`labelled`; ``<name>_units`` attributes take
 :func:`units_of`. No other module writes a ``units`` attribute by hand
 (``tests/test_conventions.py`` checks).
+
+The unambiguous depth ``H`` (µm, the pixel step is ``H/N``) has one name, ``depth_range``: the
+parameter of every function that takes it and the attribute of every spectrum, scene and B-scan
+(:func:`depth_range_of` reads it). ``depth`` is only the pixel dim/coordinate.
 
 Units strings follow UDUNITS (``um``, ``rad/um``, ``1``) so that NetCDF readers understand
 them; docstrings write µm.
@@ -52,9 +56,11 @@ import xarray as xr
 
 __all__ = [
     "COORDS",
+    "DEPTH_RANGE",
     "QUANTITIES",
     "attrs",
     "coord",
+    "depth_range_of",
     "inverse_units",
     "labelled",
     "spacing",
@@ -93,6 +99,7 @@ QUANTITIES: dict[str, tuple[str, str]] = {
     "dimensionless": ("1", "dimensionless number"),
     "length": ("um", "length"),
     "displacement": ("um", "displacement"),
+    "depth_range": ("um", "unambiguous depth H"),
     "area_density": ("um-2", "scatterers per square micrometre"),
     "level": ("dB", "level 20 log10 |A|"),
     "label": ("1", "region label"),
@@ -116,6 +123,10 @@ QUANTITIES: dict[str, tuple[str, str]] = {
     ),
     "log_data": ("1 (log-compressed, unknown gain/offset)", "log-compressed measured data"),
 }
+
+
+#: Attribute holding the unambiguous depth ``H`` (µm) on spectra, scenes and B-scans.
+DEPTH_RANGE = "depth_range"
 
 
 def attrs(name: str, long_name: str | None = None, **extra: object) -> dict[str, object]:
@@ -273,3 +284,44 @@ def spacing(obj: xr.DataArray | xr.Dataset, dim: str, default: float | None = No
     if step <= 0 or np.max(np.abs(d - step)) > 1e-9 * abs(step):
         raise ValueError(f"coordinate {dim!r} must be increasing and uniformly spaced")
     return step
+
+
+def depth_range_of(
+    obj: xr.DataArray | xr.Dataset, what: str = "object", *, required: bool = True
+) -> float | None:
+    """The unambiguous depth ``H`` in µm stored as attribute ``depth_range`` of ``obj``.
+
+    Parameters
+    ----------
+    obj : xarray.DataArray or xarray.Dataset
+        A spectrum (:func:`speckle.spectrum`), scene or B-scan.
+    what : str
+        Name of ``obj`` used in error messages (e.g. ``"source"``, ``"scene"``).
+    required : bool
+        Without the attribute, raise (``True``) or return ``None`` (``False``).
+
+    Returns
+    -------
+    float or None
+        ``H`` in µm, or ``None`` if absent and not ``required``.
+
+    Raises
+    ------
+    ValueError
+        If ``obj`` carries the attribute ``depth`` of files written before the rename (with the
+        one-line fix), or lacks ``depth_range`` while ``required``.
+    """
+    a = obj.attrs
+    if DEPTH_RANGE in a:
+        return float(a[DEPTH_RANGE])
+    if "depth" in a:
+        raise ValueError(
+            f"{what} has attribute 'depth' (unambiguous depth H, the name used before speckle "
+            f"renamed it 'depth_range'): rebuild it with this version, or rename the attribute "
+            f"with obj.attrs['depth_range'] = obj.attrs.pop('depth')"
+        )
+    if required:
+        raise ValueError(
+            f"{what} needs attribute 'depth_range' (unambiguous depth H in µm); it has {sorted(a)}"
+        )
+    return None

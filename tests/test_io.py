@@ -12,7 +12,7 @@ from speckle.io import open_dataset, to_netcdf
 
 def test_complex_roundtrip_is_lossless_and_attrs_survive(tmp_path):
     src = speckle.spectrum(32, 256.0, k0_dk=3)
-    sc = speckle.random_scatterers(4, 2.0, n_pixels=32, depth=256.0, seed=1)
+    sc = speckle.random_scatterers(4, 2.0, n_pixels=32, depth_range=256.0, seed=1)
     ds = speckle.bscan(sc, src)
     ds.attrs.update({"flag": True, "nothing": None, "cfg": {"a": 1}, "values": [1.0, 2.0]})
     path = tmp_path / "sub" / "b.nc"

@@ -11,7 +11,7 @@ from speckle.sweep import sweep
 
 def small_bscan(density, k0_dk, seed):
     src = speckle.spectrum(32, 256.0, k0_dk=k0_dk)
-    sc = speckle.random_scatterers(4, density, n_pixels=32, depth=256.0, seed=seed)
+    sc = speckle.random_scatterers(4, density, n_pixels=32, depth_range=256.0, seed=seed)
     return speckle.bscan(sc, src)[["field"]]
 
 

@@ -42,7 +42,7 @@ import scipy.optimize as opt
 import xarray as xr
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
-from ..conventions import attrs, coord, units_of
+from ..conventions import attrs, coord, depth_range_of, units_of
 from ..imaging.scan import image
 from ..system.polarization import depolarize
 
@@ -412,7 +412,7 @@ def angular_looks(
     if ang.ndim != 1 or ang.size == 0 or np.any(np.abs(ang) >= 90):
         raise ValueError("angles must be a non-empty 1-D list of degrees in (-90, 90)")
     n = int(source.attrs["n_pixels"])
-    h = float(source.attrs["depth"])
+    h = depth_range_of(source, "source")
     xs = np.asarray(x, dtype=float)
     p = h / n
     pitch = xs[1] - xs[0] if xs.size > 1 else p

@@ -43,9 +43,9 @@ import xarray as xr
 from scipy import ndimage, special
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
-from ..conventions import attrs, coord, spacing
+from ..conventions import attrs, coord
 from ..system.source import index_shift_phase, spectral_index
-from ._common import field_of, matched, parse_window, same_grid
+from ._common import field_of, grid_spacing, matched, parse_window, same_grid
 
 __all__ = [
     "KINDS",
@@ -207,8 +207,9 @@ def compensate(
     Parameters
     ----------
     deformed : xarray.Dataset or xarray.DataArray
-        Deformed B-scan (from :func:`speckle.bscan`) with dims ``(..., depth, aline)``;
-        attrs ``k0`` (rad/µm), ``depth_range`` (``H`` µm) and ``n_pixels`` are used.
+        Deformed B-scan (from :func:`speckle.bscan`) with dims ``(..., depth, aline)``: the
+        pixel size and A-line pitch are read from its ``depth`` and ``aline`` coordinates
+        (uniform, µm; never from attributes), the carrier from attribute ``k0`` (rad/µm).
     displacement : xarray.Dataset
         ``uz`` (and optionally ``ux``) in µm at the reference pixel centres, dims among
         ``depth``, ``aline`` and any extra dims of ``deformed`` (e.g. ``strain``), e.g. from
@@ -224,6 +225,12 @@ def compensate(
     xarray.DataArray
         Complex field ``A'(q + u_z/p)`` (times ``exp(-2i k0 u_z)``); with a lateral displacement
         each pixel is taken from the A-line nearest to ``x + u_x`` (NaN beyond the scan).
+
+    Raises
+    ------
+    ValueError
+        On a missing or non-uniform ``depth``/``aline`` coordinate (named), a missing ``k0``
+        attribute with ``carrier=True``, or a displacement on another grid.
     """
     field = field_of(deformed)
     from ..scene.deformation import (
@@ -236,19 +243,16 @@ def compensate(
             f"{type(displacement).__name__}"
         )
     check_field(displacement, extra_dims=[d for d in field.dims if d not in ("depth", "aline")])
-    missing = [k for k in ("n_pixels", "depth_range", "k0") if k not in field.attrs]
-    if missing:
+    pixel, pitch = grid_spacing(field)  # from the coordinates, refused if missing/non-uniform
+    if carrier and "k0" not in field.attrs:
         raise ValueError(
-            f"deformed needs attributes {missing} (n_pixels, depth_range in µm, k0 in rad/µm), "
-            "as a B-scan from speckle.bscan has"
+            "deformed needs attribute k0 (rad/µm) to remove the carrier phase, as a B-scan "
+            "from speckle.bscan has (or pass carrier=False)"
         )
     for name in ("uz", "ux"):
         if name in displacement:
             same_grid(field, displacement[name], ("deformed", f"displacement {name}"))
-    n = int(field.attrs["n_pixels"])
-    h = float(field.attrs["depth_range"])
-    k0 = float(field.attrs["k0"])
-    pixel = h / n
+    n = field.sizes["depth"]
     uz = displacement["uz"].broadcast_like(field.real).transpose(*field.dims)
     q = xr.DataArray(np.arange(n, dtype=float), dims="depth")
     pos = (q + uz / pixel).transpose(*field.dims)
@@ -257,18 +261,19 @@ def compensate(
     p_np = pos.transpose(*other, "depth").values
     out = sample_field(f_np, p_np)
     if carrier:
+        k0 = float(field.attrs["k0"])
         out = out * np.exp(-2j * k0 * uz.transpose(*other, "depth").values)
     result = xr.DataArray(out, dims=(*other, "depth"), coords=field.coords).transpose(*field.dims)
     if "ux" in displacement and np.any(displacement["ux"].values != 0):
-        result = _lateral(result, displacement["ux"].broadcast_like(field.real))
+        result = _lateral(result, displacement["ux"].broadcast_like(field.real), pitch)
     result.attrs = {**field.attrs, "compensation": "exact" if carrier else "exact, no carrier"}
     return result
 
 
-def _lateral(field: xr.DataArray, ux: xr.DataArray) -> xr.DataArray:
-    """Take each pixel from the A-line nearest to its laterally displaced material point."""
+def _lateral(field: xr.DataArray, ux: xr.DataArray, pitch: float) -> xr.DataArray:
+    """Take each pixel from the A-line nearest to its laterally displaced material point
+    (``pitch``: the A-line pitch in µm)."""
     aline = field.aline.values
-    pitch = spacing(field, "aline", default=1.0)
     f = field.transpose(..., "aline").values
     u = ux.transpose(*field.transpose(..., "aline").dims).values
     src = np.arange(len(aline)) + np.rint(u / pitch).astype(int)

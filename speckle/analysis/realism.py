@@ -34,7 +34,7 @@ from scipy import stats
 
 from .._adapters import scene_kwargs, spectrum_kwargs
 from .._validate import check_choice, check_int, check_real
-from ..conventions import attrs
+from ..conventions import attrs, coord
 from ..imaging.beam_lines import beam_lines, shared_scatterers
 from ..imaging.bscan import bscan
 from ..scene.scatterers import random_scatterers
@@ -100,9 +100,14 @@ def fit_parameters(
     parts = [roi.values] if air is None else [air.values, roi.values]
     n_air = 0 if air is None else air.shape[0]
     values = np.vstack(parts)
+    rows, cols = values.shape
     image = xr.DataArray(
         values,
         dims=("depth", "x"),
+        coords={
+            "depth": coord("depth", np.arange(rows) * dz),
+            "x": coord("x", np.arange(cols, dtype=float)),  # pitch 1: only w0/pitch matters
+        },
         attrs={"kind": "log", "pixel_size": dz, "pitch": 1.0, **_clip_attrs(roi)},
     )
     fit = fit_system(

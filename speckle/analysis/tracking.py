@@ -371,6 +371,22 @@ def interpolate_windows(
     window column: depth only, the same for every A-line). Beyond the outer window centres
     (``outside``): ``"linear"`` extrapolation, the ``"nearest"`` centre's value, or ``"nan"``.
     A NaN window spreads only to the pixels whose interpolation uses it.
+
+    Parameters
+    ----------
+    values : array_like, shape (n_depth_windows, n_aline_windows)
+        One value per window.
+    centre_depth, centre_aline : array_like
+        Window centres (increasing), in the units of the pixel coordinates.
+    depth, aline : array_like
+        The pixel grid: values of the ``depth`` and ``aline`` coordinates (µm).
+    outside : {"linear", "nearest", "nan"}
+        Beyond the outer centres.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape ``(len(depth), len(aline))``.
     """
     check_choice(outside, "outside", ("linear", "nearest", "nan"))
     v = np.asarray(values, float)
@@ -403,8 +419,20 @@ def interpolate_displacement(
 ) -> xr.Dataset:
     """Tracked window displacements interpolated (and extrapolated) linearly to every pixel.
 
-    ``axial_only`` drops the lateral estimate (A-lines are independent in the model, so the
-    lateral registration carries no sub-line information).
+    Parameters
+    ----------
+    tracked : xarray.Dataset
+        Window displacements ``uz`` (and ``ux``) over the window centres ``depth``/``aline``.
+    depth, aline : array_like
+        The pixel grid: values of the ``depth`` and ``aline`` coordinates (µm).
+    axial_only : bool
+        Drop the lateral estimate (A-lines are independent in the model, so the lateral
+        registration carries no sub-line information).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``uz`` (and ``ux``) over ``(depth, aline)``.
     """
     out = {}
     names = ("uz",) if axial_only else ("uz", "ux")

@@ -66,7 +66,7 @@ import xarray as xr
 from scipy import optimize, stats
 
 from .._validate import check_choice, check_int, check_real
-from ..conventions import attrs, coord
+from ..conventions import attrs, coord, spacing
 from ..imaging.beam import beam_scan
 from ..system.noise import add_complex_noise
 from . import autocorrelation as ac
@@ -408,7 +408,7 @@ class SystemFit:
             "lines": np.arange(nx) * pitch,
             "waist": self._value("waist"),
             "n_pixels": n,
-            "depth": h,
+            "depth_range": h,
             "k0": k0,
             "spectrum": spec,
             "method": "nufft",
@@ -419,12 +419,12 @@ class SystemFit:
             beam["rayleigh_range"] = self._value("rayleigh_range")
         return {"n": n, "h": h, "k0": k0, "rho": rho, "pitch": pitch, "beam": beam, "dz": dz}
 
-    def _scatterers(self, m: dict, nx: int, seed: int, depth: float) -> dict[str, np.ndarray]:
+    def _scatterers(self, m: dict, nx: int, seed: int, depth_range: float) -> dict[str, np.ndarray]:
         w0 = m["beam"]["waist"]
         x0, x1 = -4.5 * w0, (nx - 1) * m["pitch"] + 4.5 * w0
-        count = round(m["rho"] * (depth / m["dz"]) * (x1 - x0) / m["pitch"])
+        count = round(m["rho"] * (depth_range / m["dz"]) * (x1 - x0) / m["pitch"])
         rng = np.random.default_rng(np.random.SeedSequence([seed, 20]))
-        return {"z": rng.uniform(0.0, depth, count), "x": rng.uniform(x0, x1, count)}
+        return {"z": rng.uniform(0.0, depth_range, count), "x": rng.uniform(x0, x1, count)}
 
     def _field(self, m: dict, sc: dict, strain: float = 0.0) -> np.ndarray:
         """Noise-free complex field (depth, x) of the scatterers, compressed by ``strain``."""
@@ -868,23 +868,29 @@ def _data(image: xr.DataArray, noise: xr.DataArray | None, n_medium: float) -> _
         return v.astype(float)
 
     sig = values(image)
-    dz, pitch = (_step(image, k, d) for k, d in (("pixel_size", "depth"), ("pitch", "x")))
+    dz, pitch = _step(image, "depth"), _step(image, "x")
     noise_values = None if noise is None else values(noise)
     return _Data(kind, sig, noise_values, dz / n_medium, pitch)
 
 
-def _step(image: xr.DataArray, attr: str, dim: str) -> float:
-    """Pixel size or pitch in µm: the attribute of :func:`load_image`, else the coordinate."""
-    if attr in image.attrs:
-        return check_real(image.attrs[attr], f"image.attrs[{attr!r}]", low=0, low_inclusive=False)
-    if dim in image.coords:
-        from ..conventions import spacing
+def _step(image: xr.DataArray, dim: str) -> float:
+    """Pixel size (``depth``) or line pitch (``x``) in µm, read from the coordinate ``dim``.
 
-        return spacing(image, dim)
-    raise ValueError(
-        f"image has no {attr} attribute and no {dim!r} coordinate; load it with "
-        f"speckle.load_image(..., {attr}=...)"
-    )
+    Spacing is never read from attributes (:func:`speckle.conventions.spacing`): a missing,
+    non-uniform or non-µm coordinate is refused with a ``ValueError`` naming it.
+    """
+    if dim not in image.coords:
+        raise ValueError(
+            f"image has no {dim!r} coordinate (µm) to read its spacing from; load it with "
+            "speckle.load_image(..., pixel_size=..., pitch=...)"
+        )
+    units = image[dim].attrs.get("units")
+    if units is not None and units not in ("um", "µm", "micrometre", "micrometer"):
+        raise ValueError(
+            f"coordinate {dim!r} is in {units!r}, not µm; load the image with "
+            "speckle.load_image(..., pixel_size=..., pitch=...)"
+        )
+    return spacing(image, dim)
 
 
 def _check_values(region: xr.DataArray, name: str, kind: str) -> None:

@@ -27,7 +27,7 @@ import speckle
 
 from ..analysis import correlation as corr
 from ..analysis.beam import axial_correlation, lateral_correlation, poisson_lateral_factor
-from ..conventions import attrs, coord
+from ..conventions import attrs, coord, depth_range_of
 from ..imaging.scan import beam_reach
 from ..provenance import provenance_attrs
 from ..scene import regions as reg
@@ -61,8 +61,14 @@ def _regions(density_per_cell: float, pixel: float, pitch: float, ndim: int) -> 
 
 def _line_scene(src: xr.DataArray, seed: int) -> dict:
     """Keywords of the independent-line scene builders on the grid of ``src`` (Poisson counts)."""
-    n, h = int(src.attrs["n_pixels"]), float(src.attrs["depth"])
-    return {"n_pixels": n, "depth": h, "seed": seed, "amplitude": _AMPLITUDE, "count": "poisson"}
+    n, h = int(src.attrs["n_pixels"]), depth_range_of(src, "source")
+    return {
+        "n_pixels": n,
+        "depth_range": h,
+        "seed": seed,
+        "amplitude": _AMPLITUDE,
+        "count": "poisson",
+    }
 
 
 def _line_method(beam: Mapping) -> str:
@@ -102,7 +108,7 @@ def bscans_data(source: Mapping, beam: Mapping, seed: int) -> xr.Dataset:
     correlations, complex and intensity.
     """
     src = _source(source, beam.get("n_pixels"))
-    n, h = int(src.attrs["n_pixels"]), float(src.attrs["depth"])
+    n, h = int(src.attrs["n_pixels"]), depth_range_of(src, "source")
     pixel, pitch = h / n, float(beam["pitch"])
     ratios = np.asarray(beam["waist_pitch"], dtype=float)
     xs = speckle.scan_lines(int(beam["n_lines"]), pitch)
@@ -202,7 +208,7 @@ def strain_data(source: Mapping, beam: Mapping, seed: int) -> xr.Dataset:
     """
     cfg = beam["strain"]
     src = _source(source, beam.get("n_pixels"))
-    n, h = int(src.attrs["n_pixels"]), float(src.attrs["depth"])
+    n, h = int(src.attrs["n_pixels"]), depth_range_of(src, "source")
     pixel, pitch = h / n, float(beam["pitch"])
     strains = np.linspace(float(cfg["start"]), float(cfg["stop"]), int(cfg["num"]))
     nu = float(cfg["poisson_ratio"])
@@ -270,7 +276,7 @@ def volume_data(source: Mapping, beam: Mapping, seed: int) -> xr.Dataset:
     """
     cfg = beam["volume"]
     src = _source(source, cfg["n_pixels"])
-    n, h = int(src.attrs["n_pixels"]), float(src.attrs["depth"])
+    n, h = int(src.attrs["n_pixels"]), depth_range_of(src, "source")
     pitch = float(beam["pitch"])
     xs = speckle.scan_lines(int(cfg["n_lines"]), pitch)
     regions = _regions(float(cfg["density"]), h / n, pitch, 3)

@@ -142,7 +142,7 @@ def _estimate(a1, a2, k0, cfg, label, window=None):
 # --------------------------------------------------------------------------------------------
 
 
-def layered_field(moduli: list[float], mean_strain: float, depth: float):
+def layered_field(moduli: list[float], mean_strain: float, depth_range: float):
     """Axial displacement of equal-thickness layers in series compressed from ``z = 0``.
 
     Equal stress in every layer: strain ``s_i = s_mean * E_h / E_i`` (``E_h`` = harmonic mean
@@ -151,7 +151,7 @@ def layered_field(moduli: list[float], mean_strain: float, depth: float):
     """
     e = np.asarray(moduli, float)
     strains = mean_strain * (len(e) / np.sum(1 / e)) / e
-    edges = np.linspace(0.0, depth, len(e) + 1)
+    edges = np.linspace(0.0, depth_range, len(e) + 1)
     offsets = np.concatenate([[0.0], np.cumsum(strains * np.diff(edges))])[:-1]
 
     def field(z, x):

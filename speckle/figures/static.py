@@ -25,7 +25,7 @@ from matplotlib.figure import Figure
 
 from .._validate import as_finite_array, check_int
 from ..analysis.statistics import fit_rayleigh, histogram, rayleigh_pdf
-from ..conventions import attrs, coord
+from ..conventions import attrs, coord, depth_range_of
 from ..imaging.aline import ascan, pixel_depths
 from ..provenance import provenance_attrs
 from ..sweep import sweep
@@ -86,7 +86,7 @@ def single_scatterer(
     source = {"n_pixels": n_pixels, "pixel_size": pixel_size, "shape": shape}
     source["fwhm_fraction"] = fwhm_fraction
     sources = [source_spectrum(source, k0_dk=r) for r in ratios]
-    h = float(sources[0].attrs["depth"])
+    h = depth_range_of(sources[0], "source")
     n = int(sources[0].attrs["n_pixels"])
     z0 = pos * (h / n)
     scans, comps, ks = [], [], []
@@ -95,7 +95,12 @@ def single_scatterer(
         k0 = float(src.attrs["k0"])
         scans.append(
             ascan(
-                z0[:, None], np.ones((z0.size, 1)), n_pixels=n, depth=h, k0=k0, spectrum=src.values
+                z0[:, None],
+                np.ones((z0.size, 1)),
+                n_pixels=n,
+                depth_range=h,
+                k0=k0,
+                spectrum=src.values,
             )
         )
         comps.append(src.values * np.exp(2j * np.outer(z0, k)))

@@ -85,7 +85,7 @@ def _wrap_phase(ph):
 
 
 @numba.njit(fastmath=True, cache=True)
-def carrier_and_position(z, a, k0, depth, grid, cr, ci, u):
+def carrier_and_position(z, a, k0, depth_range, grid, cr, ci, u):
     """Fill ``cr + 1j*ci = a * exp(2i k0 z)`` and ``u = frac(z/depth) * grid`` for one line.
 
     ``z`` (float64, µm) and ``a`` (complex128) have shape (M,); outputs are float64 arrays of
@@ -93,7 +93,7 @@ def carrier_and_position(z, a, k0, depth, grid, cr, ci, u):
     (Taylor to degree 17 at a quarter of the phase, then squared twice, relative error
     < 1e-15) so that numba vectorises the loop.
     """
-    inv_h = 1.0 / depth
+    inv_h = 1.0 / depth_range
     two_k0 = 2.0 * k0
     for j in range(z.shape[0]):
         zj = z[j]
@@ -221,16 +221,17 @@ def bucket_offsets(counts):
 @numba.njit(parallel=True, cache=True)
 def bucket_sort(key, nb):
     """Stable parallel counting sort: ``key`` (M,) bucket of each scatterer in ``[0, nb)``, or
-    -1 (dropped) -> ``(starts, order)``: the input indices in bucket order and the offsets
-    ``starts`` (nb + 1) of every bucket.
+    -1 (dropped) -> ``(starts, dest)``: the slot ``dest[j]`` of input ``j`` in bucket order
+    (-1 when dropped) and the offsets ``starts`` (nb + 1) of every bucket.
 
-    Each chunk of a fixed chunking of the input counts its buckets, then writes its indices at
-    its own offsets (:func:`bucket_offsets`): the order within a bucket is the input order
-    whatever the number of threads.
+    Each chunk of a fixed chunking of the input (:func:`sort_chunks`) counts its buckets, then
+    numbers its scatterers from its own offsets (:func:`bucket_offsets`): the order within a
+    bucket is the input order whatever the number of threads. Callers then stream the input in
+    order and scatter each record to ``dest[j]``: a gather through the inverse permutation
+    reads the scene at random and costs about three times as much.
     """
     m = key.size
-    n_chunks = max(1, min(64, m // 16384))
-    size = (m + n_chunks - 1) // n_chunks
+    n_chunks, size = sort_chunks(m)
     counts = np.zeros((n_chunks, nb), dtype=np.int64)
     for c in numba.prange(n_chunks):
         for j in range(c * size, min(m, (c + 1) * size)):
@@ -238,12 +239,22 @@ def bucket_sort(key, nb):
             if k >= 0:
                 counts[c, k] += 1
     starts, offset = bucket_offsets(counts)
-    order = np.empty(starts[nb], dtype=np.int64)
+    dest = np.empty(m, dtype=np.int64)
     for c in numba.prange(n_chunks):
         pos = offset[c]
         for j in range(c * size, min(m, (c + 1) * size)):
             k = key[j]
             if k >= 0:
-                order[pos[k]] = j
+                dest[j] = pos[k]
                 pos[k] += 1
-    return starts, order
+            else:
+                dest[j] = -1
+    return starts, dest
+
+
+@numba.njit(cache=True)
+def sort_chunks(m):
+    """``(n_chunks, size)``: the fixed chunking of ``m`` inputs that :func:`bucket_sort` and the
+    loops streaming its input use (independent of the number of threads)."""
+    n_chunks = max(1, min(64, m // 16384))
+    return n_chunks, (m + n_chunks - 1) // n_chunks

@@ -23,15 +23,15 @@ from .methods import ASCAN_METHODS
 
 __all__ = ["METHODS", "ascan", "pixel_depths", "stream_ascans"]
 
-#: A-scan synthesis methods: name -> callable(z, a, n_pixels, depth, k0, spectrum, tol), the
+#: A-scan synthesis methods: name -> callable(z, a, n_pixels, depth_range, k0, spectrum, tol), the
 #: table :data:`speckle.imaging.methods.ASCAN_METHODS`.
 METHODS = ASCAN_METHODS
 
 
-def pixel_depths(n_pixels: int, depth: float) -> np.ndarray:
-    """Pixel-centre depths ``q*H/N`` in µm, ``q = 0 ... N-1``."""
+def pixel_depths(n_pixels: int, depth_range: float) -> np.ndarray:
+    """Pixel-centre depths ``q*H/N`` in µm, ``q = 0 ... N-1``, for ``depth_range`` ``H`` (µm)."""
     n = check_int(n_pixels, "n_pixels", low=2)
-    h = check_real(depth, "depth", low=0, low_inclusive=False)
+    h = check_real(depth_range, "depth_range", low=0, low_inclusive=False)
     return np.arange(n) * (h / n)
 
 
@@ -40,7 +40,7 @@ def ascan(
     amplitude: object,
     *,
     n_pixels: int,
-    depth: float,
+    depth_range: float,
     k0: float,
     spectrum: object | None = None,
     method: str = "direct",
@@ -52,16 +52,16 @@ def ascan(
     ----------
     z : array_like, shape (..., M)
         Scatterer depths in µm. Leading dimensions are batch dimensions (e.g. A-lines). Depths
-        outside ``[0, depth)`` are allowed and wrap around (finite unambiguous imaging depth):
-        a scatterer at ``z + depth`` lands in the same pixel with a different carrier phase
-        ``exp(2i k0 depth)``.
+        outside ``[0, depth_range)`` are allowed and wrap around (finite unambiguous depth ``H``):
+        a scatterer at ``z + H`` lands in the same pixel with a different carrier phase
+        ``exp(2i k0 H)``.
     amplitude : array_like
         Real or complex scattering amplitudes ``a_j``, broadcastable to ``z``. Zero amplitudes
         pad ragged A-lines.
     n_pixels : int
         Number of pixels (= spectral components) ``N`` >= 2.
-    depth : float
-        Unambiguous imaging depth ``H`` in µm (> 0). Pixel ``q`` sits at ``q*H/N``.
+    depth_range : float
+        Unambiguous depth ``H`` in µm (> 0). Pixel ``q`` sits at ``q*H/N``.
     k0 : float
         Central wavenumber in rad/µm (finite, >= 0; 0 gives the formal Fourier transform).
     spectrum : array_like, optional
@@ -95,12 +95,12 @@ def ascan(
     --------
     A scatterer at a pixel centre is imaged into that pixel only:
 
-    >>> a = ascan([8.0], [1.0], n_pixels=8, depth=64.0, k0=0.0)
+    >>> a = ascan([8.0], [1.0], n_pixels=8, depth_range=64.0, k0=0.0)
     >>> np.round(np.abs(a), 12).tolist()
     [0.0, 8.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
     """
     n = check_int(n_pixels, "n_pixels", low=2)
-    h = check_real(depth, "depth", low=0, low_inclusive=False)
+    h = check_real(depth_range, "depth_range", low=0, low_inclusive=False)
     k0v = check_real(k0, "k0", low=0)
     check_choice(method, "method", METHODS)
     tolv = check_tol(tol)
@@ -138,7 +138,7 @@ def stream_ascans(
     density: float,
     *,
     n_pixels: int,
-    depth: float,
+    depth_range: float,
     k0: float,
     seed: int,
     spectrum: np.ndarray | None = None,
@@ -159,8 +159,8 @@ def stream_ascans(
 
     Parameters
     ----------
-    n_alines, density, n_pixels, depth, seed, amplitude, count
-        Scene of :func:`speckle.random_scatterers` (``depth`` in µm).
+    n_alines, density, n_pixels, depth_range, seed, amplitude, count
+        Scene of :func:`speckle.random_scatterers` (``depth_range`` ``H`` in µm).
     k0, spectrum, method, tol
         Imaging, as in :func:`speckle.ascan` (``k0`` in rad/µm).
     chunk_lines : int
@@ -197,7 +197,7 @@ def stream_ascans(
                 nl,
                 density,
                 n_pixels=n_pixels,
-                depth=depth,
+                depth_range=depth_range,
                 seed=seed,
                 amplitude=amplitude,
                 count=count,
@@ -207,7 +207,7 @@ def stream_ascans(
                 scene["z"].values,
                 scene["amplitude"].values,
                 n_pixels=n_pixels,
-                depth=depth,
+                depth_range=depth_range,
                 k0=k0,
                 spectrum=spectrum,
                 method=method,

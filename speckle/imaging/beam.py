@@ -70,7 +70,7 @@ def beam_scan(
     lines: object,
     waist: float,
     n_pixels: int,
-    depth: float,
+    depth_range: float,
     k0: float,
     spectrum: object | None = None,
     method: str = "direct",
@@ -96,7 +96,7 @@ def beam_scan(
         in 3-D); ``"auto"`` falls back to ``"direct"`` otherwise.
     waist : float
         Beam waist ``w0`` (1/e^2 intensity radius of the one-way beam at focus) in µm, > 0.
-    n_pixels, depth, k0, spectrum
+    n_pixels, depth_range, k0, spectrum
         As in :func:`speckle.ascan` (pixels, unambiguous depth ``H`` in µm, central wavenumber
         in the medium in rad/µm, spectral weights); same grid, wrap-around and pixel
         conventions.
@@ -133,8 +133,8 @@ def beam_scan(
     """
     check_choice(method, "method", BEAM_METHODS)
     scene, beam, tolv = beam_problem(
-        z, x, amplitude, lines=lines, waist=waist, n_pixels=n_pixels, depth=depth, k0=k0,
-        spectrum=spectrum, tol=tol, y=y, focus=focus, rayleigh_range=rayleigh_range,
+        z, x, amplitude, lines=lines, waist=waist, n_pixels=n_pixels, depth_range=depth_range,
+        k0=k0, spectrum=spectrum, tol=tol, y=y, focus=focus, rayleigh_range=rayleigh_range,
     )  # fmt: skip
     n_lines = scene.lines.shape[0]
     check_beam_call(

@@ -28,7 +28,7 @@ def shared_scatterers(
     density: float,
     *,
     n_pixels: int,
-    depth: float,
+    depth_range: float,
     waist: float,
     seed: int,
     margin: float = 4.5,
@@ -43,7 +43,7 @@ def shared_scatterers(
     p = check_real(pitch, "pitch", low=0, low_inclusive=False)
     rho = check_real(density, "density", low=0, low_inclusive=False)
     n = check_int(n_pixels, "n_pixels", low=2)
-    h = check_real(depth, "depth", low=0, low_inclusive=False)
+    h = check_real(depth_range, "depth_range", low=0, low_inclusive=False)
     w0 = check_real(waist, "waist", low=0, low_inclusive=False)
     sd = check_int(seed, "seed", low=0)
     lines = np.arange(nl) * p
@@ -81,7 +81,7 @@ def beam_lines(
     cutoff : float
         Smallest double-pass weight kept (0 < cutoff < 1).
     attrs : dict, optional
-        Attributes of the returned scene (e.g. ``depth``, ``n_pixels``, ``density``).
+        Attributes of the returned scene (e.g. ``depth_range``, ``n_pixels``, ``density``).
 
     Returns
     -------

@@ -195,7 +195,7 @@ def line_grid(lines: np.ndarray, waist: float) -> LineGrid | None:
 
 @numba.njit(cache=True)
 def _bucket(x, y, z, j, three_d, o_ax, xo, po, r_o, n_outer, halo, yo, pi_, r_i, n_inner, bli,
-            depth, nbi):  # fmt: skip
+            depth_range, nbi):  # fmt: skip
     """Bucket of scatterer ``j`` (see :func:`_sort_scene`), or -1 beyond the reach of the grid."""
     so = ((x[j] if o_ax == 0 else y[j]) - xo) / po
     if so < -r_o or so > n_outer - 1 + r_o:
@@ -207,28 +207,28 @@ def _bucket(x, y, z, j, three_d, o_ax, xo, po, r_o, n_outer, halo, yo, pi_, r_i,
             return -1
         ki = min(max(np.int64(math.floor(si)) + bli, 0), nbi - 1)
     else:
-        f = z[j] / depth
+        f = z[j] / depth_range
         ki = min(max(np.int64((f - math.floor(f)) * nbi), 0), nbi - 1)
     return ko * nbi + ki
 
 
 @numba.njit(parallel=True, cache=True)
 def _scene_keys(x, y, z, three_d, o_ax, xo, po, r_o, n_outer, halo, yo, pi_, r_i, n_inner, bli,
-                depth, nbi):  # fmt: skip
+                depth_range, nbi):  # fmt: skip
     """:func:`_bucket` of every scatterer (-1 beyond the reach of the grid)."""
     m = z.size
     key = np.empty(m, dtype=np.int64)
     for j in numba.prange(m):
         key[j] = _bucket(x, y, z, j, three_d, o_ax, xo, po, r_o, n_outer, halo, yo, pi_, r_i,
-                         n_inner, bli, depth, nbi)  # fmt: skip
+                         n_inner, bli, depth_range, nbi)  # fmt: skip
     return key
 
 
 @numba.njit(parallel=True, cache=True)
-def _gather_scene(order, x, y, z, a, gam, three_d, o_ax, xo, po, yo, pi_):
-    """``(z, a, so, si, gam)`` of scatterers ``order`` (``si``/``gam`` of size 1 when not per
-    scatterer), lateral coordinates in pitches."""
-    total = order.size
+def _scatter_scene(dest, total, x, y, z, a, gam, three_d, o_ax, xo, po, yo, pi_):
+    """``(z, a, so, si, gam)`` of the ``total`` scatterers kept by the sort, scatterer ``j`` at
+    slot ``dest[j]`` (``si``/``gam`` of size 1 when not per scatterer), lateral coordinates in
+    pitches; the input is streamed in order."""
     zs = np.empty(total)
     as_ = np.empty(total, dtype=np.complex128)
     sos = np.empty(total)
@@ -236,8 +236,10 @@ def _gather_scene(order, x, y, z, a, gam, three_d, o_ax, xo, po, yo, pi_):
     gams = np.empty(total if gam.size > 1 else 1, dtype=np.complex128)
     if gam.size == 1:
         gams[0] = gam[0]
-    for t in numba.prange(total):
-        j = order[t]
+    for j in numba.prange(z.size):
+        t = dest[j]
+        if t < 0:
+            continue
         zs[t] = z[j]
         as_[t] = a[j]
         sos[t] = ((x[j] if o_ax == 0 else y[j]) - xo) / po
@@ -250,7 +252,7 @@ def _gather_scene(order, x, y, z, a, gam, three_d, o_ax, xo, po, yo, pi_):
 
 def _sort_scene(
     x, y, z, a, gam, three_d, o_ax, xo, po, r_o, n_outer, halo, yo, pi_, r_i, n_inner, bli,
-    depth, nbi,
+    depth_range, nbi,
 ):  # fmt: skip
     """Scatterers within reach of the grid, in bucket order, by a stable counting sort.
 
@@ -262,9 +264,11 @@ def _sort_scene(
     sorted (``si``/``gam`` of size 1 when not per scatterer).
     """
     key = _scene_keys(x, y, z, three_d, o_ax, xo, po, r_o, n_outer, halo, yo, pi_, r_i,
-                      n_inner, bli, depth, nbi)  # fmt: skip
-    starts, order = bucket_sort(key, (n_outer + 2 * halo) * nbi)
-    return (*_gather_scene(order, x, y, z, a, gam, three_d, o_ax, xo, po, yo, pi_), starts)
+                      n_inner, bli, depth_range, nbi)  # fmt: skip
+    nb = (n_outer + 2 * halo) * nbi
+    starts, dest = bucket_sort(key, nb)
+    scene = _scatter_scene(dest, starts[nb], x, y, z, a, gam, three_d, o_ax, xo, po, yo, pi_)
+    return (*scene, starts)
 
 
 @numba.njit(cache=True, fastmath=False)
@@ -336,7 +340,7 @@ def _line_weights(c, s, b, lo, hi, per, wr, wi):
 
 @numba.njit(parallel=True, fastmath=True, cache=True)
 def _spread_beam(
-    z, a, k0, depth, so, si, gam, bo_scale, bi_scale, ln_cut, starts, nbi, n_outer, n_inner,
+    z, a, k0, depth_range, so, si, gam, bo_scale, bi_scale, ln_cut, starts, nbi, n_outer, n_inner,
     inner, block, halo, kmax_i, nf, w, coef, out,
 ):  # fmt: skip
     """Spread every scatterer into the fine grids of the lines within its reach.
@@ -370,7 +374,7 @@ def _spread_beam(
         cr = np.empty(m)
         ci = np.empty(m)
         u = np.empty(m)
-        carrier_and_position(z[j0:j1], a[j0:j1], k0, depth, nf, cr, ci, u)
+        carrier_and_position(z[j0:j1], a[j0:j1], k0, depth_range, nf, cr, ci, u)
         # ES kernel values of every scatterer of the block, Horner vectorised over scatterers
         xk = np.empty(m)
         for t in range(m):
@@ -594,7 +598,7 @@ def beam_nufft_scan(
                 origin=tuple(grid.origin[k] for k in axes),
                 pitch=tuple(grid.pitch[k] for k in axes),
                 size=tuple(grid.size[k] for k in axes), waist=w0, k0=scene.k0,
-                depth=scene.depth, plan=plan, ln_cut=ln_cut,
+                depth_range=scene.depth_range, plan=plan, ln_cut=ln_cut,
             )  # fmt: skip
         return fine_to_pixels(g, plan)[grid.rows]
     lay = _general_layout(scene, beam, grid, ln_cut)
@@ -609,11 +613,11 @@ def beam_nufft_scan(
     with parallel_section(serial=small, slp=True):
         z, a, so, si, gam, starts = _sort_scene(
             scene.x, y, scene.z, scene.amplitude, gam, three_d, o_ax, grid.origin[o_ax],
-            p_o, r_o, n_outer, halo, grid.origin[i_ax], p_i, r_i, n_inner, bli, scene.depth,
+            p_o, r_o, n_outer, halo, grid.origin[i_ax], p_i, r_i, n_inner, bli, scene.depth_range,
             nbi,
         )  # fmt: skip
         _spread_beam(
-            z, a, scene.k0, scene.depth, so, si, gam, weight_rate(p_o, w0),
+            z, a, scene.k0, scene.depth_range, so, si, gam, weight_rate(p_o, w0),
             weight_rate(p_i, w0), ln_cut, starts, nbi, n_outer, n_inner, three_d, block, halo,
             kmax_i, plan.nf, plan.w, plan.coef, g.view(plan.real),
         )  # fmt: skip
@@ -677,7 +681,7 @@ def _estimate(method: str, scene: BeamScene, beam: Beam, tol: float, setup: _Set
         return math.inf, math.inf
     slots = setup.terms_per_row * setup.n_rows  # scatterer-line weights written
     if method == "nufft" and _placement_bound(scene) > FLOAT64_SHARE * tol:
-        if float64_error_estimate(scene.z, scene.amplitude, scene.depth, scene.k0,
+        if float64_error_estimate(scene.z, scene.amplitude, scene.depth_range, scene.k0,
                                   scene.spectrum) > FLOAT64_SHARE * tol:  # fmt: skip
             return math.inf, math.inf
     if method in ("nufft", "nufft32"):
@@ -706,7 +710,7 @@ def _estimate(method: str, scene: BeamScene, beam: Beam, tol: float, setup: _Set
         if rounding > 0.5 * tol:
             return math.inf, math.inf
         if _placement_bound(scene) > 0.5 * tol - rounding:
-            e64 = float64_error_estimate(scene.z, scene.amplitude, scene.depth, scene.k0,
+            e64 = float64_error_estimate(scene.z, scene.amplitude, scene.depth_range, scene.k0,
                                          scene.spectrum)  # fmt: skip
             if e64 > 0.5 * tol - rounding:
                 return math.inf, math.inf
@@ -746,7 +750,7 @@ def _placement_bound(scene: BeamScene) -> float:
     scatterer alone (``z_rms <= max |z|``, ``n_rms <= N/2``; one pass over the depths)."""
     zmax = float(np.max(np.abs(scene.z), initial=0.0))
     eps = float(np.finfo(np.float64).eps)
-    position = math.pi * scene.n_pixels * eps * zmax / (math.sqrt(6.0) * scene.depth)
+    position = math.pi * scene.n_pixels * eps * zmax / (math.sqrt(6.0) * scene.depth_range)
     carrier = eps * zmax * 2.0 * scene.k0 * C2 / (4.0 * math.pi * math.sqrt(3.0))
     return math.hypot(position, carrier) if 2.0 * scene.k0 * zmax < 2.0**47 else math.inf
 
@@ -756,7 +760,7 @@ def _check_placement(scene: BeamScene, budget: float, tol: float, method: str) -
     (:func:`speckle.imaging.nufft.check_float64_placement`), on a beam scene; skipped when
     the deepest scatterer's bound is within the budget."""
     if _placement_bound(scene) > budget:
-        check_float64_placement(scene.z, scene.amplitude, scene.depth, scene.k0,
+        check_float64_placement(scene.z, scene.amplitude, scene.depth_range, scene.k0,
                                 scene.spectrum, budget, tol, method)  # fmt: skip
 
 
@@ -858,7 +862,7 @@ def finufft_beam_scan(
         return np.zeros((grid.rows.size, scene.n_pixels), dtype=np.complex128)
     z, a, s = scene.z[keep], scene.amplitude[keep], s[keep]
     c = a * np.exp(2j * scene.k0 * z)
-    t = np.mod(z, scene.depth) * (2 * np.pi / scene.depth)
+    t = np.mod(z, scene.depth_range) * (2 * np.pi / scene.depth_range)
     phi = s * (2 * np.pi / lp)
     opts = {} if upsampfac is None else {"upsampfac": upsampfac}
     f = finufft.nufft2d1(

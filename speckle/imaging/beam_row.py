@@ -48,7 +48,15 @@ import math
 import numba
 import numpy as np
 
-from ._kernels import LANES, axpy8, bucket_sort, carrier_and_position, es_kernel_values, fold_padded
+from ._kernels import (
+    LANES,
+    axpy8,
+    bucket_sort,
+    carrier_and_position,
+    es_kernel_values,
+    fold_padded,
+    sort_chunks,
+)
 
 __all__ = [
     "ROW_MAX_B",
@@ -193,40 +201,36 @@ def _row_keys(x, y, origin, pitch, reach, size, h, two_d):
 
 
 @numba.njit(parallel=True, cache=True)
-def _row_records(order, x, y, z, a, k0, depth, nf, origin, pitch, two_d, rec):
-    """``rec[t] = (Re c, Im c, u, s_o[, s_i])`` of scatterer ``order[t]`` (carriers
-    vectorised over runs of :data:`_SUB` records)."""
-    total = order.size
-    n_chunks = max(1, min(64, total // 16384))
-    chunk = (total + n_chunks - 1) // n_chunks
+def _row_records(dest, x, y, z, a, k0, depth_range, nf, origin, pitch, two_d, rec):
+    """``rec[dest[j]] = (Re c, Im c, u, s_o[, s_i])`` of every scatterer ``j`` kept by the sort
+    (``dest[j] >= 0``): the input streamed in order, carriers vectorised over runs of
+    :data:`_SUB` scatterers, records scattered to their slots."""
+    m = z.size
+    n_chunks, chunk = sort_chunks(m)
     inv_o = 1.0 / pitch[0]
     inv_i = 1.0 / pitch[1]
     for c in numba.prange(n_chunks):
-        bz = np.empty(_SUB)
-        ba = np.empty(_SUB, dtype=np.complex128)
         bcr = np.empty(_SUB)
         bci = np.empty(_SUB)
         bu = np.empty(_SUB)
-        hi = min(total, (c + 1) * chunk)
-        for t0 in range(c * chunk, hi, _SUB):
-            n = min(hi, t0 + _SUB) - t0
-            for t in range(n):
-                j = order[t0 + t]
-                bz[t] = z[j]
-                ba[t] = a[j]
-            carrier_and_position(bz[:n], ba[:n], k0, depth, nf, bcr, bci, bu)
-            for t in range(n):
-                j = order[t0 + t]
-                r = rec[t0 + t]
-                r[0] = bcr[t]
-                r[1] = bci[t]
-                r[2] = bu[t]
+        hi = min(m, (c + 1) * chunk)
+        for j0 in range(c * chunk, hi, _SUB):
+            j1 = min(hi, j0 + _SUB)
+            carrier_and_position(z[j0:j1], a[j0:j1], k0, depth_range, nf, bcr, bci, bu)
+            for j in range(j0, j1):
+                t = dest[j]
+                if t < 0:
+                    continue
+                r = rec[t]
+                r[0] = bcr[j - j0]
+                r[1] = bci[j - j0]
+                r[2] = bu[j - j0]
                 r[3] = (x[j] - origin[0]) * inv_o
                 if two_d:
                     r[4] = (y[j] - origin[1]) * inv_i
 
 
-def _sort_rows(x, y, z, a, k0, depth, nf, origin, pitch, reach, size, h, two_d, rec):
+def _sort_rows(x, y, z, a, k0, depth_range, nf, origin, pitch, reach, size, h, two_d, rec):
     """Records ``(Re c, Im c, u, s_o[, s_i])`` of the scatterers within reach, by bucket.
 
     Lateral positions in pitches along the outer axis, ``s_o = (x_o - X_o)/p_o`` (``x`` holds
@@ -240,8 +244,8 @@ def _sort_rows(x, y, z, a, k0, depth, nf, origin, pitch, reach, size, h, two_d, 
     nbo = size[0] + 2 * h[0] + 1
     nbi = size[1] + 2 * h[1] + 1 if two_d else 1
     key = _row_keys(x, y, origin, pitch, reach, size, h, two_d)
-    starts, order = bucket_sort(key, int(nbo * nbi))
-    _row_records(order, x, y, z, a, k0, depth, nf, origin, pitch, two_d, rec)
+    starts, dest = bucket_sort(key, int(nbo * nbi))
+    _row_records(dest, x, y, z, a, k0, depth_range, nf, origin, pitch, two_d, rec)
     return starts
 
 
@@ -423,7 +427,7 @@ def row_fine_grids(
     size: tuple[int, ...],
     waist: float,
     k0: float,
-    depth: float,
+    depth_range: float,
     plan,
     ln_cut: float,
 ) -> np.ndarray:
@@ -432,7 +436,7 @@ def row_fine_grids(
     ``lateral`` holds the scatterers' coordinates (µm, shape (M,) each) along the grid's axes:
     ``(x,)`` for a row, ``(outer, inner)`` for a raster of ``size = (n_outer, n_inner)`` lines
     (``origin`` and ``pitch`` per axis, µm); ``z`` (µm) and complex ``amplitude`` of shape
-    (M,); ``waist`` w0 (µm); ``k0`` (rad/µm) and ``depth`` H (µm) as in
+    (M,); ``waist`` w0 (µm); ``k0`` (rad/µm) and ``depth_range`` H (µm) as in
     :func:`speckle.ascan`; ``plan`` a :class:`speckle.imaging.nufft.FineGridPlan`; weights
     below ``exp(-ln_cut)`` of a scatterer's peak may be dropped. Returns ``plan.cplx`` grids
     (prod(size), nf), line ``(o, i)`` at row ``o * n_inner + i``, for
@@ -458,7 +462,7 @@ def row_fine_grids(
     # numpy buffers (huge pages): faulting in pages allocated inside numba costs more
     rec = np.empty((z.size, 5 if raster else 4))
     inner = lateral[1] if raster else np.zeros(1)
-    starts = _sort_rows(lateral[0], inner, z, amplitude, k0, depth, plan.nf, np.array(origin),
+    starts = _sort_rows(lateral[0], inner, z, amplitude, k0, depth_range, plan.nf, np.array(origin),
                         np.array(pitch), reach, size2, h, raster, rec)  # fmt: skip
     n_i = int(nb[1] + k_n[1] - 1)
     g = np.zeros(((nb[0] + k_n[0] - 1) * n_i, 2, plan.nf + 2 * pad), dtype=plan.real)

@@ -13,7 +13,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import check_choice
-from ..conventions import attrs, coord, units_of
+from ..conventions import attrs, coord, depth_range_of, units_of
 from ..provenance import provenance_attrs
 from ..scene.scatterers import AMPLITUDE_MODELS
 from ._rules import check_tol
@@ -96,11 +96,11 @@ def bscan(
     scene : xarray.Dataset
         Scatterer field with variables ``z`` (µm) and ``amplitude`` sharing a ``scatterer`` dim
         (see :func:`speckle.random_scatterers`); other dims (``aline``, ``strain``,
-        ...) are carried through. Its ``n_pixels`` and ``depth`` attributes, when present,
+        ...) are carried through. Its ``n_pixels`` and ``depth_range`` attributes, when present,
         must match the source's (``ValueError`` otherwise).
     source : xarray.DataArray
         Spectrum from :func:`speckle.system.source.spectrum`; its attributes give ``n_pixels``,
-        ``depth`` and ``k0``.
+        ``depth_range`` (``H``, µm) and ``k0``.
     normalise : {"none", "density", "expected"}
         Explicit amplitude normalisation, recorded in the ``normalisation`` attribute.
     method, tol
@@ -120,7 +120,7 @@ def bscan(
     if not isinstance(source, xr.DataArray) or "n_pixels" not in source.attrs:
         raise TypeError("source must be a DataArray from speckle.system.source.spectrum")
     n = int(source.attrs["n_pixels"])
-    h = float(source.attrs["depth"])
+    h = depth_range_of(source, "source")
     k0 = float(source.attrs["k0"])
     check_choice(method, "method", METHODS)
     check_tol(tol)
@@ -130,21 +130,22 @@ def bscan(
                 f"scene variable {var!r} must have a 'scatterer' dim (see "
                 f"speckle.random_scatterers); got dims {scene[var].dims}"
             )
-    for key, value in (("n_pixels", n), ("depth", h)):
+    depth_range_of(scene, "scene", required=False)  # refuses a scene's pre-rename 'depth'
+    for key, value in (("n_pixels", n), ("depth_range", h)):
         if key in scene.attrs and not np.isclose(
             float(scene.attrs[key]), value, rtol=1e-12, atol=0
         ):
             raise ValueError(
                 f"scene was built for {key}={scene.attrs[key]!r} but the source has "
                 f"{key}={value!r}; build the scene and the spectrum with the same n_pixels "
-                "and depth (µm)"
+                "and depth_range (µm)"
             )
     field = map_lines(
         ascan,
         scene,
         n,
         np.complex128,
-        depth=h,
+        depth_range=h,
         k0=k0,
         spectrum=source.values,
         method=method,

@@ -45,7 +45,7 @@ MAX_CARRIER_TURNS = 2.0**45
 
 
 def float64_error_estimate(
-    z: np.ndarray, amplitude: np.ndarray, depth: float, k0: float, spectrum: np.ndarray
+    z: np.ndarray, amplitude: np.ndarray, depth_range: float, k0: float, spectrum: np.ndarray
 ) -> float:
     """Expected relative error of :func:`carrier_and_position` against the direct method.
 
@@ -70,8 +70,8 @@ def float64_error_estimate(
     ----------
     z, amplitude : numpy.ndarray
         Depths (µm) and amplitudes of the scatterers (same shape).
-    depth : float
-        Imaging depth ``H`` in µm.
+    depth_range : float
+        Unambiguous depth ``H`` in µm.
     k0 : float
         Central wavenumber in rad/µm.
     spectrum : numpy.ndarray
@@ -90,7 +90,7 @@ def float64_error_estimate(
     s = np.asarray(spectrum, dtype=float)
     n = spectral_index(s.size)
     n_rms = math.sqrt(float(np.sum(n**2 * s**2)) / float(np.sum(s**2)))
-    position = 2.0 * math.pi * n_rms * _EPS64 * z_rms / (math.sqrt(6.0) * depth)
+    position = 2.0 * math.pi * n_rms * _EPS64 * z_rms / (math.sqrt(6.0) * depth_range)
     carrier = _EPS64 * z_rms * 2.0 * k0 * C2 / (4.0 * math.pi * math.sqrt(3.0))
     return math.hypot(position, carrier)
 

@@ -34,7 +34,7 @@ def spectral_field_to_pixels(field: np.ndarray, n_pixels: int) -> np.ndarray:
     return np.fft.fft(field, axis=-1) * index_shift_phase(n_pixels, np.arange(n_pixels))
 
 
-def direct_method(z, amplitude, n_pixels, depth, k0, spectrum, tol):
+def direct_method(z, amplitude, n_pixels, depth_range, k0, spectrum, tol):
     """Exact float64 double sum: spectral field by explicit phase factors, then an exact DFT.
 
     ``z`` float64 and ``amplitude`` complex128 of shape (B, M), ``spectrum`` the ``N`` weights;
@@ -47,7 +47,7 @@ def direct_method(z, amplitude, n_pixels, depth, k0, spectrum, tol):
     # Split the k0 phase from the spectral phase: 2 k_n z = 2 k0 z + 2 pi n z / H, and the
     # second factor is H-periodic in z, so z mod H keeps its argument small and accurate.
     carrier = amplitude * np.exp(2j * k0 * z)
-    zr = np.mod(z, depth) * (2 * np.pi / depth)
+    zr = np.mod(z, depth_range) * (2 * np.pi / depth_range)
     step = max(1, DIRECT_CHUNK_ELEMENTS // max(1, m * n_pixels))
     for b0 in range(0, batch, step):
         sl = slice(b0, b0 + step)
@@ -91,7 +91,7 @@ def beam_direct_method(scene: BeamScene, beam: Beam, tol: float | None) -> np.nd
                 np.ascontiguousarray(scene.z[sel[part]])[None, :],
                 np.ascontiguousarray(scene.amplitude[sel[part]] * weight[part])[None, :],
                 scene.n_pixels,
-                scene.depth,
+                scene.depth_range,
                 scene.k0,
                 scene.spectrum,
                 None,

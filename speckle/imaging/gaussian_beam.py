@@ -45,7 +45,7 @@ class BeamScene(NamedTuple):
     amplitude: np.ndarray  # (M,) complex
     lines: np.ndarray  # (L,) or (L, 2) µm
     n_pixels: int
-    depth: float
+    depth_range: float
     k0: float
     spectrum: np.ndarray  # (N,)
 
@@ -89,7 +89,7 @@ def beam_problem(
     lines: object,
     waist: float,
     n_pixels: int,
-    depth: float,
+    depth_range: float,
     k0: float,
     spectrum: object | None = None,
     tol: float | None = None,
@@ -109,7 +109,7 @@ def beam_problem(
     """
     zr = rayleigh_range
     n = check_int(n_pixels, "n_pixels", low=2)
-    h = check_real(depth, "depth", low=0, low_inclusive=False)
+    h = check_real(depth_range, "depth_range", low=0, low_inclusive=False)
     k0v = check_real(k0, "k0", low=0)
     w0 = check_real(waist, "waist", low=0, high=MAX_WAIST, low_inclusive=False)
     tolv = check_tol(tol)

@@ -3,7 +3,7 @@
 Two plain dicts, built here from the method functions (nothing registers itself on import):
 
 :data:`ASCAN_METHODS`
-    name -> ``callable(z, amplitude, n_pixels, depth, k0, spectrum, tol)`` with validated
+    name -> ``callable(z, amplitude, n_pixels, depth_range, k0, spectrum, tol)`` with validated
     arrays ``z`` (float64, (B, M)), ``amplitude`` (complex128, (B, M)), the ``N`` spectral
     weights and ``tol`` (float or None), returning complex128 (B, N).
 :data:`BEAM_METHODS`
@@ -51,12 +51,12 @@ __all__ = [
 ]
 
 
-def ascan_auto_method(z, amplitude, n_pixels, depth, k0, spectrum, tol):
+def ascan_auto_method(z, amplitude, n_pixels, depth_range, k0, spectrum, tol):
     """``ascan(..., method="auto")``: :func:`speckle.imaging.synthesis.choose_method`, then
     that method."""
-    e64 = float64_error_estimate(z, amplitude, depth, k0, spectrum)
+    e64 = float64_error_estimate(z, amplitude, depth_range, k0, spectrum)
     name = choose_method(z.shape[0], z.shape[1], n_pixels, spectrum, tol, float64_error=e64)
-    return ASCAN_METHODS[name](z, amplitude, n_pixels, depth, k0, spectrum, tol)
+    return ASCAN_METHODS[name](z, amplitude, n_pixels, depth_range, k0, spectrum, tol)
 
 
 def beam_auto_method(scene: BeamScene, beam: Beam, tol: float | None) -> np.ndarray:

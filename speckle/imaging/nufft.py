@@ -129,7 +129,7 @@ def _kernel_fourier(w: int, nf: int, n: np.ndarray) -> np.ndarray:
 
 
 @numba.njit(parallel=True, fastmath=True, cache=True)
-def _spread(z, a, k0, depth, nf, w, coef, out):
+def _spread(z, a, k0, depth_range, nf, w, coef, out):
     """Spread lines of scatterers onto ``out`` (B, 2*nf): interleaved re/im fine grids.
 
     Per line: carrier and positions in float64 (vectorised), kernel values by Horner vectorised
@@ -144,7 +144,7 @@ def _spread(z, a, k0, depth, nf, w, coef, out):
         cr = np.empty(m)
         ci = np.empty(m)
         u = np.empty(m)
-        carrier_and_position(z[b], a[b], k0, depth, nf, cr, ci, u)
+        carrier_and_position(z[b], a[b], k0, depth_range, nf, cr, ci, u)
         vr = np.empty(m, dtype=coef.dtype)
         vi = np.empty(m, dtype=coef.dtype)
         x = np.empty(m, dtype=coef.dtype)
@@ -207,7 +207,7 @@ def nufft_ascan(
     z: np.ndarray,
     amplitude: np.ndarray,
     n_pixels: int,
-    depth: float,
+    depth_range: float,
     k0: float,
     spectrum: np.ndarray,
     *,
@@ -221,7 +221,7 @@ def nufft_ascan(
     ----------
     z, amplitude : numpy.ndarray, shape (B, M)
         Depths in µm (float64) and complex amplitudes (complex128).
-    n_pixels, depth, k0, spectrum
+    n_pixels, depth_range, k0, spectrum
         ``N``, ``H`` (µm), ``k0`` (rad/µm) and the ``N`` spectral weights.
     tol : float
         Requested relative accuracy (sets the kernel width).
@@ -248,7 +248,7 @@ def nufft_ascan(
                 z[sl],
                 amplitude[sl],
                 float(k0),
-                float(depth),
+                float(depth_range),
                 plan.nf,
                 plan.w,
                 plan.coef,
@@ -310,7 +310,7 @@ def finufft_ascan(
     z: np.ndarray,
     amplitude: np.ndarray,
     n_pixels: int,
-    depth: float,
+    depth_range: float,
     k0: float,
     spectrum: np.ndarray,
     *,
@@ -335,7 +335,7 @@ def finufft_ascan(
     eps = FINUFFT_EPS_FACTOR * tol if eps is None else eps
     nlines = z.shape[0]
     c = amplitude * np.exp(2j * k0 * z)
-    x = np.mod(z, depth) * (2 * np.pi / depth)
+    x = np.mod(z, depth_range) * (2 * np.pi / depth_range)
     plan = finufft.Plan(1, (n_pixels,), eps=max(eps, 1e-14), isign=1, nthreads=nthreads)
     field = np.empty((nlines, n_pixels), dtype=np.complex128)
     for b in range(nlines):
@@ -349,12 +349,12 @@ def finufft_ascan(
 FLOAT64_SHARE = 0.25
 
 
-def check_float64_placement(z, amplitude, depth, k0, spectrum, budget, tol, method) -> float:
+def check_float64_placement(z, amplitude, depth_range, k0, spectrum, budget, tol, method) -> float:
     """Refuse scenes whose float64 carrier/position error exceeds ``budget`` (deep scatterers).
 
     See :func:`speckle.imaging.carrier.float64_error_estimate`; returns the estimate.
     """
-    err = float64_error_estimate(z, amplitude, depth, k0, spectrum)
+    err = float64_error_estimate(z, amplitude, depth_range, k0, spectrum)
     if err > budget:
         zmax = float(np.max(np.abs(z)))
         loss = (
@@ -364,7 +364,7 @@ def check_float64_placement(z, amplitude, depth, k0, spectrum, budget, tol, meth
         )
         raise ValueError(
             f"method={method!r} cannot reach tol={tol:g} on these depths: scatterers up to "
-            f"|z| = {zmax:.3g} µm (= {zmax / depth:.3g} H; carrier phase 2 k0 |z| up to "
+            f"|z| = {zmax:.3g} µm (= {zmax / depth_range:.3g} H; carrier phase 2 k0 |z| up to "
             f"{2 * k0 * zmax:.3g} rad with k0 = {k0:g} rad/µm) lose {loss} in the float64 "
             "carrier/position reduction; use method='direct' or 'finufft' (exact reduction) "
             "or method='auto'"
@@ -372,26 +372,30 @@ def check_float64_placement(z, amplitude, depth, k0, spectrum, budget, tol, meth
     return err
 
 
-def nufft_method(z, amplitude, n_pixels, depth, k0, spectrum, tol):
+def nufft_method(z, amplitude, n_pixels, depth_range, k0, spectrum, tol):
     """``ascan(..., method="nufft")`` on validated arrays (``tol`` None: the default)."""
     tolv = refuse_below_floor(resolve_tol(tol), "nufft")
-    check_float64_placement(z, amplitude, depth, k0, spectrum, FLOAT64_SHARE * tolv, tolv, "nufft")
-    return nufft_ascan(z, amplitude, n_pixels, depth, k0, spectrum, tol=tolv)
+    check_float64_placement(
+        z, amplitude, depth_range, k0, spectrum, FLOAT64_SHARE * tolv, tolv, "nufft"
+    )
+    return nufft_ascan(z, amplitude, n_pixels, depth_range, k0, spectrum, tol=tolv)
 
 
-def nufft32_method(z, amplitude, n_pixels, depth, k0, spectrum, tol):
+def nufft32_method(z, amplitude, n_pixels, depth_range, k0, spectrum, tol):
     """``ascan(..., method="nufft32")`` on validated arrays."""
     tolv = resolve_tol(tol)
     floor = float32_error_estimate(z.shape[1], n_pixels, kernel_width(0.5 * tolv))
     refuse_float32(floor, tolv)
-    check_float64_placement(z, amplitude, depth, k0, spectrum, 0.5 * tolv - floor, tolv, "nufft32")
+    check_float64_placement(
+        z, amplitude, depth_range, k0, spectrum, 0.5 * tolv - floor, tolv, "nufft32"
+    )
     # half of tol for the kernel, half for rounding
     return nufft_ascan(
-        z, amplitude, n_pixels, depth, k0, spectrum, tol=0.5 * tolv, precision="single"
+        z, amplitude, n_pixels, depth_range, k0, spectrum, tol=0.5 * tolv, precision="single"
     )
 
 
-def finufft_method(z, amplitude, n_pixels, depth, k0, spectrum, tol):
+def finufft_method(z, amplitude, n_pixels, depth_range, k0, spectrum, tol):
     """``ascan(..., method="finufft")`` on validated arrays."""
     tolv = refuse_below_floor(resolve_tol(tol), "finufft")
-    return finufft_ascan(z, amplitude, n_pixels, depth, k0, spectrum, tol=tolv)
+    return finufft_ascan(z, amplitude, n_pixels, depth_range, k0, spectrum, tol=tolv)

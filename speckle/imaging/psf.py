@@ -149,7 +149,7 @@ def _table(spectrum: np.ndarray, lo: int, nk: int, rows: int) -> np.ndarray:
 
 
 @numba.njit(parallel=True, fastmath=True, cache=True)
-def _psf_lines(z, a, k0, depth, n_pix, lo, nk, rows, table, out):
+def _psf_lines(z, a, k0, depth_range, n_pix, lo, nk, rows, table, out):
     """Write every scatterer into its ``nk`` nearest pixels; ``out`` (B, 2N) interleaved."""
     nlines, m = z.shape
     pad = lo + 1
@@ -157,7 +157,7 @@ def _psf_lines(z, a, k0, depth, n_pix, lo, nk, rows, table, out):
         cr = np.empty(m)
         ci = np.empty(m)
         u = np.empty(m)
-        carrier_and_position(z[b], a[b], k0, depth, n_pix, cr, ci, u)
+        carrier_and_position(z[b], a[b], k0, depth_range, n_pix, cr, ci, u)
         g = np.zeros(2 * (n_pix + 2 * nk + 2))
         ker = np.empty(2 * nk)
         for j in range(m):
@@ -191,7 +191,7 @@ def psf_ascan(
     z: np.ndarray,
     amplitude: np.ndarray,
     n_pixels: int,
-    depth: float,
+    depth_range: float,
     k0: float,
     spectrum: np.ndarray,
     *,
@@ -205,7 +205,7 @@ def psf_ascan(
     ----------
     z, amplitude : numpy.ndarray, shape (B, M)
         Depths (µm, float64) and complex amplitudes.
-    n_pixels, depth, k0, spectrum
+    n_pixels, depth_range, k0, spectrum
         ``N``, ``H`` (µm), ``k0`` (rad/µm), ``N`` spectral weights.
     tol : float, optional
         Requested relative accuracy; sets ``hw`` and ``rows`` unless they are given.
@@ -233,7 +233,7 @@ def psf_ascan(
             z,
             amplitude,
             float(k0),
-            float(depth),
+            float(depth_range),
             n_pixels,
             lo,
             nk,
@@ -244,7 +244,7 @@ def psf_ascan(
     return out
 
 
-def psf_method(z, amplitude, n_pixels, depth, k0, spectrum, tol):
+def psf_method(z, amplitude, n_pixels, depth_range, k0, spectrum, tol):
     """``ascan(..., method="psf")`` on validated arrays (``tol`` None: the default)."""
     tolv = resolve_tol(tol)
     err, hw, rows = psf_error_estimate(spectrum, tolv)
@@ -254,8 +254,8 @@ def psf_method(z, amplitude, n_pixels, depth, k0, spectrum, tol):
             f"{err:.1e} (half-width {hw} px, {rows} interpolation rows per pixel, the cap); "
             "use a looser tol or method='nufft'"
         )
-    check_float64_placement(z, amplitude, depth, k0, spectrum, tolv - err, tolv, "psf")
-    out = psf_ascan(z, amplitude, n_pixels, depth, k0, spectrum, hw=hw, rows=rows)
+    check_float64_placement(z, amplitude, depth_range, k0, spectrum, tolv - err, tolv, "psf")
+    out = psf_ascan(z, amplitude, n_pixels, depth_range, k0, spectrum, hw=hw, rows=rows)
     # The estimate is relative to the incoherent energy sum_j |a_j|^2 N sum S^2 (each
     # scatterer's error has its own phase, so error energies add); the scene's own energy can
     # be far below it (few independent speckle samples, e.g. a spectrum with one dominant
@@ -272,4 +272,4 @@ def psf_method(z, amplitude, n_pixels, depth, k0, spectrum, tol):
             f"(image energy {1 / c:.1e} of the incoherent sum), which needs an error of "
             f"{tolv / c:.1e} per scatterer; use method='nufft' or 'direct'"
         )
-    return psf_ascan(z, amplitude, n_pixels, depth, k0, spectrum, hw=hw, rows=rows)
+    return psf_ascan(z, amplitude, n_pixels, depth_range, k0, spectrum, hw=hw, rows=rows)

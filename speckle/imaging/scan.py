@@ -24,7 +24,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import as_finite_array, check_int, check_real
-from ..conventions import attrs, coord, spacing, units_of
+from ..conventions import attrs, coord, depth_range_of, spacing, units_of
 from ..provenance import provenance_attrs
 from ..scene.shared import check_scene, scene_window, shared_scene
 from ._rules import check_tol
@@ -86,7 +86,7 @@ def _source(source: object) -> dict:
         raise TypeError("source must be a DataArray from speckle.spectrum")
     return {
         "n_pixels": int(source.attrs["n_pixels"]),
-        "depth": float(source.attrs["depth"]),
+        "depth_range": depth_range_of(source, "source"),
         "k0": float(source.attrs["k0"]),
         "spectrum": np.asarray(source.values, dtype=float),
     }
@@ -107,7 +107,7 @@ def _lines_field(
     """Field of lines ``xs`` (x ``ys``) from scatterers ``part = (z, x, a[, y])``: (N, Lx[, Ly])."""
     z, x, a = part[:3]
     if not wrap:
-        keep = (z >= 0) & (z < src["depth"])
+        keep = (z >= 0) & (z < src["depth_range"])
         part = tuple(p[keep] for p in part)
         z, x, a = part[:3]
     kw = {"waist": waist, "method": method, "tol": tol, **src, **optics}
@@ -151,7 +151,7 @@ def _dataset(
 ) -> xr.Dataset:
     dims = ("depth", "x") if ys is None else ("depth", "x", "y")
     coords = {
-        "depth": coord("depth", pixel_depths(src["n_pixels"], src["depth"])),
+        "depth": coord("depth", pixel_depths(src["n_pixels"], src["depth_range"])),
         "x": coord("x", xs),
     }
     if ys is not None:
@@ -171,7 +171,9 @@ def _prepare(source, waist, x, y, chunk, method, tol, wrap, focus, rayleigh_rang
     w0 = check_real(waist, "waist", low=0, high=MAX_WAIST, low_inclusive=False)
     optics = {}
     if focus is not None:
-        optics["focus"] = check_real(focus, "focus", low=0, high=src["depth"], high_inclusive=False)
+        optics["focus"] = check_real(
+            focus, "focus", low=0, high=src["depth_range"], high_inclusive=False
+        )
     if rayleigh_range is not None:
         if focus is None:
             raise ValueError("rayleigh_range needs focus= (the focal depth in µm)")
@@ -186,7 +188,7 @@ def _prepare(source, waist, x, y, chunk, method, tol, wrap, focus, rayleigh_rang
         "waist_units": units_of("length"),
         "beam": "Gaussian, double-pass amplitude exp(-2 r^2/w0^2)",
         "n_pixels": src["n_pixels"],
-        "depth_range": src["depth"],
+        "depth_range": src["depth_range"],
         "k0": src["k0"],
         "k0_units": units_of("wavenumber"),
         "k0_dk": float(source.attrs.get("k0_dk", np.nan)),
@@ -307,7 +309,7 @@ def image(
             "(y given for 3-D scenes only)"
         )
     zs = scene.z.values
-    z_lo, z_hi = (0.0, src["depth"]) if not wrap else (float(zs.min()), float(zs.max()))
+    z_lo, z_hi = (0.0, src["depth_range"]) if not wrap else (float(zs.min()), float(zs.max()))
     reach = beam_reach(w0, widening=_widening(optics, w0, src["k0"], z_lo, z_hi))
     order = np.argsort(scene.x.values, kind="stable")
     sc = scene.isel(scatterer=order)
@@ -367,8 +369,8 @@ def image_regions(
     src, w0, xs, ys, c, meta, kernel, optics = _prepare(
         source, waist, x, y, chunk, method, tol, False, focus, rayleigh_range
     )
-    reach = beam_reach(w0, widening=_widening(optics, w0, src["k0"], 0.0, src["depth"]))
-    h = src["depth"]
+    reach = beam_reach(w0, widening=_widening(optics, w0, src["k0"], 0.0, src["depth_range"]))
+    h = src["depth_range"]
     sd = check_int(seed, "seed", low=0)
 
     def get_part(x0: float, x1: float, y0: float, y1: float) -> tuple[np.ndarray, ...]:

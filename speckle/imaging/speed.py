@@ -68,9 +68,9 @@ def random_scene(
     return z, a, depth
 
 
-def _spectrum(n_pixels, depth, k0_dk, shape, fwhm_fraction):
+def _spectrum(n_pixels, depth_range, k0_dk, shape, fwhm_fraction):
     frac = fwhm_fraction if shape == "gaussian" else None
-    return make_spectrum(n_pixels, depth, k0_dk=k0_dk, shape=shape, fwhm_fraction=frac)
+    return make_spectrum(n_pixels, depth_range, k0_dk=k0_dk, shape=shape, fwhm_fraction=frac)
 
 
 def _best_time(func, repeat, **kwargs):
@@ -227,7 +227,7 @@ def speed_accuracy(
         spec = _spectrum(n, depth, k0_dk, shape, fwhm_fraction)
         k0 = float(spec.attrs["k0"])
         s = spec.values
-        common = dict(n_pixels=n, depth=depth, k0=k0, spectrum=s)
+        common = dict(n_pixels=n, depth_range=depth, k0=k0, spectrum=s)
         small = functools.partial(ascan, z[:1, :4], a[:1, :4], **common)
         run = functools.partial(ascan, z, a, **common)
         return run, small, z.size, lambda tol: choose_method(nl, z.shape[1], n, s, tol)
@@ -325,7 +325,7 @@ def beam_speed_accuracy(
         spec = _spectrum(n, depth, k0_dk, shape, fwhm_fraction)
         k0 = float(spec.attrs["k0"])
         s = spec.values
-        common = dict(lines=lines, waist=w0, n_pixels=n, depth=depth, k0=k0, spectrum=s)
+        common = dict(lines=lines, waist=w0, n_pixels=n, depth_range=depth, k0=k0, spectrum=s)
         part = slice(0, 64)
         small = functools.partial(beam_scan, z[part], x[part], a[part], **common)
         run = functools.partial(beam_scan, z, x, a, **common)
@@ -374,7 +374,7 @@ def _failure_point(n_pixels, density, k0_dk, *, n_lines, pixel_size, fwhm_fracti
     rect = _spectrum(n, depth, float(k0_dk), "rectangular", None)
     gauss = _spectrum(n, depth, float(k0_dk), "gaussian", fwhm_fraction).values
     k0 = float(rect.attrs["k0"])
-    common = dict(n_pixels=n, depth=depth, k0=k0)
+    common = dict(n_pixels=n, depth_range=depth, k0=k0)
     ref_rect = ascan(z, a, **common)
     ref_gauss = ascan(z, a, spectrum=gauss, **common)
     measured, predicted = [], []

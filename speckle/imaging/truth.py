@@ -32,7 +32,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import check_real
-from ..conventions import attrs, coord, units_of
+from ..conventions import attrs, coord, depth_range_of, units_of
 from ..provenance import provenance_attrs
 from ..system.source import check_weights, spectrum
 from ._rules import check_tol
@@ -68,7 +68,7 @@ def speckle_free_lines(
     amplitude: object,
     *,
     n_pixels: int,
-    depth: float,
+    depth_range: float,
     spectrum: object | None = None,
     method: str = "direct",
     tol: float | None = None,
@@ -79,7 +79,7 @@ def speckle_free_lines(
     ----------
     z, amplitude : array_like, shape (..., M)
         Scatterer depths (µm) and amplitudes, batch dims as in :func:`speckle.ascan`.
-    n_pixels, depth, spectrum
+    n_pixels, depth_range, spectrum
         As in :func:`speckle.ascan` (``k0`` does not enter the truth).
     method, tol
         Passed to :func:`speckle.ascan`.
@@ -96,7 +96,7 @@ def speckle_free_lines(
         z,
         a2,
         n_pixels=2 * n,
-        depth=depth,
+        depth_range=depth_range,
         k0=0.0,
         spectrum=intensity_spectrum(s),
         method=method,
@@ -150,7 +150,7 @@ def speckle_free_image(
     if not isinstance(scene, xr.Dataset) or not {"z", "amplitude"} <= set(scene.data_vars):
         raise TypeError("scene must be an xarray.Dataset with variables 'z' and 'amplitude'")
     n = int(source.attrs["n_pixels"])
-    h = float(source.attrs["depth"])
+    h = depth_range_of(source, "source")
     r = intensity_spectrum(source.values)
     shared = "x" in scene.data_vars
     if shared:
@@ -174,7 +174,7 @@ def speckle_free_image(
             scene,
             n,
             np.float64,
-            depth=h,
+            depth_range=h,
             spectrum=source.values,
             method=method,
             tol=tol,

@@ -30,7 +30,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import as_finite_array, check_bool, check_real
-from ..conventions import attrs, coord, spacing
+from ..conventions import attrs, coord, depth_range_of, spacing
 from .scatterers import line_generator, random_scatterers
 from .shared import check_scene, is_shared
 
@@ -72,13 +72,13 @@ def check_strain(strain: object, name: str = "strain") -> np.ndarray:
     return np.atleast_1d(s)
 
 
-def required_depth(depth: float, strain: object) -> float:
-    """Depth in µm to populate so that every strain in ``strain`` keeps ``[0, depth)`` full.
+def required_depth(depth_range: float, strain: object) -> float:
+    """Depth in µm to populate so that every strain in ``strain`` keeps ``[0, H)`` full.
 
-    Compression ``s > 0`` pulls material from ``depth / (1 - s)`` up to ``depth``; stretching
-    needs nothing beyond ``depth``.
+    ``depth_range`` is the unambiguous depth ``H`` in µm. Compression ``s > 0`` pulls material
+    from ``H / (1 - s)`` up to ``H``; stretching needs nothing beyond ``H``.
     """
-    h = check_real(depth, "depth", low=0, low_inclusive=False)
+    h = check_real(depth_range, "depth_range", low=0, low_inclusive=False)
     s = check_strain(strain)
     return h / (1.0 - max(0.0, float(s.max())))
 
@@ -88,7 +88,7 @@ def deformable_scene(
     density: float,
     *,
     n_pixels: int,
-    depth: float,
+    depth_range: float,
     seed: int,
     strain: object = 0.0,
     poisson_ratio: float = 0.0,
@@ -99,7 +99,7 @@ def deformable_scene(
 
     Parameters
     ----------
-    n_alines, density, n_pixels, depth, seed, amplitude, count
+    n_alines, density, n_pixels, depth_range, seed, amplitude, count
         As in :func:`speckle.random_scatterers` (density per pixel, depth ``H`` µm).
     strain : float or sequence of float
         Compressive strains the scene will be subjected to, each in (-1, 1). Depths
@@ -119,7 +119,7 @@ def deformable_scene(
     """
     s = check_strain(strain)
     nu = check_real(poisson_ratio, "poisson_ratio", low=0.0, high=0.5)
-    zmax = required_depth(depth, s)
+    zmax = required_depth(depth_range, s)
     smin = float(s.min())
     contraction = 1.0 + nu * min(smin, 0.0)  # lateral stretch factor < 1 for tension
     margin = 0 if contraction >= 1.0 else math.ceil(0.5 * n_alines * (1 / contraction - 1)) + 1
@@ -127,7 +127,7 @@ def deformable_scene(
         n_alines + 2 * margin,
         density,
         n_pixels=n_pixels,
-        depth=depth,
+        depth_range=depth_range,
         seed=seed,
         amplitude=amplitude,
         count=count,
@@ -246,7 +246,7 @@ def _field_values(
 
 def check_line_scene(scene: object, name: str = "scene") -> None:
     """Check ``scene`` is a scatterer field: ``z``/``amplitude`` over ``(aline, scatterer)``
-    and a ``depth`` attribute (µm), as :func:`speckle.random_scatterers` makes.
+    and a ``depth_range`` attribute (``H``, µm), as :func:`speckle.random_scatterers` makes.
 
     Raises
     ------
@@ -265,8 +265,7 @@ def check_line_scene(scene: object, name: str = "scene") -> None:
         )
     if set(scene.z.dims) != {"aline", "scatterer"}:
         raise ValueError(f"{name} z must have dims (aline, scatterer), got {scene.z.dims}")
-    if "depth" not in scene.attrs:
-        raise ValueError(f"{name} needs a 'depth' attribute (imaging depth H in µm)")
+    depth_range_of(scene, name)
 
 
 def check_field(displacement: xr.Dataset, extra_dims: Sequence[str] = ()) -> None:
@@ -360,7 +359,7 @@ def displace(scene: xr.Dataset, displacement: Displacement, *, wrap: bool = Fals
     )
     uz, ux = _field_values(displacement, z, x, np.broadcast_to(aline[:, None], z.shape))
     z2, x2 = z + uz, x + ux
-    h = float(scene.attrs["depth"])
+    h = depth_range_of(scene, "scene")
     first = int(scene.attrs.get("imaged_first", 0))
     count = int(scene.attrs.get("imaged_count", len(aline)))
     amp2 = np.where(amp != 0, amp, 0)
@@ -532,8 +531,9 @@ def uniaxial_strain(
     nu = check_real(poisson_ratio, "poisson_ratio", low=0.0, high=0.5)
     if is_shared(scene):
         return _uniaxial_shared(scene, s, nu, x_centre, y_centre)
-    need = required_depth(float(scene.attrs["depth"]), s)
-    have = float(scene.attrs.get("z_max", scene.attrs["depth"]))
+    h = depth_range_of(scene, "scene")
+    need = required_depth(h, s)
+    have = float(scene.attrs.get("z_max", h))
     if have < need * (1 - 1e-12):
         raise ValueError(
             f"scene is populated to {have:g} µm but strain up to {s.max():g} needs {need:g} µm; "
@@ -645,8 +645,22 @@ def uniaxial_pixel_displacement(
 ) -> xr.Dataset:
     """Uniaxial-strain displacement at pixel centres, with a ``strain`` dim.
 
-    ``x_centre`` defaults to the middle of ``aline`` (as in :func:`uniaxial_strain`).
-    Returns ``uz``/``ux`` in µm with dims ``(strain, depth, aline)``.
+    Parameters
+    ----------
+    strain : float or array_like
+        Uniaxial strain(s), compression > 0.
+    depth, aline : array_like
+        Pixel-centre depths and A-line positions in µm (the image coordinates).
+    poisson_ratio : float
+        In ``[0, 0.5]``.
+    x_centre : float, optional
+        Lateral centre in µm; defaults to the middle of ``aline`` (as in
+        :func:`uniaxial_strain`).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``uz``/``ux`` in µm with dims ``(strain, depth, aline)``.
     """
     s = check_strain(strain)
     xc = float(np.mean(aline)) if x_centre is None else x_centre

@@ -406,7 +406,9 @@ def compress(
     --------
     A stiff inclusion under a sliding probe, moving an A-line scene (exact FE field)::
 
-        scene = speckle.deformable_scene(64, 4.0, n_pixels=256, depth=2048.0, seed=1, strain=0.01)
+        scene = speckle.deformable_scene(
+            64, 4.0, n_pixels=256, depth_range=2048.0, seed=1, strain=0.01
+        )
         depth = np.arange(0.0, scene.attrs["populated_depth"] + 8.0, 8.0)
         x = scene.aline.values  # A-line positions, µm
         labels = speckle.inclusion_labels(depth, x, (1024.0, x.mean()), 160.0)

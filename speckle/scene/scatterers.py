@@ -81,7 +81,7 @@ def random_scatterers(
     density: float,
     *,
     n_pixels: int,
-    depth: float,
+    depth_range: float,
     seed: int,
     amplitude: str = "equal",
     count: str = "fixed",
@@ -96,12 +96,12 @@ def random_scatterers(
     n_alines : int
         Number of A-lines (>= 1).
     density : float
-        Mean number of scatterers per pixel ``N_sc/N`` (>= 0), i.e. per ``depth/n_pixels`` µm
+        Mean number of scatterers per pixel ``N_sc/N`` (>= 0), i.e. per ``H/N`` µm
         of depth.
     n_pixels : int
-        Pixels per A-scan ``N`` (>= 2), defines the pixel size ``depth/n_pixels``.
-    depth : float
-        Imaging depth ``H`` in µm (> 0).
+        Pixels per A-scan ``N`` (>= 2), defines the pixel size ``depth_range/n_pixels``.
+    depth_range : float
+        Unambiguous depth ``H`` in µm (> 0).
     seed : int
         Non-negative integer seed (see module docstring).
     amplitude : {"equal", "rayleigh", "uniform"}
@@ -134,7 +134,7 @@ def random_scatterers(
     nl = check_int(n_alines, "n_alines", low=1)
     rho = check_real(density, "density", low=0)
     n = check_int(n_pixels, "n_pixels", low=2)
-    h = check_real(depth, "depth", low=0, low_inclusive=False)
+    h = check_real(depth_range, "depth_range", low=0, low_inclusive=False)
     sd = check_int(seed, "seed", low=0)
     check_choice(amplitude, "amplitude", AMPLITUDE_MODELS)
     check_choice(count, "count", COUNT_MODELS)
@@ -188,7 +188,7 @@ def random_scatterers(
             "density": rho,
             "density_units": attrs("density")["long_name"],
             "n_pixels": n,
-            "depth": h,
+            "depth_range": h,
             "seed": sd,
             "amplitude_model": amplitude,
             "count_model": count,

@@ -95,19 +95,19 @@ class System:
         return 2 * np.pi * self.refractive_index * self.sampling_interval / (lam[0] * lam[-1])
 
     @property
-    def depth(self) -> float:
+    def depth_range(self) -> float:
         """Model unambiguous depth ``H = pi/dk`` in µm (medium); twice the imaging depth."""
         return np.pi / self.wavenumber_step
 
     @property
     def imaging_depth(self) -> float:
         """Imaging depth of the real interferogram ``z_max = H/2`` in µm (medium)."""
-        return self.depth / 2
+        return self.depth_range / 2
 
     @property
     def pixel_size(self) -> float:
         """Depth pixel ``H/N`` in µm (medium)."""
-        return self.depth / self.n_pixels
+        return self.depth_range / self.n_pixels
 
     @property
     def k0(self) -> float:
@@ -201,19 +201,19 @@ class System:
         """FWHM in ``k`` of the spectrometer line at ``lambda0`` in rad/µm."""
         return self.spectral_resolution * self.fwhm_k / self.bandwidth
 
-    def rolloff(self, depth: object) -> np.ndarray:
+    def rolloff(self, z: object) -> np.ndarray:
         """Analytic power roll-off ``sinc^2(w z) exp(-(d_res z)^2/(2 ln2))`` (linear, <= 1).
 
         Parameters
         ----------
-        depth : array_like
-            Depths ``z`` in µm (medium) from the zero delay.
+        z : array_like
+            Reflector depths ``z`` in µm (medium) from the zero delay.
         """
-        return rolloff_power(depth, self.pixel_width_k, self.resolution_k)
+        return rolloff_power(z, self.pixel_width_k, self.resolution_k)
 
-    def rolloff_db(self, depth: object) -> np.ndarray:
-        """:meth:`rolloff` in dB (``10 log10``)."""
-        return 10 * np.log10(self.rolloff(depth))
+    def rolloff_db(self, z: object) -> np.ndarray:
+        """:meth:`rolloff` in dB (``10 log10``) at reflector depths ``z`` (µm)."""
+        return 10 * np.log10(self.rolloff(z))
 
     @property
     def rolloff_6db_depth(self) -> float:
@@ -233,7 +233,7 @@ class System:
         """
         k = self.k0 + (np.arange(self.n_pixels) - self.n_pixels // 2) * self.wavenumber_step
         w = np.exp(-4 * np.log(2) * ((k - self.source_wavenumber) / self.fwhm_k) ** 2)
-        s = _spectrum(self.n_pixels, self.depth, k0=self.k0, shape="array", weights=w)
+        s = _spectrum(self.n_pixels, self.depth_range, k0=self.k0, shape="array", weights=w)
         s.attrs.update(
             source_wavenumber=self.source_wavenumber, fwhm=self.fwhm_k, system=self.label
         )
@@ -244,8 +244,8 @@ class System:
         keys = (
             "wavelength bandwidth camera_pixels wavelength_min wavelength_max refractive_index "
             "beam_waist aline_pitch spectral_resolution fill_factor label sampling_interval "
-            "n_pixels depth imaging_depth pixel_size k0 delta_k k0_dk source_wavenumber fwhm_k "
-            "fwhm_fraction gaussian_resolution axial_resolution lateral_resolution "
+            "n_pixels depth_range imaging_depth pixel_size k0 delta_k k0_dk source_wavenumber "
+            "fwhm_k fwhm_fraction gaussian_resolution axial_resolution lateral_resolution "
             "rolloff_6db_depth"
         ).split()
         return {k: getattr(self, k) for k in keys}
@@ -262,7 +262,7 @@ class System:
                 f"{self.wavelength_max * nm:.1f} nm ({self.sampling_interval * nm:.4f} nm/px)",
             ),
             ("refractive index", f"{self.refractive_index:g}"),
-            ("N, H", f"{self.n_pixels}, {self.depth:.1f} µm (in the sample)"),
+            ("N, H", f"{self.n_pixels}, {self.depth_range:.1f} µm (in the sample)"),
             ("imaging depth z_max", f"{self.imaging_depth:.1f} µm (in the sample)"),
             ("pixel size H/N", f"{self.pixel_size:.3f} µm"),
             ("k0, k0/Δk", f"{self.k0:.4f} rad/µm, {self.k0_dk:.3f}"),

@@ -44,6 +44,7 @@ from scipy import special
 from scipy.interpolate import RegularGridInterpolator
 
 from .._validate import as_finite_array, check_int, check_memory, check_real
+from ..conventions import depth_range_of
 from ..scene.shared import is_shared
 from ._scene import check_scene, line_rng, scale_amplitudes
 
@@ -266,8 +267,9 @@ def phase_perturb(
     s2, ell, k = _screen_parameters(index_variance, correlation_length, k0)
     sd = check_int(seed, "seed", low=0)
     step = ell / 8
-    if "depth" in scene.attrs and "n_pixels" in scene.attrs:
-        step = min(step, float(scene.attrs["depth"]) / int(scene.attrs["n_pixels"]))
+    h = depth_range_of(scene, "scene", required=False)
+    if h is not None and "n_pixels" in scene.attrs:
+        step = min(step, h / int(scene.attrs["n_pixels"]))
     z = scene.z.transpose("aline", ...)
     zv = z.values.reshape(z.shape[0], -1)
     phi = _draw(zv, s2, ell, k, sd, step).reshape(z.shape)

@@ -31,6 +31,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import as_finite_array, check_real
+from ..conventions import depth_range_of
 from ._scene import check_scene, scale_amplitudes
 
 __all__ = ["carrier_response", "rolloff", "rolloff_amplitude", "rolloff_curve", "rolloff_power"]
@@ -56,7 +57,7 @@ def carrier_response(distance: object, pixel_width: object = 0.0, resolution: ob
     return np.sinc(w * d / np.pi) * np.exp(-((r * d) ** 2) / (4 * np.log(2)))
 
 
-def rolloff_power(depth: object, pixel_width: float, resolution: float = 0.0) -> np.ndarray:
+def rolloff_power(z: object, pixel_width: float, resolution: float = 0.0) -> np.ndarray:
     """Power roll-off of a point reflector, ``sinc^2(w z) exp(-(r z)^2/(2 ln2))`` (linear).
 
     With ``w = pi/(2 z_max)`` (100 % fill at ``lambda0``) and ``r = omega w`` (``omega`` the
@@ -65,14 +66,14 @@ def rolloff_power(depth: object, pixel_width: float, resolution: float = 0.0) ->
 
     Parameters
     ----------
-    depth : array_like
+    z : array_like
         Depth ``z`` of the reflector from the zero delay, µm (medium).
     pixel_width : float
         Camera pixel width in ``k``, rad/µm (>= 0).
     resolution : float
         FWHM of the spectrometer line in ``k``, rad/µm (>= 0).
     """
-    z = as_finite_array(depth, "depth")
+    z = as_finite_array(z, "z")
     w = check_real(pixel_width, "pixel_width", low=0)
     r = check_real(resolution, "resolution", low=0)
     return carrier_response(z, w, r) ** 2
@@ -143,9 +144,12 @@ def rolloff(
         factor = xr.apply_ufunc(lambda z: np.sqrt(np.interp(z, zc, rc)), scene.z)
         return scale_amplitudes(scene, factor, rolloff="user curve")
     if z_max is None:
-        if "depth" not in scene.attrs:
-            raise ValueError("give z_max (µm): the scene has no 'depth' attribute to take H/2 from")
-        z_max = 0.5 * float(scene.attrs["depth"])
+        h = depth_range_of(scene, "scene", required=False)
+        if h is None:
+            raise ValueError(
+                "give z_max (µm): the scene has no 'depth_range' attribute to take H/2 from"
+            )
+        z_max = 0.5 * h
     factor = xr.apply_ufunc(
         rolloff_amplitude, scene.z, kwargs={"z_max": z_max, "resolution": resolution}
     )

@@ -62,10 +62,13 @@ def wavelength_from_k0(k0: float, refractive_index: float = 1.0) -> float:
     return 2 * np.pi * n / k
 
 
-def delta_k(n_pixels: int, depth: float) -> float:
-    """Spectral width ``N*pi/H`` in rad/µm of ``n_pixels`` components spaced ``pi/depth``."""
+def delta_k(n_pixels: int, depth_range: float) -> float:
+    """Spectral width ``N*pi/H`` in rad/µm of ``n_pixels`` components spaced ``pi/H``.
+
+    ``depth_range`` is the unambiguous depth ``H`` in µm (> 0).
+    """
     n = check_int(n_pixels, "n_pixels", low=2)
-    h = check_real(depth, "depth", low=0, low_inclusive=False)
+    h = check_real(depth_range, "depth_range", low=0, low_inclusive=False)
     return n * np.pi / h
 
 
@@ -87,7 +90,7 @@ def index_shift_phase(n_pixels: int, q: object) -> np.ndarray:
 
 def spectrum(
     n_pixels: int,
-    depth: float,
+    depth_range: float,
     *,
     k0: float | None = None,
     k0_dk: float | None = None,
@@ -106,8 +109,8 @@ def spectrum(
     ----------
     n_pixels : int
         Number of spectral components ``N`` (= pixels per A-scan), >= 2.
-    depth : float
-        Unambiguous imaging depth ``H`` in µm, > 0.
+    depth_range : float
+        Unambiguous depth ``H`` in µm, > 0.
     k0 : float, optional
         Central wavenumber in the medium, rad/µm, >= 0. ``k0 = 0`` is the formal Fourier
         transform of the paper's Fig. 1.
@@ -131,8 +134,8 @@ def spectrum(
     -------
     xarray.DataArray
         Weights ``S(k_n)`` (dimensionless) with dim ``wavenumber`` (coordinate ``k_n`` in rad/µm)
-        and a coordinate ``n`` (spectral index). Attributes hold ``n_pixels``, ``depth``, ``k0``,
-        ``delta_k``, ``k0_dk``, ``shape`` and ``fwhm`` (NaN unless Gaussian).
+        and a coordinate ``n`` (spectral index). Attributes hold ``n_pixels``, ``depth_range``,
+        ``k0``, ``delta_k``, ``k0_dk``, ``shape`` and ``fwhm`` (NaN unless Gaussian).
 
     Raises
     ------
@@ -141,7 +144,7 @@ def spectrum(
         ``weights`` length.
     """
     n = check_int(n_pixels, "n_pixels", low=2)
-    h = check_real(depth, "depth", low=0, low_inclusive=False)
+    h = check_real(depth_range, "depth_range", low=0, low_inclusive=False)
     check_choice(shape, "shape", SPECTRUM_SHAPES)
     given = [
         name
@@ -193,8 +196,8 @@ def spectrum(
         attrs={
             **attrs("weight"),
             "n_pixels": n,
-            "depth": h,
-            "depth_units": units_of("length"),
+            "depth_range": h,
+            "depth_range_units": units_of("depth_range"),
             "k0": k0v,
             "k0_units": units_of("wavenumber"),
             "delta_k": dk_total,

@@ -245,7 +245,7 @@ def resampling_error(theta: object, method: str) -> np.ndarray:
     return np.sqrt(err2 @ wq)
 
 
-def resampling_response(system, depth: object, method: str) -> np.ndarray:
+def resampling_response(system, z: object, method: str) -> np.ndarray:
     """Amplitude factor of the k-linearisation on a reflector's peak, from the kernel's response.
 
     The processing interpolates the wavelength-linear camera signal onto the linear-``k`` grid.
@@ -266,7 +266,7 @@ def resampling_response(system, depth: object, method: str) -> np.ndarray:
     ----------
     system : speckle.system.datasheet.System
         The system (wavelength-linear camera, processing grid).
-    depth : array_like
+    z : array_like
         Reflector depths ``z`` in µm (medium).
     method : {"linear", "cubic", "exact"}
         The k-linearisation of :func:`system_ascan` (``"exact"``: 1).
@@ -274,9 +274,9 @@ def resampling_response(system, depth: object, method: str) -> np.ndarray:
     Returns
     -------
     numpy.ndarray
-        Complex factor, shape of ``depth``.
+        Complex factor, shape of ``z``.
     """
-    z = as_finite_array(depth, "depth")
+    z = as_finite_array(z, "z")
     check_choice(method, "method", ("linear", "cubic", "exact"))
     grid = grid_wavenumbers(system)
     cam = camera_sampling(system)["wavenumber"]

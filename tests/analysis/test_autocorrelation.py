@@ -33,7 +33,9 @@ def _field_correlation(field: np.ndarray, lag: int, axis: int) -> tuple[complex,
 def test_gaussian_field_intensity_autocorrelation_is_siegert():
     """Exactly Gaussian, stationary fields (shaped noise): intensity acf = |gamma|^2, 0 across."""
     src = speckle.spectrum(N, H, k0_dk=10, shape="gaussian", fwhm_fraction=0.3)
-    zero = speckle.bscan(speckle.random_scatterers(512, 0.0, n_pixels=N, depth=H, seed=1), src)
+    zero = speckle.bscan(
+        speckle.random_scatterers(512, 0.0, n_pixels=N, depth_range=H, seed=1), src
+    )
     img = speckle.add_noise(zero, 0.0, seed=3, kind="rin", spectrum=src, signal_intensity=1.0)
     est = ac.intensity_autocorrelation(img.intensity, max_lag=6)
     gamma = noise_autocorrelation(N, np.arange(7), kind="rin", spectrum=src)
@@ -49,7 +51,7 @@ def test_gaussian_field_intensity_autocorrelation_is_siegert():
 def test_depth_field_correlation_matches_spectrum_theory():
     """E[A(q+m) A*(q)] = sum S^2 exp(-2i pi n m/N)/sum S^2 for any density (k0 H = 10 N pi)."""
     src = speckle.spectrum(N, H, k0_dk=10, shape="gaussian", fwhm_fraction=0.4)
-    scene = speckle.random_scatterers(400, 2.0, n_pixels=N, depth=H, seed=2)
+    scene = speckle.random_scatterers(400, 2.0, n_pixels=N, depth_range=H, seed=2)
     f = speckle.bscan(scene, src, method="nufft", tol=1e-10).field.values  # (depth, aline)
     theory = np.sqrt(ac.axial_correlation_theory(np.arange(4), src.values))
     for m in range(1, 4):
@@ -60,10 +62,10 @@ def test_depth_field_correlation_matches_spectrum_theory():
 def test_beam_lines_field_correlation_is_gaussian_in_lag():
     """Lines m pitches apart: complex correlation exp(-(m p)^2/w0^2) (beam_scan's theory)."""
     p, w0 = 1.0, 3.0
-    sc = shared_scatterers(300, p, 4.0, n_pixels=N, depth=H, waist=w0, seed=5)
+    sc = shared_scatterers(300, p, 4.0, n_pixels=N, depth_range=H, waist=w0, seed=5)
     scene = beam_lines(sc["z"], sc["x"], sc["amplitude"], lines=sc["lines"], waist=w0)
     src = speckle.spectrum(N, H, k0_dk=10)
-    f = speckle.bscan(scene.assign_attrs(depth=H, n_pixels=N), src, method="nufft", tol=1e-10)
+    f = speckle.bscan(scene.assign_attrs(depth_range=H, n_pixels=N), src, method="nufft", tol=1e-10)
     f = f.field.transpose("depth", "aline").values
     for m in range(1, 5):
         theory = float(np.sqrt(ac.lateral_correlation_theory(m, w0, p)))

@@ -24,7 +24,7 @@ BLOCKS = 16
 def dense():
     """Independent lines, 64 scatterers per pixel (Poisson), rectangular spectrum: one image."""
     src = speckle.spectrum(N, H, k0_dk=10)
-    sc = speckle.random_scatterers(256, 64.0, n_pixels=N, depth=H, seed=7, count="poisson")
+    sc = speckle.random_scatterers(256, 64.0, n_pixels=N, depth_range=H, seed=7, count="poisson")
     img = speckle.bscan(sc, src, method="finufft", tol=1e-9)
     return src, sc, img
 
@@ -55,7 +55,9 @@ def test_truth_is_the_incoherent_sum_exactly():
     )
     x = speckle.scan_lines(10, p)
     truth = speckle_free_image(sc, src, waist=12.0, x=x).values
-    kw = dict(lines=x, waist=12.0, n_pixels=n, depth=h, k0=src.attrs["k0"], spectrum=src.values)
+    kw = dict(
+        lines=x, waist=12.0, n_pixels=n, depth_range=h, k0=src.attrs["k0"], spectrum=src.values
+    )
     ref = sum(
         np.abs(
             speckle.beam_scan([sc.z.values[j]], [sc.x.values[j]], [sc.amplitude.values[j]], **kw)
@@ -67,14 +69,14 @@ def test_truth_is_the_incoherent_sum_exactly():
     # independent lines: the same identity through speckle.ascan
     z = rng.uniform(0, h, (3, m))
     a = rng.rayleigh(1, (3, m)) + 0j
-    lines = speckle_free_lines(z, a, n_pixels=n, depth=h, spectrum=src.values)
+    lines = speckle_free_lines(z, a, n_pixels=n, depth_range=h, spectrum=src.values)
     ref = sum(
         np.abs(
             speckle.ascan(
                 z[:, j : j + 1],
                 a[:, j : j + 1],
                 n_pixels=n,
-                depth=h,
+                depth_range=h,
                 k0=src.attrs["k0"],
                 spectrum=src.values,
             )
@@ -110,7 +112,7 @@ def test_truth_is_the_mean_over_phase_realisations():
         lines=x,
         waist=16.0,
         n_pixels=n,
-        depth=h,
+        depth_range=h,
         k0=src.attrs["k0"],
         spectrum=src.values,
         method="finufft",
@@ -199,7 +201,7 @@ def test_subband_widens_the_axial_psf_n_fold(looks):
     from speckle.analysis.image_quality import bandlimited, peak_fwhm
 
     n = 256
-    a = speckle.ascan([100.37 * 8], [1.0], n_pixels=n, depth=n * 8.0, k0=30.0)
+    a = speckle.ascan([100.37 * 8], [1.0], n_pixels=n, depth_range=n * 8.0, k0=30.0)
     looks_f = cp.frequency_looks(xr.DataArray(a, dims=["depth"]), cp.subband_windows(n, looks))
     fine = bandlimited(looks_f.values, 64)
     fwhm = peak_fwhm((np.abs(fine) ** 2).sum(axis=0), 1 / 64)
@@ -214,7 +216,7 @@ def test_brownian_g1():
     k0 = src.attrs["k0"]
     d = 0.05  # µm^2/s
     dt = 1 / (4 * k0**2 * d) / 4  # q^2 D dt = 1/4
-    sc = speckle.random_scatterers(128, 32.0, n_pixels=N, depth=H, seed=2, count="poisson")
+    sc = speckle.random_scatterers(128, 32.0, n_pixels=N, depth_range=H, seed=2, count="poisson")
     frames = cp.brownian_frames(sc, 9, diffusion=d, interval=dt, seed=5)
     img = (
         speckle.bscan(frames, src, method="finufft", tol=1e-10)
@@ -238,7 +240,7 @@ def test_brownian_g1():
 
 def test_polarization_looks_contrast():
     src = speckle.spectrum(N, H, k0_dk=10)
-    sc = speckle.random_scatterers(256, 32.0, n_pixels=N, depth=H, seed=4, count="poisson")
+    sc = speckle.random_scatterers(256, 32.0, n_pixels=N, depth_range=H, seed=4, count="poisson")
     f = 0.3
     img = speckle.bscan(speckle.depolarize(sc, f, seed=1), src, method="finufft", tol=1e-9)
     i = img.intensity.sum("channel").transpose("depth", "aline").values
@@ -256,7 +258,7 @@ def test_polarization_looks_contrast():
 def test_complex_averaging():
     """One realisation: complex averaging removes no speckle; noisy looks: SNR x L."""
     src = speckle.spectrum(N, H, k0_dk=10)
-    sc = speckle.random_scatterers(64, 16.0, n_pixels=N, depth=H, seed=4)
+    sc = speckle.random_scatterers(64, 16.0, n_pixels=N, depth_range=H, seed=4)
     img = speckle.bscan(sc, src, method="finufft", tol=1e-10)
     f = img.field.transpose("depth", "aline")
     looks = xr.concat([f] * 8, "look")
@@ -326,7 +328,7 @@ def test_truth_carries_the_polarization_channels():
     """Each channel's truth is its intensity fraction of the total (1 - f, f)."""
     n, h = 32, 256.0
     src = speckle.spectrum(n, h, k0_dk=10)
-    sc = speckle.random_scatterers(8, 4.0, n_pixels=n, depth=h, seed=3)
+    sc = speckle.random_scatterers(8, 4.0, n_pixels=n, depth_range=h, seed=3)
     f = 0.3
     both = speckle_free_image(speckle.depolarize(sc, f, seed=2), src)
     total = speckle_free_image(sc, src)

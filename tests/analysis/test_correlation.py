@@ -28,7 +28,7 @@ def tolerance(r, n_pixels, speckle_pixels=1.0):
 
 def strained_images(strains, src, *, n_alines=512, density=4.0, seed=11, count="poisson"):
     sc = D.deformable_scene(
-        n_alines, density, n_pixels=N, depth=H, seed=seed, strain=strains, count=count
+        n_alines, density, n_pixels=N, depth_range=H, seed=seed, strain=strains, count=count
     )
     b = speckle.bscan(D.uniaxial_strain(sc, strains), src)
     disp = D.uniaxial_pixel_displacement(strains, b.depth.values, b.aline.values)
@@ -42,14 +42,14 @@ def test_sample_field_is_eq4_at_any_depth():
     rng = np.random.default_rng(0)
     z = rng.uniform(0, H, (3, 40))
     k0 = 10 * DK
-    a = speckle.ascan(z, 1.0, n_pixels=N, depth=H, k0=k0)
+    a = speckle.ascan(z, 1.0, n_pixels=N, depth_range=H, k0=k0)
     y = rng.uniform(-3, N + 3, (3, 25))
     got = corr.sample_field(a, y)
     # Eq. 4 at z_q = y*p: move the scatterers up by y*p and read pixel 0, carrier restored
     want = np.array(
         [
             [
-                speckle.ascan(z[i] - yj * PIXEL, 1.0, n_pixels=N, depth=H, k0=k0)[0]
+                speckle.ascan(z[i] - yj * PIXEL, 1.0, n_pixels=N, depth_range=H, k0=k0)[0]
                 * np.exp(2j * k0 * yj * PIXEL)
                 for yj in y[i]
             ]
@@ -61,7 +61,7 @@ def test_sample_field_is_eq4_at_any_depth():
 
 
 def test_exact_compensation_undoes_a_rigid_subpixel_shift():
-    sc = D.deformable_scene(6, 3.0, n_pixels=N, depth=H, seed=2)
+    sc = D.deformable_scene(6, 3.0, n_pixels=N, depth_range=H, seed=2)
     src = speckle.spectrum(N, H, k0_dk=10)
     u = 0.37 * PIXEL
     ref = speckle.bscan(D.translate(sc, 0.0, wrap=True), src)
@@ -154,7 +154,7 @@ def test_one_pixel_shift_without_compensation():
     unity); the intensity keeps only the incoherent term, kappa D1/(rho A^2 + kappa A4) with
     D1 = int |P(x)|^2 |P(x+1)|^2, in the continuum D1/A^2 = 1/pi^2: (1/pi^2)/(rho + 2/3)."""
     density = 0.5
-    sc = D.deformable_scene(512, density, n_pixels=N, depth=H, seed=4, count="poisson")
+    sc = D.deformable_scene(512, density, n_pixels=N, depth_range=H, seed=4, count="poisson")
     src = speckle.spectrum(N, H, k0_dk=10)
     ref = speckle.bscan(D.translate(sc, 0.0, wrap=True), src)
     moved = speckle.bscan(D.translate(sc, PIXEL, wrap=True), src)
@@ -188,7 +188,7 @@ def test_correlation_decreases_with_k0_over_delta_k():
         for r in (1, 3, 10)
     ]
     assert np.all(curves[0][1:] > curves[1][1:]) and np.all(curves[1][1:] > curves[2][1:])
-    sc = D.deformable_scene(256, 4.0, n_pixels=N, depth=H, seed=8, strain=[0.0, 0.02])
+    sc = D.deformable_scene(256, 4.0, n_pixels=N, depth_range=H, seed=8, strain=[0.0, 0.02])
     sims = []
     for r in (1, 3, 10):
         src = speckle.spectrum(N, H, k0_dk=r)
@@ -216,7 +216,7 @@ def test_two_peak_spectrum_revives_and_carrier_window_factor():
 
 
 def test_correlation_map_windows_and_edges():
-    sc = D.deformable_scene(20, 2.0, n_pixels=N, depth=H, seed=1)
+    sc = D.deformable_scene(20, 2.0, n_pixels=N, depth_range=H, seed=1)
     b = speckle.bscan(sc, speckle.spectrum(N, H, k0_dk=3))
     for kind in corr.KINDS:
         m = corr.correlation_map(b, b, window=(8, 5), kind=kind)
@@ -225,7 +225,8 @@ def test_correlation_map_windows_and_edges():
         np.testing.assert_allclose(m.values[valid], 1.0, atol=1e-9)
         assert not valid[:4].any() and not valid[:, :2].any()
     other = speckle.bscan(
-        D.deformable_scene(20, 2.0, n_pixels=N, depth=H, seed=99), speckle.spectrum(N, H, k0_dk=3)
+        D.deformable_scene(20, 2.0, n_pixels=N, depth_range=H, seed=99),
+        speckle.spectrum(N, H, k0_dk=3),
     )
     m = corr.correlation_map(b, other, window=16)
     # independent images: windowed Pearson of 256 pixels scatters around 0 with SE ~ 1/16
@@ -265,7 +266,7 @@ def test_lateral_compensation_of_poisson_expansion():
     (corr - floor) <f^2> + floor <f> (pooling lines of equal variance)."""
     s, nu, n_alines = 0.1, 0.5, 64
     src = speckle.spectrum(N, H, k0_dk=1)
-    sc = D.deformable_scene(n_alines, 4.0, n_pixels=N, depth=H, seed=6, strain=[0.0, s])
+    sc = D.deformable_scene(n_alines, 4.0, n_pixels=N, depth_range=H, seed=6, strain=[0.0, s])
     b = speckle.bscan(D.uniaxial_strain(sc, [0.0, s], poisson_ratio=nu), src)
     ref, dfm = b.isel(strain=0), b.isel(strain=1)
     disp = D.uniaxial_pixel_displacement([s], b.depth.values, b.aline.values, poisson_ratio=nu)

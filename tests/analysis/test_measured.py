@@ -233,7 +233,7 @@ def test_simulated_scene_with_floor_reproduces_measured_moments(comparison):
     """Dense simulated speckle + the fitted floor + 8-bit log compression at the fitted gain
     and offset matches the measured skewness and kurtosis within the combined standard error."""
     n = 32
-    scene = speckle.random_scatterers(800, 16.0, n_pixels=n, depth=n * 8.0, seed=13)
+    scene = speckle.random_scatterers(800, 16.0, n_pixels=n, depth_range=n * 8.0, seed=13)
     ds = speckle.bscan(scene, speckle.spectrum(n, n * 8.0, k0_dk=10), normalise="expected")
     i = add_floor(ds.intensity, float(comparison.floor), mean_intensity=1.0)
     sim = measured.log_statistics(log_compress(i, float(comparison.gain), float(comparison.offset)))
@@ -255,7 +255,7 @@ def test_low_density_matches_moments_but_not_the_histogram(roi, comparison):
     skewness, but its standardised log histogram is further from the data than even the pure
     law, while the floor law is closest. Two-sample KS on equally quantised samples."""
     n, g = 256, float(comparison.gain)
-    scene = speckle.random_scatterers(160, 0.7, n_pixels=n, depth=n * 8.0, seed=17)
+    scene = speckle.random_scatterers(160, 0.7, n_pixels=n, depth_range=n * 8.0, seed=17)
     ds = speckle.bscan(scene, speckle.spectrum(n, n * 8.0, k0_dk=10))
     rng = np.random.default_rng(17)
     samples = {
@@ -287,7 +287,7 @@ def test_additive_detector_noise_does_not_explain_the_departure(sample_path, com
     noise = np.exp((float(air["mean"]) - c) / g + np.euler_gamma)  # <I_n>/<I_roi>
     assert 0.03 < noise < 0.2 and noise > 5 * float(comparison.floor)
     n = 32
-    scene = speckle.random_scatterers(800, 16.0, n_pixels=n, depth=n * 8.0, seed=19)
+    scene = speckle.random_scatterers(800, 16.0, n_pixels=n, depth_range=n * 8.0, seed=19)
     field = speckle.bscan(scene, speckle.spectrum(n, n * 8.0, k0_dk=10), normalise="expected")
     rng = np.random.default_rng(19)
     shape = field.field.shape

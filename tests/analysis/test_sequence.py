@@ -19,7 +19,9 @@ S = 2e-3
 def frames():
     src = speckle.spectrum(N, H, k0_dk=10, shape="gaussian", fwhm=0.5 * N * np.pi / H)
     totals = [1 - (1 - S) ** i for i in range(4)]
-    scene = speckle.deformable_scene(LINES, 4.0, n_pixels=N, depth=H, seed=3, strain=max(totals))
+    scene = speckle.deformable_scene(
+        LINES, 4.0, n_pixels=N, depth_range=H, seed=3, strain=max(totals)
+    )
     b = speckle.bscan(speckle.uniaxial_strain(scene, totals), src, method="nufft", tol=1e-9)
     f = b.field.rename(strain="frame").transpose("frame", "depth", "aline")
     f = f.drop_vars("frame").assign_coords(depth=500.0 + f.depth)  # a window starting at 500 um

@@ -46,7 +46,7 @@ def simulate(density, *, source, n_alines, amplitude="equal", count="fixed", see
         n_alines,
         density,
         n_pixels=source.attrs["n_pixels"],
-        depth=source.attrs["depth"],
+        depth_range=source.attrs["depth_range"],
         seed=seed,
         amplitude=amplitude,
         count=count,
@@ -124,7 +124,7 @@ def test_contrast_versus_density_sweep():
 @pytest.mark.slow
 def test_intensity_statistics_independent_of_k0():
     """Same scatterers, k0/dk = 1 and 10: same mean intensity and contrast within error."""
-    scene = speckle.random_scatterers(2000, 4.0, n_pixels=N, depth=H, seed=21)
+    scene = speckle.random_scatterers(2000, 4.0, n_pixels=N, depth_range=H, seed=21)
     out = {}
     for ratio in (1.0, 10.0):
         ds = speckle.bscan(scene, speckle.spectrum(N, H, k0_dk=ratio))

@@ -30,7 +30,7 @@ def source(shape: str = "gaussian", k0_dk: float = R):
 def pair(strains: tuple, n_alines: int = 32, shape: str = "gaussian", seed: int = 3):
     """Reference field and deformed fields (strain, depth, aline) under uniform compression."""
     scene = speckle.deformable_scene(
-        n_alines, 4.0, n_pixels=N, depth=H, seed=seed, strain=[0.0, *strains]
+        n_alines, 4.0, n_pixels=N, depth_range=H, seed=seed, strain=[0.0, *strains]
     )
     img = speckle.bscan(
         speckle.uniaxial_strain(scene, [0.0, *strains]), source(shape), method="nufft", tol=1e-9
@@ -276,7 +276,7 @@ def test_layered_phantom_strains_inverse_to_modulus():
         layer = np.clip(np.searchsorted(edges, z, side="right") - 1, 0, 2)
         return -(offsets[layer] + strain[layer] * (z - edges[layer]))
 
-    scene = speckle.deformable_scene(64, 4.0, n_pixels=N, depth=H, seed=5, strain=0.02)
+    scene = speckle.deformable_scene(64, 4.0, n_pixels=N, depth_range=H, seed=5, strain=0.02)
     ref = speckle.bscan(speckle.displace(scene, lambda z, x: 0 * z), source(), method="nufft")
     dfm = speckle.bscan(speckle.displace(scene, field), source(), method="nufft")
     for method in ("vector", "wls"):
@@ -350,7 +350,7 @@ def test_fe_inclusion_contrast_matches_window_averaged_truth():
 
     lines, s = 64, 0.004
     depth = np.arange(N) * PIXEL
-    scene = speckle.deformable_scene(lines, 4.0, n_pixels=N, depth=H, seed=7, strain=0.02)
+    scene = speckle.deformable_scene(lines, 4.0, n_pixels=N, depth_range=H, seed=7, strain=0.02)
     x = scene.aline.values
     labels = speckle.inclusion_labels(depth, x, (H / 2, x.mean()), 160.0)
     fe = speckle.compress(labels, {0: 10.0, 1: 40.0}, 0.45, strain=s, contact="sliding")

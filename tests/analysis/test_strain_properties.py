@@ -33,7 +33,9 @@ NAMES = (
 @pytest.fixture(scope="module")
 def pair():
     src = speckle.spectrum(N, N * PIXEL, k0_dk=10, shape="gaussian", fwhm=0.5 * np.pi / PIXEL)
-    scene = speckle.deformable_scene(LINES, 4.0, n_pixels=N, depth=N * PIXEL, seed=2, strain=1e-3)
+    scene = speckle.deformable_scene(
+        LINES, 4.0, n_pixels=N, depth_range=N * PIXEL, seed=2, strain=1e-3
+    )
     b = speckle.bscan(speckle.uniaxial_strain(scene, [0.0, 1e-3]), src)
     f = b.field.transpose("strain", "depth", "aline").values
     return f[0], f[1], float(src.attrs["k0"])

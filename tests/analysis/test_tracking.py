@@ -22,7 +22,7 @@ H = N * PIXEL
 
 @pytest.fixture(scope="module")
 def scene():
-    return D.deformable_scene(32, 4.0, n_pixels=N, depth=H, seed=21, strain=[0.0, 0.02])
+    return D.deformable_scene(32, 4.0, n_pixels=N, depth_range=H, seed=21, strain=[0.0, 0.02])
 
 
 @pytest.mark.parametrize("shape", ["rectangular", "gaussian"])
@@ -65,7 +65,7 @@ def test_failures_are_reported(scene):
     with a true displacement of 0 nearly every window is off by more than max_error."""
     src = speckle.spectrum(N, H, k0_dk=10)
     ref = speckle.bscan(D.translate(scene, 0.0), src)
-    other = speckle.bscan(D.deformable_scene(32, 4.0, n_pixels=N, depth=H, seed=77), src)
+    other = speckle.bscan(D.deformable_scene(32, 4.0, n_pixels=N, depth_range=H, seed=77), src)
     zero = D.pixel_displacement(lambda z, x: np.zeros(z.shape), ref.depth, ref.aline)
     tr = T.track(ref, other, truth=zero, max_error=0.5)
     assert float(tr.failed.mean()) > 0.5

@@ -31,7 +31,7 @@ def source():
 
 @pytest.fixture(scope="module")
 def scene():
-    return D.deformable_scene(64, 4.0, n_pixels=N, depth=H, seed=5, strain=[0.0, 0.02])
+    return D.deformable_scene(64, 4.0, n_pixels=N, depth_range=H, seed=5, strain=[0.0, 0.02])
 
 
 @pytest.fixture(scope="module")
@@ -107,7 +107,7 @@ def test_poisson_lateral_motion_does_not_spoil_axial_tracking(scene):
 def test_fe_inclusion_displacement():
     lines, s = 64, 0.004
     depth = np.arange(N) * PIXEL
-    sc = speckle.deformable_scene(lines, 4.0, n_pixels=N, depth=H, seed=7, strain=0.02)
+    sc = speckle.deformable_scene(lines, 4.0, n_pixels=N, depth_range=H, seed=7, strain=0.02)
     x = sc.aline.values
     labels = speckle.inclusion_labels(depth, x, (H / 2, x.mean()), 160.0)
     fe = speckle.compress(labels, {0: 10.0, 1: 40.0}, 0.45, strain=s, contact="sliding")

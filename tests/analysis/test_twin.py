@@ -57,7 +57,7 @@ def known_image(fwhm, waist, snr_db, density, *, focus=None, pitch=PITCH, seed=0
     z, x = rng.uniform(z0, h, m), rng.uniform(x0, x1, m)
     kw = {} if focus is None else {"focus": focus}  # Rayleigh range k0 w0^2/2
     a = speckle.beam_scan(
-        z, x, np.ones(m, complex), lines=lines, waist=w0, n_pixels=N, depth=h,
+        z, x, np.ones(m, complex), lines=lines, waist=w0, n_pixels=N, depth_range=h,
         k0=src.attrs["k0"], spectrum=src.values, method="nufft", tol=1e-8, **kw,
     ).T  # fmt: skip
     sig = np.mean(np.abs(a[slice(*REGION_ROWS)]) ** 2)

@@ -39,7 +39,7 @@ def test_source_by_datasheet_resolves_to_model_parameters():
     assert src["n_pixels"] == 256 and src["shape"] == "gaussian"
     assert src["pixel_size"] == pytest.approx(system.pixel_size, rel=1e-15)
     spec = _config.source_spectrum(src)
-    assert spec.attrs["depth"] == pytest.approx(system.depth, rel=1e-14)
+    assert spec.attrs["depth_range"] == pytest.approx(system.depth_range, rel=1e-14)
     assert spec.attrs["k0"] == pytest.approx(system.k0, rel=1e-13)
     assert spec.attrs["fwhm"] == pytest.approx(system.fwhm_k, rel=1e-13)
 

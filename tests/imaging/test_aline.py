@@ -35,7 +35,7 @@ def literal_eq4(z, a, n, h, k0, s):
 @pytest.mark.parametrize("k0", [0.0, 0.7, 2 * np.pi])
 @pytest.mark.parametrize("p", [0, 1, 5, N - 1])
 def test_pixel_centred_scatterer_is_a_delta(k0, p):
-    a = ascan([p * PIX], [1.0], n_pixels=N, depth=H, k0=k0)
+    a = ascan([p * PIX], [1.0], n_pixels=N, depth_range=H, k0=k0)
     expected = np.zeros(N, complex)
     expected[p] = N * np.exp(2j * k0 * p * PIX)  # sum over N unit harmonics, carrier phase
     np.testing.assert_allclose(a, expected, atol=1e-11 * N)
@@ -46,14 +46,14 @@ def test_pixel_centred_scatterer_is_a_delta(k0, p):
 def test_subpixel_scatterer_gives_dirichlet_kernel(n, offset):
     k0 = 1.3
     z = offset * H / n
-    a = ascan([z], [1.0], n_pixels=n, depth=H, k0=k0)
+    a = ascan([z], [1.0], n_pixels=n, depth_range=H, k0=k0)
     q = np.arange(n)
     expected = np.exp(2j * k0 * z) * dirichlet(2 * np.pi * (offset - q) / n, n)
     np.testing.assert_allclose(a, expected, atol=1e-10 * n)
 
 
 def test_figure1_single_scatterer_at_1_25_pixels_spreads_over_neighbours():
-    a = np.abs(ascan([1.25 * PIX], [1.0], n_pixels=N, depth=H, k0=0.0))
+    a = np.abs(ascan([1.25 * PIX], [1.0], n_pixels=N, depth_range=H, k0=0.0))
     # |D(theta)| at distances 0.25 and 0.75 pixel: |sin(pi d)/sin(pi d/N)|
     np.testing.assert_allclose(a[1], abs(np.sin(np.pi * 0.25) / np.sin(np.pi * 0.25 / N)))
     np.testing.assert_allclose(a[2], abs(np.sin(np.pi * 0.75) / np.sin(np.pi * 0.75 / N)))
@@ -65,7 +65,7 @@ def test_matches_literal_transcription_with_gaussian_spectrum():
     z = rng.uniform(-H, 2 * H, 12)
     a = rng.normal(size=12) + 1j * rng.normal(size=12)
     s = speckle.spectrum(N, H, k0=4.0, shape="gaussian", fwhm=0.3 * speckle.delta_k(N, H))
-    got = ascan(z, a, n_pixels=N, depth=H, k0=4.0, spectrum=s)
+    got = ascan(z, a, n_pixels=N, depth_range=H, k0=4.0, spectrum=s)
     ref = literal_eq4(z, a, N, H, 4.0, s.values)
     np.testing.assert_allclose(got, ref, rtol=0, atol=1e-10 * np.abs(ref).max())
 
@@ -78,7 +78,7 @@ def test_matches_literal_transcription_with_gaussian_spectrum():
 def test_parseval_single_scatterer(z, k0, amp):
     """sum_q |A(q)|^2 = N * sum_n |S_n a|^2 for one scatterer anywhere (DFT Parseval)."""
     s = np.linspace(0.2, 1.0, N)
-    a = ascan([z], [amp], n_pixels=N, depth=H, k0=k0, spectrum=s)
+    a = ascan([z], [amp], n_pixels=N, depth_range=H, k0=k0, spectrum=s)
     np.testing.assert_allclose(np.sum(np.abs(a) ** 2), N * np.sum(s**2) * abs(amp) ** 2, rtol=1e-10)
 
 
@@ -91,7 +91,7 @@ def test_parseval_many_scatterers(seed, k0):
     s = rng.uniform(0, 1, N)
     k = k0 + (np.arange(N) - N // 2) * np.pi / H
     f = (a[:, None] * np.exp(2j * np.outer(z, k))).sum(0)
-    got = ascan(z, a, n_pixels=N, depth=H, k0=k0, spectrum=s)
+    got = ascan(z, a, n_pixels=N, depth_range=H, k0=k0, spectrum=s)
     np.testing.assert_allclose(np.sum(np.abs(got) ** 2), N * np.sum(np.abs(s * f) ** 2), rtol=1e-10)
 
 
@@ -104,7 +104,7 @@ def test_linearity(seed, c1, c2):
     rng = np.random.default_rng(seed)
     z1, z2 = rng.uniform(0, H, 7), rng.uniform(0, H, 5)
     a1, a2 = rng.normal(size=7), rng.normal(size=5)
-    kw = {"n_pixels": N, "depth": H, "k0": 3.0}
+    kw = {"n_pixels": N, "depth_range": H, "k0": 3.0}
     both = ascan(np.r_[z1, z2], np.r_[c1 * a1, c2 * a2], **kw)
     parts = c1 * ascan(z1, a1, **kw) + c2 * ascan(z2, a2, **kw)
     np.testing.assert_allclose(both, parts, atol=1e-9 * (1 + np.abs(parts).max()))
@@ -115,7 +115,7 @@ def test_wrap_around_beyond_depth(wraps):
     """A scatterer at z + m H lands where z does, with carrier phase exp(2i k0 m H)."""
     rng = np.random.default_rng(1)
     z, a, k0 = rng.uniform(0, H, 9), rng.normal(size=9), 0.9
-    kw = {"n_pixels": N, "depth": H, "k0": k0}
+    kw = {"n_pixels": N, "depth_range": H, "k0": k0}
     shifted = ascan(z + wraps * H, a, **kw)
     np.testing.assert_allclose(
         shifted, ascan(z, a * np.exp(2j * k0 * wraps * H), **kw), atol=1e-10 * N * 9
@@ -126,7 +126,7 @@ def test_one_pixel_translation_rolls_the_image():
     """Shift theorem: z -> z + H/N rolls A by one pixel, each term gaining exp(2i k0 H/N)."""
     rng = np.random.default_rng(2)
     z, a, k0 = rng.uniform(0, H, 15), rng.normal(size=15), 2.2
-    kw = {"n_pixels": N, "depth": H, "k0": k0}
+    kw = {"n_pixels": N, "depth_range": H, "k0": k0}
     moved = ascan(z + PIX, a, **kw)
     np.testing.assert_allclose(
         moved, np.roll(ascan(z, a * np.exp(2j * k0 * PIX), **kw), 1), atol=1e-10 * N * 15
@@ -136,7 +136,7 @@ def test_one_pixel_translation_rolls_the_image():
 def test_changing_k0_only_rephases_each_scatterer():
     rng = np.random.default_rng(3)
     z, a = rng.uniform(0, H, 10), rng.normal(size=10)
-    kw = {"n_pixels": N, "depth": H}
+    kw = {"n_pixels": N, "depth_range": H}
     np.testing.assert_allclose(
         ascan(z, a, k0=5.0, **kw),
         ascan(z, a * np.exp(2j * 1.5 * z), k0=3.5, **kw),
@@ -149,34 +149,34 @@ def test_batch_dims_and_padding():
     z = rng.uniform(0, H, (2, 3, 6))
     a = rng.normal(size=(2, 3, 6))
     a[0, 1, 4:] = 0  # a ragged line, padded with zero amplitudes
-    out = ascan(z, a, n_pixels=N, depth=H, k0=1.0)
+    out = ascan(z, a, n_pixels=N, depth_range=H, k0=1.0)
     assert out.shape == (2, 3, N) and out.dtype == np.complex128
     np.testing.assert_allclose(
-        out[0, 1], ascan(z[0, 1, :4], a[0, 1, :4], n_pixels=N, depth=H, k0=1.0), atol=1e-10
+        out[0, 1], ascan(z[0, 1, :4], a[0, 1, :4], n_pixels=N, depth_range=H, k0=1.0), atol=1e-10
     )
-    scalar_amp = ascan(z, 2.0, n_pixels=N, depth=H, k0=1.0)
+    scalar_amp = ascan(z, 2.0, n_pixels=N, depth_range=H, k0=1.0)
     np.testing.assert_allclose(
-        scalar_amp, ascan(z, np.full(z.shape, 2.0), n_pixels=N, depth=H, k0=1.0)
+        scalar_amp, ascan(z, np.full(z.shape, 2.0), n_pixels=N, depth_range=H, k0=1.0)
     )
 
 
 def test_direct_result_does_not_depend_on_chunking(monkeypatch):
     rng = np.random.default_rng(5)
     z, a = rng.uniform(0, H, (9, 40)), rng.normal(size=(9, 40))
-    full = ascan(z, a, n_pixels=N, depth=H, k0=1.0)
+    full = ascan(z, a, n_pixels=N, depth_range=H, k0=1.0)
     monkeypatch.setattr(direct, "DIRECT_CHUNK_ELEMENTS", 1)
-    np.testing.assert_array_equal(ascan(z, a, n_pixels=N, depth=H, k0=1.0), full)
+    np.testing.assert_array_equal(ascan(z, a, n_pixels=N, depth_range=H, k0=1.0), full)
 
 
 def test_empty_scene_gives_zeros():
-    out = ascan(np.zeros((3, 0)), np.zeros((3, 0)), n_pixels=N, depth=H, k0=1.0)
+    out = ascan(np.zeros((3, 0)), np.zeros((3, 0)), n_pixels=N, depth_range=H, k0=1.0)
     assert out.shape == (3, N) and not out.any()
 
 
 def test_spectrum_dataarray_is_accepted():
     s = speckle.spectrum(N, H, k0=1.0, shape="gaussian", fwhm=0.5)
-    a1 = ascan([10.0], [1.0], n_pixels=N, depth=H, k0=1.0, spectrum=s)
-    a2 = ascan([10.0], [1.0], n_pixels=N, depth=H, k0=1.0, spectrum=s.values)
+    a1 = ascan([10.0], [1.0], n_pixels=N, depth_range=H, k0=1.0, spectrum=s)
+    a2 = ascan([10.0], [1.0], n_pixels=N, depth_range=H, k0=1.0, spectrum=s.values)
     np.testing.assert_array_equal(a1, a2)
 
 
@@ -186,8 +186,8 @@ def test_spectrum_dataarray_is_accepted():
         ({"n_pixels": 1}, ValueError, "n_pixels"),
         ({"n_pixels": 32.0}, TypeError, "n_pixels"),
         ({"n_pixels": True}, TypeError, "n_pixels"),
-        ({"depth": 0.0}, ValueError, "depth"),
-        ({"depth": np.inf}, ValueError, "depth"),
+        ({"depth_range": 0.0}, ValueError, "depth_range"),
+        ({"depth_range": np.inf}, ValueError, "depth_range"),
         ({"k0": -1.0}, ValueError, "k0"),
         ({"k0": np.nan}, ValueError, "k0"),
         ({"k0": np.inf}, ValueError, "k0"),
@@ -205,7 +205,7 @@ def test_spectrum_dataarray_is_accepted():
     ],
 )
 def test_bad_input_raises_clear_error(kwargs, exc, match):
-    args = {"z": [1.0], "amplitude": [1.0], "n_pixels": N, "depth": H, "k0": 1.0, **kwargs}
+    args = {"z": [1.0], "amplitude": [1.0], "n_pixels": N, "depth_range": H, "k0": 1.0, **kwargs}
     z, a = args.pop("z"), args.pop("amplitude")
     with pytest.raises(exc, match=match):
         ascan(z, a, **args)
@@ -213,5 +213,5 @@ def test_bad_input_raises_clear_error(kwargs, exc, match):
 
 def test_k0_zero_is_the_formal_fourier_transform():
     """k0 = 0: A(q) = N a at the pixel and the spectral components have no carrier."""
-    a = ascan([2 * PIX], [1.0], n_pixels=N, depth=H, k0=0.0)
+    a = ascan([2 * PIX], [1.0], n_pixels=N, depth_range=H, k0=0.0)
     assert np.argmax(np.abs(a)) == 2 and np.isclose(a[2], N)

@@ -42,8 +42,8 @@ def test_direct_equals_ascan_for_one_line_through_every_scatterer():
     z = rng.uniform(-H, 2 * H, 50)
     a = rng.normal(size=50) + 1j * rng.normal(size=50)
     out = speckle.beam_scan(z, np.full(50, 3.7), a, lines=[3.7], waist=5.0, n_pixels=N,
-                            depth=H, k0=K0)  # fmt: skip
-    ref = speckle.ascan(z, a, n_pixels=N, depth=H, k0=K0)
+                            depth_range=H, k0=K0)  # fmt: skip
+    ref = speckle.ascan(z, a, n_pixels=N, depth_range=H, k0=K0)
     assert out.shape == (1, N) and out.dtype == np.complex128
     assert rel_err(out[0], ref) < 1e-14
 
@@ -55,7 +55,7 @@ def test_direct_equals_the_written_out_contract():
     a = rng.normal(size=m) + 1j * rng.normal(size=m)
     lines = np.array([-3.0, 0.0, 4.5, 11.0, 20.0])
     s = rng.uniform(0.2, 1.0, N)
-    out = speckle.beam_scan(z, x, a, lines=lines, waist=6.0, n_pixels=N, depth=H, k0=K0,
+    out = speckle.beam_scan(z, x, a, lines=lines, waist=6.0, n_pixels=N, depth_range=H, k0=K0,
                             spectrum=s)  # fmt: skip
     assert rel_err(out, eq4_beam(z, x, a, lines, 6.0, N, H, K0, s)) < 1e-12
 
@@ -73,9 +73,9 @@ def test_focus_weight_is_the_squared_paraxial_field():
     np.testing.assert_allclose(got, e**2, rtol=1e-12, atol=1e-300)
     # the default Rayleigh range is k0 w0^2/2, and u = 0 gives the contract weight
     h = 512.0
-    one = speckle.beam_scan([zf], [1.0], [1.0], lines=[0.0], waist=w0, n_pixels=64, depth=h,
+    one = speckle.beam_scan([zf], [1.0], [1.0], lines=[0.0], waist=w0, n_pixels=64, depth_range=h,
                             k0=k0, focus=zf)  # fmt: skip
-    ref = speckle.beam_scan([zf], [1.0], [1.0], lines=[0.0], waist=w0, n_pixels=64, depth=h,
+    ref = speckle.beam_scan([zf], [1.0], [1.0], lines=[0.0], waist=w0, n_pixels=64, depth_range=h,
                             k0=k0)  # fmt: skip
     assert rel_err(one, ref) < 1e-14
 
@@ -105,7 +105,7 @@ def test_confocal_axial_response_of_a_mirror(three_d):
         else:
             xx, kw, area = g, dict(lines=[0.0]), step
         a = speckle.beam_scan(np.full(xx.size, zq), xx, np.full(xx.size, area), waist=w0,
-                              n_pixels=n, depth=h, k0=1.0, focus=zf, rayleigh_range=zr,
+                              n_pixels=n, depth_range=h, k0=1.0, focus=zf, rayleigh_range=zr,
                               **kw)[0]  # fmt: skip
         peak = a[round(zq * n / h)] / np.exp(2j * 1.0 * zq) / n  # one pixel, carrier removed
         got.append(abs(peak) ** 2)
@@ -123,7 +123,7 @@ def test_3d_lines_reduce_to_2d_and_separate():
     z, x, y = rng.uniform(0, H, m), rng.uniform(-5, 5, m), rng.uniform(-5, 5, m)
     a = rng.normal(size=m) + 1j * rng.normal(size=m)
     lines = np.array([[0.0, 1.0], [2.0, -1.0], [-3.0, 0.5]])
-    kw = dict(waist=3.0, n_pixels=N, depth=H, k0=K0)
+    kw = dict(waist=3.0, n_pixels=N, depth_range=H, k0=K0)
     out = speckle.beam_scan(z, x, a, y=y, lines=lines, **kw)
     for i, (xl, yl) in enumerate(lines):
         a_y = a * np.exp(-2 * (y - yl) ** 2 / 3.0**2)  # the y factor of the weight
@@ -156,8 +156,8 @@ def test_lateral_correlation_of_a_dense_uniform_scene():
         x = rng.uniform(-margin, (n_lines - 1) * pitch + margin, m)
         z = rng.uniform(0, h, m)
         a = (rng.normal(size=m) + 1j * rng.normal(size=m)) / np.sqrt(2)
-        img = speckle.beam_scan(z, x, a, lines=np.arange(n_lines) * pitch, waist=w0,
-                                n_pixels=n, depth=h, k0=K0, method="nufft", tol=1e-10)  # fmt: skip
+        img = speckle.beam_scan(z, x, a, lines=np.arange(n_lines) * pitch, waist=w0, n_pixels=n,
+                                depth_range=h, k0=K0, method="nufft", tol=1e-10)  # fmt: skip
         i_ = np.abs(img) ** 2
         row_c, row_i = [], []
         for lag in lags:
@@ -224,7 +224,7 @@ def test_fast_methods_stay_within_tol(
         "gaussian": np.exp(-4 * np.log(2) * (idx / (0.3 * n)) ** 2),
         "array": rng.uniform(0.0, 1.0, n),
     }[shape]
-    kw = dict(waist=w0, n_pixels=n, depth=h, k0=10 * n * np.pi / h, spectrum=s)
+    kw = dict(waist=w0, n_pixels=n, depth_range=h, k0=10 * n * np.pi / h, spectrum=s)
     if focus is not None:
         kw.update(focus=focus * h, rayleigh_range=rng.uniform(0.05, 1.0) * h)
     if n_y:
@@ -260,9 +260,9 @@ def test_row_path_stays_within_tol_and_agrees_with_the_general_path(waist_pitch,
     x = rng.uniform(lines[0] - reach - 2 * pitch, lines[-1] + reach + 2 * pitch, m)
     z = rng.uniform(-H, 2 * H, m)
     a = rng.normal(size=m) + 1j * rng.normal(size=m)
-    kw = dict(lines=lines, waist=w0, n_pixels=N, depth=H, k0=K0)
+    kw = dict(lines=lines, waist=w0, n_pixels=N, depth_range=H, k0=K0)
     ref = speckle.beam_scan(z, x, a, **kw)
-    sc, beam, _ = beam_problem(z, x, a, lines=lines, waist=w0, n_pixels=N, depth=H, k0=K0)
+    sc, beam, _ = beam_problem(z, x, a, lines=lines, waist=w0, n_pixels=N, depth_range=H, k0=K0)
     assert uses_row_path(beam, line_grid(sc.lines, w0), 0.5 * tol) is row
     fast = speckle.beam_scan(z, x, a, method="nufft", tol=tol, **kw)
     assert rel_err(fast, ref) <= tol
@@ -289,9 +289,11 @@ def test_raster_row_path_stays_within_tol_and_agrees_with_the_general_path(n_y, 
     y = rng.uniform(ys[0] - 4 * w0, ys[-1] + 4 * w0, m)
     z = rng.uniform(0, H, m)
     a = rng.normal(size=m) + 1j * rng.normal(size=m)
-    kw = dict(y=y, lines=lines, waist=w0, n_pixels=N, depth=H, k0=K0)
+    kw = dict(y=y, lines=lines, waist=w0, n_pixels=N, depth_range=H, k0=K0)
     ref = speckle.beam_scan(z, x, a, **kw)
-    sc, beam, _ = beam_problem(z, x, a, y=y, lines=lines, waist=w0, n_pixels=N, depth=H, k0=K0)
+    sc, beam, _ = beam_problem(
+        z, x, a, y=y, lines=lines, waist=w0, n_pixels=N, depth_range=H, k0=K0
+    )
     assert uses_row_path(beam, line_grid(sc.lines, w0), 0.25 * tol)
     fast = speckle.beam_scan(z, x, a, method=method, tol=tol, **kw)
     assert rel_err(fast, ref) <= tol
@@ -305,7 +307,7 @@ def test_finufft_reference_within_tol():
     m = 4 * N * 30
     x, z = rng.uniform(-2, 60, m), rng.uniform(0, 2 * H, m)
     a = rng.normal(size=m) + 1j * rng.normal(size=m)
-    kw = dict(lines=np.arange(30) * 2.0, waist=4.0, n_pixels=N, depth=H, k0=K0)
+    kw = dict(lines=np.arange(30) * 2.0, waist=4.0, n_pixels=N, depth_range=H, k0=K0)
     ref = speckle.beam_scan(z, x, a, **kw)
     for tol in (1e-4, 1e-8):
         assert rel_err(speckle.beam_scan(z, x, a, method="finufft", tol=tol, **kw), ref) <= tol
@@ -316,7 +318,7 @@ def test_irregular_lines_fall_back_to_direct_or_are_refused():
     z, x = rng.uniform(0, H, 100), rng.uniform(0, 10, 100)
     a = rng.normal(size=100) + 0j
     lines = np.array([0.0, 1.0, 2.5, 7.3])  # no uniform grid holds them
-    kw = dict(lines=lines, waist=2.0, n_pixels=N, depth=H, k0=K0)
+    kw = dict(lines=lines, waist=2.0, n_pixels=N, depth_range=H, k0=K0)
     sc, beam, _ = beam_problem(z, x, a, **kw)
     assert line_grid(sc.lines, 2.0) is None
     assert choose_beam_method(sc, beam, 1e-6) == "direct"
@@ -332,18 +334,18 @@ def test_auto_picks_a_fast_method_on_a_large_scan_and_direct_on_a_tiny_one():
     m = 4 * 512 * 512
     x, z = rng.uniform(0, 511, m), rng.uniform(0, 4096, m)
     lines = np.arange(512.0)
-    big = beam_problem(z, x, np.ones(m), lines=lines, waist=2.0, n_pixels=512, depth=4096.0,
+    big = beam_problem(z, x, np.ones(m), lines=lines, waist=2.0, n_pixels=512, depth_range=4096.0,
                        k0=3.9, tol=1e-6)  # fmt: skip
     assert choose_beam_method(*big) in ("nufft", "nufft32")
     tiny = beam_problem(z[:3], x[:3], np.ones(3), lines=[0.0], waist=2.0, n_pixels=16,
-                        depth=128.0, k0=3.9, tol=1e-6)  # fmt: skip
+                        depth_range=128.0, k0=3.9, tol=1e-6)  # fmt: skip
     assert choose_beam_method(*tiny) == "direct"
 
 
 # --- bad input ----------------------------------------------------------------------------
 
 
-GOOD = dict(lines=[0.0, 1.0], waist=2.0, n_pixels=N, depth=H, k0=K0)
+GOOD = dict(lines=[0.0, 1.0], waist=2.0, n_pixels=N, depth_range=H, k0=K0)
 
 
 @pytest.mark.parametrize(
@@ -389,7 +391,7 @@ def test_fast_result_does_not_depend_on_the_thread_count(raster):
     m = 4 * n * n_lines  # above the serial threshold: blocks of lines run in parallel
     x, z = rng.uniform(0, 4.0 * n_lines, m), rng.uniform(0, 8.0 * n, m)
     a = rng.normal(size=m) + 1j * rng.normal(size=m)
-    kw = dict(lines=np.arange(n_lines) * 4.0, waist=8.0, n_pixels=n, depth=8.0 * n,
+    kw = dict(lines=np.arange(n_lines) * 4.0, waist=8.0, n_pixels=n, depth_range=8.0 * n,
               k0=10 * np.pi / 8, method="nufft", tol=1e-6)  # fmt: skip
     if raster:  # 32 x 4 lines of a C-scan
         gx, gy = np.meshgrid(np.arange(32) * 4.0, np.arange(4) * 4.0)

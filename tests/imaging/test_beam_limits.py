@@ -35,7 +35,7 @@ def test_beam_scan_refuses_a_result_above_max_bytes_naming_lines():
     with pytest.raises(ValueError, match=r"lines too large: .* ~1.25e\+04 GiB"):
         speckle.beam_scan(
             [1.0], [0.0], [1.0], lines=np.arange(100_000.0), waist=2.0, n_pixels=2**23,
-            depth=H, k0=K0,
+            depth_range=H, k0=K0,
         )  # fmt: skip
 
 
@@ -45,7 +45,7 @@ def test_fast_beam_methods_refuse_their_peak_memory_with_the_estimate(method, fo
     """The result (64 lines x 32 px, 32 KiB) fits, the fine grids do not: refused before
     allocating, naming the estimate and what to reduce."""
     z, x, a, lines = _row_scene()
-    kw = dict(lines=lines, waist=4.0, n_pixels=N, depth=H, k0=K0, method=method, tol=1e-4)
+    kw = dict(lines=lines, waist=4.0, n_pixels=N, depth_range=H, k0=K0, method=method, tol=1e-4)
     ok = speckle.beam_scan(z, x, a, focus=focus, **kw)
     assert ok.shape == (64, N) and np.all(np.isfinite(ok))
     monkeypatch.setattr(speckle._validate, "MAX_BYTES", 2**17)  # 128 KiB
@@ -65,7 +65,7 @@ def _focused_3d(m=2000, rayleigh_range=1.0):
     a = rng.normal(size=m) + 1j * rng.normal(size=m)
     gx, gy = np.meshgrid(np.arange(4) * 2.0, np.arange(4) * 2.0)
     lines = np.stack([gx.ravel(), gy.ravel()], 1)
-    kw = dict(y=y, lines=lines, waist=2.0, n_pixels=N, depth=H, k0=K0, focus=0.0)
+    kw = dict(y=y, lines=lines, waist=2.0, n_pixels=N, depth_range=H, k0=K0, focus=0.0)
     return z, x, a, {**kw, "rayleigh_range": rayleigh_range}
 
 
@@ -96,7 +96,7 @@ def test_finufft_images_a_scene_beyond_every_line_to_zeros():
     zero inside FINUFFT)."""
     z, x, a, lines = _row_scene(m=50)
     out = speckle.beam_scan(
-        z, x + 1e4, a, lines=lines, waist=2.0, n_pixels=N, depth=H, k0=K0, method="finufft",
+        z, x + 1e4, a, lines=lines, waist=2.0, n_pixels=N, depth_range=H, k0=K0, method="finufft",
         tol=1e-6,
     )  # fmt: skip
     np.testing.assert_array_equal(out, np.zeros((lines.size, N)))
@@ -143,7 +143,7 @@ BAD_VALUES = st.sampled_from(
     [None, "8", "False", True, -1, 0, 1.5, 1e-20, np.nan, np.inf, -np.inf, 1e300, [], [1, 2, 3],
      {"a": 1}, 1j, "nufft", [[0.0, 1.0]]]
 )  # fmt: skip
-BEAM_PARAMS = ("z", "x", "amplitude", "lines", "waist", "n_pixels", "depth", "k0", "spectrum",
+BEAM_PARAMS = ("z", "x", "amplitude", "lines", "waist", "n_pixels", "depth_range", "k0", "spectrum",
                "method", "tol", "y", "focus", "rayleigh_range")  # fmt: skip
 IMAGE_PARAMS = ("waist", "x", "y", "chunk", "method", "tol", "wrap", "focus", "rayleigh_range")
 METHODS = ("direct", "nufft", "nufft32", "auto", "finufft")
@@ -152,7 +152,7 @@ METHODS = ("direct", "nufft", "nufft32", "auto", "finufft")
 def _beam_call(param, value, method):
     kw = dict(
         z=[8.0, 100.0, 200.0], x=[0.0, 3.0, 9.0], amplitude=[1.0, 0.5j, 2.0],
-        lines=[0.0, 2.0, 4.0], waist=3.0, n_pixels=8, depth=H, k0=K0, method=method, tol=1e-4,
+        lines=[0.0, 2.0, 4.0], waist=3.0, n_pixels=8, depth_range=H, k0=K0, method=method, tol=1e-4,
     )  # fmt: skip
     kw[param] = value
     return speckle.beam_scan(kw.pop("z"), kw.pop("x"), kw.pop("amplitude"), **kw)

@@ -11,7 +11,7 @@ from speckle.imaging.beam_lines import beam_lines, shared_scatterers
 
 def test_beam_lines_equal_beam_scan():
     n, h, w0, p = 32, 128.0, 6.0, 2.0
-    sc = shared_scatterers(12, p, 2.0, n_pixels=n, depth=h, waist=w0, seed=3)
+    sc = shared_scatterers(12, p, 2.0, n_pixels=n, depth_range=h, waist=w0, seed=3)
     src = speckle.spectrum(n, h, k0_dk=8, shape="gaussian", fwhm_fraction=0.4)
     ref = speckle.beam_scan(
         sc["z"],
@@ -20,7 +20,7 @@ def test_beam_lines_equal_beam_scan():
         lines=sc["lines"],
         waist=w0,
         n_pixels=n,
-        depth=h,
+        depth_range=h,
         k0=src.attrs["k0"],
         spectrum=src.values,
     )

@@ -14,7 +14,7 @@ N, H = 64, 512.0
 
 @pytest.fixture(scope="module")
 def scene():
-    return speckle.random_scatterers(32, 4.0, n_pixels=N, depth=H, seed=5)
+    return speckle.random_scatterers(32, 4.0, n_pixels=N, depth_range=H, seed=5)
 
 
 @pytest.fixture(scope="module")
@@ -32,7 +32,11 @@ def test_dataset_layout(scene, source):
     assert ds.attrs["k0_dk"] == pytest.approx(10) and ds.attrs["scene_seed"] == 5
     assert ds.attrs["speckle_version"]
     line = speckle.ascan(
-        scene.z[3].values, scene.amplitude[3].values, n_pixels=N, depth=H, k0=source.attrs["k0"]
+        scene.z[3].values,
+        scene.amplitude[3].values,
+        n_pixels=N,
+        depth_range=H,
+        k0=source.attrs["k0"],
     )
     np.testing.assert_array_equal(ds.field.isel(aline=3).values, line)
 
@@ -50,7 +54,7 @@ def test_expected_normalisation_gives_unit_mean_intensity(source):
     The sample mean over 64 independent lines x 64 pixels has relative standard error
     about C/sqrt(n_lines * N / 2) (~2 correlated pixels per speckle), C ~ 1.08: 5 sigma ~ 0.05.
     """
-    sc = speckle.random_scatterers(64, 4.0, n_pixels=N, depth=H, seed=9)
+    sc = speckle.random_scatterers(64, 4.0, n_pixels=N, depth_range=H, seed=9)
     ds = bscan(sc, source, normalise="expected")
     assert float(ds.intensity.mean()) == pytest.approx(1.0, abs=0.05)
     assert expected_intensity(4.0, N, None) == 4.0 * N * N
@@ -86,7 +90,7 @@ def test_bad_bscan_input(scene, source):
         bscan(scene, source.values)
     with pytest.raises(ValueError, match="density"):
         bscan(
-            speckle.random_scatterers(2, 0.0, n_pixels=N, depth=H, seed=1),
+            speckle.random_scatterers(2, 0.0, n_pixels=N, depth_range=H, seed=1),
             source,
             normalise="density",
         )

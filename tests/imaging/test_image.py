@@ -16,7 +16,7 @@ from speckle.scene import regions as R
 
 N, H = 32, 256.0  # pixel 8 µm
 SRC = speckle.spectrum(N, H, k0_dk=10)
-ARGS = {"n_pixels": N, "depth": H, "k0": SRC.attrs["k0"], "spectrum": SRC.values}
+ARGS = {"n_pixels": N, "depth_range": H, "k0": SRC.attrs["k0"], "spectrum": SRC.values}
 
 
 def _rel(a, b):
@@ -179,7 +179,13 @@ def test_axial_correlation_of_independent_lines():
     est = []
     for seed in range(12):
         sc = speckle.random_scatterers(
-            1000, 4.0, n_pixels=N, depth=H, seed=100 + seed, amplitude="rayleigh", count="poisson"
+            1000,
+            4.0,
+            n_pixels=N,
+            depth_range=H,
+            seed=100 + seed,
+            amplitude="rayleigh",
+            count="poisson",
         )
         i = np.abs(speckle.bscan(sc, SRC, method="nufft", tol=1e-12).field.values) ** 2
         est.append([_corr(i, np.roll(i, -d, axis=0), "intensity") for d in lags])
@@ -311,7 +317,7 @@ def test_independent_lines_are_a_beam_much_narrower_than_the_pitch():
     a beam whose weight on the neighbouring line, exp(-2 p^2/w0^2) = exp(-200), is negligible."""
     from speckle.scene.shared import from_lines
 
-    lines = speckle.random_scatterers(12, 3.0, n_pixels=N, depth=H, seed=4, aline_pitch=8.0)
+    lines = speckle.random_scatterers(12, 3.0, n_pixels=N, depth_range=H, seed=4, aline_pitch=8.0)
     scene = from_lines(lines)
     assert scene.sizes["scatterer"] == int(lines["count"].sum())
     ds = speckle.image(scene, SRC, waist=0.8, x=lines.aline.values, chunk=5)

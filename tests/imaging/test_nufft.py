@@ -63,8 +63,8 @@ scenes = dict(
 def test_double_precision_within_tol(seed, n, m, lines, k0_dk, shape, tol, method):
     z, a, h, k0, rng = random_scene(seed, n, m, lines, k0_dk)
     s = spectrum_of(shape, n, rng)
-    ref = ascan(z, a, n_pixels=n, depth=h, k0=k0, spectrum=s)
-    out = ascan(z, a, n_pixels=n, depth=h, k0=k0, spectrum=s, method=method, tol=tol)
+    ref = ascan(z, a, n_pixels=n, depth_range=h, k0=k0, spectrum=s)
+    out = ascan(z, a, n_pixels=n, depth_range=h, k0=k0, spectrum=s, method=method, tol=tol)
     assert out.shape == ref.shape and out.dtype == np.complex128
     assert rel_err(out, ref) <= tol
 
@@ -74,8 +74,8 @@ def test_double_precision_within_tol(seed, n, m, lines, k0_dk, shape, tol, metho
 def test_single_precision_within_tol(seed, n, m, lines, k0_dk, shape, tol):
     z, a, h, k0, rng = random_scene(seed, n, m, lines, k0_dk)
     s = spectrum_of(shape, n, rng)
-    ref = ascan(z, a, n_pixels=n, depth=h, k0=k0, spectrum=s)
-    out = ascan(z, a, n_pixels=n, depth=h, k0=k0, spectrum=s, method="nufft32", tol=tol)
+    ref = ascan(z, a, n_pixels=n, depth_range=h, k0=k0, spectrum=s)
+    out = ascan(z, a, n_pixels=n, depth_range=h, k0=k0, spectrum=s, method="nufft32", tol=tol)
     assert rel_err(out, ref) <= tol
 
 
@@ -85,8 +85,8 @@ def test_single_scatterer_worst_offset(tol):
     n, h = 64, 512.0
     z = np.linspace(0, 2 * h / n, 257)[:, None]
     a = np.ones_like(z)
-    ref = ascan(z, a, n_pixels=n, depth=h, k0=3.0)
-    out = ascan(z, a, n_pixels=n, depth=h, k0=3.0, method="nufft", tol=tol)
+    ref = ascan(z, a, n_pixels=n, depth_range=h, k0=3.0)
+    out = ascan(z, a, n_pixels=n, depth_range=h, k0=3.0, method="nufft", tol=tol)
     per_line = np.linalg.norm(out - ref, axis=1) / np.linalg.norm(ref, axis=1)
     assert per_line.max() <= tol
 
@@ -94,7 +94,7 @@ def test_single_scatterer_worst_offset(tol):
 def test_pixel_centre_is_delta_within_tol():
     """A scatterer at a pixel centre images to N in that pixel (exact), up to tol."""
     n, h = 32, 256.0
-    out = ascan([[5 * h / n]], [[1.0]], n_pixels=n, depth=h, k0=0.0, method="nufft", tol=1e-8)
+    out = ascan([[5 * h / n]], [[1.0]], n_pixels=n, depth_range=h, k0=0.0, method="nufft", tol=1e-8)
     expected = np.zeros(n)
     expected[5] = n
     assert np.linalg.norm(out[0] - expected) <= 1e-8 * n
@@ -131,7 +131,7 @@ def test_nufft32_refuses_tol_below_its_rounding_floor():
             np.ones((1, 64)),
             np.ones((1, 64)),
             n_pixels=32,
-            depth=256.0,
+            depth_range=256.0,
             k0=1.0,
             method="nufft32",
             tol=1e-8,
@@ -141,13 +141,21 @@ def test_nufft32_refuses_tol_below_its_rounding_floor():
 @pytest.mark.parametrize("method", ["nufft", "finufft"])
 def test_nufft_refuses_tol_below_floor(method):
     with pytest.raises(ValueError, match="direct"):
-        ascan([1.0], [1.0], n_pixels=8, depth=64.0, k0=1.0, method=method, tol=NUFFT_TOL_FLOOR / 10)
+        ascan(
+            [1.0],
+            [1.0],
+            n_pixels=8,
+            depth_range=64.0,
+            k0=1.0,
+            method=method,
+            tol=NUFFT_TOL_FLOOR / 10,
+        )
 
 
 def test_loose_tol_error_grows_as_predicted():
     """At loose tol the error is large -- and of the size the rule predicts (auto uses tol/2)."""
     z, a, h, k0, _ = random_scene(5, 128, 512, 4, 10.0)
-    ref = ascan(z, a, n_pixels=128, depth=h, k0=k0)
+    ref = ascan(z, a, n_pixels=128, depth_range=h, k0=k0)
     for tol in (1e-1, 1e-2, 1e-3):
-        err = rel_err(ascan(z, a, n_pixels=128, depth=h, k0=k0, method="nufft", tol=tol), ref)
+        err = rel_err(ascan(z, a, n_pixels=128, depth_range=h, k0=k0, method="nufft", tol=tol), ref)
         assert 0.05 * tol < err <= tol  # not vacuous: the error really is of order tol

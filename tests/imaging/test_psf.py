@@ -35,8 +35,8 @@ def test_within_tol_on_smooth_spectra(seed, n, m, fraction, tol):
     z = rng.uniform(-h, 2 * h, (2, m))
     a = rng.normal(size=(2, m)) + 1j * rng.normal(size=(2, m))
     s = gaussian(n, fraction)
-    ref = ascan(z, a, n_pixels=n, depth=h, k0=3.7, spectrum=s)
-    out = ascan(z, a, n_pixels=n, depth=h, k0=3.7, spectrum=s, method="psf", tol=tol)
+    ref = ascan(z, a, n_pixels=n, depth_range=h, k0=3.7, spectrum=s)
+    out = ascan(z, a, n_pixels=n, depth_range=h, k0=3.7, spectrum=s, method="psf", tol=tol)
     assert rel_err(out, ref) <= tol
 
 
@@ -46,7 +46,7 @@ def test_full_width_is_exact_on_any_spectrum():
     for n in (16, 17):
         h = 8.0 * n
         z, a = rng.uniform(0, h, (3, 40)), rng.normal(size=(3, 40)) + 0j
-        ref = ascan(z, a, n_pixels=n, depth=h, k0=1.0)
+        ref = ascan(z, a, n_pixels=n, depth_range=h, k0=1.0)
         out = psf_ascan(z, a, n, h, 1.0, np.ones(n), hw=n, rows=4096)
         assert rel_err(out, ref) < 1e-6
 
@@ -70,7 +70,7 @@ def test_truncated_rectangular_error_matches_estimate():
     rng = np.random.default_rng(1)
     n, h = 128, 1024.0
     z, a = rng.uniform(0, h, (4, 256)), np.exp(2j * np.pi * rng.uniform(size=(4, 256)))
-    ref = ascan(z, a, n_pixels=n, depth=h, k0=2.0)
+    ref = ascan(z, a, n_pixels=n, depth_range=h, k0=2.0)
     out = psf_ascan(z, a, n, h, 2.0, np.ones(n), hw=4, rows=4096)
     assert rel_err(out, ref) == pytest.approx(tail_error(np.ones(n), 4), rel=0.2)
     assert rel_err(out, ref) > 0.1  # the failure is real
@@ -78,7 +78,7 @@ def test_truncated_rectangular_error_matches_estimate():
 
 def test_refuses_unreachable_tol():
     with pytest.raises(ValueError, match=r"psf.*cannot reach"):
-        ascan([[1.0]], [[1.0]], n_pixels=64, depth=512.0, k0=1.0, method="psf", tol=1e-11)
+        ascan([[1.0]], [[1.0]], n_pixels=64, depth_range=512.0, k0=1.0, method="psf", tol=1e-11)
 
 
 def test_estimate_components():

@@ -106,8 +106,8 @@ def test_auto_result_within_tol(seed, n, lines, density, shape, tol):
     a = rng.normal(size=(lines, m)) + 1j * rng.normal(size=(lines, m))
     s = spectrum_of(shape, n)
     k0 = 10 * n * np.pi / h
-    ref = ascan(z, a, n_pixels=n, depth=h, k0=k0, spectrum=s)
-    out = ascan(z, a, n_pixels=n, depth=h, k0=k0, spectrum=s, method="auto", tol=tol)
+    ref = ascan(z, a, n_pixels=n, depth_range=h, k0=k0, spectrum=s)
+    out = ascan(z, a, n_pixels=n, depth_range=h, k0=k0, spectrum=s, method="auto", tol=tol)
     err = np.linalg.norm(out - ref) / np.linalg.norm(ref)
     assert err <= (1e-12 if tol is None else tol)
 
@@ -117,10 +117,10 @@ def test_loose_nufft_tol_error_is_accounted_for():
     rng = np.random.default_rng(2)
     n, h = 128, 1024.0
     z, a = rng.uniform(0, h, (8, 512)), rng.normal(size=(8, 512)) + 0j
-    ref = ascan(z, a, n_pixels=n, depth=h, k0=3.0)
+    ref = ascan(z, a, n_pixels=n, depth_range=h, k0=3.0)
     for tol in (1e-1, 1e-2):
         err = np.linalg.norm(
-            ascan(z, a, n_pixels=n, depth=h, k0=3.0, method="nufft", tol=tol) - ref
+            ascan(z, a, n_pixels=n, depth_range=h, k0=3.0, method="nufft", tol=tol) - ref
         )
         err /= np.linalg.norm(ref)
         predicted = method_estimates(8, 512, n, None, tol)["nufft"]["error"]
@@ -141,7 +141,7 @@ def test_auto_runs_exactly_one_method(monkeypatch):
         np.ones((3, 10)),
         np.ones((3, 10)),
         n_pixels=16,
-        depth=128.0,
+        depth_range=128.0,
         k0=1.0,
         method="auto",
         tol=1e-3,
@@ -152,14 +152,14 @@ def test_auto_runs_exactly_one_method(monkeypatch):
 @pytest.mark.parametrize("bad", [0.0, 1.0, -1e-3, float("nan"), 2.0])
 def test_bad_tol(bad):
     with pytest.raises(ValueError, match="tol"):
-        ascan([1.0], [1.0], n_pixels=8, depth=64.0, k0=1.0, method="auto", tol=bad)
+        ascan([1.0], [1.0], n_pixels=8, depth_range=64.0, k0=1.0, method="auto", tol=bad)
 
 
 def test_bad_tol_type_and_unknown_method():
     with pytest.raises(TypeError, match="tol"):
-        ascan([1.0], [1.0], n_pixels=8, depth=64.0, k0=1.0, method="nufft", tol="1e-6")
+        ascan([1.0], [1.0], n_pixels=8, depth_range=64.0, k0=1.0, method="nufft", tol="1e-6")
     with pytest.raises(ValueError, match=r"method must be one of.*auto"):
-        ascan([1.0], [1.0], n_pixels=8, depth=64.0, k0=1.0, method="fastest")
+        ascan([1.0], [1.0], n_pixels=8, depth_range=64.0, k0=1.0, method="fastest")
 
 
 def test_registry_holds_every_method():
@@ -167,17 +167,19 @@ def test_registry_holds_every_method():
 
 
 def test_stream_matches_whole_scene_and_is_chunk_independent():
-    kw = dict(n_pixels=32, depth=256.0, k0=3.0, seed=7, tol=1e-9, method="nufft")
+    kw = dict(n_pixels=32, depth_range=256.0, k0=3.0, seed=7, tol=1e-9, method="nufft")
     a = stream_ascans(10, 2.0, chunk_lines=3, **kw)
     b = stream_ascans(10, 2.0, chunk_lines=256, **kw)
     np.testing.assert_array_equal(a, b)
-    scene = random_scatterers(10, 2.0, n_pixels=32, depth=256.0, seed=7)
-    ref = ascan(scene["z"].values, scene["amplitude"].values, n_pixels=32, depth=256.0, k0=3.0)
+    scene = random_scatterers(10, 2.0, n_pixels=32, depth_range=256.0, seed=7)
+    ref = ascan(
+        scene["z"].values, scene["amplitude"].values, n_pixels=32, depth_range=256.0, k0=3.0
+    )
     assert np.linalg.norm(a - ref) <= 1e-9 * np.linalg.norm(ref)
 
 
 def test_stream_only_requested_lines():
-    kw = dict(n_pixels=32, depth=256.0, k0=3.0, seed=7, tol=1e-9, method="nufft")
+    kw = dict(n_pixels=32, depth_range=256.0, k0=3.0, seed=7, tol=1e-9, method="nufft")
     full = stream_ascans(12, 2.0, chunk_lines=5, **kw)
     part = stream_ascans(12, 2.0, chunk_lines=2, lines=[9, 2, 3, 4, 11], **kw)
     np.testing.assert_array_equal(part, full[[9, 2, 3, 4, 11]])

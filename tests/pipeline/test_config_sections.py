@@ -199,6 +199,6 @@ def test_tol_floors_are_the_methods_own():
     # nufft32's bound: what the method itself refuses on the smallest image
     floor = tol_floor("nufft32", 32)
     z, x, a = np.array([10.0]), np.array([0.0]), np.array([1.0 + 0j])
-    common = dict(lines=np.arange(8) * 4.0, waist=8.0, n_pixels=32, depth=256.0, k0=1.0)
+    common = dict(lines=np.arange(8) * 4.0, waist=8.0, n_pixels=32, depth_range=256.0, k0=1.0)
     with pytest.raises(ValueError, match="nufft32"):
         speckle.imaging.beam.beam_scan(z, x, a, method="nufft32", tol=0.5 * floor, **common)

@@ -14,7 +14,9 @@ H = N * PIXEL
 
 
 def scene(n_alines=8, density=2.0, strain=0.0, **kw):
-    return D.deformable_scene(n_alines, density, n_pixels=N, depth=H, seed=3, strain=strain, **kw)
+    return D.deformable_scene(
+        n_alines, density, n_pixels=N, depth_range=H, seed=3, strain=strain, **kw
+    )
 
 
 # --- bad input -------------------------------------------------------------------------------
@@ -26,7 +28,7 @@ def test_strain_out_of_range_is_refused(bad):
     with pytest.raises(ValueError, match=r"strain must lie in the open interval \(-1, 1\)"):
         D.uniaxial_strain(sc, bad)
     with pytest.raises(ValueError, match="strain"):
-        D.deformable_scene(4, 1.0, n_pixels=N, depth=H, seed=0, strain=bad)
+        D.deformable_scene(4, 1.0, n_pixels=N, depth_range=H, seed=0, strain=bad)
 
 
 @pytest.mark.parametrize("bad", [np.nan, np.inf])
@@ -124,7 +126,7 @@ def test_wrap_around_would_decorrelate_the_top_rows():
     incoherent floor (< 0.5 here), against the theory value 0.83 with wrap=False."""
     smax, s, n = 0.05, 0.01, 128
     h = n * PIXEL
-    sc = D.deformable_scene(128, 4.0, n_pixels=n, depth=h, seed=5, strain=[0.0, smax])
+    sc = D.deformable_scene(128, 4.0, n_pixels=n, depth_range=h, seed=5, strain=[0.0, smax])
     src = speckle.spectrum(n, h, k0_dk=10)
     # rows 2..6: inside the aliased band of 0.05*n = 6.4 px, away from the first two rows where
     # the periodic kernel's tail also sees the moving bottom of the image; 640 pixels, so the
@@ -220,7 +222,7 @@ def test_strain_sweep_is_independent_of_scheduler_and_workers():
     src = speckle.spectrum(N, H, k0_dk=3)
 
     def point(strain):
-        sc = D.deformable_scene(8, 2.0, n_pixels=N, depth=H, seed=9, strain=[0.0, 0.05])
+        sc = D.deformable_scene(8, 2.0, n_pixels=N, depth_range=H, seed=9, strain=[0.0, 0.05])
         b = speckle.bscan(D.uniaxial_strain(sc, [0.0, strain]), src)
         disp = D.uniaxial_pixel_displacement([strain], b.depth.values, b.aline.values)
         comp = corr.compensate(b.isel(strain=1), disp.isel(strain=0))

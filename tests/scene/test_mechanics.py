@@ -318,7 +318,7 @@ def test_displace_with_fe_field_reproduces_uniaxial_strain(tmp_path):
     nu = 1/4), also after a NetCDF round trip of the result."""
     n, pixel, n_alines, s = 32, 4.0, 8, 0.05
     scene = speckle.deformable_scene(
-        n_alines, 2.0, n_pixels=n, depth=n * pixel, seed=5, strain=s, poisson_ratio=1 / 3
+        n_alines, 2.0, n_pixels=n, depth_range=n * pixel, seed=5, strain=s, poisson_ratio=1 / 3
     )
     pitch = scene.attrs["aline_pitch"]
     zmax = scene.attrs["populated_depth"]
@@ -343,7 +343,7 @@ def test_aline_labels_give_a_field_displace_accepts():
     """Labels over (depth, aline) give uz/ux over (depth, aline), which speckle.displace takes
     directly (linear interpolation between pixel centres: exact for a linear field)."""
     n, pixel, s = 16, 4.0, 0.02
-    scene = speckle.deformable_scene(6, 2.0, n_pixels=n, depth=n * pixel, seed=2, strain=s)
+    scene = speckle.deformable_scene(6, 2.0, n_pixels=n, depth_range=n * pixel, seed=2, strain=s)
     depth = np.arange(0.0, scene.attrs["populated_depth"] + pixel, pixel)
     lab = speckle.layered_labels(depth, scene.aline.values, []).rename(x="aline")
     res = speckle.compress(lab, E0, 0.0, strain=s, contact="sliding")

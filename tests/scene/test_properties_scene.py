@@ -15,7 +15,7 @@ import speckle.scene.shared as sh
 
 REGIONS = reg.make_regions(reg.background(density=0.01), reg.circle(20.0, 20.0, 8.0, density=0.02))
 SCENE = sh.shared_scene(REGIONS, z_range=(0.0, 40.0), x_range=(0.0, 40.0), seed=1, tile=20.0)
-LINES = dfm.deformable_scene(4, 1.0, n_pixels=8, depth=64.0, seed=0, strain=0.01)
+LINES = dfm.deformable_scene(4, 1.0, n_pixels=8, depth_range=64.0, seed=0, strain=0.01)
 
 VALID = {
     "shared_scene": dict(z_range=(0.0, 40.0), x_range=(0.0, 40.0), seed=1, tile=20.0),

@@ -7,7 +7,7 @@ import pytest
 
 from speckle.scene.scatterers import amplitude_kurtosis, random_scatterers
 
-KW = {"n_pixels": 64, "depth": 512.0}
+KW = {"n_pixels": 64, "depth_range": 512.0}
 
 
 def test_fixed_count_and_range():

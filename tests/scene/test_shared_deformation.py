@@ -82,7 +82,7 @@ def test_callable_displacement_3d():
 
 
 def test_independent_lines_are_the_special_case_still_available():
-    lines = speckle.deformable_scene(4, 2.0, n_pixels=16, depth=128.0, seed=0, strain=0.1)
+    lines = speckle.deformable_scene(4, 2.0, n_pixels=16, depth_range=128.0, seed=0, strain=0.1)
     out = speckle.uniaxial_strain(lines, [0.0, 0.1])
     assert out.z.dims == ("strain", "aline", "scatterer")
 

@@ -116,4 +116,4 @@ def test_bad_regions_and_empty_scenes():
     with pytest.raises(ValueError, match="no scatterers"):
         check_scene(empty)
     with pytest.raises(TypeError, match="shared scene"):
-        check_scene(speckle.random_scatterers(2, 1.0, n_pixels=8, depth=64.0, seed=0))
+        check_scene(speckle.random_scatterers(2, 1.0, n_pixels=8, depth_range=64.0, seed=0))

@@ -14,7 +14,7 @@ N, H = 256, 1024.0
 
 @pytest.fixture(scope="module")
 def scene():
-    return speckle.random_scatterers(64, 4.0, n_pixels=N, depth=H, seed=3)
+    return speckle.random_scatterers(64, 4.0, n_pixels=N, depth_range=H, seed=3)
 
 
 def test_mean_log_intensity_falls_with_slope_minus_two_mu(scene):

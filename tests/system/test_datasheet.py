@@ -33,8 +33,8 @@ def test_imaging_depth_from_sampling_interval():
     textbook = 0.84**2 / (4 * 1.4 * dl)
     x = (1023 * dl / (2 * 0.84)) ** 2
     assert s.imaging_depth == pytest.approx(textbook * (1 - x), rel=1e-13)
-    assert s.depth == pytest.approx(2 * s.imaging_depth, rel=1e-15)
-    assert s.pixel_size == pytest.approx(s.depth / s.n_pixels, rel=1e-15)
+    assert s.depth_range == pytest.approx(2 * s.imaging_depth, rel=1e-15)
+    assert s.pixel_size == pytest.approx(s.depth_range / s.n_pixels, rel=1e-15)
     assert s.n_pixels == 1024
 
 
@@ -54,11 +54,11 @@ def test_grid_spans_camera_and_model_parameters():
     k_cam = 2 * np.pi * 1.4 / s.camera_wavelengths()
     k = src.wavenumber.values
     np.testing.assert_allclose([k[0], k[-1]], [k_cam[-1], k_cam[0]], rtol=1e-14)
-    np.testing.assert_allclose(np.diff(k), np.pi / s.depth, rtol=1e-10)
+    np.testing.assert_allclose(np.diff(k), np.pi / s.depth_range, rtol=1e-10)
     assert src.attrs["k0"] == pytest.approx(s.k0, rel=1e-15)
-    assert src.attrs["depth"] == pytest.approx(s.depth, rel=1e-15)
+    assert src.attrs["depth_range"] == pytest.approx(s.depth_range, rel=1e-15)
     assert src.attrs["k0_dk"] == pytest.approx(s.k0_dk, rel=1e-13)
-    assert s.delta_k == pytest.approx(s.n_pixels * np.pi / s.depth, rel=1e-14)
+    assert s.delta_k == pytest.approx(s.n_pixels * np.pi / s.depth_range, rel=1e-14)
     assert s.source_wavenumber == pytest.approx(2 * np.pi * 1.4 / 0.84, rel=1e-15)
     # the spectrum peaks at the source wavenumber with FWHM 2 pi n Delta_lambda / lambda0^2
     assert s.fwhm_k == pytest.approx(2 * np.pi * 1.4 * 0.05 / 0.84**2, rel=1e-14)
@@ -140,7 +140,7 @@ def test_summary_and_html():
     html = s._repr_html_()
     assert html.startswith("<table>") and "illustrative" in html
     rec = s.to_dict()
-    assert rec["n_pixels"] == 1024 and rec["depth"] == pytest.approx(s.depth)
+    assert rec["n_pixels"] == 1024 and rec["depth_range"] == pytest.approx(s.depth_range)
 
 
 def test_examples_are_illustrative():

@@ -16,7 +16,7 @@ N, H = 128, 512.0
 @pytest.fixture(scope="module")
 def image():
     src = speckle.spectrum(N, H, k0_dk=10, shape="gaussian", fwhm_fraction=0.5)
-    scene = speckle.random_scatterers(128, 4.0, n_pixels=N, depth=H, seed=5)
+    scene = speckle.random_scatterers(128, 4.0, n_pixels=N, depth_range=H, seed=5)
     return speckle.bscan(scene, src, normalise="expected", method="nufft", tol=1e-10), src
 
 

@@ -35,7 +35,7 @@ def test_screen_variance_and_increments_match_theory():
 
 def test_independent_screens_decorrelate_scatterers_as_exp_minus_variance():
     """Two acquisitions, independent screens: E exp(i dphi) = exp(-4 k0^2 D(z)) per scatterer."""
-    scene = speckle.random_scatterers(200, 1.0, n_pixels=64, depth=640.0, seed=4)
+    scene = speckle.random_scatterers(200, 1.0, n_pixels=64, depth_range=640.0, seed=4)
     kw = {"index_variance": S2, "correlation_length": ELL, "k0": K0}
     a = speckle.phase_perturb(scene, seed=1, **kw).amplitude
     b = speckle.phase_perturb(scene, seed=2, **kw).amplitude
@@ -54,7 +54,7 @@ def test_pixel_field_correlation_between_acquisitions():
     """Complex correlation of two images (independent screens) in a depth band ~ exp(-Var phi)."""
     n, h = 64, 640.0
     src = speckle.spectrum(n, h, k0=K0, shape="gaussian", fwhm_fraction=0.6)
-    scene = speckle.random_scatterers(300, 4.0, n_pixels=n, depth=h, seed=9)
+    scene = speckle.random_scatterers(300, 4.0, n_pixels=n, depth_range=h, seed=9)
     kw = {"index_variance": S2, "correlation_length": ELL, "k0": K0}
     a, b = (
         speckle.bscan(speckle.phase_perturb(scene, seed=s, **kw), src, method="nufft", tol=1e-10)
@@ -124,6 +124,6 @@ def test_phase_perturb_on_shared_scene():
     np.testing.assert_allclose(out.amplitude.values, scene.amplitude.values * np.exp(1j * phi))
     with pytest.raises(ValueError, match="lateral_correlation_length"):
         speckle.phase_perturb(scene, **kw, lateral_correlation_length=-1.0)
-    lines = speckle.random_scatterers(2, 1.0, n_pixels=16, depth=128.0, seed=0)
+    lines = speckle.random_scatterers(2, 1.0, n_pixels=16, depth_range=128.0, seed=0)
     with pytest.raises(ValueError, match="shared scenes only"):
         speckle.phase_perturb(lines, **kw, lateral_correlation_length=10.0)

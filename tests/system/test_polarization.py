@@ -16,7 +16,7 @@ N, H, RHO = 128, 512.0, 4.0
 @pytest.fixture(scope="module")
 def channels():
     src = speckle.spectrum(N, H, k0_dk=10)
-    scene = speckle.random_scatterers(160, RHO, n_pixels=N, depth=H, seed=7)
+    scene = speckle.random_scatterers(160, RHO, n_pixels=N, depth_range=H, seed=7)
     f = 0.3
     img = speckle.bscan(speckle.depolarize(scene, f, seed=1), src, method="nufft", tol=1e-10)
     return img, f, src
@@ -69,7 +69,7 @@ def test_total_intensity_pdf_is_normalised_with_the_right_moments(p):
 
 
 def test_layered_depolarization_routes_each_layer():
-    scene = speckle.random_scatterers(4, 2.0, n_pixels=N, depth=H, seed=1)
+    scene = speckle.random_scatterers(4, 2.0, n_pixels=N, depth_range=H, seed=1)
     stack = speckle.layers([0.0, 200.0], depolarization=[0.0, 1.0])
     out = speckle.depolarize(scene, stack, seed=3)
     top = scene.z < 200.0
@@ -80,7 +80,7 @@ def test_layered_depolarization_routes_each_layer():
 
 
 def test_bad_depolarization():
-    scene = speckle.random_scatterers(2, 1.0, n_pixels=N, depth=H, seed=1)
+    scene = speckle.random_scatterers(2, 1.0, n_pixels=N, depth_range=H, seed=1)
     for bad in (-0.1, 1.2, float("nan")):
         with pytest.raises(ValueError, match="depolarization"):
             speckle.depolarize(scene, bad, seed=1)
@@ -96,7 +96,7 @@ def test_depolarization_by_region_label():
         lab, dims=("depth", "x"), coords={"depth": depth, "x": [0.0, 4.0, 8.0, 12.0]}
     )
     props = xr.Dataset({"depolarization": ("region", [0.0, 1.0])}, coords={"region": [0, 1]})
-    scene = speckle.random_scatterers(4, 1.0, n_pixels=N, depth=H, seed=2, aline_pitch=4.0)
+    scene = speckle.random_scatterers(4, 1.0, n_pixels=N, depth_range=H, seed=2, aline_pitch=4.0)
     out = speckle.depolarize(scene, props, seed=1, labels=labels)
     co, x = (abs(out.amplitude.sel(channel=c)) for c in ("co", "cross"))
     left = (scene.aline < 6.0).broadcast_like(scene.z)

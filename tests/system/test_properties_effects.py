@@ -16,7 +16,7 @@ import speckle.scene.shared as sh
 from speckle.system import attenuation, detection, noise, phase, polarization
 
 SRC = speckle.spectrum(16, 128.0, k0_dk=3.0)
-LINES = speckle.random_scatterers(4, 2.0, n_pixels=16, depth=128.0, seed=1)
+LINES = speckle.random_scatterers(4, 2.0, n_pixels=16, depth_range=128.0, seed=1)
 IMAGE = speckle.bscan(LINES, SRC)
 REGIONS = reg.make_regions(reg.background(density=0.02, attenuation=0.001))
 SCENE = sh.shared_scene(REGIONS, z_range=(0.0, 40.0), x_range=(0.0, 40.0), seed=1, tile=20.0)
@@ -66,7 +66,7 @@ def test_valid_calls_work():
 
 def test_noise_of_an_image_does_not_depend_on_the_other_images():
     """Same seed, same noise on the strain-0 image whatever the number of strains."""
-    scene = speckle.deformable_scene(4, 2.0, n_pixels=16, depth=128.0, seed=1, strain=0.02)
+    scene = speckle.deformable_scene(4, 2.0, n_pixels=16, depth_range=128.0, seed=1, strain=0.02)
     noisy = []
     for strains in ([0.0, 0.01], [0.0, 0.005, 0.01, 0.02]):
         img = speckle.bscan(speckle.uniaxial_strain(scene, strains), SRC)

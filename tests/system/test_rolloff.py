@@ -19,7 +19,7 @@ def _point_scene(z):
             "z": (("aline", "scatterer"), z[:, None]),
             "amplitude": (("aline", "scatterer"), np.ones((z.size, 1), dtype=complex)),
         },
-        attrs={"depth": H, "n_pixels": N},
+        attrs={"depth_range": H, "n_pixels": N},
     )
 
 

@@ -61,7 +61,7 @@ def test_response_arguments_are_checked():
     system = _config.system_from_config({**SHEET, "camera_pixels": 256})
     with pytest.raises(ValueError, match="method"):
         sp.resampling_response(system, [10.0], "none")
-    with pytest.raises(ValueError, match="depth"):
+    with pytest.raises(ValueError, match="z must be finite"):
         sp.resampling_response(system, [np.nan], "cubic")
     with pytest.raises(ValueError, match="t must lie"):
         sp.interpolation_gain(1.0, 1.5, "linear")

@@ -37,7 +37,7 @@ def test_ideal_chain_is_eq4(spectrum, k0_dk):
     z = rng.uniform(-h, 3 * h, (3, 2, 40))  # depths beyond H and before the zero delay
     a = rng.normal(size=z.shape) + 1j * rng.normal(size=z.shape)
     got = ideal_chain(z, a, src)
-    ref = speckle.ascan(z, a, n_pixels=n, depth=h, k0=src.attrs["k0"], spectrum=src.values)
+    ref = speckle.ascan(z, a, n_pixels=n, depth_range=h, k0=src.attrs["k0"], spectrum=src.values)
     assert got.shape == ref.shape == (3, 2, n)
     # rounding: phases 2 k z up to |2 k_max z_max| carry relative errors ~eps each
     phase_max = 2 * src.wavenumber.values.max() * 3 * h
@@ -48,15 +48,15 @@ def test_ideal_chain_is_eq4(spectrum, k0_dk):
 def test_system_ideal_chain_is_eq4():
     s = speckle.example_system("840nm", camera_pixels=256)
     rng = np.random.default_rng(1)
-    z = rng.uniform(0, s.depth, (4, 30))
+    z = rng.uniform(0, s.depth_range, (4, 30))
     a = np.exp(2j * np.pi * rng.uniform(size=z.shape))
     got = speckle.system_ascan(
         s, z, a, sampling="wavenumber", pixel_width=False, resolution=False,
         detection="complex", resample="none",
     )  # fmt: skip
     src = s.spectrum()
-    ref = speckle.ascan(z, a, n_pixels=256, depth=s.depth, k0=s.k0, spectrum=src.values)
-    bound = 8 * EPS * 2 * src.wavenumber.values.max() * s.depth * np.sqrt(30 * 256)
+    ref = speckle.ascan(z, a, n_pixels=256, depth_range=s.depth_range, k0=s.k0, spectrum=src.values)
+    bound = 8 * EPS * 2 * src.wavenumber.values.max() * s.depth_range * np.sqrt(30 * 256)
     assert np.max(np.abs(got - ref)) / np.max(np.abs(ref)) < bound
 
 
@@ -151,7 +151,7 @@ def test_dispersion_compensation_restores_eq4():
     a = rng.normal(size=z.shape) + 0j
     disp = {2: 300.0, 3: -2000.0}
     sig = sp.interferogram(z, a, k, src.values, k0=k0, dispersion=disp)
-    ref = speckle.ascan(z, a, n_pixels=n, depth=h, k0=k0, spectrum=src.values)
+    ref = speckle.ascan(z, a, n_pixels=n, depth_range=h, k0=k0, spectrum=src.values)
     bad = sp.process(sig, grid=k, k0=k0)
     good = sp.process(sig, grid=k, k0=k0, dispersion=disp)
     assert np.max(np.abs(bad - ref)) / np.max(np.abs(ref)) > 0.1
@@ -215,7 +215,7 @@ def test_resampling_error_grows_as_kernel_predicts(method):
     kw = dict(pixel_width=False, resolution=False, detection="complex")
     errors, predictions = [], []
     for frac in (1 / 64, 1 / 32, 1 / 16, 1 / 8):
-        z = np.array([[frac * s.depth]])
+        z = np.array([[frac * s.depth_range]])
         exact = speckle.system_ascan(s, z, np.ones((1, 1)), resample="exact", **kw)
         approx = speckle.system_ascan(s, z, np.ones((1, 1)), resample=method, **kw)
         measured = np.linalg.norm(approx - exact) / np.linalg.norm(exact)
@@ -337,7 +337,7 @@ def test_finufft_wavelength_camera_within_tol(tol):
     cam = sp.camera_sampling(s, "wavelength")
     weights = sp.source_weights(s, cam["wavenumber"])
     rng = np.random.default_rng(int(-np.log10(tol)))
-    z = rng.uniform(-s.depth, 3 * s.depth, (3, 300))
+    z = rng.uniform(-s.depth_range, 3 * s.depth_range, (3, 300))
     a = rng.normal(size=z.shape) + 1j * rng.normal(size=z.shape)
     kw = dict(pixel_width=cam["pixel_width"], resolution=cam["resolution"], k0=s.k0,
               dispersion={2: 20.0})  # fmt: skip

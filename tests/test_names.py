@@ -1,0 +1,133 @@
+"""One meaning per name: ``depth_range`` is the unambiguous depth H, ``depth`` the pixel dim."""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import pkgutil
+import re
+
+import numpy as np
+import pytest
+
+import speckle
+from speckle.conventions import QUANTITIES, depth_range_of
+
+PACKAGES = ["speckle", "speckle.scene", "speckle.system", "speckle.imaging", "speckle.analysis"]
+
+
+def _public_modules() -> list[str]:
+    names = ["speckle"]
+    for info in pkgutil.walk_packages(speckle.__path__, "speckle."):
+        if not any(part.startswith("_") for part in info.name.split(".")):
+            names.append(info.name)
+    return names
+
+
+def _callables() -> dict[str, object]:
+    """Every public function, class and public method: the lazy ``__all__`` of each package,
+    and the public names defined in every public module (``speckle.figures.*`` included)."""
+    found: dict[str, object] = {}
+    for package in PACKAGES:
+        module = importlib.import_module(package)
+        for name in module.__all__:
+            found[f"{package}.{name}"] = getattr(module, name)
+    for mod_name in _public_modules():
+        module = importlib.import_module(mod_name)
+        for name, obj in vars(module).items():
+            if name.startswith("_") or getattr(obj, "__module__", None) != mod_name:
+                continue
+            if inspect.isfunction(obj) or inspect.isclass(obj):
+                found[f"{mod_name}.{name}"] = obj
+    out = {}
+    for qual, obj in found.items():
+        if inspect.isclass(obj):
+            out[qual] = obj
+            for name, member in vars(obj).items():
+                if not name.startswith("_") and inspect.isfunction(member):
+                    out[f"{qual}.{name}"] = member
+        elif callable(obj):
+            out[qual] = obj
+    return out
+
+
+def _parameters(obj: object) -> list[inspect.Parameter]:
+    try:
+        return list(inspect.signature(obj).parameters.values())
+    except (TypeError, ValueError):  # builtins without a signature
+        return []
+
+
+def _documents_coordinate_values(obj: object) -> bool:
+    """Whether the numpydoc entry of ``depth`` is an array (the pixel-depth coordinate)."""
+    doc = inspect.getdoc(obj) or ""
+    return bool(re.search(r"^\s*depth(, \w+)* : array_like", doc, flags=re.MULTILINE))
+
+
+def test_no_public_function_takes_H_as_depth():
+    """A public ``depth`` parameter, if any, holds the values of the ``depth`` coordinate
+    (pixel-centre depths, an array): never the scalar H, which is ``depth_range``."""
+    callables = _callables()
+    assert len(callables) > 200  # the walk found the package
+    wrong = []
+    for qual, obj in callables.items():
+        for p in _parameters(obj):
+            if p.name != "depth":
+                continue
+            scalar = p.annotation in (float, int, "float", "int", "float | None")
+            if scalar or not _documents_coordinate_values(obj):
+                wrong.append(qual)
+    assert wrong == [], f"parameters named depth that are not the depth coordinate: {wrong}"
+
+
+def test_the_functions_taking_H_call_it_depth_range():
+    for func in (
+        speckle.ascan,
+        speckle.stream_ascans,
+        speckle.pixel_depths,
+        speckle.delta_k,
+        speckle.spectrum,
+        speckle.random_scatterers,
+        speckle.deformable_scene,
+        speckle.beam_scan,
+        speckle.speckle_free_lines,
+    ):
+        assert "depth_range" in inspect.signature(func).parameters, func.__name__
+    assert "depth_range" in speckle.imaging.BeamScene._fields
+    assert "depth_range" in speckle.datasheet(840.0, 50.0, 256, imaging_depth=500.0).to_dict()
+
+
+def test_the_old_keyword_is_a_type_error():
+    with pytest.raises(TypeError, match="depth"):
+        speckle.ascan([8.0], [1.0], n_pixels=8, depth=64.0, k0=0.0)
+
+
+def test_spectra_scenes_and_bscans_carry_depth_range_only():
+    src = speckle.spectrum(16, 128.0, k0_dk=3.0)
+    scene = speckle.random_scatterers(3, 2.0, n_pixels=16, depth_range=128.0, seed=1)
+    moved = speckle.deformable_scene(3, 2.0, n_pixels=16, depth_range=128.0, seed=1, strain=0.01)
+    img = speckle.bscan(scene, src)
+    for what, obj in (("spectrum", src), ("scene", scene), ("deformable scene", moved)):
+        assert obj.attrs["depth_range"] == 128.0, what
+        assert "depth" not in obj.attrs, what
+    assert img.attrs["depth_range"] == 128.0 and "depth" not in img.attrs
+    assert src.attrs["depth_range_units"] == QUANTITIES["depth_range"][0] == "um"
+    # the pixel dim keeps its name: q*H/N
+    np.testing.assert_allclose(img.depth.values, np.arange(16) * 8.0)
+
+
+def test_a_file_written_before_the_rename_is_refused_clearly():
+    src = speckle.spectrum(16, 128.0, k0_dk=3.0)
+    old = src.copy()
+    old.attrs["depth"] = old.attrs.pop("depth_range")
+    scene = speckle.random_scatterers(3, 2.0, n_pixels=16, depth_range=128.0, seed=1)
+    with pytest.raises(ValueError, match=r"attribute 'depth'.*renamed it 'depth_range'"):
+        speckle.bscan(scene, old)
+    old_scene = scene.copy()
+    old_scene.attrs["depth"] = old_scene.attrs.pop("depth_range")
+    with pytest.raises(ValueError, match=r"scene has attribute 'depth'"):
+        speckle.bscan(old_scene, src)
+    with pytest.raises(ValueError, match=r"needs attribute 'depth_range'"):
+        depth_range_of(src.drop_attrs(), "source")
+    assert depth_range_of(src.drop_attrs(), required=False) is None
+    assert depth_range_of(src) == 128.0
