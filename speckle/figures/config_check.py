@@ -172,7 +172,8 @@ def check_config(config: Mapping, schema: Mapping | None = None) -> None:
 
 
 def _elastography(el: Mapping) -> None:
-    """Estimator windows inside the images they slide over (depth >= 2 pixels)."""
+    """Estimator windows inside the images they slide over (depth >= 2 pixels), and the
+    failure maps' image pair within the memory limit."""
     n, lines = int(el["n_pixels"]), int(el["n_alines"])
     wz, wx = (int(v) for v in el["window"])
     images = {"elastography.n_alines": lines}
@@ -191,12 +192,23 @@ def _elastography(el: Mapping) -> None:
                 f"config key elastography.window = {[wz, wx]} does not fit in the images "
                 f"(elastography.n_pixels = {n}, {key} = {m})"
             )
-    for i, w in enumerate(el.get("failure", {}).get("windows", [])):
-        if not 2 <= int(w) <= n:
+    fc = el.get("failure", {})
+    fn = int(fc.get("n_pixels", n))
+    flines = int(fc.get("n_alines", lines))
+    fkey = "elastography.failure.n_pixels" if "n_pixels" in fc else "elastography.n_pixels"
+    if wz > fn or wx > flines:
+        raise ValueError(
+            f"config key elastography.window = {[wz, wx]} does not fit in the failure-map "
+            f"images ({fkey} = {fn}, elastography.failure.n_alines = {flines})"
+        )
+    for i, w in enumerate(fc.get("windows", [])):
+        if not 2 <= int(w) <= fn:
             raise ValueError(
-                f"config key elastography.failure.windows[{i}] = {w} must be in [2, "
-                f"elastography.n_pixels = {n}]"
+                f"config key elastography.failure.windows[{i}] = {w} must be in [2, {fkey} = {fn}]"
             )
+    if "n_alines" in fc:
+        densest = max([float(el["density"]), *(float(v) for v in fc.get("density", []))])
+        _memory(figure_bytes(2, flines, fn, densest), "elastography.failure.n_alines")
     for i, w in enumerate(el.get("speed", {}).get("windows", [])):
         if not 2 <= int(w) <= n:
             raise ValueError(

@@ -22,7 +22,7 @@ from matplotlib.figure import Figure
 from scipy import ndimage
 
 from ..analysis.correlation import expected_correlation
-from ..analysis.failure import method_options, strain_scores
+from ..analysis.failure import mean_and_se, method_options, strain_scores
 from ..analysis.phase import choose_lag, depth_autocorrelation, noise_power
 from ..analysis.strain import accumulate_strain, estimate_strain, predicted_strain_std
 from ..conventions import attrs, coord
@@ -30,12 +30,16 @@ from ..imaging.bscan import bscan
 from ..provenance import provenance_attrs
 from ..scene.deformation import deformable_scene, displace
 from ..scene.mechanics import compress, inclusion_labels
+from ..sweep import sweep
 from ..system.noise import add_complex_noise
-from ._config import scene_kwargs, source_spectrum
+from ._config import dask_options, scene_kwargs, source_spectrum
 from ._style import new_figure
 
 __all__ = [
+    "FAILURE_SWEEPS",
+    "failure_config",
     "failure_data",
+    "failure_point",
     "inclusion_data",
     "phantom_data",
     "plot_failure",
@@ -44,6 +48,7 @@ __all__ = [
     "plot_sequence",
     "plot_sequence_large",
     "plot_speed",
+    "point_seeds",
     "sequence_data",
     "sequence_large_data",
     "sequence_large_frames",
@@ -51,6 +56,7 @@ __all__ = [
 ]
 
 STRAIN = attrs("strain", "axial strain (compression > 0)")
+STRAIN_ERROR = attrs("strain", "estimate minus truth")
 
 
 def _source(cfg: Mapping, k0_dk: float | None = None, fwhm: float | None = None):
@@ -264,15 +270,61 @@ def plot_inclusion(ds: xr.Dataset) -> Figure:
 # --------------------------------------------------------------------------------------------
 
 
-def _failure_point(cfg, seed, methods, *, strain, snr_db=None, window=None, **scene_kw):
-    (ref, dfm), k0 = _images(cfg, seed, [_uniform(0.0), _uniform(strain)], **scene_kw)
-    a1, a2 = _noisy(ref, snr_db, seed + 1), _noisy(dfm, snr_db, seed + 2)
+#: The one-parameter sweeps of the failure maps; a sweep's index is part of its points' seeds.
+FAILURE_SWEEPS = ("strain", "snr_db", "window", "k0_dk", "fwhm_fraction", "density")
+
+
+def failure_config(cfg: Mapping) -> dict:
+    """The ``elastography`` section with the failure maps' own image size
+    (``failure.n_pixels`` x ``failure.n_alines``, depth x A-lines)."""
+    fc = cfg["failure"]
+    return {**cfg, "n_pixels": int(fc["n_pixels"]), "n_alines": int(fc["n_alines"])}
+
+
+def point_seeds(seed: int, sweep_index: int, point: int, replicate: int) -> tuple[int, int, int]:
+    """Scene and the two noise seeds of one failure-map image pair.
+
+    Drawn from ``SeedSequence(seed, spawn_key=(sweep_index, point, replicate))`` (the sweep's
+    index in :data:`FAILURE_SWEEPS`, the point's in its sweep): every point and repeat has its
+    own independent stream, whatever the order or the Dask worker that runs it.
+    """
+    key = (sweep_index, point, replicate)
+    state = np.random.SeedSequence(seed, spawn_key=key).generate_state(3)
+    return int(state[0]), int(state[1]), int(state[2])
+
+
+def _failure_point(cfg, seeds, methods, *, strain, snr_db=None, window=None, **scene_kw):
+    scene_seed, noise1, noise2 = seeds
+    (ref, dfm), k0 = _images(cfg, scene_seed, [_uniform(0.0), _uniform(strain)], **scene_kw)
+    a1, a2 = _noisy(ref, snr_db, noise1), _noisy(dfm, snr_db, noise2)
     out = []
     for m in methods:
         est = _estimate(a1, a2, k0, cfg, m, window)
         truth = abs(strain) if method_options(m)[0] == "correlation" else strain
         out.append(strain_scores(est, truth))
     return np.array(out)  # (method, 3)
+
+
+def failure_point(
+    case: int, replicate: int, *, cases: list, cfg: Mapping, seed: int, methods: list
+) -> xr.Dataset:
+    """Scores of every method on one seeded image pair of a failure-map point.
+
+    ``cases[case]`` is ``(sweep index, point index, keyword arguments)``; the pair is drawn
+    from :func:`point_seeds` (``seed``, sweep, point, ``replicate``). Returns
+    ``median_error``, ``rms_error`` and ``answered`` over ``method`` (a task of
+    :func:`speckle.sweep.sweep`).
+    """
+    sweep_i, point_i, kw = cases[case]
+    res = _failure_point(cfg, point_seeds(seed, sweep_i, point_i, replicate), methods, **kw)
+    return xr.Dataset(
+        {
+            "median_error": ("method", res[:, 0]),
+            "rms_error": ("method", res[:, 1]),
+            "answered": ("method", res[:, 2]),
+        },
+        coords={"method": list(methods)},
+    )
 
 
 def predicted_limits(cfg: Mapping) -> dict[str, float]:
@@ -311,20 +363,73 @@ def _half_width(image: np.ndarray) -> float:
     return float(i - 1 + (rho[i - 1] - 0.5) / (rho[i - 1] - rho[i]))
 
 
-def failure_data(cfg: Mapping, seed: int) -> xr.Dataset:
-    """Median error, rms error and answered fraction of every method along one-parameter sweeps.
+def _over_seeds(key: str, dim: str, values: np.ndarray, long_name: str) -> dict:
+    """``key`` (mean over seeds), ``key_se`` (its standard error) and ``key_per_seed`` of the
+    per-seed ``values`` over ``(dim, method, replicate)``."""
+    mean, se = mean_and_se(values)
+    dims = (dim, "method")
+    return {
+        key: (dims, mean, attrs("dimensionless", f"{long_name}, mean over seeds")),
+        f"{key}_se": (dims, se, attrs("dimensionless", f"standard error of {key} (seeds)")),
+        f"{key}_per_seed": (
+            (*dims, "replicate"),
+            values,
+            attrs("dimensionless", f"{long_name}, per seed"),
+        ),
+    }
+
+
+def failure_data(
+    cfg: Mapping,
+    seed: int,
+    *,
+    dask: Mapping | None = None,
+    threads: int | None = None,
+    progress: bool = False,
+) -> xr.Dataset:
+    """Error and answered fraction of every method along one-parameter sweeps, over seeds.
 
     Sweeps (others at the base): interframe strain, SNR (null = noise-free), depth window,
-    k0/delta_k, spectrum FWHM (fraction of delta_k) and scatterer density; plus the predicted
-    limits and the predicted noise floor (vector method) at each SNR.
+    k0/delta_k, spectrum FWHM (fraction of delta_k) and scatterer density, on images of
+    ``failure.n_pixels`` x ``failure.n_alines`` px. Every point is repeated on
+    ``failure.n_seeds`` independent scenes (:func:`point_seeds`); the points and repeats run
+    in parallel on the Dask scheduler of ``dask`` (the pipeline's ``dask`` section, workers
+    capped at ``threads``) through :func:`speckle.sweep.sweep`, so the numbers do not depend on
+    the scheduler or the number of workers.
+
+    Parameters
+    ----------
+    cfg : Mapping
+        The pipeline's ``elastography`` section.
+    seed : int
+        The pipeline seed.
+    dask : Mapping, optional
+        The pipeline's ``dask`` section (default: Dask's threads).
+    threads : int, optional
+        Cap on local Dask workers (the rule's Snakemake threads).
+    progress : bool
+        Show a Dask progress bar.
+
+    Returns
+    -------
+    xarray.Dataset
+        For each sweep ``<s>``, over ``(<s>, method)``: ``relative_rms_error_<s>`` (rms error
+        over the answered pixels divided by the true strain, mean over seeds) and
+        ``relative_rms_error_<s>_se`` (its standard error), ``answered_<s>`` and
+        ``answered_<s>_se``, ``median_error_<s>`` and ``rms_error_<s>`` (means over seeds);
+        per seed over ``(<s>, method, replicate)``: ``relative_rms_error_<s>_per_seed`` and
+        ``answered_<s>_per_seed``. Also ``predicted_noise_snr_db`` and the predicted limits
+        (attributes ``limit_*``).
     """
     fc = cfg["failure"]
+    fcfg = failure_config(cfg)
     methods = list(cfg["methods"])
+    n_seeds = int(fc["n_seeds"])
     base = {"strain": float(fc["base_strain"]), "snr_db": fc.get("base_snr_db")}
     sweeps = {
         "strain": [{"strain": float(s)} for s in fc["strain"]],
         "snr_db": [{"snr_db": s} for s in fc["snr_db"]],
-        "window": [{"window": _window(cfg, w)} for w in fc["windows"]],
+        "window": [{"window": _window(fcfg, w)} for w in fc["windows"]],
         "k0_dk": [{"k0_dk": float(v)} for v in fc["k0_dk"]],
         "fwhm_fraction": [{"fwhm": float(v)} for v in fc["fwhm_fraction"]],
         "density": [{"density": float(v)} for v in fc["density"]],
@@ -337,19 +442,50 @@ def failure_data(cfg: Mapping, seed: int) -> xr.Dataset:
         "fwhm_fraction": fc["fwhm_fraction"],
         "density": fc["density"],
     }
+    cases = [
+        (i, j, {**base, **pt})
+        for i, name in enumerate(FAILURE_SWEEPS)
+        for j, pt in enumerate(sweeps[name])
+    ]
+    scores = sweep(
+        failure_point,
+        {"case": list(range(len(cases))), "replicate": list(range(n_seeds))},
+        fixed={"cases": cases, "cfg": fcfg, "seed": int(seed), "methods": methods},
+        progress=progress,
+        **dask_options(dask or {}, threads),
+    )
     data = {}
-    for name, points in sweeps.items():
-        res = np.array([_failure_point(cfg, seed, methods, **{**base, **pt}) for pt in points])
-        dims = (name, "method")
-        data[f"median_error_{name}"] = (dims, res[..., 0], attrs("strain", "median error"))
-        data[f"rms_error_{name}"] = (dims, res[..., 1], attrs("strain", "rms error"))
-        data[f"answered_{name}"] = (
-            dims,
-            res[..., 2],
-            attrs("dimensionless", "fraction of pixels answered"),
+    for i, name in enumerate(FAILURE_SWEEPS):
+        rows = [c for c, (si, _, _) in enumerate(cases) if si == i]
+        part = scores.isel(case=rows).transpose("case", "method", "replicate")
+        scale = np.abs(np.asarray(coords["strain"], float)) if name == "strain" else base["strain"]
+        scale = np.reshape(scale, (-1, 1, 1)) if name == "strain" else scale
+        what = "true strain" if name == "strain" else "base strain"
+        for var, long_name in (
+            ("median_error", "median of estimate minus truth, mean over seeds"),
+            ("rms_error", "rms of estimate minus truth, mean over seeds"),
+        ):
+            mean = mean_and_se(part[var].values)[0]
+            data[f"{var}_{name}"] = (
+                (name, "method"),
+                mean,
+                {**STRAIN_ERROR, "long_name": long_name},
+            )
+        data.update(
+            _over_seeds(
+                f"relative_rms_error_{name}",
+                name,
+                part["rms_error"].values / scale,
+                f"rms error / {what}",
+            )
+        )
+        data.update(
+            _over_seeds(
+                f"answered_{name}", name, part["answered"].values, "fraction of pixels answered"
+            )
         )
     # predicted strain noise of the vector method at each SNR (noise-free images, base strain)
-    (ref, dfm), k0 = _images(cfg, seed, [_uniform(0.0), _uniform(base["strain"])])
+    (ref, dfm), k0 = _images(fcfg, seed, [_uniform(0.0), _uniform(base["strain"])])
     pred = []
     for s in coords["snr_db"]:
         if np.isinf(s):
@@ -361,7 +497,7 @@ def failure_data(cfg: Mapping, seed: int) -> xr.Dataset:
             noise_power=noise_power(ref, s),
             k0=k0,
             pixel_size=float(cfg["pixel_size"]),
-            window=_window(cfg),
+            window=_window(fcfg),
         )
         pred.append(float(np.sqrt(np.nanmean(std**2))))
     data["predicted_noise_snr_db"] = (
@@ -369,33 +505,67 @@ def failure_data(cfg: Mapping, seed: int) -> xr.Dataset:
         np.array(pred),
         attrs("strain", "predicted rms strain noise, vector method"),
     )
-    limits = predicted_limits(cfg)
+    limits = predicted_limits(fcfg)
+    coord_attrs = {
+        "strain": attrs("strain", "interframe strain (compression > 0)"),
+        "snr_db": attrs("level", "SNR, mean intensity / noise power (inf: noise-free)"),
+        "window": attrs("axial_lag", "depth window of the estimators (pixels)"),
+        "k0_dk": attrs("k0_dk"),
+        "fwhm_fraction": attrs("dimensionless", "spectrum FWHM / delta_k"),
+        "density": attrs("density"),
+    }
     return xr.Dataset(
         data,
-        coords={"method": methods, **{k: (k, np.asarray(v, float)) for k, v in coords.items()}},
+        coords={
+            "method": methods,
+            "replicate": ("replicate", np.arange(n_seeds), attrs("dimensionless", "seed index")),
+            **{k: (k, np.asarray(v, float), coord_attrs[k]) for k, v in coords.items()},
+        },
         attrs={
             **{f"limit_{k}": v for k, v in limits.items()},
             "base_strain": base["strain"],
+            "n_pixels": fcfg["n_pixels"],
+            "n_alines": fcfg["n_alines"],
+            "n_seeds": n_seeds,
             "seed": seed,
+            "seeds": "SeedSequence(seed, spawn_key=(sweep, point, replicate)), "
+            "sweeps in the order " + ", ".join(FAILURE_SWEEPS),
             **provenance_attrs(),
         },
     )
 
 
 def plot_failure(ds: xr.Dataset) -> Figure:
-    """Failure maps: rms error (top) and fraction answered (bottom) per sweep, with limits."""
-    sweeps = ["strain", "snr_db", "window", "k0_dk", "fwhm_fraction", "density"]
-    fig, axes = new_figure(2, len(sweeps), width=2.4 * len(sweeps), height=5.0)
-    for j, name in enumerate(sweeps):
+    """Failure maps: rms error / strain (top) and fraction answered (bottom) per sweep, with
+    limits. Points are the means over seeds, bars +- one standard error."""
+    fig, axes = new_figure(2, len(FAILURE_SWEEPS), width=2.4 * len(FAILURE_SWEEPS), height=5.0)
+    for j, name in enumerate(FAILURE_SWEEPS):
         x = ds[name].values.astype(float)
         xplot = (
             np.where(np.isinf(x), np.nanmax(x[np.isfinite(x)]) + 10, x) if name == "snr_db" else x
         )
-        scale = x if name == "strain" else ds.attrs["base_strain"]
-        for m in ds.method.values:
-            rel = ds[f"rms_error_{name}"].sel({"method": m}).values / scale
-            axes[0, j].plot(xplot, rel, "o-", ms=3, lw=0.8, label=str(m))
-            axes[1, j].plot(xplot, ds[f"answered_{name}"].sel({"method": m}), "o-", ms=3, lw=0.8)
+        for i, m in enumerate(ds.method.values):
+            sel = {"method": i}  # by position: a str index read back from NetCDF may not select
+            line = axes[0, j].errorbar(
+                xplot,
+                ds[f"relative_rms_error_{name}"].isel(sel).values,
+                yerr=ds[f"relative_rms_error_{name}_se"].isel(sel).values,
+                fmt="o-",
+                ms=3,
+                lw=0.8,
+                capsize=2,
+                label=str(m),
+            )
+            axes[1, j].errorbar(
+                xplot,
+                ds[f"answered_{name}"].isel(sel).values,
+                yerr=ds[f"answered_{name}_se"].isel(sel).values,
+                fmt="o-",
+                ms=3,
+                lw=0.8,
+                capsize=2,
+                color=line[0].get_color(),
+            )
         axes[0, j].set_yscale("log")
         axes[0, j].set_title(f"rms error / strain vs {name}")
         axes[1, j].set_xlabel(
@@ -420,6 +590,11 @@ def plot_failure(ds: xr.Dataset) -> Figure:
     axes[0, 0].legend(fontsize=5)
     axes[0, 1].legend(fontsize=5)
     axes[1, 0].set_ylabel("fraction of pixels answered")
+    fig.suptitle(
+        f"{ds.attrs['n_pixels']} x {ds.attrs['n_alines']} px, mean +- SE over "
+        f"{ds.attrs['n_seeds']} seeds",
+        fontsize=8,
+    )
     return fig
 
 

@@ -65,9 +65,11 @@ rule elastography_inclusion:
         "../scripts/elastography_inclusion.py"
 
 
+# The dask section is read from the config in the script (as the sweeps do): the numbers do not
+# depend on the scheduler, so changing it does not rerun the rule.
 rule elastography_failure:
     input:
-        code=package_code("speckle.figures.elastography", "speckle.io"),
+        code=package_code("speckle.figures.elastography", "speckle.io", "speckle.sweep"),
     output:
         data=f"{RESULTS}/elastography/failure_maps.nc",
         figure=report(
@@ -80,7 +82,7 @@ rule elastography_failure:
         f"{RESULTS}/logs/elastography_failure.log",
     conda:
         "../envs/speckle.yaml"
-    threads: 1
+    threads: config["dask"]["n_workers"]
     params:
         **section("elastography", "seed"),
     script:

@@ -1,4 +1,5 @@
-"""Elastography failure (thin): compute with speckle.figures.elastography, write NetCDF and PNG."""
+"""Elastography failure (thin): compute with speckle.figures.elastography on the config's Dask
+scheduler (points and seeds in parallel), write NetCDF and PNG."""
 
 from speckle._workflow import run
 from speckle.figures import elastography
@@ -7,7 +8,13 @@ from speckle.io import to_netcdf
 
 
 def main(snakemake) -> None:
-    ds = elastography.failure_data(snakemake.params.elastography, snakemake.params.seed)
+    ds = elastography.failure_data(
+        snakemake.params.elastography,
+        snakemake.params.seed,
+        dask=snakemake.config["dask"],
+        threads=snakemake.threads,
+        progress=True,
+    )
     to_netcdf(ds, snakemake.output.data)
     save(elastography.plot_failure(ds), snakemake.output.figure)
     print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
