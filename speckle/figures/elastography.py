@@ -535,6 +535,12 @@ def failure_data(
     )
 
 
+def _seed_bars(ax, ds: xr.Dataset, var: str, sel: dict, x: np.ndarray, **style):
+    """Mean over seeds of ``var`` against ``x`` with its ``<var>_se`` error bars."""
+    mean, se = (ds[v].isel(sel).values for v in (var, f"{var}_se"))
+    return ax.errorbar(x, mean, yerr=se, fmt="o-", ms=3, lw=0.8, capsize=2, **style)
+
+
 def plot_failure(ds: xr.Dataset) -> Figure:
     """Failure maps: rms error / strain (top) and fraction answered (bottom) per sweep, with
     limits. Points are the means over seeds, bars +- one standard error."""
@@ -546,26 +552,9 @@ def plot_failure(ds: xr.Dataset) -> Figure:
         )
         for i, m in enumerate(ds.method.values):
             sel = {"method": i}  # by position: a str index read back from NetCDF may not select
-            line = axes[0, j].errorbar(
-                xplot,
-                ds[f"relative_rms_error_{name}"].isel(sel).values,
-                yerr=ds[f"relative_rms_error_{name}_se"].isel(sel).values,
-                fmt="o-",
-                ms=3,
-                lw=0.8,
-                capsize=2,
-                label=str(m),
-            )
-            axes[1, j].errorbar(
-                xplot,
-                ds[f"answered_{name}"].isel(sel).values,
-                yerr=ds[f"answered_{name}_se"].isel(sel).values,
-                fmt="o-",
-                ms=3,
-                lw=0.8,
-                capsize=2,
-                color=line[0].get_color(),
-            )
+            var = f"relative_rms_error_{name}"
+            line = _seed_bars(axes[0, j], ds, var, sel, xplot, label=str(m))
+            _seed_bars(axes[1, j], ds, f"answered_{name}", sel, xplot, color=line[0].get_color())
         axes[0, j].set_yscale("log")
         axes[0, j].set_title(f"rms error / strain vs {name}")
         axes[1, j].set_xlabel(
