@@ -13,10 +13,12 @@ such a module's other names with ``from speckle.system.rolloff import rolloff_cu
 
 from __future__ import annotations
 
+import ast
 import pkgutil
 import sys
 import types
 from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
 
 import lazy_loader
 
@@ -55,6 +57,45 @@ def attach(
     module.__class__ = _Package
     module.__dict__["_lazy_table"] = {n: m for m, group in names.items() for n in group}
     return getattr_, dir_, public
+
+
+def functions_of(package: str, module: str) -> list[str]:
+    """The functions and classes in ``__all__`` of ``package.module``, read without importing it.
+
+    The module's source is parsed (so a lazy ``__init__`` can list a module's names without
+    loading it, and without writing them a second time); its constants stay out of the
+    package's table (they may share a name with another module's, e.g. ``WINDOWS``).
+
+    Parameters
+    ----------
+    package : str
+        The package's ``__name__``.
+    module : str
+        Module name relative to the package.
+
+    Returns
+    -------
+    list of str
+        The names, in ``__all__`` order.
+
+    Raises
+    ------
+    ValueError
+        If the module has no literal ``__all__`` list.
+    """
+    path = next(iter(sys.modules[package].__path__))
+    tree = ast.parse(Path(path, f"{module}.py").read_text(encoding="utf-8"))
+    defined = {
+        node.name
+        for node in tree.body
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef)
+    }
+    for node in tree.body:
+        if isinstance(node, ast.Assign) and any(
+            isinstance(t, ast.Name) and t.id == "__all__" for t in node.targets
+        ):
+            return [n for n in ast.literal_eval(node.value) if n in defined]
+    raise ValueError(f"{package}.{module} has no literal __all__ list")
 
 
 def defining_module(package: str, name: str) -> str | None:

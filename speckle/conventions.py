@@ -29,8 +29,17 @@ reflector     um          depth of a point reflector
 ============  ==========  ===============================================================
 
 Data variables (:data:`QUANTITIES`): ``field``, ``amplitude``, ``weight``, ``correlation``,
-``contrast``, ``dimensionless`` (1); ``length``, ``displacement``, ``depth_range`` (um);
-``area_density`` (um-2); ``level`` (dB, ``20 log10 |A|``).
+``contrast``, ``dimensionless``, ``label``, ``count``, ``probability`` (1); ``length``,
+``displacement``, ``depth_range`` (um); ``area_density`` (um-2); ``level`` (dB,
+``20 log10 |A|``); ``pixels`` (pixel); ``line_density`` (1/pixel) and ``beam_density``
+(1/(pixel line)); ``modulus``, ``stress`` (kPa); ``attenuation`` (1/um); ``diffusion``
+(um^2/s); ``time`` (s); ``rate`` (1/s); ``angle`` (degree); and, for measured images of
+unknown calibration, ``data``, ``data_slope``, ``mean_intensity`` and ``log_data``.
+
+A quantity whose units are carried over from an input (a histogram of a variable in µm, a
+column of a property table) takes :func:`labelled`; ``<name>_units`` attributes take
+:func:`units_of`. No other module writes a ``units`` attribute by hand
+(``tests/test_conventions.py`` checks).
 
 The unambiguous depth ``H`` (µm, the pixel step is ``H/N``) has one name, ``depth_range``: the
 parameter of every function that takes it and the attribute of every spectrum, scene and B-scan
@@ -45,7 +54,18 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-__all__ = ["COORDS", "DEPTH_RANGE", "QUANTITIES", "attrs", "coord", "depth_range_of", "spacing"]
+__all__ = [
+    "COORDS",
+    "DEPTH_RANGE",
+    "QUANTITIES",
+    "attrs",
+    "coord",
+    "depth_range_of",
+    "inverse_units",
+    "labelled",
+    "spacing",
+    "units_of",
+]
 
 #: Coordinate/dimension name -> (units, long_name).
 COORDS: dict[str, tuple[str, str]] = {
@@ -82,6 +102,26 @@ QUANTITIES: dict[str, tuple[str, str]] = {
     "depth_range": ("um", "unambiguous depth H"),
     "area_density": ("um-2", "scatterers per square micrometre"),
     "level": ("dB", "level 20 log10 |A|"),
+    "label": ("1", "region label"),
+    "count": ("1", "number of items"),
+    "probability": ("1", "probability"),
+    "pixels": ("pixel", "length in pixels"),
+    "line_density": ("1/pixel", "scatterers per pixel"),
+    "beam_density": ("1/(pixel line)", "scatterers per pixel per line"),
+    "modulus": ("kPa", "modulus"),
+    "stress": ("kPa", "stress"),
+    "attenuation": ("1/um", "intensity attenuation coefficient mu_t"),
+    "time": ("s", "time"),
+    "rate": ("1/s", "scatterers per second"),
+    "angle": ("degree", "angle"),
+    "diffusion": ("um^2/s", "diffusion coefficient"),
+    "data": ("data units", "value in the units of the measured data"),
+    "data_slope": ("data units per pixel", "slope in the units of the measured data per pixel"),
+    "mean_intensity": (
+        "mean speckle intensity",
+        "intensity relative to the mean speckle intensity",
+    ),
+    "log_data": ("1 (log-compressed, unknown gain/offset)", "log-compressed measured data"),
 }
 
 
@@ -89,7 +129,7 @@ QUANTITIES: dict[str, tuple[str, str]] = {
 DEPTH_RANGE = "depth_range"
 
 
-def attrs(name: str, long_name: str | None = None) -> dict[str, str]:
+def attrs(name: str, long_name: str | None = None, **extra: object) -> dict[str, object]:
     """``units`` and ``long_name`` attributes of quantity ``name`` from the tables.
 
     Parameters
@@ -98,6 +138,14 @@ def attrs(name: str, long_name: str | None = None) -> dict[str, str]:
         A key of :data:`COORDS` (a coordinate) or :data:`QUANTITIES` (a data variable).
     long_name : str, optional
         A more specific description replacing the table's (the units stay the table's).
+    **extra
+        Further attributes (e.g. ``note``) added after ``units`` and ``long_name``; they may
+        not be ``units`` or ``long_name``.
+
+    Returns
+    -------
+    dict
+        ``{"units": ..., "long_name": ..., **extra}``.
 
     Raises
     ------
@@ -115,8 +163,74 @@ def attrs(name: str, long_name: str | None = None) -> dict[str, str]:
             f"unknown quantity {name!r}: add it to speckle.conventions.COORDS or QUANTITIES "
             f"(known: {sorted({**COORDS, **QUANTITIES})})"
         )
+    clash = {"units", "long_name"} & set(extra)
+    if clash:
+        raise ValueError(f"extra attributes may not set {sorted(clash)}: they come from the table")
     units, default = table
-    return {"units": units, "long_name": default if long_name is None else long_name}
+    return {"units": units, "long_name": default if long_name is None else long_name, **extra}
+
+
+def units_of(name: str) -> str:
+    """The ``units`` string of quantity ``name`` (for ``<name>_units`` attributes).
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`COORDS` or :data:`QUANTITIES`.
+
+    Returns
+    -------
+    str
+        Its units, e.g. ``"rad/um"`` for ``"wavenumber"``.
+
+    Raises
+    ------
+    ValueError
+        If ``name`` is in neither table.
+    """
+    return str(attrs(name)["units"])
+
+
+def labelled(units: str, long_name: str) -> dict[str, str]:
+    """``units``/``long_name`` attributes of a quantity whose units come from its input data.
+
+    For outputs that carry the units of what they were computed from (a histogram of a
+    variable in µm, a table column with its own units), never for a fixed quantity: those
+    take :func:`attrs`.
+
+    Parameters
+    ----------
+    units : str
+        The input's ``units``.
+    long_name : str
+        Description of the output (non-empty).
+
+    Returns
+    -------
+    dict
+        ``{"units": units, "long_name": long_name}``.
+
+    Raises
+    ------
+    TypeError
+        If ``units`` is not a string or ``long_name`` not a non-empty string.
+    """
+    if not isinstance(units, str):
+        raise TypeError(f"units must be a str, got {units!r}")
+    if not isinstance(long_name, str) or not long_name:
+        raise TypeError(f"long_name must be a non-empty str, got {long_name!r}")
+    return {"units": units, "long_name": long_name}
+
+
+def inverse_units(units: str) -> str:
+    """Units of a density over a quantity in ``units``: ``"1"`` stays ``"1"``, else ``1/(units)``.
+
+    Examples
+    --------
+    >>> inverse_units("um")
+    '1/(um)'
+    """
+    return "1" if units == "1" else f"1/({units})"
 
 
 def coord(

@@ -99,3 +99,13 @@ def test_function_wins_over_its_same_named_module_whatever_the_import_order():
         " callable(speckle.imaging.bscan), callable(speckle.layers))"
     )
     assert out.split() == ["True"] * 4
+
+
+def test_a_module_table_read_from_its_source_lists_its_functions():
+    from speckle._lazy import functions_of  # private: the helper lazy __init__ files use
+    from speckle.analysis import compounding
+
+    expected = [n for n in compounding.__all__ if callable(getattr(compounding, n))]
+    assert functions_of("speckle.analysis", "compounding") == expected
+    assert set(expected) <= set(speckle.analysis.__all__)
+    assert "WINDOWS" not in speckle.analysis.__all__  # a constant: spectrometer has one too

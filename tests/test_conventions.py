@@ -11,15 +11,12 @@ import pytest
 from speckle import conventions
 
 ROOT = Path(__file__).resolve().parents[1]
-#: Modules whose labelled outputs are built with conventions.attrs/coord only (issue 17).
-CONVERTED = [
-    "speckle/figures/beam.py",
-    "speckle/figures/deformation.py",
-    "speckle/figures/histograms.py",
-    "speckle/figures/speed.py",
-    "speckle/figures/static.py",
-    "speckle/figures/system.py",
-]
+#: Every module of the package builds its labelled outputs with conventions.attrs/coord (or
+#: conventions.labelled for units carried over from an input or a property table); only the
+#: tables' own module writes a ``units`` attribute (issue 17).
+MODULES = sorted(
+    str(p.relative_to(ROOT)) for p in (ROOT / "speckle").rglob("*.py") if p.name != "conventions.py"
+)
 
 
 def test_attrs_come_from_the_tables():
@@ -42,6 +39,26 @@ def test_unknown_quantity_is_refused_by_name():
         conventions.attrs("speed_of_light")
 
 
+def test_extra_attrs_follow_and_may_not_replace_the_table():
+    assert conventions.attrs("probability", "KS p-value", note="n") == {
+        "units": "1",
+        "long_name": "KS p-value",
+        "note": "n",
+    }
+    with pytest.raises(ValueError, match="units"):
+        conventions.attrs("length", units="mm")
+
+
+def test_units_carried_over_from_an_input():
+    assert conventions.units_of("wavenumber") == "rad/um"
+    assert conventions.labelled("um", "bin centre") == {"units": "um", "long_name": "bin centre"}
+    assert conventions.inverse_units("um") == "1/(um)" and conventions.inverse_units("1") == "1"
+    with pytest.raises(TypeError, match="units"):
+        conventions.labelled(None, "x")
+    with pytest.raises(TypeError, match="long_name"):
+        conventions.labelled("um", "")
+
+
 def test_coord_along_its_own_or_another_dim():
     dims, values, attrs = conventions.coord("z", [1.0, 2.0], dims="position")
     assert dims == "position" and attrs == conventions.attrs("z")
@@ -51,21 +68,60 @@ def test_coord_along_its_own_or_another_dim():
 
 
 def _literal(node: ast.expr) -> bool:
+    """A hand-written string: a constant, an f-string or a choice between such."""
+    if isinstance(node, ast.IfExp):
+        return _literal(node.body) or _literal(node.orelse)
     return isinstance(node, ast.Constant | ast.JoinedStr)
 
 
-@pytest.mark.parametrize("path", CONVERTED)
-def test_no_hand_written_units(path):
-    """No ``{"units": ...}`` literal and no ``units=`` keyword: attrs()/coord() instead."""
-    tree = ast.parse((ROOT / path).read_text())
+def _hand_written_units(tree: ast.AST) -> list[int]:
+    """Lines that write a units attribute by hand.
+
+    A ``"units"`` key of a dict display (whatever its value), a ``units=`` keyword
+    (``assign_attrs(units=...)``, ``dict(units=...)``), an assignment to ``[...]["units"]``,
+    and any other ``*units`` key or keyword given a string literal.
+    """
     found = []
     for node in ast.walk(tree):
         if isinstance(node, ast.Dict):
             for key, value in zip(node.keys, node.values, strict=True):
                 name = key.value if isinstance(key, ast.Constant) else None
-                if isinstance(name, str) and name.endswith("units") and _literal(value):
+                if name == "units" or (
+                    isinstance(name, str) and name.endswith("units") and _literal(value)
+                ):
                     found.append(value.lineno)
-        elif isinstance(node, ast.keyword) and (node.arg or "").endswith("units"):
-            if _literal(node.value):
+        elif isinstance(node, ast.keyword) and node.arg:
+            if node.arg == "units" or (node.arg.endswith("units") and _literal(node.value)):
                 found.append(node.value.lineno)
+        elif isinstance(node, ast.Assign | ast.AugAssign):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            for t in targets:
+                if (
+                    isinstance(t, ast.Subscript)
+                    and isinstance(t.slice, ast.Constant)
+                    and t.slice.value == "units"
+                ):
+                    found.append(t.lineno)
+    return sorted(found)
+
+
+def test_the_check_finds_every_form():
+    src = """
+a = {"units": "um"}
+b = {"units": u, "long_name": n}
+c = {"pitch_units": "um"}
+d = x.assign_attrs(units="1")
+e = dict(units=u)
+f = {"units": "um" if p else "pixel"}
+x.attrs["units"] = "1"
+ok = {"pitch_units": attrs("length")["units"], "v": x.attrs.get("units")}
+g = attrs("length")
+"""
+    assert _hand_written_units(ast.parse(src)) == [2, 3, 4, 5, 6, 7, 8]
+
+
+@pytest.mark.parametrize("path", MODULES)
+def test_no_hand_written_units(path):
+    """No ``units`` written by hand: conventions.attrs()/coord()/labelled() instead."""
+    found = _hand_written_units(ast.parse((ROOT / path).read_text()))
     assert not found, f"{path}: hand-written units at lines {found}"

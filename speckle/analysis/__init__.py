@@ -10,27 +10,12 @@ reads a user's own image and ``twin`` fits the model's system to it.
 Names load on first use (SPEC 1, ``lazy_loader``).
 """
 
-from .._lazy import attach
+from .._lazy import attach, functions_of
 
 __getattr__, __dir__, __all__ = attach(
     __name__,
     {
-        "compounding": [
-            "angular_looks",
-            "brownian_frames",
-            "brownian_g1",
-            "compound",
-            "compounded_contrast",
-            "frequency_looks",
-            "noisy_looks",
-            "polarization_looks",
-            "spatial_looks",
-            "split_spectrum_contrast",
-            "subband_fwhm",
-            "subband_windows",
-            "temporal_looks",
-            "window_correlation",
-        ],
+        "compounding": functions_of(__name__, "compounding"),
         "correlation": [
             "amplitude_from_gamma",
             "compensate",

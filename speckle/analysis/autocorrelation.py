@@ -22,6 +22,7 @@ import xarray as xr
 from scipy import optimize
 
 from .._validate import as_finite_array, check_int, check_real
+from ..conventions import attrs, coord
 
 __all__ = [
     "axial_correlation_theory",
@@ -76,11 +77,22 @@ def intensity_autocorrelation(
     whole = acf(x)
     blocks = np.stack([acf(x[:, b]) for b in np.array_split(np.arange(nl), nb)])
     se = blocks.std(axis=0, ddof=1) / np.sqrt(nb)
-    coords = {"axis": ["depth", "lateral"], "lag": ("lag", np.arange(ml + 1), {"units": "1"})}
+    coords = {
+        "axis": ["depth", "lateral"],
+        "lag": coord("lag", np.arange(ml + 1), "lag (pixels or lines)"),
+    }
     return xr.Dataset(
         {
-            "autocorrelation": (("axis", "lag"), whole, {"units": "1"}),
-            "autocorrelation_se": (("axis", "lag"), se, {"units": "1", "note": "A-line blocks"}),
+            "autocorrelation": (
+                ("axis", "lag"),
+                whole,
+                attrs("correlation", "intensity autocorrelation"),
+            ),
+            "autocorrelation_se": (
+                ("axis", "lag"),
+                se,
+                attrs("correlation", "standard error of the autocorrelation", note="A-line blocks"),
+            ),
         },
         coords=coords,
         attrs={"n_blocks": nb},

@@ -30,6 +30,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import as_finite_array, check_real
+from ..conventions import attrs, coord
 
 __all__ = ["axial_correlation", "lateral_correlation", "poisson_lateral_factor"]
 
@@ -89,11 +90,11 @@ def lateral_correlation(
         c = rho * wx0 * az
         var = c**2 + rho * kappa * w40 * a4
         intensity = ((c * gamma) ** 2 + rho * kappa * w40 * np.exp(-2 * d**2 / w0**2) * a4) / var
-    lag = ("lag", d, {"units": "um", "long_name": "line separation"})
+    lag = coord("length", d, "line separation", dims="lag")
     return xr.Dataset(
         {
-            "complex": ("lag", gamma, {"units": "1", "long_name": "complex correlation"}),
-            "intensity": ("lag", intensity, {"units": "1", "long_name": "intensity correlation"}),
+            "complex": ("lag", gamma, attrs("correlation", "complex correlation")),
+            "intensity": ("lag", intensity, attrs("correlation", "intensity correlation")),
         },
         coords={"lag": lag},
         attrs={"waist": w0, "density": np.nan if density is None else float(density)},
@@ -159,11 +160,11 @@ def axial_correlation(
     scale = (rho * w2 * p * n) ** 2
     incoh = rho * kappa * w4 * p * n
     intensity = (scale * g**2 + incoh * h) / (scale * g0**2 + incoh * h0)
-    lag = ("lag", d, {"units": "1", "long_name": "depth lag (pixels)"})
+    lag = coord("lag", d, "depth lag (pixels)")
     return xr.Dataset(
         {
-            "complex": ("lag", g / g0, {"units": "1", "long_name": "complex correlation"}),
-            "intensity": ("lag", intensity, {"units": "1", "long_name": "intensity correlation"}),
+            "complex": ("lag", g / g0, attrs("correlation", "complex correlation")),
+            "intensity": ("lag", intensity, attrs("correlation", "intensity correlation")),
         },
         coords={"lag": lag},
     )

@@ -42,7 +42,7 @@ import scipy.optimize as opt
 import xarray as xr
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
-from ..conventions import coord, depth_range_of
+from ..conventions import attrs, coord, depth_range_of, units_of
 from ..imaging.scan import image
 from ..system.polarization import depolarize
 
@@ -284,11 +284,11 @@ def frequency_looks(img: xr.Dataset | xr.DataArray, windows: object) -> xr.DataA
     return _looks(looks.transpose("look", *f.dims), "frequency")
 
 
-def _looks(looks: xr.DataArray, kind: str, **attrs: object) -> xr.DataArray:
+def _looks(looks: xr.DataArray, kind: str, **extra: object) -> xr.DataArray:
     return (
         looks.assign_coords(look=np.arange(looks.sizes["look"]))
         .rename("looks")
-        .assign_attrs(units="1", long_name=f"complex {kind} looks", compounding=kind, **attrs)
+        .assign_attrs(attrs("field", f"complex {kind} looks", compounding=kind, **extra))
     )
 
 
@@ -309,9 +309,11 @@ def compound(looks: xr.DataArray, mode: str = "intensity") -> xr.DataArray:
     else:
         out = abs(looks.mean("look")) ** 2
     return out.rename("intensity").assign_attrs(
-        units="1",
-        long_name=f"{mode}-averaged intensity of {looks.sizes['look']} looks",
-        averaging=mode,
+        attrs(
+            "dimensionless",
+            f"{mode}-averaged intensity of {looks.sizes['look']} looks",
+            averaging=mode,
+        )
     )
 
 
@@ -375,11 +377,11 @@ def _moved_field(scene: xr.Dataset, source: xr.DataArray, kw: dict) -> np.ndarra
 
 
 def _stacked_looks(
-    fields: list[np.ndarray], kind: str, name: str, coordinate: tuple, **attrs: object
+    fields: list[np.ndarray], kind: str, name: str, coordinate: tuple, **extra: object
 ) -> xr.DataArray:
     """Looks ``(look, depth, x)`` of the fields, coordinate ``name`` along ``look``."""
     looks = xr.DataArray(np.stack(fields), dims=("look", "depth", "x"), coords={name: coordinate})
-    return _looks(looks, kind, **attrs)
+    return _looks(looks, kind, **extra)
 
 
 def angular_looks(
@@ -432,7 +434,7 @@ def angular_looks(
             for comp in (f.real, f.imag)
         ]
         out.append(part[0] + 1j * part[1])
-    angle = ("look", ang, {"units": "degree", "long_name": "beam angle"})
+    angle = coord("angle", ang, "beam angle", dims="look")
     return _stacked_looks(out, "angular", "angle", angle)
 
 
@@ -550,8 +552,10 @@ def brownian_frames(
     out = scene.assign(moved)
     times = np.arange(nf) * dt
     return out.assign_coords(
-        time=("frame", times, {"units": "s", "long_name": "time of the frame"})
-    ).assign_attrs(diffusion=d, diffusion_units="um^2/s", frame_interval=dt, brownian_seed=sd)
+        time=coord("time", times, "time of the frame", dims="frame")
+    ).assign_attrs(
+        diffusion=d, diffusion_units=units_of("diffusion"), frame_interval=dt, brownian_seed=sd
+    )
 
 
 def temporal_looks(

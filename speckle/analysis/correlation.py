@@ -44,6 +44,7 @@ import xarray as xr
 from scipy import ndimage, special
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
+from ..conventions import attrs, coord
 from ..system.source import index_shift_phase, spectral_index
 from ._common import field_of, grid_spacing, matched, parse_window, same_grid
 from ._kernels import lagrange_resample
@@ -317,7 +318,7 @@ def pearson(
     r = abs(cov) / np.sqrt((abs(dx) ** 2).mean(dims) * (abs(dy) ** 2).mean(dims))
     if kind != "complex":
         r = cov.real / np.sqrt((dx**2).mean(dims) * (dy**2).mean(dims))
-    return r.assign_attrs(long_name=f"{kind} correlation coefficient", units="1", kind=kind)
+    return r.assign_attrs(attrs("correlation", f"{kind} correlation coefficient", kind=kind))
 
 
 def correlation_array(
@@ -421,8 +422,7 @@ def correlation_map(
         dims=x.dims,
         coords=x.coords,
         attrs={
-            "long_name": f"{kind} correlation in a sliding window",
-            "units": "1",
+            **attrs("correlation", f"{kind} correlation in a sliding window"),
             "kind": kind,
             "window_depth_pixels": wz,
             "window_aline_pixels": wx,
@@ -550,8 +550,8 @@ def expected_correlation(
         g = abs(c_mean) / np.sqrt(a * a_def)
         res["complex"].append(g)
         res["amplitude"].append(amplitude_from_gamma(g))
-    coords = {"strain": ("strain", s, {"units": "1", "long_name": "compressive strain"})}
-    attrs = {
+    coords = {"strain": coord("strain", s, "compressive strain")}
+    meta = {
         "density": rho,
         "kurtosis": kappa,
         "k0_dk": r_ratio,
@@ -561,11 +561,11 @@ def expected_correlation(
     }
     return xr.Dataset(
         {
-            k: ("strain", np.array(v), {"units": "1", "long_name": f"theoretical {k} correlation"})
+            k: ("strain", np.array(v), attrs("correlation", f"theoretical {k} correlation"))
             for k, v in res.items()
         },
         coords=coords,
-        attrs=attrs,
+        attrs=meta,
     )
 
 

@@ -44,7 +44,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import check_choice, check_real
-from ..conventions import COORDS
+from ..conventions import attrs, coord
 
 __all__ = ["IMAGE_DIMS", "IMAGE_KINDS", "load_image"]
 
@@ -275,27 +275,24 @@ def load_image(
     data = data.astype(np.complex128 if kind == "complex" else np.float64)
     nz, nx = data.shape[-2:]
     coords = {
-        "depth": ("depth", np.arange(nz) * dz, _attrs("depth")),
-        "x": ("x", np.arange(nx) * dx, _attrs("x")),
+        "depth": coord("depth", np.arange(nz) * dz),
+        "x": coord("x", np.arange(nx) * dx),
     }
     if "frame" in order:
-        coords["frame"] = ("frame", np.arange(data.shape[0]), {"units": "1"})
-    attrs = {
+        coords["frame"] = coord("count", np.arange(data.shape[0]), "frame index", dims="frame")
+    meta = {
         "kind": kind,
         "source": str(p),
         "format": fmt,
         "dtype": str(stored),
         "pixel_size": dz,
         "pitch": dx,
-        "long_name": "measured OCT " + ("log-compressed signal" if kind == "log" else kind),
-        "units": "1",
+        **attrs(
+            "dimensionless",
+            "measured OCT " + ("log-compressed signal" if kind == "log" else kind),
+        ),
     }
     if np.issubdtype(stored, np.integer):
         info = np.iinfo(stored)
-        attrs.update(clip_low=int(info.min), clip_high=int(info.max))
-    return xr.DataArray(data, dims=order, coords=coords, name="image", attrs=attrs)
-
-
-def _attrs(name: str) -> dict[str, str]:
-    units, long_name = COORDS[name]
-    return {"units": units, "long_name": long_name}
+        meta.update(clip_low=int(info.min), clip_high=int(info.max))
+    return xr.DataArray(data, dims=order, coords=coords, name="image", attrs=meta)

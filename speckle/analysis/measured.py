@@ -35,6 +35,7 @@ import xarray as xr
 from scipy import integrate, optimize, special, stats
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
+from ..conventions import attrs, coord
 
 __all__ = [
     "SCALES",
@@ -55,6 +56,7 @@ SCALES = ("linear", "log")
 #: Fully developed speckle: skewness and excess kurtosis of ln(I).
 GUMBEL_SKEWNESS = float(-2.0 * special.zeta(3.0) / (np.pi**2 / 6.0) ** 1.5)
 GUMBEL_EXCESS_KURTOSIS = 2.4
+_BLOCKS = "from A-line blocks"
 
 
 def _read(path: str | os.PathLike, *, mmap: bool = False) -> np.ndarray:
@@ -175,17 +177,16 @@ def load_measured(
     sl = roi_slices(roi, data.shape)
     rows = np.arange(data.shape[0])[sl["depth"]]
     cols = np.arange(data.shape[1])[sl["aline"]]
-    attrs = {
+    meta = {
         "source": str(path),
         "scale": scale,
         "roi": repr(roi or {}),
         "dtype": str(raw.dtype),
-        "long_name": "measured OCT signal",
-        "units": "1 (log-compressed, unknown gain/offset)" if scale == "log" else "1",
+        **attrs("log_data" if scale == "log" else "dimensionless", "measured OCT signal"),
     }
     if np.issubdtype(raw.dtype, np.integer):
         info = np.iinfo(raw.dtype)
-        attrs.update(clip_low=int(info.min), clip_high=int(info.max))
+        meta.update(clip_low=int(info.min), clip_high=int(info.max))
     depth = (
         rows * check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
         if pixel_size is not None
@@ -200,14 +201,21 @@ def load_measured(
         data[sl["depth"], sl["aline"]],
         dims=("depth", "aline"),
         coords={
-            "depth": ("depth", depth, {"units": "um" if pixel_size else "pixel"}),
-            "aline": ("aline", aline, {"units": "um" if aline_pitch else "pixel"}),
+            "depth": _axis_coord("depth", depth, pixel_size),
+            "aline": _axis_coord("aline", aline, aline_pitch),
             "row": ("depth", rows),
             "column": ("aline", cols),
         },
         name="measured",
-        attrs=attrs,
+        attrs=meta,
     )
+
+
+def _axis_coord(dim: str, values: np.ndarray, step: float | None) -> tuple:
+    """Coordinate ``dim`` in µm when its step is known, else in pixels."""
+    if step:
+        return coord(dim, values)
+    return coord("pixels", values, f"{dim} in pixels", dims=dim)
 
 
 def log_intensity(image: xr.DataArray) -> xr.DataArray:
@@ -222,7 +230,10 @@ def log_intensity(image: xr.DataArray) -> xr.DataArray:
         return image
     if np.any(image.values <= 0):
         raise ValueError("linear-scale image must be > 0 everywhere to take its log")
-    return np.log(image).assign_attrs(image.attrs, scale="log", units="1")
+    long_name = image.attrs.get("long_name", "log intensity")
+    return np.log(image).assign_attrs(
+        {**image.attrs, **attrs("dimensionless", long_name)}, scale="log"
+    )
 
 
 def _floor_moment(k: int, floor: float) -> float:
@@ -330,21 +341,37 @@ def log_statistics(image: xr.DataArray, *, n_blocks: int = 16) -> xr.Dataset:
         "n": ((), x.size, {"long_name": "number of pixels"}),
         "mean": ((), float(x.mean()), {"long_name": "mean of log data"}),
         "std": ((), float(np.sqrt(var)), {"long_name": "std of log data"}),
-        "skewness": ((), float(stats.skew(x)), {"units": "1"}),
-        "skewness_se": ((), float(se[0]), {"units": "1", "note": "from A-line blocks"}),
-        "excess_kurtosis": ((), float(stats.kurtosis(x)), {"units": "1"}),
-        "excess_kurtosis_se": ((), float(se[1]), {"units": "1", "note": "from A-line blocks"}),
+        "skewness": ((), float(stats.skew(x)), attrs("dimensionless", "skewness of log data")),
+        "skewness_se": (
+            (),
+            float(se[0]),
+            attrs("dimensionless", "standard error of the skewness", note=_BLOCKS),
+        ),
+        "excess_kurtosis": (
+            (),
+            float(stats.kurtosis(x)),
+            attrs("dimensionless", "excess kurtosis of log data"),
+        ),
+        "excess_kurtosis_se": (
+            (),
+            float(se[1]),
+            attrs("dimensionless", "standard error of the excess kurtosis", note=_BLOCKS),
+        ),
         "skewness_theory": ((), GUMBEL_SKEWNESS, {"long_name": "fully developed speckle"}),
         "excess_kurtosis_theory": (
             (),
             GUMBEL_EXCESS_KURTOSIS,
             {"long_name": "fully developed speckle"},
         ),
-        "clipped_fraction": ((), clipped, {"units": "1"}),
+        "clipped_fraction": (
+            (),
+            clipped,
+            attrs("dimensionless", "fraction of pixels at a clip level"),
+        ),
         "quantisation_variance_fraction": (
             (),
             (1.0 / 12.0) / var if var > 0 else np.nan,
-            {"units": "1"},
+            attrs("dimensionless", "quantisation variance 1/12 over the variance"),
         ),
     }
     return xr.Dataset(out, attrs={"n_blocks": nb})
@@ -386,16 +413,29 @@ def fit_floor(image: xr.DataArray) -> xr.Dataset:
             "floor": (
                 (),
                 b,
-                {
-                    "units": "mean speckle intensity",
-                    "long_name": "intensity floor b in ln(I/<I> + b)",
-                },
+                attrs("mean_intensity", "intensity floor b in ln(I/<I> + b)"),
             ),
-            "floor_db": ((), 10 * np.log10(b) if b > 0 else -np.inf, {"units": "dB"}),
-            "gain": ((), g, {"long_name": "g in D = g ln(I) + c", "units": "data units"}),
-            "offset": ((), float(x.mean() - g * mom["mean"]), {"units": "data units"}),
-            "skewness_model": ((), mom["skewness"], {"units": "1"}),
-            "excess_kurtosis_model": ((), mom["excess_kurtosis"], {"units": "1"}),
+            "floor_db": (
+                (),
+                10 * np.log10(b) if b > 0 else -np.inf,
+                attrs("level", "intensity floor 10 log10 b"),
+            ),
+            "gain": ((), g, attrs("data", "g in D = g ln(I) + c")),
+            "offset": (
+                (),
+                float(x.mean() - g * mom["mean"]),
+                attrs("data", "c in D = g ln(I) + c"),
+            ),
+            "skewness_model": (
+                (),
+                mom["skewness"],
+                attrs("dimensionless", "skewness of the floor model"),
+            ),
+            "excess_kurtosis_model": (
+                (),
+                mom["excess_kurtosis"],
+                attrs("dimensionless", "excess kurtosis of the floor model"),
+            ),
         },
         attrs={"method": "skewness matched; excess kurtosis predicted"},
     )
@@ -405,7 +445,7 @@ def standardise(image: xr.DataArray) -> xr.DataArray:
     """``(D - mean D)/std D`` of the log intensity (gain- and offset-free)."""
     d = log_intensity(image)
     return ((d - d.mean()) / d.std()).assign_attrs(
-        units="1", long_name="standardised log intensity"
+        attrs("dimensionless", "standardised log intensity")
     )
 
 
@@ -438,16 +478,28 @@ def compare_measured(image: xr.DataArray, *, n_blocks: int = 16) -> xr.Dataset:
         "depth_slope": (
             (),
             float(slope),
-            {"units": "data units per pixel", "long_name": "least-squares slope of row means"},
+            attrs("data_slope", "least-squares slope of row means"),
         ),
-        "depth_trend_variance_fraction": ((), trend_var / float(st["std"]) ** 2, {"units": "1"}),
-        "skewness_detrended": ((), float(stats.skew(detr)), {"units": "1"}),
-        "excess_kurtosis_detrended": ((), float(stats.kurtosis(detr)), {"units": "1"}),
-        "ks_pure": ((), ks(0.0), {"units": "1", "long_name": "KS distance to ln Exp(1)"}),
+        "depth_trend_variance_fraction": (
+            (),
+            trend_var / float(st["std"]) ** 2,
+            attrs("dimensionless", "fraction of the variance explained by the depth trend"),
+        ),
+        "skewness_detrended": (
+            (),
+            float(stats.skew(detr)),
+            attrs("dimensionless", "skewness after removing each row's mean"),
+        ),
+        "excess_kurtosis_detrended": (
+            (),
+            float(stats.kurtosis(detr)),
+            attrs("dimensionless", "excess kurtosis after removing each row's mean"),
+        ),
+        "ks_pure": ((), ks(0.0), attrs("dimensionless", "KS distance to ln Exp(1)")),
         "ks_floor": (
             (),
             ks(float(fl["floor"])),
-            {"units": "1", "long_name": "KS distance to ln(Exp(1) + floor)"},
+            attrs("dimensionless", "KS distance to ln(Exp(1) + floor)"),
         ),
     }
     lo = image.attrs.get("clip_low")
@@ -457,11 +509,15 @@ def compare_measured(image: xr.DataArray, *, n_blocks: int = 16) -> xr.Dataset:
         g_pure = float(st["std"]) / np.sqrt(np.pi**2 / 6.0)
         c_pure = float(st["mean"]) + np.euler_gamma * g_pure
         p_low = -np.expm1(-np.exp((lo + 0.5 - c_pure) / g_pure))
-        extra["low_clip_count"] = ((), int(np.sum(d.values == lo)), {"units": "1"})
+        extra["low_clip_count"] = (
+            (),
+            int(np.sum(d.values == lo)),
+            attrs("count", "pixels at the low clip"),
+        )
         extra["low_clip_count_pure"] = (
             (),
             float(d.size * p_low),
-            {"units": "1", "long_name": "expected pixels at the low clip for ln Exp(1)"},
+            attrs("count", "expected pixels at the low clip for ln Exp(1)"),
         )
     out = xr.merge([st, fl, xr.Dataset(extra)])
     out.attrs = {

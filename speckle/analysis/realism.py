@@ -32,8 +32,9 @@ import numpy as np
 import xarray as xr
 from scipy import stats
 
+from .._adapters import scene_kwargs, spectrum_kwargs
 from .._validate import check_choice, check_int, check_real
-from ..conventions import coord
+from ..conventions import attrs, coord
 from ..imaging.beam_lines import beam_lines, shared_scatterers
 from ..imaging.bscan import bscan
 from ..scene.scatterers import random_scatterers
@@ -158,23 +159,18 @@ def simulate(
     """Log data ``(depth, aline)`` of a model image with the given effects on."""
     for e in effects:
         check_choice(e, "effect", EFFECTS)
-    h = n_pixels * pixel_size
+    section = {"n_pixels": n_pixels, "pixel_size": pixel_size, "k0_dk": k0_dk}
     if "spectral_width" in effects:
-        src = spectrum(
-            n_pixels, h, k0_dk=k0_dk, shape="gaussian", fwhm_fraction=fit["fwhm_fraction"]
-        )
-    else:
-        src = spectrum(n_pixels, h, k0_dk=k0_dk)
-    attrs = {"depth_range": h, "n_pixels": n_pixels, "density": density}
+        section.update(shape="gaussian", fwhm_fraction=fit["fwhm_fraction"])
+    src = spectrum(**spectrum_kwargs(section))
+    grid = scene_kwargs(section)
     if "beam" in effects:
         w0 = fit["waist"] * pixel_size  # lines one pixel_size apart: only w0/pitch matters
-        sc = shared_scatterers(
-            n_alines, pixel_size, density, n_pixels=n_pixels, depth_range=h, waist=w0, seed=seed
-        )
+        sc = shared_scatterers(n_alines, pixel_size, density, **grid, waist=w0, seed=seed)
         scene = beam_lines(sc["z"], sc["x"], sc["amplitude"], lines=sc["lines"], waist=w0)
-        scene = scene.assign_attrs(attrs)
+        scene = scene.assign_attrs(**grid, density=density)
     else:
-        scene = random_scatterers(n_alines, density, n_pixels=n_pixels, depth_range=h, seed=seed)
+        scene = random_scatterers(n_alines, density, **grid, seed=seed)
     if "attenuation" in effects:
         scene = attenuate(scene, fit["attenuation"])
     if "phase" in effects:
@@ -298,7 +294,7 @@ def realism_study(
     else:
         model_acf = cum.autocorrelation.isel(step=-1, drop=True)
     out["model_autocorrelation"] = model_acf.assign_attrs(
-        long_name="intensity autocorrelation of the final (smallest sufficient) model", units="1"
+        attrs("correlation", "intensity autocorrelation of the final (smallest sufficient) model")
     )
     ds = xr.Dataset(out)
     for k, v in fit.items():

@@ -48,6 +48,7 @@ import xarray as xr
 from scipy import stats
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
+from ..conventions import attrs, inverse_units, labelled, units_of
 from ..scene.scatterers import AMPLITUDE_MODELS, COUNT_MODELS, amplitude_kurtosis
 from ..system.source import check_weights
 
@@ -77,7 +78,8 @@ def _values(values: object, name: str) -> np.ndarray:
 
 
 def _units(values: object) -> str:
-    return values.attrs.get("units", "1") if isinstance(values, xr.DataArray) else "1"
+    one = units_of("dimensionless")
+    return str(values.attrs.get("units", one)) if isinstance(values, xr.DataArray) else one
 
 
 def _usable(edges: np.ndarray) -> bool:
@@ -139,18 +141,13 @@ def histogram(
         density,
         dims=("bin",),
         coords={
-            "bin": (
-                "bin",
-                0.5 * (edges[:-1] + edges[1:]),
-                {"units": units, "long_name": f"{name} (bin centre)"},
-            ),
-            "bin_lower": ("bin", edges[:-1], {"units": units}),
-            "bin_upper": ("bin", edges[1:], {"units": units}),
+            "bin": ("bin", 0.5 * (edges[:-1] + edges[1:]), labelled(units, f"{name} (bin centre)")),
+            "bin_lower": ("bin", edges[:-1], labelled(units, f"{name} (lower bin edge)")),
+            "bin_upper": ("bin", edges[1:], labelled(units, f"{name} (upper bin edge)")),
         },
         name=f"{name}_density",
         attrs={
-            "long_name": f"probability density of {name}",
-            "units": "1" if units == "1" else f"1/({units})",
+            **labelled(inverse_units(units), f"probability density of {name}"),
             "count": int(x.size),
             "outside": int(x.size - counts.sum()),
         },
@@ -211,21 +208,29 @@ def _fit_result(
     )
     return xr.Dataset(
         {
-            parameter: ((), value, {"units": units, "long_name": f"fitted {model} {parameter}"}),
+            parameter: ((), value, labelled(units, f"fitted {model} {parameter}")),
             "ks_statistic": (
                 (),
                 float(ks.statistic),
-                {"units": "1", "long_name": "Kolmogorov-Smirnov statistic"},
+                attrs("dimensionless", "Kolmogorov-Smirnov statistic"),
             ),
-            "ks_pvalue": ((), float(ks.pvalue), {"units": "1", "note": note}),
+            "ks_pvalue": (
+                (),
+                float(ks.pvalue),
+                attrs("probability", "Kolmogorov-Smirnov p-value", note=note),
+            ),
             "chi2": (
                 (),
                 chi2,
-                {"units": "1", "long_name": "Pearson chi-square over equal-probability bins"},
+                attrs("dimensionless", "Pearson chi-square over equal-probability bins"),
             ),
-            "chi2_dof": ((), dof, {"units": "1", "long_name": "chi-square degrees of freedom"}),
-            "chi2_pvalue": ((), float(stats.chi2.sf(chi2, dof)), {"units": "1", "note": note}),
-            "n": ((), int(x.size), {"units": "1", "long_name": "number of samples"}),
+            "chi2_dof": ((), dof, attrs("count", "chi-square degrees of freedom")),
+            "chi2_pvalue": (
+                (),
+                float(stats.chi2.sf(chi2, dof)),
+                attrs("probability", "chi-square p-value", note=note),
+            ),
+            "n": ((), int(x.size), attrs("count", "number of samples")),
         },
         attrs={
             "model": model,
@@ -283,7 +288,7 @@ def speckle_contrast(intensity: object, dim: str | list[str] | None = None) -> o
     if isinstance(intensity, xr.DataArray):
         as_finite_array(intensity.values, "intensity")
         c = intensity.std(dim=dim) / intensity.mean(dim=dim)
-        return c.rename("contrast").assign_attrs(units="1", long_name="speckle contrast std/mean")
+        return c.rename("contrast").assign_attrs(attrs("contrast", "speckle contrast std/mean"))
     if dim is not None:
         raise TypeError("dim needs intensity as an xarray.DataArray")
     x = _values(intensity, "intensity")
@@ -389,6 +394,6 @@ def contrast_theory(
         return (
             density.copy(data=c)
             .rename("contrast_theory")
-            .assign_attrs(units="1", long_name="speckle contrast (theory)")
+            .assign_attrs(attrs("contrast", "speckle contrast (theory)"))
         )
     return float(c) if np.ndim(c) == 0 else c

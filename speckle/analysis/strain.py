@@ -74,6 +74,7 @@ import xarray as xr
 from scipy import ndimage
 
 from .._validate import check_choice, check_int, check_real
+from ..conventions import attrs
 from ..system.source import spectrum
 from ._common import depth_major, parse_window
 from ._kernels import MARGIN, vector_phase
@@ -655,21 +656,21 @@ def _no_answer_reason(method: str, quality: np.ndarray, opts: dict, window) -> s
 
 def _strain_attrs(method: str, wz: int, wx: int) -> dict:
     """Attrs of a strain estimate: what it is, the method and the window (pixels)."""
+    long_name = (
+        "axial strain (compression > 0)" if method != "correlation" else "axial strain magnitude"
+    )
     return {
-        "long_name": "axial strain (compression > 0)"
-        if method != "correlation"
-        else "axial strain magnitude",
-        "units": "1",
+        **attrs("strain", long_name),
         "method": method,
         "window_depth_pixels": wz,
         "window_aline_pixels": wx,
     }
 
 
-def _wrap(values: np.ndarray, template, name: str, attrs: dict) -> object:
+def _wrap(values: np.ndarray, template, name: str, meta: dict) -> object:
     if template is None:
         return values
-    return xr.DataArray(values, dims=("depth", "aline"), coords=template.coords, attrs=attrs)
+    return xr.DataArray(values, dims=("depth", "aline"), coords=template.coords, attrs=meta)
 
 
 def estimate_strain(
@@ -746,10 +747,10 @@ def estimate_strain(
     out = _wrap(strain, template, "strain", {**_strain_attrs(method, wz, wx), **info})
     if template is not None:
         out = out.assign_coords(
-            quality=(("depth", "aline"), quality, {"units": "1", "long_name": "quality"})
+            quality=(("depth", "aline"), quality, attrs("dimensionless", "quality"))
         )
     if return_quality:
-        return out, _wrap(quality, template, "quality", {"units": "1", "long_name": "quality"})
+        return out, _wrap(quality, template, "quality", attrs("dimensionless", "quality"))
     return out
 
 
@@ -839,7 +840,7 @@ def _strain_frames(reference, deformed, has_frame, k0, pixel_size, method, windo
         attrs=_strain_attrs(method, wz, wx),
     )
     return out.assign_coords(
-        quality=(("frame", "depth", "aline"), both[:, 1], {"units": "1", "long_name": "quality"})
+        quality=(("frame", "depth", "aline"), both[:, 1], attrs("dimensionless", "quality"))
     )
 
 
@@ -893,8 +894,8 @@ def estimate_displacement(
         opts = {**allowed, **options}
         phase, _ = _unwrapped_phase(a1, a2, _lag(a1, opts))
         uz = phase / (2 * k)
-    attrs = {"units": "um", "long_name": "axial displacement (+z deeper)", "method": method}
-    return _wrap(uz, template, "uz", attrs)
+    meta = attrs("displacement", "axial displacement (+z deeper)", method=method)
+    return _wrap(uz, template, "uz", meta)
 
 
 def predicted_strain_std(
@@ -1105,12 +1106,12 @@ def accumulate_strain(
     if "aline" in coords:
         out_coords["aline"] = coords["aline"]
     variables = {
-        "interframe": {"units": "1", "long_name": "interframe strain"},
-        "quality": {"units": "1", "long_name": "interframe quality"},
-        "cumulative": {"units": "1", "long_name": "strain to frame 0"},
-        "position": {"units": "pixel", "long_name": "position in frame"},
+        "interframe": attrs("strain", "interframe strain"),
+        "quality": attrs("dimensionless", "interframe quality"),
+        "cumulative": attrs("strain", "strain to frame 0"),
+        "position": attrs("pixels", "position in frame"),
     }
-    attrs = {
+    meta = {
         "method": method,
         "k0": k,
         "pixel_size": p,
@@ -1123,7 +1124,7 @@ def accumulate_strain(
         return xr.Dataset(
             {name: (dims, np.array([r[name] for r in rows]), a) for name, a in variables.items()},
             coords=out_coords,
-            attrs=attrs,
+            attrs=meta,
         )
     from ..io import open_dataset, write_frames
 
@@ -1133,7 +1134,7 @@ def accumulate_strain(
             for name, a in variables.items()
         },
         coords=out_coords,
-        attrs=attrs,
+        attrs=meta,
     )
     write_frames(path, frames_out, n_frames=n_frames - 1, template=template, progress=progress)
     return open_dataset(path, load=False)

@@ -32,7 +32,7 @@ import xarray as xr
 from skimage.registration import phase_cross_correlation
 
 from .._validate import check_choice, check_int, check_real
-from ..conventions import coord
+from ..conventions import attrs, coord
 from ._common import field_of, grid_spacing, matched, parse_window
 from ._kernels import refine_shifts, window_moments
 from .correlation import oversample_depth, sample_field
@@ -513,18 +513,18 @@ def track(
     dims = ("depth", "aline")
     out = xr.Dataset(
         {
-            "uz": (dims, res["uz"] * pixel, _attrs("depth", "tracked axial displacement")),
-            "ux": (dims, res["ux"] * pitch, _attrs("aline", "tracked lateral displacement")),
-            "uz_pixels": (dims, res["uz"], {"units": "pixel"}),
+            "uz": (dims, res["uz"] * pixel, attrs("depth", "tracked axial displacement")),
+            "ux": (dims, res["ux"] * pitch, attrs("aline", "tracked lateral displacement")),
+            "uz_pixels": (dims, res["uz"], attrs("pixels", "tracked axial displacement")),
             "registration_error": (
                 dims,
                 res["error"],
-                {"units": "1", "long_name": "cross-correlation RMS error"},
+                attrs("dimensionless", "cross-correlation RMS error"),
             ),
         },
         coords={
-            "depth": ("depth", cz, _attrs("depth", "window centre depth")),
-            "aline": ("aline", cx, _attrs("aline", "window centre")),
+            "depth": coord("depth", cz, "window centre depth"),
+            "aline": coord("aline", cx, "window centre"),
         },
         attrs={
             "window_depth_pixels": wz,
@@ -543,19 +543,12 @@ def track(
             / pixel
         )
         resid = out["uz_pixels"] - exact
-        out["uz_residual"] = resid.assign_attrs(
-            units="pixel", long_name="tracked minus exact displacement"
-        )
+        out["uz_residual"] = resid.assign_attrs(attrs("pixels", "tracked minus exact displacement"))
         out["failed"] = (~(abs(resid) <= tol)).assign_attrs(
             long_name=f"tracking failed (|error| > {tol:g} pixel or no estimate)"
         )
         out.attrs["max_error_pixels"] = tol
     return out
-
-
-def _attrs(dim: str, long_name: str) -> dict[str, str]:
-    """Units of coordinate ``dim`` (from :mod:`speckle.conventions`) with ``long_name``."""
-    return {**coord(dim, [])[2], "long_name": long_name}
 
 
 def interpolate_windows(

@@ -75,7 +75,7 @@ import xarray as xr
 from scipy import optimize, stats
 
 from .._validate import check_choice, check_int, check_real
-from ..conventions import COORDS, spacing
+from ..conventions import attrs, coord, spacing
 from ..imaging.beam import beam_scan
 from ..system.noise import add_complex_noise
 from . import autocorrelation as ac
@@ -103,7 +103,6 @@ FOCUS_P_VALUE = 0.01
 NOISE_ROW_DB = 10.0
 #: Fewest contiguous signal-free rows accepted.
 MIN_NOISE_ROWS = 4
-_UM = COORDS["depth"][0]
 
 
 def rectangular_weights(width_fraction: float, n_pixels: int) -> np.ndarray:
@@ -565,14 +564,18 @@ class SystemFit:
             c = float(d.mean() - g * ln.mean())
         else:
             g, c = 1.0, 0.0
-        attrs = {
-            "units": "1",
-            "long_name": "intensity floor / mean speckle intensity, twin-matched",
-        }
-        p["twin_floor"] = ((), b, attrs)
-        p["twin_floor_se"] = ((), float(b_se), {"units": "1"})
-        p["twin_gain"] = ((), g, {"units": "1", "long_name": "g of the twin's log mapping"})
-        p["twin_offset"] = ((), c, {"units": "1", "long_name": "c of the twin's log mapping"})
+        p["twin_floor"] = (
+            (),
+            b,
+            attrs("dimensionless", "intensity floor / mean speckle intensity, twin-matched"),
+        )
+        p["twin_floor_se"] = (
+            (),
+            float(b_se),
+            attrs("dimensionless", "standard error of twin_floor"),
+        )
+        p["twin_gain"] = ((), g, attrs("dimensionless", "g of the twin's log mapping"))
+        p["twin_offset"] = ((), c, attrs("dimensionless", "c of the twin's log mapping"))
 
     # -- comparison ------------------------------------------------------------------------
     def compare(self, image: xr.DataArray, *, seed: int = 0) -> xr.Dataset:
@@ -602,7 +605,7 @@ class SystemFit:
             ds[f"z_{k}"] = (
                 (),
                 float(z.max()),
-                {"units": "1", "long_name": f"largest |measured - twin| / combined SE, {k}"},
+                attrs("dimensionless", f"largest |measured - twin| / combined SE, {k}"),
             )
         edges = np.linspace(-5, 3, 41)
         for name, x in (("measured", region), ("twin", twin)):
@@ -611,7 +614,7 @@ class SystemFit:
             ds[f"{name}_log_histogram"] = (
                 ("bin",),
                 np.histogram(zs, edges, density=True)[0],
-                {"units": "1"},
+                attrs("dimensionless", f"probability density of the standardised {name} log data"),
             )
             ds[f"{name}_image"] = (
                 ("depth", "x"),
@@ -623,10 +626,11 @@ class SystemFit:
                 },
             )
         ds = ds.assign_coords(
-            bin=(
-                "bin",
+            bin=coord(
+                "dimensionless",
                 0.5 * (edges[1:] + edges[:-1]),
-                {"units": "1", "long_name": "standardised log intensity"},
+                "standardised log intensity",
+                dims="bin",
             ),
             depth=region.depth,
             x=region.x,
@@ -667,26 +671,42 @@ class SystemFit:
         acf_se = np.stack([se["depth"], se["lateral"]])
         return xr.Dataset(
             {
-                "autocorrelation": (("axis", "lag"), acf, {"units": "1"}),
-                "autocorrelation_se": (("axis", "lag"), acf_se, {"units": "1"}),
+                "autocorrelation": (
+                    ("axis", "lag"),
+                    acf,
+                    attrs("correlation", "intensity autocorrelation"),
+                ),
+                "autocorrelation_se": (
+                    ("axis", "lag"),
+                    acf_se,
+                    attrs("correlation", "standard error of the autocorrelation"),
+                ),
                 **{
-                    k: ((), whole[k], {"units": "1"})
+                    k: ((), whole[k], attrs("dimensionless", k.replace("_", " ")))
                     for k in ("skewness", "excess_kurtosis", "contrast_excess")
                 },
                 **{
-                    f"{k}_se": ((), float(se[k]), {"units": "1"})
+                    f"{k}_se": (
+                        (),
+                        float(se[k]),
+                        attrs("dimensionless", f"standard error of {k}"),
+                    )
                     for k in ("skewness", "excess_kurtosis", "contrast_excess")
                 },
                 "mean_log_profile": (
                     ("row",),
                     whole["profile"] - whole["profile"].mean(),
-                    {"units": "1", "long_name": "mean ln intensity per row, minus its mean"},
+                    attrs("dimensionless", "mean ln intensity per row, minus its mean"),
                 ),
-                "mean_log_profile_se": (("row",), se["profile"], {"units": "1"}),
+                "mean_log_profile_se": (
+                    ("row",),
+                    se["profile"],
+                    attrs("dimensionless", "standard error of mean_log_profile"),
+                ),
             },
             coords={
                 "axis": ["depth", "lateral"],
-                "lag": ("lag", lag, {"units": "1"}),
+                "lag": coord("lag", lag, "lag (pixels or lines)"),
                 "row": np.arange(image.sizes["depth"]),
             },
         )
@@ -765,18 +785,22 @@ class SystemFit:
             "strain": (
                 "strain",
                 np.asarray(s_values),
-                {"units": "1", "long_name": COORDS["strain"][1]},
+                attrs("strain"),
             ),
             "method": labels,
         }
         return xr.Dataset(
             {
-                "median_error": (("strain", "method"), res[..., 0], {"units": "1"}),
-                "rms_error": (("strain", "method"), res[..., 1], {"units": "1"}),
+                "median_error": (
+                    ("strain", "method"),
+                    res[..., 0],
+                    attrs("strain", "median error"),
+                ),
+                "rms_error": (("strain", "method"), res[..., 1], attrs("strain", "rms error")),
                 "answered": (
                     ("strain", "method"),
                     res[..., 2],
-                    {"units": "1", "long_name": "fraction of pixels answered"},
+                    attrs("dimensionless", "fraction of pixels answered"),
                 ),
             },
             coords=coords,
@@ -1133,7 +1157,7 @@ def fit_system(
         params["focus_p_value"] = (
             (),
             p_focus,
-            {"units": "1", "long_name": "F-test p-value of a focus in the row means"},
+            attrs("probability", "F-test p-value of a focus in the row means"),
         )
         if best is not None and p_focus < FOCUS_P_VALUE:
             focused = True
@@ -1151,12 +1175,16 @@ def fit_system(
                 ("focus_depth", 2, "focal depth in the medium below the region's first row"),
                 ("rayleigh_range", 3, "Rayleigh range in the medium"),
             ):
-                params[name] = ((), float(p[i]), {"units": _UM, "long_name": ln})
-                params[f"{name}_se"] = ((), float(pse[i]), {"units": _UM})
+                params[name] = ((), float(p[i]), attrs("length", ln))
+                params[f"{name}_se"] = (
+                    (),
+                    float(pse[i]),
+                    attrs("length", f"standard error of {name}"),
+                )
     if not focused:
         for name in ("focus_depth", "rayleigh_range"):
-            params[name] = ((), np.nan, {"units": _UM, "long_name": "no focus detected"})
-            params[f"{name}_se"] = ((), np.nan, {"units": _UM})
+            params[name] = ((), np.nan, attrs("length", "no focus detected"))
+            params[f"{name}_se"] = ((), np.nan, attrs("length", "no focus detected"))
     dk = np.pi / data.dz  # delta_k = N pi / H = pi / pixel
     k_model = DEFAULT_K0_DK * dk if k0v is None else n_med * k0v
     ds = xr.Dataset(params)
@@ -1209,52 +1237,55 @@ def _parameters(whole, se, jack, data: _Data, reg, npx, have_noise) -> dict:
     width_key = "gaussian_fwhm_fraction" if shape == "gaussian" else "rectangular_width_fraction"
     p: dict = {}
 
-    def put(name, value, err, units, long_name):
-        p[name] = ((), float(value), {"units": units, "long_name": long_name})
-        p[f"{name}_se"] = ((), float(err), {"units": units})
+    def put(name, value, err, quantity, long_name):
+        p[name] = ((), float(value), attrs(quantity, long_name))
+        p[f"{name}_se"] = ((), float(err), attrs(quantity, f"standard error of {name}"))
 
     put(
         "spectrum_width",
         whole[width_key],
         se[width_key],
-        "1",
+        "dimensionless",
         f"{shape} spectrum width (FWHM) / delta_k",
     )
     put(
         "gaussian_fwhm_fraction",
         whole["gaussian_fwhm_fraction"],
         se["gaussian_fwhm_fraction"],
-        "1",
+        "dimensionless",
         "Gaussian spectrum FWHM / delta_k",
     )
     put(
         "rectangular_width_fraction",
         whole["rectangular_width_fraction"],
         se["rectangular_width_fraction"],
-        "1",
+        "dimensionless",
         "rectangular spectrum width / delta_k",
     )
     for s in SPECTRUM_SHAPES:
         p[f"{s}_rms_residual"] = (
             (),
             float(whole[f"{s}_rms"]),
-            {
-                "units": "1",
-                "long_name": f"rms residual of the {s} fit to the depth autocorrelation",
-            },
+            attrs("dimensionless", f"rms residual of the {s} fit to the depth autocorrelation"),
         )
     put(
         "waist",
         whole["waist_pitch"] * data.pitch,
         se["waist_pitch"] * data.pitch,
-        _UM,
+        "length",
         "beam waist w0 (1/e^2 intensity radius)",
     )
-    put("waist_pitch", whole["waist_pitch"], se["waist_pitch"], "1", "beam waist / A-line pitch")
+    put(
+        "waist_pitch",
+        whole["waist_pitch"],
+        se["waist_pitch"],
+        "dimensionless",
+        "beam waist / A-line pitch",
+    )
     p["waist_rms_residual"] = (
         (),
         float(whole["waist_rms"]),
-        {"units": "1", "long_name": "rms residual of the waist fit to the lateral autocorrelation"},
+        attrs("dimensionless", "rms residual of the waist fit to the lateral autocorrelation"),
     )
     bw, bse = np.asarray(whole["band_waist_pitch"]), np.asarray(se["band_waist_pitch"])
     if bw.size:
@@ -1263,26 +1294,30 @@ def _parameters(whole, se, jack, data: _Data, reg, npx, have_noise) -> dict:
         p["band_waist"] = (
             ("band",),
             bw * data.pitch,
-            {"units": _UM, "long_name": "waist fitted per depth band"},
+            attrs("length", "waist fitted per depth band"),
         )
-        p["band_waist_se"] = (("band",), bse * data.pitch, {"units": _UM})
+        p["band_waist_se"] = (
+            ("band",),
+            bse * data.pitch,
+            attrs("length", "standard error of band_waist"),
+        )
         p["band_depth"] = (
             ("band",),
             centre * data.dz,
-            {"units": _UM, "long_name": "band centre below the region's first row (medium)"},
+            attrs("length", "band centre below the region's first row (medium)"),
         )
         wm = np.sum(bw / bse**2) / np.sum(1 / bse**2)
         chi = float(np.sum(((bw - wm) / bse) ** 2))
         p["waist_depth_p_value"] = (
             (),
             float(stats.chi2.sf(chi, nb - 1)),
-            {"units": "1", "long_name": "p-value of one waist at every depth band"},
+            attrs("probability", "p-value of one waist at every depth band"),
         )
     put(
         "snr_db",
         whole["snr_db"],
         se["snr_db"] if have_noise else 0.0,
-        "dB",
+        "level",
         "mean signal intensity / noise intensity",
     )
     if have_noise:
@@ -1290,53 +1325,65 @@ def _parameters(whole, se, jack, data: _Data, reg, npx, have_noise) -> dict:
             "noise_floor",
             whole["noise_floor"],
             se["noise_floor"],
-            "1",
+            "dimensionless",
             "mean noise level (log data units, or intensity)",
         )
     put(
         "attenuation",
         whole["attenuation"],
         se["attenuation"],
-        "1/um",
+        "attenuation",
         "intensity attenuation mu_t (medium)",
     )
-    put("floor", whole["floor"], se["floor"], "1", "intensity floor / mean speckle intensity")
+    put(
+        "floor",
+        whole["floor"],
+        se["floor"],
+        "dimensionless",
+        "intensity floor / mean speckle intensity",
+    )
     if data.kind == "log":
-        put("gain", whole["gain"], se["gain"], "1", "g in D = g ln I + c")
-        put("offset", whole["offset"], se["offset"], "1", "c in D = g ln I + c")
+        put("gain", whole["gain"], se["gain"], "dimensionless", "g in D = g ln I + c")
+        put("offset", whole["offset"], se["offset"], "dimensionless", "c in D = g ln I + c")
     else:
-        put("gain", 1.0, 0.0, "1", "linear image: ln I itself")
-        put("offset", 0.0, 0.0, "1", "linear image")
+        put("gain", 1.0, 0.0, "dimensionless", "linear image: ln I itself")
+        put("offset", 0.0, 0.0, "dimensionless", "linear image")
     put(
         "contrast_excess",
         whole["contrast_excess"],
         se["contrast_excess"],
-        "1",
+        "dimensionless",
         "<I_s^2>/<I_s>^2 - 2 (noise and floor removed)",
     )
     put(
         "inverse_density_contrast",
         whole["inverse_density_contrast"],
         se["inverse_density_contrast"],
-        "1",
+        "dimensionless",
         "1 / scatterers per pixel per pitch, from the intensity contrast",
     )
     put(
         "inverse_density_log",
         whole["inverse_density_log"],
         se["inverse_density_log"],
-        "1",
+        "dimensionless",
         "1 / scatterers per pixel per pitch, from var ln I (linear data only)",
     )
     inv, inv_se, how = _combined_inverse_density(whole, jack)
-    put("inverse_density", inv, inv_se, "1", f"1 / scatterers per pixel per pitch ({how})")
+    put(
+        "inverse_density",
+        inv,
+        inv_se,
+        "dimensionless",
+        f"1 / scatterers per pixel per pitch ({how})",
+    )
     p["inverse_density"][2]["method"] = how
     significant = inv > 2 * inv_se
     put(
         "density",
         1 / inv if significant else np.nan,
         inv_se / inv**2 if significant else np.nan,
-        "1",
+        "dimensionless",
         "scatterers per pixel per pitch",
     )
     p["density_identified"] = (
@@ -1347,10 +1394,10 @@ def _parameters(whole, se, jack, data: _Data, reg, npx, have_noise) -> dict:
     p["density_lower_bound"] = (
         (),
         float(1 / (inv + 2 * inv_se)) if inv + 2 * inv_se > 0 else np.inf,
-        {"units": "1", "long_name": "density at 2 SE of the inverse density"},
+        attrs("dimensionless", "density at 2 SE of the inverse density"),
     )
     for k in ("skewness", "excess_kurtosis"):
-        put(k, whole[k], se[k], "1", f"{k} of the log data")
+        put(k, whole[k], se[k], "dimensionless", f"{k} of the log data")
     return p
 
 

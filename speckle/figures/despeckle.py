@@ -41,7 +41,7 @@ from matplotlib.figure import Figure
 from ..analysis import compounding as cp
 from ..analysis import filters as dsp
 from ..analysis import image_quality as iq
-from ..conventions import coord
+from ..conventions import attrs, coord, labelled
 from ..imaging.aline import ascan
 from ..imaging.bscan import bscan
 from ..imaging.scan import beam_reach, image, scan_lines
@@ -379,7 +379,7 @@ def _table(rows: list[dict], extra: Mapping | None = None) -> xr.Dataset:
         data[k] = (
             "technique",
             np.array([r.get(k, np.nan) for r in rows], float),
-            {"units": units, "long_name": long},
+            labelled(units, long),
         )
     coords = {"technique": ("technique", labels)}
     for k in ("family", "parameters", "averaging", "domain"):
@@ -475,15 +475,17 @@ def methods_data(cfg: Mapping, seed: int) -> tuple[xr.Dataset, xr.Dataset]:
     i_ref = int(np.flatnonzero(ds.technique.values == "single look + noise")[0])
     ref = {k: float(v) for k, v in ds.isel(technique=i_ref).data_vars.items()}
     ds["speckle_reduction"] = (ref["contrast"] / ds.contrast).assign_attrs(
-        units="1", long_name="single-look contrast over the method's"
+        attrs("dimensionless", "single-look contrast over the method's")
     )
     for k in ("fwhm_axial", "fwhm_lateral", "edge_width"):
         ds[k + "_ratio"] = (ds[k] / ref[k]).assign_attrs(
-            units="1", long_name=f"{k} over the single look's"
+            attrs("dimensionless", f"{k} over the single look's")
         )
     ds["resolution_loss"] = np.maximum(ds.fwhm_axial_ratio, ds.fwhm_lateral_ratio).assign_attrs(
-        units="1",
-        long_name="larger of the axial and lateral point-target FWHM ratios to the single look",
+        attrs(
+            "dimensionless",
+            "larger of the axial and lateral point-target FWHM ratios to the single look",
+        )
     )
     ds.attrs.update(
         snr_db=snr,
@@ -495,30 +497,30 @@ def methods_data(cfg: Mapping, seed: int) -> tuple[xr.Dataset, xr.Dataset]:
     x = ph["x"]
     depth = np.arange(ph["geo"]["n_pixels"]) * ph["pixel"]
     coords = {
-        "depth": ("depth", depth, {"units": "um", "long_name": "depth"}),
-        "x": ("x", x, {"units": "um", "long_name": "lateral position x"}),
+        "depth": coord("depth", depth, "depth"),
+        "x": coord("x", x),
     }
     phantom = xr.Dataset(
         {
             "labels": (
                 ("depth", "x"),
                 ph["labels"].values,
-                {"long_name": "region label", "units": "1"},
+                attrs("label"),
             ),
             "truth": (
                 ("depth", "x"),
                 ph["truth"],
-                {"units": "1", "long_name": "speckle-free intensity E|A|^2"},
+                attrs("dimensionless", "speckle-free intensity E|A|^2"),
             ),
             "single_look": (
                 ("depth", "x"),
                 noisy_img,
-                {"units": "1", "long_name": "single look with noise"},
+                attrs("dimensionless", "single look with noise"),
             ),
             "best": (
                 ("family", "depth", "x"),
                 np.stack([best[f][1] for f in fams]),
-                {"units": "1", "long_name": "best method of each family (highest SSIM)"},
+                attrs("dimensionless", "best method of each family (highest SSIM)"),
             ),
         },
         coords={
@@ -693,35 +695,37 @@ def failure_data(cfg: Mapping, seed: int) -> xr.Dataset:
                 res["resolution_loss"][i, j] = max(
                     m["fwhm_axial"] / loss_ref[0], m["fwhm_lateral"] / loss_ref[1]
                 )
+        dims = ("technique", axis)
         for k, arr in res.items():
-            out[f"{k}_{axis}"] = (("technique", axis), arr)
+            out[f"{k}_{axis}"] = (dims, arr, attrs("dimensionless", f"{k} against {axis}"))
         sr, fr = res["speckle_reduction"], res["feature_retained"]
-        out[f"helps_{axis}"] = (("technique", axis), (sr >= HELPS).astype(np.int8))
-        out[f"erases_{axis}"] = (("technique", axis), (fr < ERASES).astype(np.int8))
+        out[f"helps_{axis}"] = (
+            dims,
+            (sr >= HELPS).astype(np.int8),
+            attrs("dimensionless", f"1 where speckle_reduction >= {HELPS}, against {axis}"),
+        )
+        out[f"erases_{axis}"] = (
+            dims,
+            (fr < ERASES).astype(np.int8),
+            attrs("dimensionless", f"1 where feature_retained < {ERASES}, against {axis}"),
+        )
     ds = xr.Dataset(
         out,
         coords={
             "technique": ("technique", names),
             "family": ("technique", [specs[n]["family"] for n in names]),
-            "density": (
-                "density",
-                np.asarray(fc["density"], float),
-                {"units": "1", "long_name": "scatterers per pixel"},
+            "density": coord("density", np.asarray(fc["density"], float)),
+            "snr_db": coord(
+                "level", np.asarray(fc["snr_db"], float), "receiver SNR", dims="snr_db"
             ),
-            "snr_db": (
-                "snr_db",
-                np.asarray(fc["snr_db"], float),
-                {"units": "dB", "long_name": "receiver SNR"},
-            ),
-            "feature_radius": (
-                "feature_radius",
+            "feature_radius": coord(
+                "dimensionless",
                 np.asarray(fc["feature_radius"], float),
-                {"units": "1", "long_name": "inclusion radius (pixels)"},
+                "inclusion radius (pixels)",
+                dims="feature_radius",
             ),
         },
     )
-    for v in ds.data_vars:
-        ds[v].attrs["units"] = "1"
     ds.attrs.update(
         helps_threshold=HELPS,
         erases_threshold=ERASES,

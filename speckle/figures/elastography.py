@@ -25,15 +25,14 @@ from ..analysis.correlation import expected_correlation
 from ..analysis.failure import mean_and_se, method_options, strain_scores
 from ..analysis.phase import choose_lag, depth_autocorrelation, noise_power
 from ..analysis.strain import accumulate_strain, estimate_strain, predicted_strain_std
-from ..conventions import attrs
+from ..conventions import attrs, coord
 from ..imaging.bscan import bscan
 from ..provenance import provenance_attrs
 from ..scene.deformation import deformable_scene, displace
 from ..scene.mechanics import compress, inclusion_labels
 from ..sweep import sweep
 from ..system.noise import add_complex_noise
-from ..system.source import spectrum
-from ._config import dask_options
+from ._config import dask_options, scene_kwargs, source_spectrum
 from ._style import new_figure
 
 __all__ = [
@@ -56,16 +55,39 @@ __all__ = [
     "speed_data",
 ]
 
-STRAIN = {"units": "1", "long_name": "axial strain (compression > 0)"}
+STRAIN = attrs("strain", "axial strain (compression > 0)")
 STRAIN_ERROR = attrs("strain", "estimate minus truth")
 
 
 def _source(cfg: Mapping, k0_dk: float | None = None, fwhm: float | None = None):
-    n = int(cfg["n_pixels"])
-    h = n * float(cfg["pixel_size"])
-    frac = float(cfg["fwhm_fraction"] if fwhm is None else fwhm)
-    r = float(cfg["k0_dk"] if k0_dk is None else k0_dk)
-    return spectrum(n, h, k0_dk=r, shape="gaussian", fwhm=frac * n * np.pi / h)
+    """The section's Gaussian spectrum, ``k0_dk``/``fwhm_fraction`` optionally replaced."""
+    override = {"k0_dk": k0_dk, "fwhm_fraction": fwhm}
+    return source_spectrum(
+        cfg, shape="gaussian", **{k: v for k, v in override.items() if v is not None}
+    )
+
+
+def _scene(cfg: Mapping, seed: int, n_alines: int, density: float, max_strain: float):
+    """The seeded deformable scene of the section's grid (:func:`speckle.deformable_scene`)."""
+    return deformable_scene(n_alines, density, **scene_kwargs(cfg), seed=seed, strain=max_strain)
+
+
+def _inclusion_fe(cfg: Mapping, lines: int, strain: float) -> tuple[xr.DataArray, xr.Dataset]:
+    """Label image and plane-strain FE solution of the section's circular inclusion on
+    ``lines`` A-lines."""
+    ic, n, p = cfg["inclusion"], int(cfg["n_pixels"]), float(cfg["pixel_size"])
+    depth = np.arange(n) * p
+    x = np.arange(lines) * p  # A-line positions of speckle.deformable_scene (pitch = pixel)
+    labels = inclusion_labels(
+        depth, x, (float(ic["depth_fraction"]) * n * p, x.mean()), float(ic["radius"])
+    )
+    return labels, compress(
+        labels,
+        {0: float(ic["youngs_modulus"][0]), 1: float(ic["youngs_modulus"][1])},
+        float(ic["poisson_ratio"]),
+        strain=strain,
+        contact=ic["contact"],
+    )
 
 
 def _images(
@@ -81,14 +103,12 @@ def _images(
 ) -> tuple[list[np.ndarray], float]:
     """Complex images (depth, aline) of one seeded scene under each displacement field."""
     src = _source(cfg, k0_dk, fwhm)
-    n = int(cfg["n_pixels"])
-    scene = deformable_scene(
+    scene = _scene(
+        cfg,
+        seed,
         int(cfg["n_alines"] if n_alines is None else n_alines),
         float(cfg["density"] if density is None else density),
-        n_pixels=n,
-        depth_range=n * float(cfg["pixel_size"]),
-        seed=seed,
-        strain=max_strain,
+        max_strain,
     )
     out = []
     for f in fields:
@@ -155,14 +175,14 @@ def _maps(cfg, seed, fields, modulus, truth, n_alines=None) -> xr.Dataset:
     p = float(cfg["pixel_size"])
     return xr.Dataset(
         {
-            "modulus": (("depth", "aline"), modulus, {"units": "kPa", "long_name": "modulus"}),
+            "modulus": (("depth", "aline"), modulus, attrs("modulus")),
             "true_strain": (("depth", "aline"), truth, STRAIN),
             "strain": (dims, est, STRAIN),
-            "error": (dims, est - truth, {"units": "1", "long_name": "estimate minus truth"}),
+            "error": (dims, est - truth, attrs("strain", "estimate minus truth")),
         },
         coords={
             "method": list(cfg["methods"]),
-            "depth": ("depth", np.arange(ref.shape[0]) * p, {"units": "um"}),
+            "depth": coord("depth", np.arange(ref.shape[0]) * p),
             "aline": np.arange(ref.shape[1]),
         },
         attrs={"k0": k0, "pixel_size": p, "seed": seed, **provenance_attrs()},
@@ -187,20 +207,8 @@ def inclusion_data(cfg: Mapping, seed: int) -> xr.Dataset:
     finite elements): modulus, FE strain ``strain_zz`` as the truth, strain and error maps, and
     the truth averaged over each method's window (what a windowed estimator can resolve)."""
     ic = cfg["inclusion"]
-    n, lines = int(cfg["n_pixels"]), int(ic.get("n_alines", cfg["n_alines"]))
-    p = float(cfg["pixel_size"])
-    depth = np.arange(n) * p
-    x = np.arange(lines) * p  # A-line positions of speckle.deformable_scene (pitch = pixel)
-    labels = inclusion_labels(
-        depth, x, (float(ic["depth_fraction"]) * n * p, x.mean()), float(ic["radius"])
-    )
-    fe = compress(
-        labels,
-        {0: float(ic["youngs_modulus"][0]), 1: float(ic["youngs_modulus"][1])},
-        float(ic["poisson_ratio"]),
-        strain=float(ic["strain"]),
-        contact=ic["contact"],
-    )
+    lines = int(ic.get("n_alines", cfg["n_alines"]))
+    labels, fe = _inclusion_fe(cfg, lines, float(ic["strain"]))
     disp = fe[["uz", "ux"]].rename(x="aline")
     truth = fe["strain_zz"].values
     ds = _maps(cfg, seed, [_uniform(0.0), disp], fe["youngs_modulus"].values, truth, lines)
@@ -495,7 +503,7 @@ def failure_data(
     data["predicted_noise_snr_db"] = (
         ("snr_db",),
         np.array(pred),
-        {"units": "1", "long_name": "predicted rms strain noise, vector method"},
+        attrs("strain", "predicted rms strain noise, vector method"),
     )
     limits = predicted_limits(fcfg)
     coord_attrs = {
@@ -527,6 +535,12 @@ def failure_data(
     )
 
 
+def _seed_bars(ax, ds: xr.Dataset, var: str, sel: dict, x: np.ndarray, **style):
+    """Mean over seeds of ``var`` against ``x`` with its ``<var>_se`` error bars."""
+    mean, se = (ds[v].isel(sel).values for v in (var, f"{var}_se"))
+    return ax.errorbar(x, mean, yerr=se, fmt="o-", ms=3, lw=0.8, capsize=2, **style)
+
+
 def plot_failure(ds: xr.Dataset) -> Figure:
     """Failure maps: rms error / strain (top) and fraction answered (bottom) per sweep, with
     limits. Points are the means over seeds, bars +- one standard error."""
@@ -538,26 +552,9 @@ def plot_failure(ds: xr.Dataset) -> Figure:
         )
         for i, m in enumerate(ds.method.values):
             sel = {"method": i}  # by position: a str index read back from NetCDF may not select
-            line = axes[0, j].errorbar(
-                xplot,
-                ds[f"relative_rms_error_{name}"].isel(sel).values,
-                yerr=ds[f"relative_rms_error_{name}_se"].isel(sel).values,
-                fmt="o-",
-                ms=3,
-                lw=0.8,
-                capsize=2,
-                label=str(m),
-            )
-            axes[1, j].errorbar(
-                xplot,
-                ds[f"answered_{name}"].isel(sel).values,
-                yerr=ds[f"answered_{name}_se"].isel(sel).values,
-                fmt="o-",
-                ms=3,
-                lw=0.8,
-                capsize=2,
-                color=line[0].get_color(),
-            )
+            var = f"relative_rms_error_{name}"
+            line = _seed_bars(axes[0, j], ds, var, sel, xplot, label=str(m))
+            _seed_bars(axes[1, j], ds, f"answered_{name}", sel, xplot, color=line[0].get_color())
         axes[0, j].set_yscale("log")
         axes[0, j].set_title(f"rms error / strain vs {name}")
         axes[1, j].set_xlabel(
@@ -614,8 +611,16 @@ def speed_data(cfg: Mapping, seed: int) -> xr.Dataset:
             errors[i, j] = strain_scores(est, s)[1] / s
     return xr.Dataset(
         {
-            "time_per_megapixel": (("method", "window"), times, {"units": "s"}),
-            "relative_rms_error": (("method", "window"), errors, {"units": "1"}),
+            "time_per_megapixel": (
+                ("method", "window"),
+                times,
+                attrs("time", "time per megapixel"),
+            ),
+            "relative_rms_error": (
+                ("method", "window"),
+                errors,
+                attrs("dimensionless", "rms strain error / strain"),
+            ),
         },
         coords={"method": methods, "window": windows},
         attrs={"strain": s, "image_pixels": ref.size, "seed": seed, **provenance_attrs()},
@@ -664,7 +669,11 @@ def sequence_data(cfg: Mapping, seed: int) -> xr.Dataset:
     rms = np.array([np.sqrt(np.nanmean((c - t) ** 2)) for c, t in zip(cum, truth, strict=True)])
     out["true_cumulative"] = ("frame", truth, STRAIN)
     out["median_cumulative"] = ("frame", med, STRAIN)
-    out["rms_error_cumulative"] = ("frame", rms, {"units": "1"})
+    out["rms_error_cumulative"] = (
+        "frame",
+        rms,
+        attrs("strain", "rms error of the cumulative strain"),
+    )
     out.attrs.update({"interframe_strain": s, "seed": seed, **provenance_attrs()})
     return out
 
@@ -694,16 +703,9 @@ def plot_sequence(ds: xr.Dataset) -> Figure:
 def _inclusion_frame(cfg: Mapping, seed: int, disp: xr.Dataset, k: int, max_strain: float):
     """Frame ``k``: the seeded inclusion scene displaced by ``k`` times the per-frame FE field
     (linear elasticity: the displacement is proportional to the applied strain)."""
-    ic, n = cfg["inclusion"], int(cfg["n_pixels"])
+    ic = cfg["inclusion"]
     lines = int(cfg["sequence_large"].get("n_alines", ic.get("n_alines", cfg["n_alines"])))
-    scene = deformable_scene(
-        lines,
-        float(cfg["density"]),
-        n_pixels=n,
-        depth_range=n * float(cfg["pixel_size"]),
-        seed=seed,
-        strain=max_strain,
-    )
+    scene = _scene(cfg, seed, lines, float(cfg["density"]), max_strain)
     img = bscan(
         displace(scene, disp * k), _source(cfg, None, None), method=cfg["method"], tol=cfg["tol"]
     )
@@ -717,20 +719,12 @@ def sequence_large_frames(cfg: Mapping, seed: int) -> tuple[xr.DataArray, float]
     import dask.array as da
 
     sq, ic = cfg["sequence_large"], cfg["inclusion"]
-    n, p = int(cfg["n_pixels"]), float(cfg["pixel_size"])
+    n = int(cfg["n_pixels"])
     lines = int(sq.get("n_alines", ic.get("n_alines", cfg["n_alines"])))
     n_frames, s = int(sq["n_frames"]), float(sq["strain"])
+    p = float(cfg["pixel_size"])
     depth, x = np.arange(n) * p, np.arange(lines) * p
-    labels = inclusion_labels(
-        depth, x, (float(ic["depth_fraction"]) * n * p, x.mean()), float(ic["radius"])
-    )
-    fe = compress(
-        labels,
-        {0: float(ic["youngs_modulus"][0]), 1: float(ic["youngs_modulus"][1])},
-        float(ic["poisson_ratio"]),
-        strain=s,
-        contact=ic["contact"],
-    )
+    _, fe = _inclusion_fe(cfg, lines, s)
     disp = fe[["uz", "ux"]].rename(x="aline").load()
     max_strain = min(0.5, 2 * n_frames * s)
     parts = [

@@ -16,13 +16,14 @@ from matplotlib.figure import Figure
 
 from ..analysis.realism import EFFECTS, realism_study
 from ..analysis.twin import SystemFit
+from ..conventions import attrs
 from ..imaging.beam import beam_scan
 from ..scene.regions import cell_density, ellipse, layer, make_regions, rasterize
 from ..scene.shared import shared_scene
 from ..system.attenuation import attenuate_regions
 from ..system.noise import add_noise
 from ..system.rolloff import rolloff
-from ..system.source import spectrum
+from ._config import scene_kwargs, source_spectrum
 from ._style import new_figure
 
 __all__ = [
@@ -165,22 +166,22 @@ def showcase_dataset(cfg: Mapping, seed: int) -> xr.Dataset:
     attenuation integrated through the regions (:func:`speckle.attenuate_regions` on a label
     image four times finer than the pixels in depth), the roll-off and white receiver noise.
     """
-    n, p, nl, pitch = cfg["n_pixels"], cfg["pixel_size"], cfg["n_lines"], cfg["pitch"]
-    h, w0 = n * p, cfg["waist"]
+    grid = scene_kwargs(cfg)
+    n, h = grid["n_pixels"], grid["depth"]
+    p, nl, pitch, w0 = cfg["pixel_size"], cfg["n_lines"], cfg["pitch"], cfg["waist"]
     regions = phantom_regions(cfg)
     lines = np.arange(nl) * pitch
     margin = 5 * w0
     x_range = (lines[0] - margin, lines[-1] + margin)
     scene = shared_scene(regions, z_range=(0.0, h), x_range=x_range, seed=seed)
-    src = spectrum(n, h, k0_dk=cfg["k0_dk"], shape="gaussian", fwhm_fraction=cfg["fwhm_fraction"])
+    src = source_spectrum(cfg, shape="gaussian")
     fine = np.arange(4 * n) * p / 4
     xl = np.arange(x_range[0], x_range[1] + pitch, pitch)
     labels = rasterize(regions, fine, xl)
     beam = {
         "lines": lines,
         "waist": w0,
-        "n_pixels": n,
-        "depth_range": h,
+        **grid,
         "k0": src.attrs["k0"],
         "spectrum": src.values,
         "method": cfg["method"],
@@ -202,7 +203,9 @@ def showcase_dataset(cfg: Mapping, seed: int) -> xr.Dataset:
     system = add_noise(system, cfg["snr_db"], seed=seed, signal_intensity=ref)
 
     def db(img):
-        return (10 * np.log10(img.intensity / ref)).assign_attrs(units="dB re mean tissue")
+        return (10 * np.log10(img.intensity / ref)).assign_attrs(
+            attrs("level", "10 log10 intensity re mean tissue intensity")
+        )
 
     label = rasterize(regions, pure.depth.values, lines)
     return xr.Dataset(
@@ -210,8 +213,8 @@ def showcase_dataset(cfg: Mapping, seed: int) -> xr.Dataset:
             "pure_db": db(pure),
             "system_db": db(system),
             "label": label.drop_attrs(),
-            "attenuation": regions.attenuation.assign_attrs(units="1/um"),
-            "backscatter": regions.backscatter.assign_attrs(units="1"),
+            "attenuation": regions.attenuation,  # units and long name from the regions table
+            "backscatter": regions.backscatter,
         },
         attrs={
             "snr_db": float(cfg["snr_db"]),

@@ -16,6 +16,8 @@ import numpy as np
 import xarray as xr
 
 from .._validate import as_finite_array, check_int, check_real
+from ..conventions import attrs as labels
+from ..conventions import coord
 
 __all__ = ["beam_lines", "shared_scatterers"]
 
@@ -108,9 +110,13 @@ def beam_lines(
         ao[i, : sel.size] = aa[sel] * np.exp(-2 * (xx[sel] - xl[i]) ** 2 / w0**2)
     return xr.Dataset(
         {
-            "z": (("aline", "scatterer"), zo, {"units": "um"}),
-            "amplitude": (("aline", "scatterer"), ao, {"units": "1"}),
+            "z": (("aline", "scatterer"), zo, labels("z")),
+            "amplitude": (
+                ("aline", "scatterer"),
+                ao,
+                labels("amplitude", "scattering amplitude a_j times the beam weight"),
+            ),
         },
-        coords={"aline": ("aline", xl, {"units": "um", "long_name": "lateral position"})},
+        coords={"aline": coord("aline", xl, "lateral position")},
         attrs={**(attrs or {}), "waist": w0, "beam_cutoff": c},
     )

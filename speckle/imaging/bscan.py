@@ -13,7 +13,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import check_choice
-from ..conventions import depth_range_of
+from ..conventions import attrs, coord, depth_range_of, units_of
 from ..provenance import provenance_attrs
 from ..scene.scatterers import AMPLITUDE_MODELS
 from ._rules import check_tol
@@ -168,19 +168,13 @@ def bscan(
     field = field.transpose(*dims)
     ds = xr.Dataset(
         {
-            "field": field.assign_attrs(long_name="complex A-scan field A(q)", units="1"),
-            "amplitude": abs(field).assign_attrs(long_name="speckle amplitude |A|", units="1"),
+            "field": field.assign_attrs(attrs("field", "complex A-scan field A(q)")),
+            "amplitude": abs(field).assign_attrs(attrs("amplitude", "speckle amplitude |A|")),
             "intensity": (abs(field) ** 2).assign_attrs(
-                long_name="speckle intensity |A|^2", units="1"
+                attrs("dimensionless", "speckle intensity |A|^2")
             ),
         },
-        coords={
-            "depth": (
-                "depth",
-                pixel_depths(n, h),
-                {"units": "um", "long_name": "depth of pixel centre q*H/N"},
-            )
-        },
+        coords={"depth": coord("depth", pixel_depths(n, h), "depth of pixel centre q*H/N")},
     )
     ds.attrs.update({f"scene_{k}": v for k, v in scene.attrs.items()})
     ds.attrs.update(
@@ -188,7 +182,7 @@ def bscan(
             "n_pixels": n,
             "depth_range": h,
             "k0": k0,
-            "k0_units": "rad/um",
+            "k0_units": units_of("wavenumber"),
             "delta_k": float(source.attrs["delta_k"]),
             "k0_dk": float(source.attrs["k0_dk"]),
             "spectrum_shape": source.attrs.get("shape", "array"),

@@ -24,7 +24,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import as_finite_array, check_int, check_real
-from ..conventions import coord, depth_range_of, spacing
+from ..conventions import attrs, coord, depth_range_of, spacing, units_of
 from ..provenance import provenance_attrs
 from ..scene.shared import check_scene, scene_window, shared_scene
 from ._rules import check_tol
@@ -147,7 +147,7 @@ def _blocks(
 
 
 def _dataset(
-    field: da.Array, xs: np.ndarray, ys: np.ndarray | None, src: dict, attrs: dict
+    field: da.Array, xs: np.ndarray, ys: np.ndarray | None, src: dict, meta: dict
 ) -> xr.Dataset:
     dims = ("depth", "x") if ys is None else ("depth", "x", "y")
     coords = {
@@ -156,12 +156,10 @@ def _dataset(
     }
     if ys is not None:
         coords["y"] = coord("y", ys)
-    f = xr.DataArray(
-        field, dims=dims, attrs={"units": "1", "long_name": "complex field A(q) of the beam"}
-    )
+    f = xr.DataArray(field, dims=dims, attrs=attrs("field", "complex field A(q) of the beam"))
     ds = xr.Dataset({"field": f}, coords=coords)
-    ds["intensity"] = (abs(ds.field) ** 2).assign_attrs(units="1", long_name="intensity |A|^2")
-    ds.attrs.update(attrs)
+    ds["intensity"] = (abs(ds.field) ** 2).assign_attrs(attrs("dimensionless", "intensity |A|^2"))
+    ds.attrs.update(meta)
     ds.attrs.update(provenance_attrs())
     return ds
 
@@ -185,14 +183,14 @@ def _prepare(source, waist, x, y, chunk, method, tol, wrap, focus, rayleigh_rang
     xs = _lines(x, "x")
     ys = None if y is None else _lines(y, "y")
     c = check_int(chunk, "chunk", low=1)
-    attrs = {
+    meta = {
         "waist": w0,
-        "waist_units": "um",
+        "waist_units": units_of("length"),
         "beam": "Gaussian, double-pass amplitude exp(-2 r^2/w0^2)",
         "n_pixels": src["n_pixels"],
         "depth_range": src["depth_range"],
         "k0": src["k0"],
-        "k0_units": "rad/um",
+        "k0_units": units_of("wavenumber"),
         "k0_dk": float(source.attrs.get("k0_dk", np.nan)),
         "spectrum_shape": source.attrs.get("shape", "array"),
         "method": method,
@@ -212,7 +210,7 @@ def _prepare(source, waist, x, y, chunk, method, tol, wrap, focus, rayleigh_rang
     # not in the first Dask task.
     empty = np.zeros(0)
     kernel((empty, empty, empty) + ((empty,) if ys is not None else ()), xs[:1], _first(ys))
-    return src, w0, xs, ys, c, attrs, kernel, optics
+    return src, w0, xs, ys, c, meta, kernel, optics
 
 
 def _first(ys: np.ndarray | None) -> np.ndarray | None:
@@ -279,7 +277,7 @@ def image(
     """
     if not isinstance(wrap, bool | np.bool_):  # "False" would be true
         raise TypeError(f"wrap must be True or False, got {wrap!r} ({type(wrap).__name__})")
-    src, w0, xs, ys, c, attrs, kernel, optics = _prepare(
+    src, w0, xs, ys, c, meta, kernel, optics = _prepare(
         source, waist, x, y, chunk, method, tol, bool(wrap), focus, rayleigh_range
     )
     if not isinstance(scene, xr.Dataset) or "z" not in scene:
@@ -328,8 +326,8 @@ def image(
         return dask.delayed(kernel, pure=True)(get_part(*bounds), cx, cy)
 
     field = _blocks(make_task, xs, ys, c, src["n_pixels"])
-    attrs.update({f"scene_{k}": v for k, v in scene.attrs.items()})
-    return _dataset(field, xs, ys, src, attrs)
+    meta.update({f"scene_{k}": v for k, v in scene.attrs.items()})
+    return _dataset(field, xs, ys, src, meta)
 
 
 def image_regions(
@@ -368,7 +366,7 @@ def image_regions(
     xarray.Dataset
         As :func:`image`.
     """
-    src, w0, xs, ys, c, attrs, kernel, optics = _prepare(
+    src, w0, xs, ys, c, meta, kernel, optics = _prepare(
         source, waist, x, y, chunk, method, tol, False, focus, rayleigh_range
     )
     reach = beam_reach(w0, widening=_widening(optics, w0, src["k0"], 0.0, src["depth_range"]))
@@ -395,8 +393,8 @@ def image_regions(
         return dask.delayed(kernel, pure=True)(part, cx, cy)
 
     field = _blocks(make_task, xs, ys, c, src["n_pixels"])
-    attrs.update(
+    meta.update(
         {"scene_seed": sd, "scene_tile": np.atleast_1d(np.asarray(tile, dtype=float)).tolist()}
     )
-    attrs["density_units"] = f"scatterers per um^{2 if ys is None else 3}"
-    return _dataset(field, xs, ys, src, attrs)
+    meta["density_units"] = f"scatterers per um^{2 if ys is None else 3}"
+    return _dataset(field, xs, ys, src, meta)

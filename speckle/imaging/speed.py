@@ -20,6 +20,7 @@ import time
 import numpy as np
 import xarray as xr
 
+from ..conventions import attrs
 from ..scene.scatterers import line_generator
 from ..sweep import sweep
 from ..system.source import spectrum as make_spectrum
@@ -141,23 +142,21 @@ def _time_sizes(sizes, methods, tols, repeat, case):
     return t_all, e_all, chosen, n_scat
 
 
-def _chart_dataset(time_, error, chosen, methods, tols, coords, attrs) -> xr.Dataset:
+def _chart_dataset(time_, error, chosen, methods, tols, coords, meta) -> xr.Dataset:
     """The chart's dataset: dims ``(scene, method, tol)``, ``coords`` per scene as
-    ``{name: (values, attrs)}`` (``n_scatterers`` among them), ``rate`` from ``time``."""
+    ``{name: (values, attrs)}`` (``n_scatterers`` among them), ``rate`` from ``time``;
+    ``meta``: the dataset's attributes."""
     ds = xr.Dataset(
         {
             "time": (
                 ("scene", "method", "tol"),
                 time_,
-                {
-                    "units": "s",
-                    "long_name": "wall time (best of repeat, direct: one run; noisy in a pipeline)",
-                },
+                attrs("time", "wall time (best of repeat, direct: one run; noisy in a pipeline)"),
             ),
             "error": (
                 ("scene", "method", "tol"),
                 error,
-                {"units": "1", "long_name": "relative error ||A - A_direct||_2/||A_direct||_2"},
+                attrs("dimensionless", "relative error ||A - A_direct||_2/||A_direct||_2"),
             ),
             "chosen": (("scene", "tol"), chosen.astype(str), {"long_name": "method auto picks"}),
         },
@@ -167,11 +166,9 @@ def _chart_dataset(time_, error, chosen, methods, tols, coords, attrs) -> xr.Dat
             "tol": ("tol", list(map(float, tols)), {"long_name": "requested relative accuracy"}),
             **{k: ("scene", v, a) for k, (v, a) in coords.items()},
         },
-        attrs=attrs,
+        attrs=meta,
     )
-    ds["rate"] = (ds["n_scatterers"] / ds["time"]).assign_attrs(
-        units="1/s", long_name="scatterers per second"
-    )
+    ds["rate"] = (ds["n_scatterers"] / ds["time"]).assign_attrs(attrs("rate"))
     return ds
 
 
@@ -237,18 +234,18 @@ def speed_accuracy(
 
     t_all, e_all, chosen, n_scat = _time_sizes(sizes, methods, tols, repeat, case)
     coords = {
-        "n_pixels": ([int(s["n_pixels"]) for s in sizes], {"units": "1"}),
-        "n_lines": ([int(s["n_lines"]) for s in sizes], {"units": "1"}),
-        "density": ([float(s["density"]) for s in sizes], {"units": "1/pixel"}),
-        "n_scatterers": (n_scat, {"units": "1"}),
+        "n_pixels": ([int(s["n_pixels"]) for s in sizes], attrs("count", "pixels N")),
+        "n_lines": ([int(s["n_lines"]) for s in sizes], attrs("count", "lines")),
+        "density": ([float(s["density"]) for s in sizes], attrs("line_density")),
+        "n_scatterers": (n_scat, attrs("count", "scatterers")),
     }
-    attrs = {
+    meta = {
         "title": "speed versus accuracy of the A-scan synthesis methods",
         **_source_attrs(k0_dk, shape, fwhm_fraction, pixel_size, seed, repeat),
         "note": "timings from a pipeline run are noisy; benchmarks/bench_ascan.py is the "
         "reference for speed claims",
     }
-    return _chart_dataset(t_all, e_all, chosen, methods, tols, coords, attrs)
+    return _chart_dataset(t_all, e_all, chosen, methods, tols, coords, meta)
 
 
 def random_beam_scene(
@@ -337,19 +334,16 @@ def beam_speed_accuracy(
 
     t_all, e_all, chosen, n_scat = _time_sizes(sizes, methods, tols, repeat, case)
     coords = {
-        "n_pixels": ([int(s["n_pixels"]) for s in sizes], {"units": "1"}),
-        "n_lines": ([int(s["n_lines"]) for s in sizes], {"units": "1"}),
-        "density": (
-            [float(s["density"]) for s in sizes],
-            {"units": "1/(pixel line)", "long_name": "scatterers per pixel per line"},
-        ),
+        "n_pixels": ([int(s["n_pixels"]) for s in sizes], attrs("count", "pixels N")),
+        "n_lines": ([int(s["n_lines"]) for s in sizes], attrs("count", "lines")),
+        "density": ([float(s["density"]) for s in sizes], attrs("beam_density")),
         "waist_pitch": (
             [float(s["waist_pitch"]) for s in sizes],
-            {"units": "1", "long_name": "beam waist w0 / line pitch"},
+            attrs("waist_pitch", "beam waist w0 / line pitch"),
         ),
-        "n_scatterers": (n_scat, {"units": "1"}),
+        "n_scatterers": (n_scat, attrs("count", "scatterers")),
     }
-    attrs = {
+    meta = {
         "title": "speed versus accuracy of the scanned-beam B-scan methods",
         **_source_attrs(k0_dk, shape, fwhm_fraction, pixel_size, seed, repeat),
         "pitch_um": pitch,
@@ -359,7 +353,7 @@ def beam_speed_accuracy(
         "note": "timings from a pipeline run are noisy; benchmarks/bench_beam.py is the "
         "reference for speed claims",
     }
-    return _chart_dataset(t_all, e_all, chosen, methods, tols, coords, attrs)
+    return _chart_dataset(t_all, e_all, chosen, methods, tols, coords, meta)
 
 
 #: Failure-map cases: (label, method, knob). Gaussian cases use ``fwhm_fraction``.
@@ -446,13 +440,13 @@ def failure_map(
         point = {k: v for k, v in base.items() if k != axis}
         ds = sweep(_failure_point, {axis: list(values)}, fixed={**point, **fixed}, **opts)
         out[f"error_vs_{axis}"] = ds["error"].assign_attrs(
-            units="1", long_name=f"measured relative error vs {axis}"
+            attrs("dimensionless", f"measured relative error vs {axis}")
         )
         out[f"predicted_vs_{axis}"] = ds["predicted"].assign_attrs(
-            units="1", long_name=f"predicted relative error vs {axis}"
+            attrs("dimensionless", f"predicted relative error vs {axis}")
         )
-    out["density"].attrs["units"] = "1/pixel"
-    out["k0_dk"].attrs["long_name"] = "k0/delta_k (= Lc/lambda0)"
+    out["density"].attrs.update(attrs("line_density"))
+    out["k0_dk"].attrs.update(attrs("k0_dk"))
     out.attrs.update(
         title="failure map of the A-scan synthesis methods",
         base_n_pixels=base["n_pixels"],

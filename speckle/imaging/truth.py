@@ -32,7 +32,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import check_real
-from ..conventions import coord, depth_range_of
+from ..conventions import attrs, coord, depth_range_of, units_of
 from ..provenance import provenance_attrs
 from ..system.source import check_weights, spectrum
 from ._rules import check_tol
@@ -184,12 +184,11 @@ def speckle_free_image(
     dims = [d for d in truth.dims if d not in ("depth", lateral)] + ["depth", lateral]
     truth = truth.transpose(*[d for d in dims if d in truth.dims])
     truth = truth.rename("truth").assign_attrs(
-        units="1",
-        long_name="speckle-free intensity E|A|^2 (incoherent sum)",
+        attrs("dimensionless", "speckle-free intensity E|A|^2 (incoherent sum)"),
         k0=float(source.attrs["k0"]),
         n_pixels=n,
         depth_range=h,
-        **({"waist": float(waist), "waist_units": "um"} if shared else {}),
+        **({"waist": float(waist), "waist_units": units_of("length")} if shared else {}),
         **provenance_attrs(),
     )
     return truth

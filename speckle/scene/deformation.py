@@ -30,7 +30,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import as_finite_array, check_bool, check_real
-from ..conventions import depth_range_of, spacing
+from ..conventions import attrs, coord, depth_range_of, spacing
 from .scatterers import line_generator, random_scatterers
 from .shared import check_scene, is_shared
 
@@ -139,7 +139,7 @@ def deformable_scene(
         rng = line_generator(seed, i, LATERAL_STREAM)
         offsets[i] = rng.uniform(-0.5 * pitch, 0.5 * pitch, size=scene.sizes["scatterer"])
     x = scene.aline.values[:, None] + offsets
-    scene["x"] = (("aline", "scatterer"), x, {"units": "um", "long_name": "lateral position"})
+    scene["x"] = (("aline", "scatterer"), x, attrs("x", "lateral position"))
     scene.attrs.update(
         {
             "imaged_first": margin,
@@ -381,7 +381,7 @@ def displace(scene: xr.Dataset, displacement: Displacement, *, wrap: bool = Fals
                 amp2.astype(np.complex128),
                 scene.amplitude.attrs,
             ),
-            "x": (("aline", "scatterer"), x2, {"units": "um", "long_name": "lateral position"}),
+            "x": (("aline", "scatterer"), x2, attrs("x", "lateral position")),
         },
         coords={"aline": ("aline", aline[first : first + count], scene.aline.attrs)},
         attrs={**scene.attrs, "wrap": int(bool(wrap)), "imaged_first": 0, "imaged_count": count},
@@ -547,7 +547,7 @@ def uniaxial_strain(
         displace(scene, uniaxial_displacement(si, poisson_ratio=nu, x_centre=x_centre), wrap=wrap)
         for si in s
     ]
-    out = _stack(scenes, "strain", s, {"units": "1", "long_name": "compressive strain"})
+    out = _stack(scenes, "strain", s, attrs("strain", "compressive strain"))
     out.attrs.update({"poisson_ratio": nu, "x_centre": x_centre, "deformation": "uniaxial"})
     return out
 
@@ -572,7 +572,7 @@ def _uniaxial_shared(
         [_displace_shared(scene, f) for f in fields],
         "strain",
         s,
-        {"units": "1", "long_name": "compressive strain"},
+        attrs("strain", "compressive strain"),
     )
     out.attrs.update({"poisson_ratio": nu, "x_centre": xc, "deformation": "uniaxial"})
     if ndim == 3:
@@ -601,9 +601,7 @@ def translate(scene: xr.Dataset, dz: object, dx: float = 0.0, *, wrap: bool = Fa
     ]
     if dzs.ndim == 0:
         return scenes[0]
-    return _stack(
-        scenes, "shift", np.atleast_1d(dzs), {"units": "um", "long_name": "axial translation"}
-    )
+    return _stack(scenes, "shift", np.atleast_1d(dzs), attrs("displacement", "axial translation"))
 
 
 def pixel_displacement(
@@ -627,11 +625,11 @@ def pixel_displacement(
     a = np.asarray(aline, float)
     zz, xx = np.meshgrid(d, a, indexing="ij")
     uz, ux = _field_values(displacement, zz, xx, xx)
-    coords = {"depth": ("depth", d, {"units": "um"}), "aline": ("aline", a, {"units": "um"})}
+    coords = {"depth": coord("depth", d), "aline": coord("aline", a)}
     return xr.Dataset(
         {
-            "uz": (("depth", "aline"), uz, {"units": "um", "long_name": "axial displacement"}),
-            "ux": (("depth", "aline"), ux, {"units": "um", "long_name": "lateral displacement"}),
+            "uz": (("depth", "aline"), uz, attrs("displacement", "axial displacement")),
+            "ux": (("depth", "aline"), ux, attrs("displacement", "lateral displacement")),
         },
         coords=coords,
     )
@@ -673,7 +671,7 @@ def uniaxial_pixel_displacement(
         for si in s
     ]
     return xr.concat(fields, dim="strain").assign_coords(
-        strain=("strain", s, {"units": "1", "long_name": "compressive strain"})
+        strain=coord("strain", s, "compressive strain")
     )
 
 

@@ -26,6 +26,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import as_finite_array
+from ..conventions import attrs, labelled
 
 __all__ = [
     "PROPERTIES",
@@ -91,12 +92,12 @@ def layers(tops: object, **properties: object) -> xr.Dataset:
         if v.shape != t.shape:
             raise ValueError(f"{name} needs one value per layer ({t.size}), got shape {v.shape}")
         units, _, long_name = PROPERTIES[name]
-        data[name] = ("layer", v, {"units": units, "long_name": long_name})
+        data[name] = ("layer", v, labelled(units, long_name))
     return xr.Dataset(
         data,
         coords={
             "layer": np.arange(t.size),
-            "top": ("layer", t, {"units": "um", "long_name": "depth of layer top"}),
+            "top": ("layer", t, attrs("length", "depth of layer top")),
         },
     )
 
@@ -191,8 +192,7 @@ def region_values(
     if not np.all(found):
         missing = np.unique(labels.values[~found])
         raise ValueError(f"labels {missing.tolist()} have no row in properties (regions {table})")
-    units = PROPERTIES[name][0]
-    return labels.copy(data=vals).assign_attrs(units=units, long_name=name)
+    return labels.copy(data=vals).assign_attrs(labelled(PROPERTIES[name][0], name))
 
 
 def sample_map(field: xr.DataArray, z: object, x: object) -> np.ndarray:

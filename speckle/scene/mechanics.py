@@ -57,6 +57,7 @@ from speckle._validate import (
     check_memory,
     check_real,
 )
+from speckle.conventions import attrs, coord, units_of
 from speckle.scene.regions import check_modulus, in_ellipse
 
 __all__ = [
@@ -100,11 +101,11 @@ def _label_image(values: np.ndarray, depth: np.ndarray, x: np.ndarray) -> xr.Dat
         values.astype(np.int64),
         dims=("depth", "x"),
         coords={
-            "depth": ("depth", depth, {"units": "um", "long_name": "depth"}),
-            "x": ("x", x, {"units": "um", "long_name": "lateral position"}),
+            "depth": coord("depth", depth, "depth"),
+            "x": coord("x", x, "lateral position"),
         },
         name="label",
-        attrs={"units": "1", "long_name": "region label"},
+        attrs=attrs("label"),
     )
 
 
@@ -515,30 +516,30 @@ def compress(
     grid = ("depth", lateral)
     nodes = ("node_depth", "node_x")
 
-    def var(dims, data, units, long_name):
-        return (dims, data, {"units": units, "long_name": long_name})
+    def var(dims, data, quantity, long_name):
+        return (dims, data, attrs(quantity, long_name))
 
     ds = xr.Dataset(
         {
-            "label": var(grid, values, "1", "region label"),
-            "youngs_modulus": var(grid, young, "kPa", "Young's modulus"),
-            "poisson_ratio": var(grid, nu, "1", "Poisson ratio"),
-            "uz": var(grid, uz_pix, "um", "axial displacement (+z = deeper)"),
-            "ux": var(grid, ux_pix, "um", "lateral displacement"),
-            "strain_zz": var(grid, -ezz, "1", "axial strain, compression positive"),
-            "strain_xx": var(grid, -exx, "1", "lateral strain, compression positive"),
-            "strain_xz": var(grid, -exz, "1", "shear strain (tensor), sign flipped"),
-            "stress_zz": var(grid, -szz, "kPa", "axial stress, compression positive"),
-            "stress_xx": var(grid, -sxx, "kPa", "lateral stress, compression positive"),
-            "stress_xz": var(grid, -sxz, "kPa", "shear stress, sign flipped"),
-            "uz_node": var(nodes, uz_node, "um", "axial displacement at FE nodes"),
-            "ux_node": var(nodes, ux_node, "um", "lateral displacement at FE nodes"),
+            "label": var(grid, values, "label", "region label"),
+            "youngs_modulus": var(grid, young, "modulus", "Young's modulus"),
+            "poisson_ratio": var(grid, nu, "dimensionless", "Poisson ratio"),
+            "uz": var(grid, uz_pix, "displacement", "axial displacement (+z = deeper)"),
+            "ux": var(grid, ux_pix, "displacement", "lateral displacement"),
+            "strain_zz": var(grid, -ezz, "strain", "axial strain, compression positive"),
+            "strain_xx": var(grid, -exx, "strain", "lateral strain, compression positive"),
+            "strain_xz": var(grid, -exz, "strain", "shear strain (tensor), sign flipped"),
+            "stress_zz": var(grid, -szz, "stress", "axial stress, compression positive"),
+            "stress_xx": var(grid, -sxx, "stress", "lateral stress, compression positive"),
+            "stress_xz": var(grid, -sxz, "stress", "shear stress, sign flipped"),
+            "uz_node": var(nodes, uz_node, "displacement", "axial displacement at FE nodes"),
+            "ux_node": var(nodes, ux_node, "displacement", "lateral displacement at FE nodes"),
         },
         coords={
-            "depth": ("depth", depth, {"units": "um", "long_name": "depth"}),
-            lateral: (lateral, xcoord, {"units": "um", "long_name": "lateral position"}),
-            "node_depth": ("node_depth", z_nodes, {"units": "um", "long_name": "FE node depth"}),
-            "node_x": ("node_x", x_nodes, {"units": "um", "long_name": "FE node position"}),
+            "depth": coord("depth", depth, "depth"),
+            lateral: coord(lateral, xcoord, "lateral position"),
+            "node_depth": coord("length", z_nodes, "FE node depth", dims="node_depth"),
+            "node_x": coord("length", x_nodes, "FE node position", dims="node_x"),
         },
         attrs={
             "contact": contact,
@@ -551,7 +552,7 @@ def compress(
             "x_centre": x_centre,
             "probe_force": float(reaction[dof_z[top]].sum()),
             "sign_convention": "strain_ij = -eps_ij, stress_ij = -sigma_ij (compression > 0)",
-            "youngs_modulus_units": "kPa",
+            "youngs_modulus_units": units_of("modulus"),
         },
     )
     return ds

@@ -50,7 +50,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
-from ..conventions import coord, spacing
+from ..conventions import attrs, coord, labelled, spacing
 from .scatterers import AMPLITUDE_MODELS
 
 __all__ = [
@@ -251,11 +251,17 @@ def _table(rows: list[dict]) -> xr.Dataset:
             arr = np.array([fill if v is None else v for v in values], dtype=object).astype(str)
         else:
             arr = np.array([np.nan if v is None else v for v in values], dtype=float)
-        units, long_name = _UNITS.get(name, ("1" if name not in _GEOMETRY else "um", name))
-        data[name] = ("region", arr, {"units": units, "long_name": long_name})
+        if name in _UNITS:
+            data[name] = ("region", arr, labelled(*_UNITS[name]))
+        else:
+            data[name] = (
+                "region",
+                arr,
+                attrs("dimensionless" if name not in _GEOMETRY else "length", name),
+            )
     for name in _GEOMETRY:
         if name not in data:
-            data[name] = ("region", np.full(len(rows), np.nan), {"units": "um", "long_name": name})
+            data[name] = ("region", np.full(len(rows), np.nan), attrs("length", name))
     return xr.Dataset(
         data,
         coords={"region": coord("region", np.arange(len(rows)))},
@@ -334,7 +340,7 @@ def from_label_image(labels: xr.DataArray, properties: list[Mapping]) -> xr.Data
     out["label_image"] = (
         ("depth", "x"),
         values.astype(np.int32),
-        {"units": "1", "long_name": "region label"},
+        attrs("label"),
     )
     return out.assign_coords(depth=coord("depth", img.depth.values), x=coord("x", img.x.values))
 
@@ -508,5 +514,5 @@ def rasterize(regions: xr.Dataset, depth_coord: object, x_coord: object) -> xr.D
         dims=("depth", "x"),
         coords={"depth": coord("depth", d), "x": coord("x", xs)},
         name="region",
-        attrs={"units": "1", "long_name": "region label (-1: none)"},
+        attrs=attrs("label", "region label (-1: none)"),
     )

@@ -23,6 +23,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import check_choice, check_int, check_memory, check_real
+from ..conventions import attrs, coord
 
 __all__ = [
     "AMPLITUDE_MODELS",
@@ -174,18 +175,18 @@ def random_scatterers(
     x = (i0 + np.arange(nl)) * pitch
     return xr.Dataset(
         {
-            "z": (("aline", "scatterer"), z, {"units": "um", "long_name": "scatterer depth"}),
+            "z": (("aline", "scatterer"), z, attrs("z")),
             "amplitude": (
                 ("aline", "scatterer"),
                 amp.astype(np.complex128),
-                {"units": "1", "long_name": "scattering amplitude a_j"},
+                attrs("amplitude", "scattering amplitude a_j"),
             ),
-            "count": ("aline", counts, {"units": "1", "long_name": "scatterers in A-line"}),
+            "count": ("aline", counts, attrs("count", "scatterers in A-line")),
         },
-        coords={"aline": ("aline", x, {"units": "um", "long_name": "lateral position"})},
+        coords={"aline": coord("aline", x, "lateral position")},
         attrs={
             "density": rho,
-            "density_units": "scatterers per pixel",
+            "density_units": attrs("density")["long_name"],
             "n_pixels": n,
             "depth_range": h,
             "seed": sd,

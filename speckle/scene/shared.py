@@ -40,6 +40,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import as_finite_array, check_int, check_memory, check_real
+from ..conventions import attrs
 from .regions import compile_regions, labels_of
 from .scatterers import draw_amplitudes
 
@@ -63,11 +64,11 @@ MAX_TILES = 10**6
 SCATTERER_BYTES = 5 * 16 * 4
 
 _ATTRS = {
-    "z": {"units": "um", "long_name": "scatterer depth"},
-    "x": {"units": "um", "long_name": "scatterer lateral position x"},
-    "y": {"units": "um", "long_name": "scatterer lateral position y"},
-    "amplitude": {"units": "1", "long_name": "scattering amplitude a_j"},
-    "region": {"units": "1", "long_name": "region label"},
+    "z": attrs("z"),
+    "x": attrs("x", "scatterer lateral position x"),
+    "y": attrs("y", "scatterer lateral position y"),
+    "amplitude": attrs("amplitude", "scattering amplitude a_j"),
+    "region": attrs("label"),
 }
 
 

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ..conventions import spacing
+from ..conventions import attrs, spacing, units_of
 from ..scene.layers import property_integral, region_values, sample_map
 from ._scene import check_scene, lateral_positions, scale_amplitudes
 
@@ -58,7 +58,9 @@ def attenuate(scene: xr.Dataset, attenuation: float | xr.Dataset) -> xr.Dataset:
     check_scene(scene)
     tau = xr.apply_ufunc(optical_depth, scene.z, kwargs={"attenuation": attenuation})
     mu = float(attenuation) if not isinstance(attenuation, xr.Dataset) else np.nan
-    return scale_amplitudes(scene, np.exp(-tau), attenuation=mu, attenuation_units="1/um")
+    return scale_amplitudes(
+        scene, np.exp(-tau), attenuation=mu, attenuation_units=units_of("attenuation")
+    )
 
 
 def attenuation_map(labels: xr.DataArray, properties: xr.Dataset) -> xr.DataArray:
@@ -82,7 +84,7 @@ def attenuation_map(labels: xr.DataArray, properties: xr.Dataset) -> xr.DataArra
     z0 = float(labels.depth.values[0])
     tau = dz * (mu.cumsum("depth") - mu / 2) + mu.isel(depth=0) * (z0 - dz / 2)
     return np.exp(-tau).assign_attrs(
-        units="1", long_name="round-trip amplitude factor exp(-int mu_t dz)"
+        attrs("dimensionless", "round-trip amplitude factor exp(-int mu_t dz)")
     )
 
 

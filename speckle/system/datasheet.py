@@ -436,30 +436,28 @@ def datasheet(
     return system
 
 
+#: Columns of the rows of :data:`EXAMPLE_SYSTEMS` (datasheet keywords).
+_EXAMPLE_COLUMNS = (
+    "wavelength_nm",
+    "bandwidth_nm",
+    "camera_pixels",
+    "camera_range_nm",
+    "lateral_resolution",
+    "aline_pitch",
+    "spectral_resolution_nm",
+)
+_EXAMPLE_ROWS = {
+    "840nm": (840.0, 50.0, 2048, (790.0, 890.0), 10.0, 5.0, 0.07),
+    "1310nm": (1310.0, 100.0, 1024, (1200.0, 1420.0), 15.0, 7.5, 0.2),
+}
 #: Illustrative parameter sets of two common SD-OCT classes (not any vendor's specification).
 EXAMPLE_SYSTEMS: dict[str, dict] = {
-    "840nm": dict(
-        wavelength_nm=840.0,
-        bandwidth_nm=50.0,
-        camera_pixels=2048,
-        camera_range_nm=(790.0, 890.0),
-        refractive_index=1.38,
-        lateral_resolution=10.0,
-        aline_pitch=5.0,
-        spectral_resolution_nm=0.07,
-        label="illustrative 840 nm / 50 nm class (not a vendor specification)",
-    ),
-    "1310nm": dict(
-        wavelength_nm=1310.0,
-        bandwidth_nm=100.0,
-        camera_pixels=1024,
-        camera_range_nm=(1200.0, 1420.0),
-        refractive_index=1.38,
-        lateral_resolution=15.0,
-        aline_pitch=7.5,
-        spectral_resolution_nm=0.2,
-        label="illustrative 1310 nm / 100 nm class (not a vendor specification)",
-    ),
+    name: {
+        **dict(zip(_EXAMPLE_COLUMNS, row, strict=True)),
+        "refractive_index": 1.38,
+        "label": f"illustrative {row[0]:g} nm / {row[1]:g} nm class (not a vendor specification)",
+    }
+    for name, row in _EXAMPLE_ROWS.items()
 }
 
 

@@ -13,6 +13,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import as_finite_array, check_int, check_real
+from ..conventions import attrs
 
 __all__ = ["add_floor", "log_compress", "log_expand"]
 
@@ -90,12 +91,11 @@ def log_compress(
         nb = check_int(bits, "bits", low=1, high=16)
         d = np.clip(np.round(d.fillna(0.0).where(np.isfinite(d), 0.0)), 0, 2**nb - 1)
     return d.assign_attrs(
+        attrs("dimensionless", "log-compressed intensity"),
         scale="log",
         gain=g,
         offset=c,
         bits=-1 if bits is None else bits,
-        units="1",
-        long_name="log-compressed intensity",
     )
 
 
@@ -110,5 +110,5 @@ def log_expand(data: xr.DataArray, gain: float, offset: float) -> xr.DataArray:
     g = check_real(gain, "gain", low=0, low_inclusive=False)
     c = check_real(offset, "offset")
     return np.exp((data - c) / g).assign_attrs(
-        scale="linear", units="1", long_name="intensity from log-compressed data"
+        attrs("dimensionless", "intensity from log-compressed data"), scale="linear"
     )

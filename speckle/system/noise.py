@@ -31,6 +31,7 @@ import xarray as xr
 from scipy import special
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
+from ..conventions import attrs
 from ._scene import line_rng
 from .source import index_shift_phase
 
@@ -166,7 +167,7 @@ def add_noise(
         field=noisy.assign_attrs(field.attrs),
         amplitude=abs(noisy).assign_attrs(image.get("amplitude", field).attrs),
         intensity=(abs(noisy) ** 2).assign_attrs(image.get("intensity", field).attrs),
-        noise=nz.assign_attrs(long_name=f"receiver noise ({kind})", units="1"),
+        noise=nz.assign_attrs(attrs("field", f"receiver noise ({kind})")),
     )
     return out.assign_attrs(snr_db=snr, noise_intensity=sigma2, noise_kind=kind, noise_seed=sd)
 

@@ -24,6 +24,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import as_finite_array, check_int, check_real
+from ..conventions import attrs
 from ..scene.layers import property_profile
 from ._scene import check_scene, line_rng, region_property
 
@@ -114,7 +115,7 @@ def degree_of_polarization(image: xr.Dataset, dims: object = None) -> xr.DataArr
     s1 = (abs(co) ** 2 - abs(x) ** 2).mean(dims)
     s23 = 2 * (co * np.conj(x)).mean(dims)
     return (np.sqrt(s1**2 + abs(s23) ** 2) / s0).assign_attrs(
-        units="1", long_name="degree of polarization"
+        attrs("dimensionless", "degree of polarization")
     )
 
 

@@ -20,7 +20,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
-from ..conventions import QUANTITIES
+from ..conventions import attrs, coord, units_of
 
 __all__ = [
     "SPECTRUM_SHAPES",
@@ -189,18 +189,17 @@ def spectrum(
         s,
         dims=("wavenumber",),
         coords={
-            "wavenumber": ("wavenumber", k, {"units": "rad/um", "long_name": "wavenumber k_n"}),
-            "n": ("wavenumber", idx, {"long_name": "spectral index"}),
+            "wavenumber": coord("wavenumber", k, "wavenumber k_n"),
+            "n": coord("n", idx, dims="wavenumber"),
         },
         name="spectrum",
         attrs={
-            "long_name": "spectral weight S(k_n)",
-            "units": "1",
+            **attrs("weight"),
             "n_pixels": n,
             "depth_range": h,
-            "depth_range_units": QUANTITIES["depth_range"][0],
+            "depth_range_units": units_of("depth_range"),
             "k0": k0v,
-            "k0_units": "rad/um",
+            "k0_units": units_of("wavenumber"),
             "delta_k": dk_total,
             "k0_dk": k0v / dk_total,
             "shape": shape,
