@@ -24,7 +24,7 @@ def source(shape="gaussian"):
 
 
 def pair(strain, lines=16, shape="gaussian", seed=4):
-    scene = D.deformable_scene(lines, 4.0, n_pixels=N, depth=H, seed=seed, strain=[0.0, strain])
+    scene = D.deformable_scene(lines, 4.0, n_pixels=N, depth_range=H, seed=seed, strain=[0.0, strain])
     b = speckle.bscan(D.uniaxial_strain(scene, [0.0, strain]), source(shape), method="nufft")
     img = b.field.transpose("strain", "depth", "aline").values
     return img[0], img[1]
@@ -129,7 +129,7 @@ def test_resample_depth_matches_the_exact_interpolant(shape, bound):
 
 @pytest.mark.parametrize("shift", [0.3, -1.7])
 def test_track_axial_rigid_shift_and_uniform_strain(shift):
-    scene = D.deformable_scene(32, 4.0, n_pixels=N, depth=H, seed=9)
+    scene = D.deformable_scene(32, 4.0, n_pixels=N, depth_range=H, seed=9)
     ref = speckle.bscan(D.translate(scene, 0.0, wrap=True), source()).field.values
     moved = speckle.bscan(D.translate(scene, shift * PIXEL, wrap=True), source()).field.values
     out = tracking.track_axial(ref, moved, window=(64, 8), step=(32, 8))
