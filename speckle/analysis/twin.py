@@ -1389,7 +1389,7 @@ def _parameters(whole, se, jack, data: _Data, reg, npx, have_noise) -> dict:
     p["density_identified"] = (
         (),
         int(significant),
-        {"units": "1", "long_name": "1 if the inverse density exceeds 2 SE (density fitted)"},
+        attrs("dimensionless", "1 if the inverse density exceeds 2 SE (density fitted)"),
     )
     p["density_lower_bound"] = (
         (),
