@@ -43,14 +43,7 @@ __getattr__, __dir__, __all__ = attach(
         "sparse": ["depth_intensity_psf", "log_intensity_moments", "sparse_inverse_density"],
         "statistics": ["contrast_theory", "fit_exponential", "fit_rayleigh", "speckle_contrast"],
         "strain": ["accumulate_strain", "estimate_displacement", "estimate_strain"],
-        "tracking": [
-            "TRACK_METHODS",
-            "interpolate_displacement",
-            "interpolate_windows",
-            "track",
-            "track_array",
-            "track_axial",
-        ],
+        "tracking": ["TRACK_METHODS", *functions_of(__name__, "tracking")],
         "twin": ["SystemFit", "fit_system"],
     },
 )
