@@ -167,7 +167,7 @@ def showcase_dataset(cfg: Mapping, seed: int) -> xr.Dataset:
     image four times finer than the pixels in depth), the roll-off and white receiver noise.
     """
     grid = scene_kwargs(cfg)
-    n, h = grid["n_pixels"], grid["depth"]
+    n, h = grid["n_pixels"], grid["depth_range"]
     p, nl, pitch, w0 = cfg["pixel_size"], cfg["n_lines"], cfg["pitch"], cfg["waist"]
     regions = phantom_regions(cfg)
     lines = np.arange(nl) * pitch
