@@ -146,17 +146,19 @@ GRID = [
 LOW = [
     (1.0, 1.0, 40.0, 0.5, False),
     (0.5, 3.0, 25.0, 1.0, False),
-    (0.25, 3.0, 40.0, 2.0, False),
     (0.25, 1.0, 25.0, 1.0, False),
 ]
 #: Points inside the issue's ranges where the fit is known to fail the criterion (issue 20
 #: stays open on them): at (0.5, 1, 10 dB, 4) the focus test finds a focus in an unfocused
 #: image (p = 2e-4) and the tilted attenuation pulls 7.3 SE; at (1.0, 6, 40 dB, 2) the
-#: attenuation pulls -3.7 SE (its SE too small). Strict: a fix turns them into failures of this
-#: marker, and they then move back to ``LOW``.
+#: attenuation pulls -3.7 SE (its SE too small); at (0.25, 3, 40 dB, 2) the focus test finds a
+#: focus at p = 0.005. Two false foci among 12 unfocused points at the 1 % level: the focus
+#: test's p-value is not calibrated (correlated rows). Strict: a fix turns them into failures
+#: of this marker, and they then move back to ``LOW``.
 KNOWN_FAILURES = [
     (1.0, 6.0, 40.0, 2.0, False),
     (0.5, 1.0, 10.0, 4.0, False),
+    (0.25, 3.0, 40.0, 2.0, False),
 ]
 
 
