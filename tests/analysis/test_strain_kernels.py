@@ -24,7 +24,9 @@ def source(shape="gaussian"):
 
 
 def pair(strain, lines=16, shape="gaussian", seed=4):
-    scene = D.deformable_scene(lines, 4.0, n_pixels=N, depth_range=H, seed=seed, strain=[0.0, strain])
+    scene = D.deformable_scene(
+        lines, 4.0, n_pixels=N, depth_range=H, seed=seed, strain=[0.0, strain]
+    )
     b = speckle.bscan(D.uniaxial_strain(scene, [0.0, strain]), source(shape), method="nufft")
     img = b.field.transpose("strain", "depth", "aline").values
     return img[0], img[1]
