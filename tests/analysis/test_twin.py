@@ -223,7 +223,12 @@ def test_grid_verdict_detects_a_wrong_se():
     assert bad["p_std"] < P_GRID and bad["p_coverage"] < P_GRID
 
 
-@pytest.mark.parametrize("point", [LOW[0], LOW[3]], ids=["rho0.5", "rho4"])
+#: The lowest and highest of the low densities (the second fails the grid criterion on its focus
+#: and attenuation, see ``KNOWN_FAILURES``, not on its density).
+DENSITY_POINTS = [(1.0, 1.0, 40.0, 0.5, False), (0.5, 1.0, 10.0, 4.0, False)]
+
+
+@pytest.mark.parametrize("point", DENSITY_POINTS, ids=["rho0.5", "rho4"])
 def test_low_density_from_the_log_moments(point):
     """At 0.5-4 scatterers per pixel var ln I gives 1/rho within its SE, and joins the contrast."""
     f, pull, _ = closed_loop(*point)
