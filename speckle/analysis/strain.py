@@ -161,8 +161,9 @@ def _as_images(reference: object, deformed: object) -> tuple[np.ndarray, np.ndar
                 f"{name} holds {int(finite.size - finite.sum())} NaN or infinite pixels of "
                 f"{finite.size}; the phase methods cannot bridge them (crop or fill them first)"
             )
-        # C order (A-lines side by side in memory): row slices along depth stay contiguous
-        arrays.append(np.ascontiguousarray(values, dtype=np.complex128))
+        # the input's own layout: the numba kernels handle both (a C-order copy of a transposed
+        # B-scan cost more than it saved once the lag and the sums left numpy)
+        arrays.append(values.astype(np.complex128, copy=False))
     if arrays[0].shape != arrays[1].shape:
         raise ValueError(
             f"reference and deformed must have the same shape, got {arrays[0].shape} and "
