@@ -30,7 +30,8 @@ reflector     um          depth of a point reflector
 
 Data variables (:data:`QUANTITIES`): ``field``, ``amplitude``, ``weight``, ``correlation``,
 ``contrast``, ``dimensionless``, ``label``, ``count``, ``probability`` (1); ``length``,
-``displacement``, ``depth_range`` (um); ``area_density`` (um-2); ``level`` (dB,
+``displacement``, ``depth_range`` (um); ``area_density`` (um-2); ``scene_density`` (um^-d,
+per µm^2 or µm^3 of a 2-D or 3-D scene); ``level`` (dB,
 ``20 log10 |A|``); ``pixels`` (pixel); ``line_density`` (1/pixel) and ``beam_density``
 (1/(pixel line)); ``modulus``, ``stress`` (kPa); ``attenuation`` (1/um); ``diffusion``
 (um^2/s); ``time`` (s); ``rate`` (1/s); ``angle`` (degree); and, for measured images of
@@ -101,6 +102,7 @@ QUANTITIES: dict[str, tuple[str, str]] = {
     "displacement": ("um", "displacement"),
     "depth_range": ("um", "unambiguous depth H"),
     "area_density": ("um-2", "scatterers per square micrometre"),
+    "scene_density": ("um^-d", "scatterers per um^d of a d-dimensional scene (d = 2 or 3)"),
     "level": ("dB", "level 20 log10 |A|"),
     "label": ("1", "region label"),
     "count": ("1", "number of items"),

@@ -41,7 +41,7 @@ from matplotlib.figure import Figure
 from ..analysis import compounding as cp
 from ..analysis import filters as dsp
 from ..analysis import image_quality as iq
-from ..conventions import attrs, coord, labelled
+from ..conventions import attrs, coord
 from ..imaging.aline import ascan
 from ..imaging.bscan import bscan
 from ..imaging.scan import beam_reach, image, scan_lines
@@ -241,17 +241,18 @@ def quality(intensity: np.ndarray, ph: dict, *, edge: bool = True) -> dict:
     }
 
 
+#: metric -> (its quantity in :data:`speckle.conventions.QUANTITIES`, long name)
 METRICS = {
-    "contrast": ("1", "speckle contrast std/mean in the uniform region"),
-    "enl": ("1", "equivalent number of looks mean^2/var in the uniform region"),
-    "cnr": ("1", "contrast-to-noise ratio inclusion/background (dB images)"),
-    "psnr": ("dB", "PSNR against the truth (dB images)"),
-    "ssim": ("1", "SSIM against the truth (dB images)"),
-    "fwhm_axial": ("um", "axial FWHM of the point targets"),
-    "fwhm_lateral": ("um", "lateral FWHM of the point targets"),
-    "edge_width": ("um", "10-90 % width of the layer step edge"),
-    "edge_width_se": ("um", "standard error of edge_width (4 blocks of lines)"),
-    "feature_retained": ("1", "inclusion contrast (dB) kept, over the truth's"),
+    "contrast": ("contrast", "speckle contrast std/mean in the uniform region"),
+    "enl": ("dimensionless", "equivalent number of looks mean^2/var in the uniform region"),
+    "cnr": ("dimensionless", "contrast-to-noise ratio inclusion/background (dB images)"),
+    "psnr": ("level", "PSNR against the truth (dB images)"),
+    "ssim": ("dimensionless", "SSIM against the truth (dB images)"),
+    "fwhm_axial": ("length", "axial FWHM of the point targets"),
+    "fwhm_lateral": ("length", "lateral FWHM of the point targets"),
+    "edge_width": ("length", "10-90 % width of the layer step edge"),
+    "edge_width_se": ("length", "standard error of edge_width (4 blocks of lines)"),
+    "feature_retained": ("dimensionless", "inclusion contrast (dB) kept, over the truth's"),
 }
 
 
@@ -375,11 +376,11 @@ def _grid(params: Mapping) -> list[dict]:
 def _table(rows: list[dict], extra: Mapping | None = None) -> xr.Dataset:
     labels = [r["method"] for r in rows]
     data = {}
-    for k, (units, long) in {**METRICS, **(extra or {})}.items():
+    for k, (quantity, long) in {**METRICS, **(extra or {})}.items():
         data[k] = (
             "technique",
             np.array([r.get(k, np.nan) for r in rows], float),
-            labelled(units, long),
+            attrs(quantity, long),
         )
     coords = {"technique": ("technique", labels)}
     for k in ("family", "parameters", "averaging", "domain"):
@@ -468,8 +469,8 @@ def methods_data(cfg: Mapping, seed: int) -> tuple[xr.Dataset, xr.Dataset]:
                     img,
                 )
     extra = {
-        "acquisitions": ("1", "acquisitions (looks acquired)"),
-        "time_per_mpx": ("s", "processing time per megapixel"),
+        "acquisitions": ("count", "acquisitions (looks acquired)"),
+        "time_per_mpx": ("time", "processing time per megapixel"),
     }
     ds = _table(rows, extra)
     i_ref = int(np.flatnonzero(ds.technique.values == "single look + noise")[0])

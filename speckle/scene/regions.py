@@ -50,7 +50,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
-from ..conventions import attrs, coord, labelled, spacing
+from ..conventions import attrs, coord, spacing
 from .scatterers import AMPLITUDE_MODELS
 
 __all__ = [
@@ -90,13 +90,14 @@ DEFAULTS: dict[str, object] = {
     "poisson_ratio": 0.45,
 }
 
-_UNITS = {
-    "density": ("um^-d", "scatterers per um^2 (2-D) or um^3 (3-D)"),
-    "backscatter": ("1", "mean backscatter E|a|^2"),
-    "attenuation": ("1/um", "attenuation coefficient"),
-    "depolarization": ("1", "depolarisation ratio"),
-    "youngs_modulus": ("kPa", "Young's modulus"),
-    "poisson_ratio": ("1", "Poisson ratio"),
+#: property -> (its quantity in :data:`speckle.conventions.QUANTITIES`, long name)
+_PROPERTIES = {
+    "density": ("scene_density", "scatterers per um^2 (2-D) or um^3 (3-D)"),
+    "backscatter": ("dimensionless", "mean backscatter E|a|^2"),
+    "attenuation": ("attenuation", "attenuation coefficient"),
+    "depolarization": ("dimensionless", "depolarisation ratio"),
+    "youngs_modulus": ("modulus", "Young's modulus"),
+    "poisson_ratio": ("dimensionless", "Poisson ratio"),
 }
 _GEOMETRY = (
     "z_top",
@@ -251,8 +252,8 @@ def _table(rows: list[dict]) -> xr.Dataset:
             arr = np.array([fill if v is None else v for v in values], dtype=object).astype(str)
         else:
             arr = np.array([np.nan if v is None else v for v in values], dtype=float)
-        if name in _UNITS:
-            data[name] = ("region", arr, labelled(*_UNITS[name]))
+        if name in _PROPERTIES:
+            data[name] = ("region", arr, attrs(*_PROPERTIES[name]))
         else:
             data[name] = (
                 "region",
