@@ -79,10 +79,18 @@ def _hand_written_units(tree: ast.AST) -> list[int]:
 
     A ``"units"`` key of a dict display (whatever its value), a ``units=`` keyword
     (``assign_attrs(units=...)``, ``dict(units=...)``), an assignment to ``[...]["units"]``,
-    and any other ``*units`` key or keyword given a string literal.
+    any other ``*units`` key or keyword given a string literal, and ``labelled`` given literal
+    units (it is for units carried over from an input; a fixed quantity takes ``attrs``).
     """
     found = []
     for node in ast.walk(tree):
+        if (
+            isinstance(node, ast.Call)
+            and getattr(node.func, "id", getattr(node.func, "attr", None)) == "labelled"
+            and node.args
+            and _literal(node.args[0])
+        ):
+            found.append(node.args[0].lineno)
         if isinstance(node, ast.Dict):
             for key, value in zip(node.keys, node.values, strict=True):
                 name = key.value if isinstance(key, ast.Constant) else None
@@ -114,10 +122,12 @@ d = x.assign_attrs(units="1")
 e = dict(units=u)
 f = {"units": "um" if p else "pixel"}
 x.attrs["units"] = "1"
+h = conventions.labelled("um", "a length")
 ok = {"pitch_units": attrs("length")["units"], "v": x.attrs.get("units")}
 g = attrs("length")
+i = labelled(units, "carried over")
 """
-    assert _hand_written_units(ast.parse(src)) == [2, 3, 4, 5, 6, 7, 8]
+    assert _hand_written_units(ast.parse(src)) == [2, 3, 4, 5, 6, 7, 8, 9]
 
 
 @pytest.mark.parametrize("path", MODULES)

@@ -26,7 +26,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import as_finite_array
-from ..conventions import attrs, labelled
+from ..conventions import attrs, labelled, units_of
 
 __all__ = [
     "PROPERTIES",
@@ -40,11 +40,20 @@ __all__ = [
     "sample_map",
 ]
 
-#: Property name -> (units, allowed interval (low, high), long name).
+#: Property name -> (units, allowed interval (low, high), long name); the units are those of
+#: the property's quantity in :data:`speckle.conventions.QUANTITIES`.
 PROPERTIES: dict[str, tuple[str, tuple[float, float], str]] = {
-    "attenuation": ("1/um", (0.0, np.inf), "intensity attenuation coefficient mu_t"),
-    "backscatter": ("1", (0.0, np.inf), "relative backscattered intensity"),
-    "depolarization": ("1", (0.0, 1.0), "cross-polarized fraction of scattered intensity"),
+    "attenuation": (
+        units_of("attenuation"),
+        (0.0, np.inf),
+        "intensity attenuation coefficient mu_t",
+    ),
+    "backscatter": (units_of("dimensionless"), (0.0, np.inf), "relative backscattered intensity"),
+    "depolarization": (
+        units_of("dimensionless"),
+        (0.0, 1.0),
+        "cross-polarized fraction of scattered intensity",
+    ),
 }
 
 
