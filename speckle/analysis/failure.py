@@ -14,8 +14,15 @@ import xarray as xr
 
 from .._validate import check_int, check_real
 from ..conventions import depth_range_of
+from .tracking import interpolate_windows
 
-__all__ = ["mean_and_se", "method_options", "predicted_vector_floor", "strain_scores"]
+__all__ = [
+    "mean_and_se",
+    "method_options",
+    "predicted_tracking_quantization",
+    "predicted_vector_floor",
+    "strain_scores",
+]
 
 #: Label suffix -> the ``align`` option of ``estimate_strain`` it stands for.
 _ALIGN_SUFFIXES = {"_unaligned": False, "_aligned": True}
@@ -232,3 +239,58 @@ def predicted_vector_floor(
         v2 = 0.5 * (uu.real - u2.real)  # E[(Im U)^2], U = sum_z (T0 + T1 + T2)
         out[r] = np.sqrt(max(v2, 0.0) / wx) / (kappa * d_rows[rows].sum())
     return out
+
+
+def predicted_tracking_quantization(
+    strain: float,
+    n_pixels: int,
+    *,
+    track_window: int = 32,
+    step: int = 8,
+    window: int = 64,
+    grid: float = 1 / 40,
+) -> float:
+    """Relative rms strain error of the tracking method from its registration grid alone.
+
+    The tracker (:func:`speckle.analysis.tracking.track_array`) reads each window's
+    displacement on a grid of ``grid`` pixels (``1/(upsample * oversample)``, 1/40 by
+    default). This model takes the exact displacement ``s z`` of a uniform compression at the
+    window centres, rounds it to that grid, interpolates it to every pixel as the estimator does
+    (:func:`speckle.analysis.tracking.interpolate_windows`) and fits the unit-weight
+    least-squares slope over ``window`` pixels. Where ``s * n_pixels < grid / 2`` every window
+    reads 0 and the result is exactly 1. The speckle's own registration jitter is not in it,
+    so it is a lower bound of the measured error.
+
+    Parameters
+    ----------
+    strain : float
+        Uniform compression ``s`` (dimensionless, > 0).
+    n_pixels : int
+        Image depth in pixels (>= ``track_window + window``).
+    track_window, step : int
+        Depth size and step of the tracking windows (pixels).
+    window : int
+        Depth size of the strain slope fit (pixels, >= 2).
+    grid : float
+        Registration grid (pixels, > 0).
+
+    Returns
+    -------
+    float
+        rms of (estimate - s) / s over the depths where the slope fit is inside the image.
+    """
+    s = check_real(strain, "strain", low=0.0, low_inclusive=False)
+    wz = check_int(window, "window", low=2)
+    tw = check_int(track_window, "track_window", low=1)
+    st = check_int(step, "step", low=1)
+    n = check_int(n_pixels, "n_pixels", low=tw + wz)
+    g = check_real(grid, "grid", low=0.0, low_inclusive=False)
+    centres = np.arange(0, n - tw + 1, st) + 0.5 * (tw - 1)
+    u = np.round(s * centres / g) * g
+    q = np.arange(n, dtype=float)
+    line = interpolate_windows(u[:, None], centres, np.zeros(1), q, np.zeros(1), outside="nan")
+    y = np.lib.stride_tricks.sliding_window_view(line[:, 0], wz)
+    k = np.arange(wz) - 0.5 * (wz - 1)
+    slope = (y @ k) / np.sum(k**2)
+    slope = slope[np.isfinite(slope)]
+    return float(np.sqrt(np.mean((slope - s) ** 2)) / s)

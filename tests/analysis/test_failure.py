@@ -7,7 +7,11 @@ import numpy as np
 import pytest
 
 import speckle
-from speckle.analysis.failure import mean_and_se, predicted_vector_floor
+from speckle.analysis.failure import (
+    mean_and_se,
+    predicted_tracking_quantization,
+    predicted_vector_floor,
+)
 
 N, PIXEL, LINES, LAG, WINDOW = 256, 8.0, 64, 3, (32, 4)
 STRAIN = 1e-6  # deep in the linear regime: 2 k0 s H = 0.03 rad
@@ -90,3 +94,40 @@ def test_small_strain_floor_matches_the_gaussian_theory():
         assert abs(mean - expected) < 3 * se, (k, mean, se, expected)
     # the leakage makes the top rows several times worse than the rows below
     assert np.nanmean(pred[bands["top"]] ** 2) > 4 * np.nanmean(pred[bands["below"]] ** 2)
+
+
+def test_tracking_reads_zero_below_half_its_registration_grid():
+    """The tracker's displacement lies on a 1/40-px grid: when the largest displacement of the
+    compression (s * depth) is below half a step, every window reads 0, so the strain is exactly
+    0 (error/strain 1, as the model of the grid alone predicts)."""
+    n, s = 128, 5e-5  # 0.0064 px at the bottom < 1/80 px
+    scene = speckle.deformable_scene(8, 4.0, n_pixels=n, depth_range=n * PIXEL, seed=3)
+    src = speckle.spectrum(n, n * PIXEL, k0_dk=10.0, shape="gaussian", fwhm_fraction=0.5)
+    a1, a2 = (
+        speckle.bscan(speckle.displace(scene, lambda z, x, s=v: -s * z), src)
+        .field.transpose("depth", "aline")
+        .values
+        for v in (0.0, s)
+    )
+    est = speckle.estimate_strain(
+        a1, a2, k0=float(src.attrs["k0"]), pixel_size=PIXEL, method="tracking"
+    )
+    assert np.isfinite(est).any()
+    np.testing.assert_array_equal(est[np.isfinite(est)], 0.0)
+    assert predicted_tracking_quantization(s, n) == pytest.approx(1.0, abs=1e-12)
+    # above the threshold the rounded displacement is a staircase: spikes of the slope fit
+    assert predicted_tracking_quantization(1e-4, 512) > 1.5
+
+
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        ({"strain": 0.0, "n_pixels": 512}, "strain"),
+        ({"strain": 1e-4, "n_pixels": 64}, "n_pixels"),
+        ({"strain": 1e-4, "n_pixels": 512, "window": 1}, "window"),
+        ({"strain": 1e-4, "n_pixels": 512, "grid": 0.0}, "grid"),
+    ],
+)
+def test_tracking_quantization_refuses_bad_input(kw, match):
+    with pytest.raises((TypeError, ValueError), match=match):
+        predicted_tracking_quantization(**kw)
