@@ -10,10 +10,12 @@ of a Gaussian-spectrum image (FWHM 0.5 delta_k, k0/delta_k 10, 4 scatterers per 
 pixels). Every time is the best of ``--repeat`` runs, as wall clock and as this process's CPU
 time (the machine is shared: CPU time is the steadier of the two), and every ratio is against
 the ten-line numpy baseline (vector method at fixed lag 3, ``scipy.ndimage.uniform_filter``
-windows (32, 4), no alignment) timed in the same run. The tracker table compares
-``speckle.track`` (``method="fft"``) with the per-window ``phase_cross_correlation`` reference
-on the same pair (default windows (32, 16), steps (16, 8)), and lists ``track_axial`` (the
-alignment tracker of the phase methods: lateral offset 0, windows (64, 8) every (64, 8)).
+windows (32, 4), no alignment), timed in rounds interleaved with each method (baseline,
+method, baseline, ...; the median of the rounds' ratios, after one warm-up call). The
+tracker table compares ``speckle.track`` (``method="fft"``) with the per-window
+``phase_cross_correlation`` reference on the same pair (default windows (32, 16), steps
+(16, 8)), and lists ``track_axial`` (the alignment tracker of the phase methods: lateral
+offset 0, windows (64, 8) every (64, 8)).
 Each row's ``target`` is issue 18's bound on the CPU ratio (tracker: the speed-up).
 """
 
@@ -54,17 +56,37 @@ def baseline(ref: np.ndarray, dfm: np.ndarray, k0: float, pixel: float) -> np.nd
     return -np.angle(s) / (2 * k0 * lag * pixel)
 
 
+def _once(func):
+    w0, c0 = time.perf_counter(), time.process_time()
+    out = func()
+    return time.perf_counter() - w0, time.process_time() - c0, out
+
+
 def timed(func, repeat: int, warmup: bool = True):
     """(best wall time, best CPU time, last result); ``warmup``: one untimed call first (numba
     kernels compiled or loaded from their cache, FFT plans made)."""
-    wall = cpu = np.inf
     out = func() if warmup else None
+    runs = [_once(func) for _ in range(repeat)]
+    if runs:
+        out = runs[-1][2]
+    return min(r[0] for r in runs), min(r[1] for r in runs), out
+
+
+def paired(func, base, repeat: int):
+    """``func`` timed in rounds interleaved with the baseline ``base`` (base, func, base, ...):
+    (best wall, best CPU, median of the rounds' wall ratios, of their CPU ratios, result). A
+    load that comes and goes hits both calls of a round alike, so the ratio is steadier than
+    the ratio of two best times measured minutes apart."""
+    out = func()  # warm-up
+    ratios, walls, cpus = [], [], []
     for _ in range(repeat):
-        w0, c0 = time.perf_counter(), time.process_time()
-        out = func()
-        wall = min(wall, time.perf_counter() - w0)
-        cpu = min(cpu, time.process_time() - c0)
-    return wall, cpu, out
+        bw, bc, _ = _once(base)
+        w, c, out = _once(func)
+        walls.append(w)
+        cpus.append(c)
+        ratios.append((w / bw, c / bc))
+    rw, rc = np.median(np.array(ratios), axis=0)
+    return min(walls), min(cpus), float(rw), float(rc), out
 
 
 def scores(est: np.ndarray, truth: float) -> tuple[float, float, float]:
@@ -112,10 +134,11 @@ def main() -> None:
         f"| 1.0x | 1.0x | | {med:.4f} | {rms:.4f} | {ans:.2f} |"
     )
     for method, opts in METHODS:
-        wall, cpu, est = timed(
+        wall, cpu, ratio_wall, ratio_cpu, est = paired(
             lambda method=method, opts=opts: speckle.estimate_strain(
                 ref, dfm, k0=k0, pixel_size=pixel, method=method, **opts
             ),
+            lambda: baseline(ref, dfm, k0, pixel),
             args.repeat,
         )
         label = method + {True: " (aligned)", False: " (unaligned)"}.get(
@@ -125,8 +148,8 @@ def main() -> None:
         med, rms, ans = scores(est, args.strain)
         target = TARGETS.get(label, 10.0 if method != "vector" else None)
         print(
-            f"| {label} | {window} | {wall / mpx:.3g} s | {cpu / mpx:.3g} s | {wall / bw:.2f}x | "
-            f"{cpu / bc:.2f}x | {f'<= {target:g}x' if target else ''} | {med:.4f} | {rms:.4f} "
+            f"| {label} | {window} | {wall / mpx:.3g} s | {cpu / mpx:.3g} s | {ratio_wall:.2f}x | "
+            f"{ratio_cpu:.2f}x | {f'<= {target:g}x' if target else ''} | {med:.4f} | {rms:.4f} "
             f"| {ans:.2f} |"
         )
     print(

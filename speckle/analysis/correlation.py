@@ -651,7 +651,9 @@ def expected_gamma(strain: object, *, spectrum: xr.DataArray, oversample: int = 
     t = 2 * np.pi * dx * f
     series = finufft.nufft1d2(t, v, isign=1, eps=GAMMA_EPS, modeord=0, nthreads=1)
     big_v = (series * np.exp(1j * np.pi * dx * f)).reshape(s.size, n)
-    c_mean = big_v @ w
+    # an elementwise sum, not ``big_v @ w``: the BLAS call spins threads that cost twice the
+    # CPU of the product here (a 2-core machine: 210 ms CPU against 86 ms for this)
+    c_mean = (big_v * w).sum(axis=1)
     a = n * float(np.sum(w**2))
     return np.abs(c_mean) / np.sqrt(a * a / (1 - s))
 
