@@ -17,16 +17,26 @@ statistics that the model's system parameters set, and inverts their theory:
   pitch ``p``), and the same per depth band (``band_waist``), with a chi-square test of a
   depth-independent waist (``waist_depth_p_value``; the model's focused beam keeps the lateral
   correlation depth-independent, see :mod:`speckle.imaging.beam`);
-* **focus**: the mean intensity per row against ``A exp(-2 mu_t z) (1 + u^2)^(-3/2) + N``,
-  ``u = (z - z_f)/z_R`` (the 2-D confocal response of :func:`speckle.beam_scan`), kept when it
-  beats the unfocused profile ``A exp(-2 mu_t z) + N`` by an F-test at 1 % (``focus_p_value``);
+* **focus**: rows are correlated along depth (point-spread function) and across A-lines, so
+  the row means of ``ln I`` have the covariance ``C`` of their mean over x, from the region's
+  2-D autocovariance of ``ln I`` (summed over lateral lags to the first non-positive one,
+  kept to the first non-positive depth lag; Toeplitz). The test statistic is the largest
+  reduction of the generalised least-squares residual sum of squares of ``a + b z`` when the
+  confocal term ``ln (1 + u^2)^(-3/2)``, ``u = (z - z_f)/z_R`` (the 2-D confocal response of
+  :func:`speckle.beam_scan`), is added with a positive coefficient, scanned over ``z_f`` (the
+  region and a quarter of it either side) and ``z_R`` (1/2 to 2 times ``k0 w0^2/2``, ``k0`` in
+  the medium, ``w0`` the fitted waist). Its p-value (``focus_p_value``) is from a seeded
+  Monte-Carlo null (``FOCUS_NULL_DRAWS`` correlated Gaussian residuals with covariance ``C``):
+  ``p = (1 + #{null >= observed})/(1 + n)``. Below 1 % (``FOCUS_P_VALUE``) the mean intensity
+  per row is fitted by ``A exp(-2 mu_t z) (1 + u^2)^(-3/2) + N``;
 * **SNR and noise floor** from signal-free rows (``noise_rows``, or found above the region when
   neither they nor ``snr_db`` are given: :func:`fit_system`): ``SNR = <I_region>/<I_noise>
   - 1`` (the region holds signal plus noise), ``noise_floor`` = mean noise intensity (for log
   data: the mean log level of those rows, data units); white noise multiplies every lag >= 1
   by ``(r/(1 + r))^2``, which the fits include;
-* **attenuation** ``mu_t`` (1/µm, intensity): ``-1/2`` the slope of the mean log intensity per
-  row against depth in the medium (``pixel_size / refractive_index``);
+* **attenuation** ``mu_t`` (1/µm, intensity): ``-1/2`` the least-squares slope of the mean log
+  intensity per row against depth in the medium (``pixel_size / refractive_index``), its SE
+  from the sandwich variance with the row means' covariance ``C`` (above);
 * **intensity floor** ``b`` and, for log data, the gain ``g`` and offset ``c`` of
   ``D = g ln I + c`` (:func:`~speckle.analysis.measured.fit_floor`: skewness of the log data);
 * **scatterer density**: from the intensity contrast. For Poisson scatterers of unit amplitude
@@ -52,9 +62,10 @@ correlated over a few lines, blocks are nearly independent): every quantity abov
 re-estimated without each block (statistics pooled over the remaining blocks, no pair across a
 block edge) and ``SE^2 = (n - 1)/n sum (theta_i - mean theta)^2``. With a ``frame`` dim the
 statistics pool every frame and each jackknife sample deletes the same block from all frames.
-The focus fit is repeated on each jackknife sample too (rows are correlated along depth by the
-point-spread function, so the least-squares covariance of the row means would understate its
-errors).
+The attenuation's SE and the focus test use the row means' covariance ``C`` instead (a block
+jackknife of a slope over ~16 blocks understates its error under a wide beam). When a focus is
+found its fit is repeated on each jackknife sample (those errors, attenuation included, are the
+jackknife's).
 
 :meth:`SystemFit.simulate` images a shared scene of the fitted density through the fitted
 spectrum and scanned (focused) beam (:func:`speckle.beam_scan`), attenuated, with white noise
@@ -72,7 +83,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import xarray as xr
-from scipy import optimize, stats
+from scipy import linalg, optimize, signal, stats
 
 from .._validate import check_choice, check_int, check_real
 from ..conventions import attrs, coord, spacing
@@ -98,6 +109,9 @@ DEFAULT_K0_DK = 10.0
 #: Intensity contrast std/mean below which a linear image is suspected to be log data.
 LOG_AS_LINEAR_CONTRAST = 0.5
 FOCUS_P_VALUE = 0.01
+FOCUS_NULL_DRAWS = 1000  # Monte-Carlo draws of the focus test's null (seeded)
+FOCUS_SCAN_DEPTHS = 41  # focus depths scanned over the region and a quarter of it either side
+FOCUS_SCAN_RAYLEIGH = 5  # Rayleigh ranges scanned, 1/2 to 2 times k0 w0^2/2
 #: Rows above the region whose mean intensity is this many dB below the region's are candidate
 #: signal-free rows (found when ``noise_rows`` is not given).
 NOISE_ROW_DB = 10.0
@@ -346,48 +360,122 @@ def _refit_focus(z, rows, rows_se, noise_level, p0):
     return p
 
 
-def _fit_focus(z, rows, rows_se, noise_level):
-    """Weighted least squares of the row means with and without focus (module docstring)."""
+def _fit_focus(z, rows, rows_se, noise_level, start):
+    """Weighted least squares of the focused profile to the intensity row means.
+
+    Started from the focus test's best ``start = (z_f, z_R)`` and a few other points; returns
+    ``(chi^2, parameters, covariance)`` of the best fit, or None.
+    """
     w = 1 / rows_se
     mean = float(rows.mean())
-
-    def flat(zz, a, mu):
-        return a * np.exp(-2 * mu * zz) + noise_level
-
-    p_flat, _ = optimize.curve_fit(
-        flat, z, rows, p0=[mean, 0.0], sigma=rows_se, absolute_sigma=True, maxfev=20000
-    )
-    chi_flat = float(np.sum(((flat(z, *p_flat) - rows) * w) ** 2))
     span = z[-1] - z[0] + (z[1] - z[0])
     best = None
-    for zf0 in np.linspace(z[0], z[-1], 5):
-        for zr0 in (span / 8, span / 3, span):
-            try:
-                p, cov = optimize.curve_fit(
-                    lambda zz, a, mu, zf, zr: _confocal(zz, a, mu, zf, zr, noise_level),
-                    z,
-                    rows,
-                    p0=[mean, 0.0, zf0, zr0],
-                    sigma=rows_se,
-                    absolute_sigma=True,
-                    bounds=(
-                        [0, -1, z[0] - 2 * span, span / 50],
-                        [np.inf, 1, z[-1] + 2 * span, 20 * span],
-                    ),
-                    maxfev=20000,
-                )
-            except (RuntimeError, ValueError):
-                continue
-            chi = float(np.sum(((_confocal(z, *p, noise_level) - rows) * w) ** 2))
-            if best is None or chi < best[0]:
-                best = (chi, p, cov)
-    if best is None:
-        return None, 1.0
-    # F-test of the two extra parameters (robust to a common scale error of the row SEs)
-    dof = z.size - 4
-    f_stat = ((chi_flat - best[0]) / 2) / (best[0] / dof) if dof > 0 and best[0] > 0 else 0.0
-    p_value = float(stats.f.sf(max(f_stat, 0.0), 2, dof)) if dof > 0 else 1.0
-    return best, p_value
+    grid = [(a, b) for a in np.linspace(z[0], z[-1], 5) for b in (span / 8, span / 3, span)]
+    starts = [start, *grid]
+    for zf0, zr0 in starts:
+        try:
+            p, cov = optimize.curve_fit(
+                lambda zz, a, mu, zf, zr: _confocal(zz, a, mu, zf, zr, noise_level),
+                z,
+                rows,
+                p0=[mean, 0.0, zf0, zr0],
+                sigma=rows_se,
+                absolute_sigma=True,
+                bounds=(
+                    [0, -1, z[0] - 2 * span, span / 50],
+                    [np.inf, 1, z[-1] + 2 * span, 20 * span],
+                ),
+                maxfev=20000,
+            )
+        except (RuntimeError, ValueError):
+            continue
+        chi = float(np.sum(((_confocal(z, *p, noise_level) - rows) * w) ** 2))
+        if best is None or chi < best[0]:
+            best = (chi, p, cov)
+    return best
+
+
+def _row_mean_covariance(log_blocks: list[np.ndarray]) -> np.ndarray:
+    """Covariance of the region's row means of ``ln I`` from its 2-D autocovariance.
+
+    Each block (depth, x) has its rows' means removed; its autocovariance (FFT,
+    :func:`scipy.signal.correlate`, over overlapping pairs) is summed over x-lags up to the
+    first non-positive lateral lag, which gives ``S(m) = nx cov(row_i, row_{i+m})``; removing
+    the row means scales the truncated sum by ``1 - (2 L + 1)/nx`` (corrected). ``S`` is kept
+    up to its first non-positive depth lag (the point-spread function's correlation length) and
+    the Toeplitz matrix ``S(|i - j|)/nx`` is returned (eigenvalues clipped to stay positive).
+    """
+    nz = log_blocks[0].shape[0]
+    acc = None
+    count = None
+    widths = 0
+    for b in log_blocks:
+        r = b - b.mean(axis=1, keepdims=True)
+        c = signal.correlate(r, r, mode="full", method="fft")
+        n = signal.correlate(np.ones_like(r), np.ones_like(r), mode="full", method="fft")
+        acc = c if acc is None else _add_centred(acc, c)
+        count = n if count is None else _add_centred(count, n)
+        widths += r.shape[1]
+    cxz = acc / np.maximum(np.round(count), 1)
+    z0, x0 = nz - 1, cxz.shape[1] // 2
+    nx_block = widths / len(log_blocks)
+    lat = cxz[z0, x0:]
+    stop = np.flatnonzero(lat[1:] <= 0)
+    lx = int(stop[0]) if stop.size else lat.size - 1
+    lx = min(lx, int(nx_block) // 4)
+    s = cxz[z0:, x0 - lx : x0 + lx + 1].sum(axis=1) / (1 - (2 * lx + 1) / nx_block)
+    stop = np.flatnonzero(s[1:] <= 0)
+    lz = int(stop[0]) + 1 if stop.size else s.size
+    col = np.zeros(nz)
+    col[:lz] = s[:lz]
+    cov = linalg.toeplitz(col) / widths
+    w, v = linalg.eigh(cov)
+    w = np.maximum(w, 1e-6 * w.max())
+    return (v * w) @ v.T
+
+
+def _add_centred(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a + b`` for two full correlations of blocks of different widths (zero lag centred)."""
+    if a.shape[1] < b.shape[1]:
+        a, b = b, a
+    d = (a.shape[1] - b.shape[1]) // 2
+    out = a.copy()
+    out[:, d : d + b.shape[1]] += b
+    return out
+
+
+def _focus_test(
+    z: np.ndarray, rows: np.ndarray, cov: np.ndarray, rayleigh: float, seed: int = 0
+) -> tuple[float, float, float]:
+    """Scan test of a confocal term in the log row means (module docstring).
+
+    Returns the p-value and the best focus depth and Rayleigh range (µm).
+    """
+    span = z[-1] - z[0] + (z[1] - z[0])
+    chol = linalg.cholesky(cov, lower=True)
+    x = np.column_stack([np.ones_like(z), z])
+    q, _ = np.linalg.qr(linalg.solve_triangular(chol, x, lower=True))
+    zf, zr = np.meshgrid(
+        np.linspace(z[0] - span / 4, z[-1] + span / 4, FOCUS_SCAN_DEPTHS),
+        rayleigh * 2.0 ** np.linspace(-1, 1, FOCUS_SCAN_RAYLEIGH),
+    )
+    zf, zr = zf.ravel(), zr.ravel()
+    term = -1.5 * np.log1p(((z[:, None] - zf) / zr) ** 2)  # ln of (1 + u^2)^(-3/2)
+    tw = linalg.solve_triangular(chol, term, lower=True)
+    tw -= q @ (q.T @ tw)
+    norm = np.linalg.norm(tw, axis=0)
+    keep = norm > 1e-9 * norm.max()
+    tw, zf, zr = tw[:, keep] / norm[keep], zf[keep], zr[keep]
+
+    def statistic(white):  # largest one-sided GLS reduction of the residual sum of squares
+        return np.max(np.maximum(white @ tw, 0.0) ** 2, axis=-1)
+
+    yw = linalg.solve_triangular(chol, rows, lower=True)
+    obs = float(statistic(yw))
+    best = int(np.argmax(np.maximum(yw @ tw, 0.0)))
+    null = statistic(np.random.default_rng(seed).standard_normal((FOCUS_NULL_DRAWS, z.size)))
+    p = (1 + int(np.sum(null >= obs))) / (1 + FOCUS_NULL_DRAWS)
+    return float(p), float(zf[best]), float(zr[best])
 
 
 @dataclass
@@ -1146,20 +1234,47 @@ def fit_system(
     keys = [k for k, v in whole.items()]
     se = _jackknife(jack, keys)
     params = _parameters(whole, se, jack, data, reg, npx, noise is not None)
-    # focus: row means of the intensity (linear units of the fit)
+    # focus and attenuation: row means of ln I, their covariance from the region's 2-D
+    # autocovariance (rows are correlated along depth by the point-spread function)
+    dk = np.pi / data.dz  # delta_k = N pi / H = pi / pixel
+    k_model = DEFAULT_K0_DK * dk if k0v is None else n_med * k0v
     z = np.arange(nz) * data.dz
-    rows, rows_se = np.asarray(whole["row_mean_intensity"]), se["row_mean_intensity"]
-    snr_v = float(whole["snr_db"])
-    noise_level = float(rows.mean() / (1 + 10 ** (snr_v / 10))) if np.isfinite(snr_v) else 0.0
+    g = float(whole["gain"]) if kind == "log" else 1.0
+    log_blocks = [
+        data.signal[:, c] / g if kind == "log" else np.log(data.signal[:, c])
+        for c in _column_groups(nx, nf, [np.arange(nx)])
+    ]
+    log_rows = np.mean(np.hstack(log_blocks), axis=1)
     focused = False
-    if nz >= 8 and np.all(rows_se > 0):
-        best, p_focus = _fit_focus(z, rows, rows_se, noise_level)
+    if nz >= 8:
+        cov = _row_mean_covariance(log_blocks)
+        # attenuation: least-squares slope, sandwich variance with the rows' covariance
+        x = np.column_stack([np.ones_like(z), z])
+        h = np.linalg.solve(x.T @ x, x.T)
+        params["attenuation_se"] = (
+            (),
+            float(np.sqrt((h @ cov @ h.T)[1, 1]) / 2),
+            params["attenuation_se"][2],
+        )
+        rayleigh = k_model * (float(whole["waist_pitch"]) * data.pitch) ** 2 / 2
+        p_focus, zf_scan, zr_scan = _focus_test(z, log_rows, cov, rayleigh)
         params["focus_p_value"] = (
             (),
             p_focus,
-            attrs("probability", "F-test p-value of a focus in the row means"),
+            attrs(
+                "probability",
+                "p-value of a focus in the row means of ln I (scan statistic, Monte-Carlo "
+                "null with the rows' covariance)",
+            ),
         )
-        if best is not None and p_focus < FOCUS_P_VALUE:
+        rows = np.asarray(whole["row_mean_intensity"])
+        rows_se = se["row_mean_intensity"]
+        snr_v = float(whole["snr_db"])
+        noise_level = float(rows.mean() / (1 + 10 ** (snr_v / 10))) if np.isfinite(snr_v) else 0.0
+        best = None
+        if p_focus < FOCUS_P_VALUE and np.all(rows_se > 0):
+            best = _fit_focus(z, rows, rows_se, noise_level, (zf_scan, zr_scan))
+        if best is not None:
             focused = True
             _, p, _ = best
             # errors: the same fit on each jackknife sample (rows are correlated along depth
@@ -1185,8 +1300,6 @@ def fit_system(
         for name in ("focus_depth", "rayleigh_range"):
             params[name] = ((), np.nan, attrs("length", "no focus detected"))
             params[f"{name}_se"] = ((), np.nan, attrs("length", "no focus detected"))
-    dk = np.pi / data.dz  # delta_k = N pi / H = pi / pixel
-    k_model = DEFAULT_K0_DK * dk if k0v is None else n_med * k0v
     ds = xr.Dataset(params)
     ds.attrs.update(
         kind=kind,
