@@ -63,7 +63,9 @@ re-estimated without each block (statistics pooled over the remaining blocks, no
 block edge) and ``SE^2 = (n - 1)/n sum (theta_i - mean theta)^2``. With a ``frame`` dim the
 statistics pool every frame and each jackknife sample deletes the same block from all frames.
 The attenuation's SE and the focus test use the row means' covariance ``C`` instead (a block
-jackknife of a slope over ~16 blocks understates its error under a wide beam). When a focus is
+jackknife of a slope over ~16 blocks understates its error under a wide beam); with a ``frame``
+dim ``C`` is that of the frame-averaged ``ln I``, right whether the frames' speckle is
+independent, identical or in between. When a focus is
 found its fit is repeated on each jackknife sample (those errors, attenuation included, are the
 jackknife's).
 
@@ -1247,7 +1249,9 @@ def fit_system(
     log_rows = np.mean(np.hstack(log_blocks), axis=1)
     focused = False
     if nz >= 8:
-        cov = _row_mean_covariance(log_blocks)
+        # from the frame average: its row means are the row means of every frame, and its
+        # autocovariance holds whatever correlation the frames share (none to all)
+        cov = _row_mean_covariance([np.mean(log_blocks, axis=0)])
         # attenuation: least-squares slope, sandwich variance with the rows' covariance
         x = np.column_stack([np.ones_like(z), z])
         h = np.linalg.solve(x.T @ x, x.T)

@@ -336,16 +336,19 @@ def test_frames_pooled_with_the_jackknife_over_all_frames(small):
     one = fit(small).parameters
     same = fit(xr.concat([small, small], dim="frame")).parameters
     assert same.attrs["n_frames"] == 2
-    for k in ("gaussian_fwhm_fraction", "waist_pitch", "snr_db", "inverse_density"):
+    for k in ("gaussian_fwhm_fraction", "waist_pitch", "snr_db", "inverse_density", "attenuation"):
         assert float(same[k]) == pytest.approx(float(one[k]), rel=1e-9, abs=1e-12)
         assert float(same[f"{k}_se"]) == pytest.approx(float(one[f"{k}_se"]), rel=1e-6)
+    # the rows' covariance is the frame average's: identical frames add no information
+    assert float(same.focus_p_value) == pytest.approx(float(one.focus_p_value), rel=1e-9)
     other = known_image(0.5, 2.0, 30.0, 4.0, seed=1)
     two = fit([small, other]).parameters
-    for k in ("gaussian_fwhm_fraction", "waist_pitch"):
+    for k in ("gaussian_fwhm_fraction", "waist_pitch", "attenuation"):
         assert float(two[f"{k}_se"]) < float(one[f"{k}_se"])
-        assert abs(float(two[k]) - {"gaussian_fwhm_fraction": 0.5, "waist_pitch": 2.0}[k]) < (
-            TOL_ONE * float(two[f"{k}_se"])
-        )
+        assert abs(
+            float(two[k])
+            - {"gaussian_fwhm_fraction": 0.5, "waist_pitch": 2.0, "attenuation": 0.0}[k]
+        ) < (TOL_ONE * float(two[f"{k}_se"]))
     with pytest.raises(ValueError, match="same shape"):
         fit_system([small, small.isel(x=slice(0, 200))], **FIT_KW)
 
