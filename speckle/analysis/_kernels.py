@@ -5,6 +5,9 @@
   ``|C_L|`` summed over (depth, aline) windows (running sums in depth, the window's A-lines
   added in order), the phase of the sum, its quality and the multi-lag branch check. Nothing
   of image size is allocated but the two outputs.
+* :func:`box_sums`: the (depth, aline) window sums of :func:`speckle.analysis.strain._box`,
+  bit-identical to its numpy running sums (the same additions in the same order), in the
+  input's memory layout.
 * :func:`lagrange_resample`: the 6-point Lagrange interpolation of
   :func:`speckle.analysis.correlation.resample_depth` on its oversampled A-lines.
 
@@ -24,6 +27,7 @@ __all__ = [
     "MARGIN",
     "atan2",
     "atan2_array",
+    "box_sums",
     "lag_sums",
     "lagrange_resample",
     "refine_shifts",
@@ -185,6 +189,72 @@ def vector_phase(a1, a2, lag, wz, wx, denom, cfac, tan0, min_q, wrap, strain, qu
                     ph = ph + two_pi * np.round((pred - ph) / two_pi)
             quality[rl + i, c] = q
             strain[rl + i, c] = -ph / denom if q >= min_q else np.nan
+
+
+@numba.njit(cache=True)
+def box_sums(x, wz, wx, depth_major, target):
+    """Window sums of ``x`` (depth, aline) over ``wz`` rows and ``wx`` columns into ``target``.
+
+    ``target[i, j] = sum x[i : i + wz, j : j + wx]`` for ``i < n - wz + 1``, ``j < m - wx + 1``,
+    formed as numpy's running sums are: ``c = [0, cumsum(x, axis=0)]``, ``d = c[wz:] - c[:-wz]``,
+    then along aline the same for ``wx > 3`` and ``((d_0 + d_1) + d_2)`` for ``wx <= 3``.
+    ``depth_major``: walk each A-line in turn (a depth-contiguous ``x``), else row by row.
+    """
+    n, m = x.shape
+    rows = n - wz + 1
+    k = m - wx + 1
+    if depth_major:  # every temporary A-line by A-line: d[j, i], run[j, i]
+        d = np.empty((m, rows), dtype=x.dtype)
+        col = np.empty(n + 1, dtype=x.dtype)
+        for j in range(m):
+            col[0] = 0
+            col[1] = x[0, j]
+            for i in range(1, n):
+                col[i + 1] = col[i] + x[i, j]
+            for i in range(rows):
+                d[j, i] = col[i + wz] - col[i]
+        if wx <= 3:
+            for j in range(k):
+                for i in range(rows):
+                    acc = d[j, i]
+                    for t in range(1, wx):
+                        acc = acc + d[j + t, i]
+                    target[i, j] = acc
+        else:
+            run = np.empty((m, rows), dtype=x.dtype)
+            run[0] = d[0]
+            for j in range(1, m):
+                for i in range(rows):
+                    run[j, i] = run[j - 1, i] + d[j, i]
+            for i in range(rows):
+                target[i, 0] = run[wx - 1, i]
+            for j in range(1, k):
+                for i in range(rows):
+                    target[i, j] = run[wx - 1 + j, i] - run[j - 1, i]
+        return
+    c = np.empty((n + 1, m), dtype=x.dtype)
+    for j in range(m):
+        c[0, j] = 0
+        c[1, j] = x[0, j]
+    for i in range(1, n):
+        for j in range(m):
+            c[i + 1, j] = c[i, j] + x[i, j]
+    if wx <= 3:
+        for i in range(rows):
+            for j in range(k):
+                acc = c[i + wz, j] - c[i, j]
+                for t in range(1, wx):
+                    acc = acc + (c[i + wz, j + t] - c[i, j + t])
+                target[i, j] = acc
+    else:
+        run = np.empty(m, dtype=x.dtype)
+        for i in range(rows):
+            run[0] = c[i + wz, 0] - c[i, 0]
+            for j in range(1, m):
+                run[j] = run[j - 1] + (c[i + wz, j] - c[i, j])
+            target[i, 0] = run[wx - 1]
+            for j in range(1, k):
+                target[i, j] = run[wx - 1 + j] - run[j - 1]
 
 
 @numba.njit(cache=True)

@@ -77,7 +77,7 @@ from .._validate import check_choice, check_int, check_real
 from ..conventions import attrs
 from ..system.source import spectrum
 from ._common import depth_major, parse_window
-from ._kernels import MARGIN, vector_phase
+from ._kernels import MARGIN, box_sums, vector_phase
 from .correlation import amplitude_from_gamma, correlation_array, expected_gamma, resample_depth
 from .phase import DEFAULT_MAX_BIAS, choose_lag, depth_autocorrelation, lag_and_rho
 from .tracking import interpolate_windows, track_array, track_axial
@@ -215,41 +215,36 @@ def _box(x: np.ndarray, wz: int, wx: int, n_out: int | None = None, offset: int 
     """Sum over the (wz, wx) window starting at ``c - w//2``; NaN where it leaves the image.
 
     A running sum in depth (cumulative sum and one difference: one pass for real and complex
-    data alike), then along aline. With ``n_out``, the sums are placed ``offset`` rows lower in
-    an ``n_out``-row array (NaN elsewhere), without a copy.
+    data alike), then along aline, in one numba pass (:func:`~._kernels.box_sums`; NaN input:
+    direct window sums). With ``n_out``, the sums are placed ``offset`` rows lower in an
+    ``n_out``-row array (NaN elsewhere), without a copy.
     """
     n, m = x.shape
     dtype = np.result_type(x.dtype, np.float64)
-    out = np.empty((n if n_out is None else n_out, m), dtype=dtype)
+    x = x.astype(dtype, copy=False)
+    # the input's layout for the output (a depth-contiguous image stays depth-contiguous)
+    order = "F" if x.flags.f_contiguous and not x.flags.c_contiguous else "C"
+    out = np.empty((n if n_out is None else n_out, m), dtype=dtype, order=order)
     if wz > n or wx > m:
         out.fill(np.nan)
         return out
-    if wz == 1:
-        depth = x
-    elif not np.isfinite(x).all():  # a running sum would carry a NaN down the whole column
-        depth = np.lib.stride_tricks.sliding_window_view(x, wz, axis=0).sum(axis=-1)
-    else:
-        c = np.empty((n + 1, m), dtype=dtype)
-        c[0] = 0
-        np.cumsum(x, axis=0, out=c[1:])
-        depth = c[wz:] - c[:-wz]  # rows i .. i+wz-1, i = 0 .. n-wz
     k = m - wx + 1
     r0 = wz // 2 + offset
-    target = out[r0 : r0 + depth.shape[0], wx // 2 : wx // 2 + k]
-    if wx == 1:
-        target[...] = depth
-    elif wx <= 3 or not np.isfinite(depth).all():
-        np.add(depth[:, :k], depth[:, 1 : 1 + k], out=target)
-        for j in range(2, wx):
-            target += depth[:, j : j + k]
+    rows = n - wz + 1
+    target = out[r0 : r0 + rows, wx // 2 : wx // 2 + k]
+    if np.isfinite(x).all():  # running sums (a NaN would be carried down the whole column)
+        box_sums(x, wz, wx, order == "F", target)
     else:
-        c = np.cumsum(depth, axis=1)
-        target[:, 0] = c[:, wx - 1]
-        np.subtract(c[:, wx:], c[:, : k - 1], out=target[:, 1:])
+        depth = x
+        if wz > 1:
+            depth = np.lib.stride_tricks.sliding_window_view(x, wz, axis=0).sum(axis=-1)
+        target[...] = depth[:, :k]
+        for j in range(1, wx):
+            target += depth[:, j : j + k]
     out[:r0] = np.nan
-    out[r0 + depth.shape[0] :] = np.nan
-    out[r0 : r0 + depth.shape[0], : wx // 2] = np.nan
-    out[r0 : r0 + depth.shape[0], wx // 2 + k :] = np.nan
+    out[r0 + rows :] = np.nan
+    out[r0 : r0 + rows, : wx // 2] = np.nan
+    out[r0 : r0 + rows, wx // 2 + k :] = np.nan
     return out
 
 
