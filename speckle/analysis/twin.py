@@ -351,15 +351,15 @@ def _confocal(z, a, mu, zf, zr, noise):
 
 
 def _refit_focus(z, rows, rows_se, noise_level, p0):
-    """The focused profile fitted from ``p0`` (the whole region's fit) to other row means."""
+    """The focused profile fitted from ``p0`` to the intensity row means: (parameters,
+    covariance)."""
     span = z[-1] - z[0] + (z[1] - z[0])
-    p, _ = optimize.curve_fit(
+    return optimize.curve_fit(
         lambda zz, a, mu, zf, zr: _confocal(zz, a, mu, zf, zr, noise_level),
         z, rows, p0=p0, sigma=rows_se, absolute_sigma=True,
         bounds=([0, -1, z[0] - 2 * span, span / 50], [np.inf, 1, z[-1] + 2 * span, 20 * span]),
         maxfev=20000,
     )  # fmt: skip
-    return p
 
 
 def _fit_focus(z, rows, rows_se, noise_level, start):
@@ -368,82 +368,46 @@ def _fit_focus(z, rows, rows_se, noise_level, start):
     Started from the focus test's best ``start = (z_f, z_R)`` and a few other points; returns
     ``(chi^2, parameters, covariance)`` of the best fit, or None.
     """
-    w = 1 / rows_se
     mean = float(rows.mean())
     span = z[-1] - z[0] + (z[1] - z[0])
-    best = None
     grid = [(a, b) for a in np.linspace(z[0], z[-1], 5) for b in (span / 8, span / 3, span)]
-    starts = [start, *grid]
-    for zf0, zr0 in starts:
+    best = None
+    for zf0, zr0 in [start, *grid]:
         try:
-            p, cov = optimize.curve_fit(
-                lambda zz, a, mu, zf, zr: _confocal(zz, a, mu, zf, zr, noise_level),
-                z,
-                rows,
-                p0=[mean, 0.0, zf0, zr0],
-                sigma=rows_se,
-                absolute_sigma=True,
-                bounds=(
-                    [0, -1, z[0] - 2 * span, span / 50],
-                    [np.inf, 1, z[-1] + 2 * span, 20 * span],
-                ),
-                maxfev=20000,
-            )
+            p, cov = _refit_focus(z, rows, rows_se, noise_level, [mean, 0.0, zf0, zr0])
         except (RuntimeError, ValueError):
             continue
-        chi = float(np.sum(((_confocal(z, *p, noise_level) - rows) * w) ** 2))
+        chi = float(np.sum(((_confocal(z, *p, noise_level) - rows) / rows_se) ** 2))
         if best is None or chi < best[0]:
             best = (chi, p, cov)
     return best
 
 
-def _row_mean_covariance(log_blocks: list[np.ndarray]) -> np.ndarray:
-    """Covariance of the region's row means of ``ln I`` from its 2-D autocovariance.
+def _row_mean_covariance(log_image: np.ndarray) -> np.ndarray:
+    """Covariance of the row means of ``ln I`` (depth, x) from its 2-D autocovariance.
 
-    Each block (depth, x) has its rows' means removed; its autocovariance (FFT,
-    :func:`scipy.signal.correlate`, over overlapping pairs) is summed over x-lags up to the
-    first non-positive lateral lag, which gives ``S(m) = nx cov(row_i, row_{i+m})``; removing
-    the row means scales the truncated sum by ``1 - (2 L + 1)/nx`` (corrected). ``S`` is kept
-    up to its first non-positive depth lag (the point-spread function's correlation length) and
-    the Toeplitz matrix ``S(|i - j|)/nx`` is returned (eigenvalues clipped to stay positive).
+    The rows' means are removed; the autocovariance (FFT, :func:`scipy.signal.correlate`, over
+    overlapping pairs) is summed over x-lags up to the first non-positive lateral lag ``L``,
+    which gives ``S(m) = nx cov(row_i, row_{i+m})``; removing the row means scales the truncated
+    sum by ``1 - (2 L + 1)/nx`` (corrected). ``S`` is kept up to its first non-positive depth
+    lag (the point-spread function's correlation length) and the Toeplitz matrix
+    ``S(|i - j|)/nx`` is returned (eigenvalues clipped to stay positive).
     """
-    nz = log_blocks[0].shape[0]
-    acc = None
-    count = None
-    widths = 0
-    for b in log_blocks:
-        r = b - b.mean(axis=1, keepdims=True)
-        c = signal.correlate(r, r, mode="full", method="fft")
-        n = signal.correlate(np.ones_like(r), np.ones_like(r), mode="full", method="fft")
-        acc = c if acc is None else _add_centred(acc, c)
-        count = n if count is None else _add_centred(count, n)
-        widths += r.shape[1]
-    cxz = acc / np.maximum(np.round(count), 1)
-    z0, x0 = nz - 1, cxz.shape[1] // 2
-    nx_block = widths / len(log_blocks)
+    nz, nx = log_image.shape
+    r = log_image - log_image.mean(axis=1, keepdims=True)
+    count = signal.correlate(np.ones_like(r), np.ones_like(r), mode="full", method="fft")
+    cxz = signal.correlate(r, r, mode="full", method="fft") / np.maximum(np.round(count), 1)
+    z0, x0 = nz - 1, nx - 1
     lat = cxz[z0, x0:]
     stop = np.flatnonzero(lat[1:] <= 0)
-    lx = int(stop[0]) if stop.size else lat.size - 1
-    lx = min(lx, int(nx_block) // 4)
-    s = cxz[z0:, x0 - lx : x0 + lx + 1].sum(axis=1) / (1 - (2 * lx + 1) / nx_block)
+    lx = min(int(stop[0]) if stop.size else lat.size - 1, nx // 4)
+    s = cxz[z0:, x0 - lx : x0 + lx + 1].sum(axis=1) / (1 - (2 * lx + 1) / nx)
     stop = np.flatnonzero(s[1:] <= 0)
     lz = int(stop[0]) + 1 if stop.size else s.size
     col = np.zeros(nz)
     col[:lz] = s[:lz]
-    cov = linalg.toeplitz(col) / widths
-    w, v = linalg.eigh(cov)
-    w = np.maximum(w, 1e-6 * w.max())
-    return (v * w) @ v.T
-
-
-def _add_centred(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``a + b`` for two full correlations of blocks of different widths (zero lag centred)."""
-    if a.shape[1] < b.shape[1]:
-        a, b = b, a
-    d = (a.shape[1] - b.shape[1]) // 2
-    out = a.copy()
-    out[:, d : d + b.shape[1]] += b
-    return out
+    w, v = linalg.eigh(linalg.toeplitz(col) / nx)
+    return (v * np.maximum(w, 1e-6 * w.max())) @ v.T
 
 
 def _focus_test(
@@ -1242,16 +1206,19 @@ def fit_system(
     k_model = DEFAULT_K0_DK * dk if k0v is None else n_med * k0v
     z = np.arange(nz) * data.dz
     g = float(whole["gain"]) if kind == "log" else 1.0
-    log_blocks = [
-        data.signal[:, c] / g if kind == "log" else np.log(data.signal[:, c])
-        for c in _column_groups(nx, nf, [np.arange(nx)])
-    ]
-    log_rows = np.mean(np.hstack(log_blocks), axis=1)
+    # the frame average: its row means are those of every frame, and its autocovariance holds
+    # whatever correlation the frames share (none to all)
+    log_mean = np.mean(
+        [
+            data.signal[:, c] / g if kind == "log" else np.log(data.signal[:, c])
+            for c in _column_groups(nx, nf, [np.arange(nx)])
+        ],
+        axis=0,
+    )
+    log_rows = log_mean.mean(axis=1)
     focused = False
     if nz >= 8:
-        # from the frame average: its row means are the row means of every frame, and its
-        # autocovariance holds whatever correlation the frames share (none to all)
-        cov = _row_mean_covariance([np.mean(log_blocks, axis=0)])
+        cov = _row_mean_covariance(log_mean)
         # attenuation: least-squares slope, sandwich variance with the rows' covariance
         x = np.column_stack([np.ones_like(z), z])
         h = np.linalg.solve(x.T @ x, x.T)
@@ -1284,7 +1251,11 @@ def fit_system(
             # errors: the same fit on each jackknife sample (rows are correlated along depth
             # by the point-spread function, so the least-squares covariance would be too small)
             refits = [
-                {"p": _refit_focus(z, np.asarray(j["row_mean_intensity"]), rows_se, noise_level, p)}
+                {
+                    "p": _refit_focus(
+                        z, np.asarray(j["row_mean_intensity"]), rows_se, noise_level, p
+                    )[0]
+                }
                 for j in jack
             ]
             pse = _jackknife(refits, ["p"])["p"]

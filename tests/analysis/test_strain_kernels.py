@@ -11,6 +11,7 @@ import pytest
 import speckle
 from speckle.analysis import correlation, phase, sample_field, tracking
 from speckle.analysis._kernels import atan2_array  # private: the kernels' atan2, tested here
+from speckle.analysis.strain import _box  # private: box_sums' caller, tested here
 from speckle.scene import deformation as D
 
 N, PIXEL, R = 256, 8.0, 10.0
@@ -204,8 +205,6 @@ def test_box_sums_bit_identical_to_numpy_running_sums(layout, dtype, wz, wx):
     if dtype is np.complex128:
         x = x + 1j * rng.standard_normal((97, 23))
     x = np.asarray(x.astype(dtype), order=layout)
-    from speckle.analysis.strain import _box  # private: the kernel's caller
-
     got = _box(x, wz, wx)
     core = got[wz // 2 : wz // 2 + 97 - wz + 1, wx // 2 : wx // 2 + 23 - wx + 1]
     np.testing.assert_array_equal(core, _box_numpy(x, wz, wx))
