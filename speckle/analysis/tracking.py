@@ -254,7 +254,7 @@ def track_array(
         fine = np.arange(0, a.shape[0], 1 / ov)
         ha, hb = np.abs(sample_field(a.T, fine)), np.abs(sample_field(b.T, fine))
     else:
-        ha, hb = _amplitudes(a, b, ov)
+        ha, hb, _ = _amplitudes(a, b, ov)
     if quantity == "intensity":
         ha, hb = ha**2, hb**2
     nz, nx = a.shape
@@ -289,6 +289,7 @@ def track_axial(
     step: int | tuple[int, int] = (16, 8),
     upsample: int = 20,
     oversample: int = 2,
+    keep_samples: bool = False,
 ) -> dict[str, np.ndarray]:
     """Axial displacement of every window, each A-line compared with itself (no lateral search).
 
@@ -305,12 +306,19 @@ def track_axial(
         :func:`track_array`.
     window, step, upsample, oversample
         As in :func:`track_array` (window default (32, 8)).
+    keep_samples : bool
+        Also return ``deformed_samples``: the deformed image's complex samples every
+        ``1/oversample`` pixel from which its amplitude was tracked (the band-limited interpolant
+        of :func:`oversample_depth`, complex64, shape (aline, oversample x depth), each A-line
+        contiguous; NaN pixels zeroed). The alignment of :func:`estimate_strain` resamples the
+        deformed image from them instead of oversampling it a second time.
 
     Returns
     -------
     dict
         ``uz`` (pixels, windows in depth x windows in aline; NaN without texture or with a NaN
-        pixel), ``centre_depth``, ``centre_aline`` (pixels).
+        pixel), ``centre_depth``, ``centre_aline`` (pixels), and with ``keep_samples``
+        ``deformed_samples``.
 
     Raises
     ------
@@ -322,8 +330,10 @@ def track_axial(
     stz, stx = parse_window(step, "step", low=1)
     up = check_int(upsample, "upsample", low=1)
     ov = check_int(oversample, "oversample", low=1)
+    if not isinstance(keep_samples, (bool, np.bool_)):
+        raise TypeError(f"keep_samples must be True or False, got {keep_samples!r}")
     a, b, bad = _zero_bad(a, b)
-    ha, hb = _amplitudes(a, b, ov)
+    ha, hb, samples = _amplitudes(a, b, ov, keep=bool(keep_samples))
     nz, nx = a.shape
     z0, x0 = _starts(nz, wz, stz), _starts(nx, wx, stx)
     mz, sz = wz * ov, stz * ov
@@ -365,11 +375,14 @@ def track_axial(
     uz = shift.reshape(x0.size, z0.size).T.ravel()
     shape = (z0.size, x0.size)
     textured = _textured(ha, hb, ov, bad, shape, (wz, wx), (stz, stx))
-    return {
+    out = {
         "uz": np.where(textured, uz / ov, np.nan).reshape(shape),
         "centre_depth": z0 + (wz - 1) / 2,
         "centre_aline": x0 + (wx - 1) / 2,
     }
+    if keep_samples:
+        out["deformed_samples"] = samples
+    return out
 
 
 def _pair(reference, deformed) -> tuple[np.ndarray, np.ndarray]:
@@ -395,28 +408,39 @@ def _zero_bad(a, b):
     return np.where(bad, 0, a), np.where(bad, 0, b), bad
 
 
-def _amplitudes(a, b, ov: int):
+def _amplitudes(a, b, ov: int, keep: bool = False):
     """``|A|`` of both images oversampled ``ov`` times in depth (zero-padded spectrum, single
-    precision), laid out (aline, depth samples): depth contiguous for the FFTs.
+    precision), laid out (aline, depth samples): depth contiguous for the FFTs. With ``keep``,
+    also the deformed image's complex samples of which its amplitude is taken (else None).
 
     For ``ov = 2`` the whole-pixel samples are the data and only the half-pixel ones are
     transformed: ``A(q + 1/2)`` is the N-point inverse transform of the spectrum times the
     half-pixel phase ramp (the same interpolant as :func:`oversample_depth`, half the work).
     """
     out = []
-    for x in (a, b):
+    for x, want in ((a, False), (b, keep)):
         lines = np.ascontiguousarray(x.T, dtype=np.complex64)
         if ov != 2:
-            out.append(np.abs(oversample_depth(lines, ov, axis=-1)))
+            fine = oversample_depth(lines, ov, axis=-1)
+            out.append((np.abs(fine), fine if want else None))
             continue
         n = lines.shape[1]
-        h = np.empty((lines.shape[0], 2 * n), dtype=np.float32)
-        np.abs(lines, out=h[:, 0::2])
         spec = sfft.fft(lines, axis=-1)
         spec *= _half_pixel_ramp(n)
-        np.abs(sfft.ifft(spec, axis=-1, overwrite_x=True), out=h[:, 1::2])
-        out.append(h)
-    return tuple(out)
+        half = sfft.ifft(spec, axis=-1, overwrite_x=True)
+        h = np.empty((lines.shape[0], 2 * n), dtype=np.float32)
+        fine = None
+        if want:  # interleaved: sample 2q is pixel q, sample 2q + 1 is q + 1/2
+            fine = np.empty((lines.shape[0], 2 * n), dtype=np.complex64)
+            fine[:, 0::2] = lines
+            fine[:, 1::2] = half
+            np.abs(fine, out=h)
+        else:
+            np.abs(lines, out=h[:, 0::2])
+            np.abs(half, out=h[:, 1::2])
+        out.append((h, fine))
+    (ha, _), (hb, samples) = out
+    return ha, hb, samples
 
 
 def _half_pixel_ramp(n: int) -> np.ndarray:

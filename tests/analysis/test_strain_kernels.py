@@ -10,7 +10,10 @@ import pytest
 
 import speckle
 from speckle.analysis import correlation, phase, sample_field, tracking
-from speckle.analysis._kernels import atan2_array  # private: the kernels' atan2, tested here
+from speckle.analysis._kernels import (  # private: the kernels' atan2 and taps, tested here
+    LAGRANGE_TAPS,
+    atan2_array,
+)
 from speckle.analysis.strain import _box  # private: box_sums' caller, tested here
 from speckle.scene import deformation as D
 
@@ -118,16 +121,59 @@ def test_lag_autocorrelation_equals_its_definition(layout):
     np.testing.assert_allclose(phase.depth_autocorrelation(a, lag), rho, rtol=1e-12)
 
 
-@pytest.mark.parametrize("shape, bound", [("gaussian", 1e-4), ("rectangular", 4e-4)])
-def test_resample_depth_matches_the_exact_interpolant(shape, bound):
-    """Within the bound of its docstring of the exact trigonometric interpolant, at positions
-    that wrap around the period and move by up to 3 px."""
-    a1, _ = pair(1e-3, lines=6, shape=shape)
+def lagrange_error(omega: np.ndarray, taps: int) -> np.ndarray:
+    """Largest error over the interval of ``taps``-point Lagrange interpolation (nodes
+    ``-(taps//2 - 1) ... taps//2``, as the kernel) of ``exp(i omega s)``, per ``omega``
+    (radians per sample): ``max_t |exp(i omega t) - sum_k w_k(t) exp(i omega s_k)|``."""
+    t = np.linspace(0.0, 1.0, 257)
+    nodes = np.arange(taps) - (taps // 2 - 1)
+    w = np.ones((t.size, taps))
+    for k in range(taps):
+        for i in range(taps):
+            if i != k:
+                w[:, k] *= (t - nodes[i]) / (nodes[k] - nodes[i])
+    e = np.exp(1j * omega[:, None] * t[None]) - np.exp(1j * omega[:, None] * nodes[None]) @ w.T
+    return np.abs(e).max(axis=1)
+
+
+@pytest.mark.parametrize("shape", ["gaussian", "rectangular"])
+@pytest.mark.parametrize("path", ["resample_depth", "alignment"])
+def test_resampling_within_its_lagrange_bound(shape, path):
+    """Both resamplings against the exact interpolant, at positions that wrap around the period
+    and move by up to 3 px: ``resample_depth`` (4 samples per pixel) and the alignment's (the
+    tracker's half-pixel samples, which are the exact interpolant: whole pixels the data, half
+    pixels to float32 rounding). The error is below the bound of each A-line's own spectrum,
+    ``sum_n |F_n| max_t |e(omega_n, t)|`` with ``omega_n = 2 pi n / (F N)`` per sample (every
+    frequency's worst error of the 8-point polynomial added in phase), and of its order."""
+    from speckle.analysis.strain import _resampled  # private: the alignment's resampling
+
+    a1, a2 = pair(1e-3, lines=6, shape=shape)
     q = np.arange(N, dtype=float)[:, None]
-    y = q * 1.004 + 3 * np.sin(np.arange(6))[None] - 1.5
-    got = correlation.resample_depth(a1, y)
-    exact = sample_field(a1.T, y.T).T
-    assert np.abs(got - exact).max() / np.abs(exact).max() < bound
+    uz = q * 0.004 + 3 * np.sin(np.arange(6))[None] - 1.5
+    scale = np.abs(a2).max()
+    if path == "resample_depth":
+        factor, got = 4, correlation.resample_depth(a2, q + uz)
+    else:
+        tr = tracking.track_axial(a1, a2, window=(64, 6), step=(64, 6), keep_samples=True)
+        samples = tr["deformed_samples"]
+        assert samples.shape == (6, 2 * N) and samples.dtype == np.complex64
+        assert np.abs(samples[:, 0::2] - a2.T).max() <= 1e-6 * scale  # float32 rounding
+        half = sample_field(a2.T, np.arange(N) + 0.5)
+        assert np.abs(samples[:, 1::2] - half).max() <= 1e-5 * scale
+        factor, got = 2, _resampled(a2, uz, samples)
+    exact = sample_field(a2.T, (q + uz).T).T
+    n = np.arange(N) - N // 2  # model indices of the spectrum F_n
+    spec = np.abs(np.fft.fft(a2, axis=0, norm="forward"))  # |F_n| at bin n mod N
+    bound = spec[n % N].T @ lagrange_error(2 * np.pi * n / (factor * N), LAGRANGE_TAPS)
+    err = np.abs(got - exact).max(axis=0)
+    assert np.all(err <= bound + 1e-5 * scale)  # + float32 rounding of the samples
+    assert np.all(err >= 0.05 * bound)  # the bound is of the error's order, not a loose one
+
+
+def test_keep_samples_must_be_a_bool():
+    a1, a2 = pair(1e-3, lines=6)
+    with pytest.raises(TypeError, match="keep_samples"):
+        tracking.track_axial(a1, a2, window=(64, 6), keep_samples="yes")
 
 
 @pytest.mark.parametrize("shift", [0.3, -1.7])
