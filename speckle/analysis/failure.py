@@ -139,7 +139,8 @@ def _field_covariances(weights, n_index, k0p, n_pixels, oversample):
 
 def _pair_moments(cov, n, lag, kappa, wz):
     """Sums over the term pairs of c-rows ``z`` and ``z + d`` (|d| < wz) of ``E[T_a T_b*]``
-    and ``E[T_a T_b]``, as arrays ``[z, d + wz - 1]`` (zero where a row leaves the image)."""
+    and ``E[T_a T_b]``, as arrays ``[z, d + wz - 1]`` (zero where a row leaves the image), and
+    the mean ``E[T0 + T1 + T2]`` of every c-row."""
     rows = n - lag  # c-rows z = 0 .. n - lag - 1
     z = np.arange(rows)
 
@@ -153,6 +154,10 @@ def _pair_moments(cov, n, lag, kappa, wz):
 
     p1 = np.zeros((rows, 2 * wz - 1), complex)
     p2 = np.zeros_like(p1)
+    mean = np.zeros(rows, complex)  # E[T0 + T1 + T2] per c-row: fourth moments, 2 x 2 permanents
+    for ca, pa, qa in terms(z):
+        m = cov[np.stack(pa, 1)[:, :, None], np.stack(qa, 1)[:, None]]
+        mean += ca * (m[:, 0, 0] * m[:, 1, 1] + m[:, 0, 1] * m[:, 1, 0])
     for k, d in enumerate(range(-(wz - 1), wz)):
         za = z[(z + d >= 0) & (z + d < rows)]
         for ca, pa, qa in terms(za):
@@ -163,7 +168,7 @@ def _pair_moments(cov, n, lag, kappa, wz):
                 m2 = cov[np.stack([*pa, *pb], 1)[:, :, None], np.stack([*qa, *qb], 1)[:, None]]
                 p1[za, k] += ca * np.conj(cb) * _permanent4(m1)
                 p2[za, k] += ca * cb * _permanent4(m2)
-    return p1, p2
+    return p1, p2, mean
 
 
 def predicted_vector_floor(
@@ -221,7 +226,7 @@ def predicted_vector_floor(
         np.asarray(spectrum.values, complex), spectrum["n"].values, k0 * p, n, oversample
     )
     kappa = 2 * k0 * p * lag
-    p1, p2 = _pair_moments(cov, n, lag, kappa, wz)
+    p1, p2, mean = _pair_moments(cov, n, lag, kappa, wz)
     z = np.arange(n - lag)
     d_rows = cov[z, z].real * cov[z + lag, z + lag].real + np.abs(cov[z, z + lag]) ** 2
     offsets = np.arange(-(wz - 1), wz)
@@ -236,8 +241,11 @@ def predicted_vector_floor(
         )
         uu = np.sum(p1[rows] * inside)
         u2 = np.sum(p2[rows] * inside)
-        v2 = 0.5 * (uu.real - u2.real)  # E[(Im U)^2], U = sum_z (T0 + T1 + T2)
-        out[r] = np.sqrt(max(v2, 0.0) / wx) / (kappa * d_rows[rows].sum())
+        v2 = 0.5 * (uu.real - u2.real)  # E[(Im U)^2], U = sum_z (T0 + T1 + T2), one A-line
+        m = np.sum(mean[rows]).imag  # E[Im U]: the same on every A-line (a bias)
+        # the window's wx independent A-lines: variance / wx, the bias squared whole
+        ms = max(v2 - m * m, 0.0) / wx + m * m
+        out[r] = np.sqrt(ms) / (kappa * d_rows[rows].sum())
     return out
 
 
