@@ -60,7 +60,7 @@ at the tracked displacement (:func:`speckle.analysis.tracking.track_axial` on
 tracker's half-pixel samples by an 8-point Lagrange polynomial, without carrier removal, so the
 strain phase ``2 k0 u`` is kept); ``"auto"`` (default) does
 this only when the tracked displacement exceeds :data:`AUTO_ALIGN_PIXELS` (0.5 px) somewhere.
-Alignment costs about twice the vector pass (``benchmarks/bench_strain.py``).
+Alignment costs about as much as the vector pass itself (``benchmarks/bench_strain.py``).
 
 Every method returns NaN where its window does not fit in the image or it has no answer.
 """
