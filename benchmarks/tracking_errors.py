@@ -28,9 +28,13 @@ import numpy as np
 import yaml
 
 from speckle.analysis import oversample_depth, resample_depth, track_array
-from speckle.analysis.strain import OPTIONS, _pooled_slope, _track_options
+from speckle.analysis.strain import (  # private: the tracking method's own options and fit
+    OPTIONS,
+    _pooled_slope,
+    _track_options,
+)
 from speckle.analysis.tracking import interpolate_windows
-from speckle.figures import elastography as E
+from speckle.figures import elastography as E  # private: its _images, _estimate, _window
 
 CONFIG = pathlib.Path(__file__).resolve().parents[1] / "workflow" / "config" / "config.yaml"
 SHIFTS = np.array([0.0, 0.025, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.75, 1.0, 2.0, 3.0, 5.0, 6.0])
