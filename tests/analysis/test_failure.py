@@ -30,8 +30,9 @@ def _source():
     return speckle.spectrum(N, N * PIXEL, k0_dk=10.0, shape="gaussian", fwhm_fraction=0.5)
 
 
-def _tracker_pair(seed: int, strain: float, warp: bool = False):
-    """Noise-free pair at uniform compression; ``warp``: the deformed image is the reference
+def _pair(seed: int, strain: float, warp: bool = False):
+    """Noise-free pair at uniform compression. The scene fills [0, H) only (strain=0), so no
+    scatterer is pulled in from below the image. ``warp``: the deformed image is the reference
     itself resampled where the material went (the envelopes stretched, no speckle change)."""
     scene = speckle.deformable_scene(LINES, 4.0, n_pixels=N, depth_range=N * PIXEL, seed=seed)
     a1, a2 = (
@@ -54,7 +55,7 @@ def test_tracker_window_edge_bias_matches_its_derivation():
     from the image's own amplitude samples. Identical images (u = 0) have no bias. Tested at
     exact whole-pixel shifts (the deformed image a roll of the reference); within 15 %
     (the Gaussian form of R, and the ramp by which the bias grows in from u = 0)."""
-    a1, _ = _tracker_pair(300, 1e-3)
+    a1, _ = _pair(300, 1e-3)
     h = np.abs(speckle.analysis.oversample_depth(a1, 2))
     x = h - h.mean(axis=0)
     beta2 = -2 * np.log(np.mean(x[:-1] * x[1:]) / np.mean(x * x))
@@ -81,9 +82,7 @@ def test_tracking_error_above_1e3_is_not_decorrelation():
     def mean_square(strain, warp):
         out = []
         for i in range(4):
-            est = speckle.estimate_strain(
-                *_tracker_pair(400 + i, strain, warp), window=WINDOW, **kw
-            )
+            est = speckle.estimate_strain(*_pair(400 + i, strain, warp), window=WINDOW, **kw)
             out.append(np.nanmean(((est - strain) / strain) ** 2))
         return np.array(out)
 
@@ -114,15 +113,8 @@ def test_predicted_floor_needs_a_spectrum():
 
 
 def _relative_errors(seed: int, window=WINDOW) -> np.ndarray:
-    """(estimate - s)/s of the unaligned vector method on a noise-free compressed pair. The
-    scene fills [0, H) only (strain=0), so no scatterer is pulled in from below the image."""
-    scene = speckle.deformable_scene(LINES, 4.0, n_pixels=N, depth_range=N * PIXEL, seed=seed)
-    a1, a2 = (
-        speckle.bscan(speckle.displace(scene, lambda z, x, s=s: -s * z), _source())
-        .field.transpose("depth", "aline")
-        .values
-        for s in (0.0, STRAIN)
-    )
+    """(estimate - s)/s of the unaligned vector method on a noise-free compressed pair."""
+    a1, a2 = _pair(seed, STRAIN)
     est = speckle.estimate_strain(
         a1,
         a2,
@@ -166,13 +158,7 @@ def test_small_strain_floor_matches_the_gaussian_theory(window):
 
 def _wls_band_mean_squares(seed: int, strain: float) -> tuple[float, float]:
     """Mean square of (estimate - s)/s of unaligned ``wls`` in the top eighth and below it."""
-    scene = speckle.deformable_scene(LINES, 4.0, n_pixels=N, depth_range=N * PIXEL, seed=seed)
-    a1, a2 = (
-        speckle.bscan(speckle.displace(scene, lambda z, x, s=s: -s * z), _source())
-        .field.transpose("depth", "aline")
-        .values
-        for s in (0.0, strain)
-    )
+    a1, a2 = _pair(seed, strain)
     k0 = float(_source().attrs["k0"])
     est = speckle.estimate_strain(
         a1, a2, k0=k0, pixel_size=PIXEL, window=WINDOW, method="wls", align=False
