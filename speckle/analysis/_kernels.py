@@ -371,18 +371,15 @@ def window_moments(h, nx, nz, mx, mz, sx, sz, s1, s2):
 
 
 @numba.njit(cache=True)
-def _phasors(f, shift, size, out):
+def _phasors(f, shift, size, powers, out):
     """``out[k] = exp(2i pi f[k] shift/size)`` for integer frequencies ``f`` (FFT order: any
-    signs), from the powers of one phasor (two trigonometric calls instead of two per
-    frequency; the powers' rounding grows as 1e-16 per step, 3e-15 at the 32nd)."""
+    signs, ``|f| < powers.size``), from the powers of one phasor written to the workspace
+    ``powers`` (two trigonometric calls instead of two per frequency; the powers' rounding grows
+    as 1e-16 per step, 3e-15 at the 32nd)."""
     ang = 2.0 * math.pi * shift / size
     unit = complex(math.cos(ang), math.sin(ang))
-    top = 0
-    for k in range(f.size):
-        top = max(top, abs(int(f[k])))
-    powers = np.empty(top + 1, np.complex128)
     powers[0] = 1.0
-    for j in range(1, top + 1):
+    for j in range(1, powers.size):
         powers[j] = powers[j - 1] * unit
     for k in range(f.size):
         j = int(f[k])
@@ -390,15 +387,25 @@ def _phasors(f, shift, size, out):
 
 
 @numba.njit(cache=True)
-def _refine_line(q, f, shift, size, up, table_re, table_im):
+def _powers_for(f):
+    """The workspace of :func:`_phasors` for the frequencies ``f``: ``max |f| + 1`` entries."""
+    top = 0
+    for k in range(f.size):
+        top = max(top, abs(int(f[k])))
+    return np.empty(top + 1, np.complex128)
+
+
+@numba.njit(cache=True)
+def _refine_line(q, f, shift, size, up, table_re, table_im, powers):
     """Best offset on the ``1/up`` grid around ``shift`` of ``Re sum_f q_f exp(2i pi f s/size)``
-    and its value; ``table[f, u] = exp(2i pi f (u - centre)/(up size))``."""
+    and its value; ``table[f, u] = exp(2i pi f (u - centre)/(up size))``; ``powers``: the
+    workspace of :func:`_phasors` for ``f``."""
     region = table_re.shape[1]
     centre = region // 2
     base = np.round(shift * up) / up
     nf = q.size
     qb = np.empty(nf, np.complex128)
-    _phasors(f, base, size, qb)
+    _phasors(f, base, size, powers, qb)
     for k in range(nf):
         qb[k] *= q[k]
     acc = np.zeros(region)
@@ -429,6 +436,7 @@ def refine_shifts(p, mult, fz, fx, mz, mx, up, lateral, tz_re, tz_im, tx_re, tx_
     """
     w_count, nfz, nfx = p.shape
     qz = np.empty(nfz, np.complex128)
+    pow_z, pow_x = _powers_for(fz), _powers_for(fx)  # phasor workspaces, shared by every window
     qx = np.empty(nfx, np.complex128)
     ex = np.empty(nfx, np.complex128)
     ez = np.empty(nfz, np.complex128)
@@ -438,15 +446,15 @@ def refine_shifts(p, mult, fz, fx, mz, mx, up, lateral, tz_re, tz_im, tx_re, tx_
         steps = 3 if (lateral and mx > 1) else 1
         for step in range(steps):
             if step != 1:  # depth at the aline offset x
-                _phasors(fx, x, mx, ex)
+                _phasors(fx, x, mx, pow_x, ex)
                 for f in range(nfz):
                     acc = 0j
                     for k in range(nfx):
                         acc += ex[k] * p[w, f, k]
                     qz[f] = acc * mult[f]
-                z, v = _refine_line(qz, fz, z, mz, up, tz_re, tz_im)
+                z, v = _refine_line(qz, fz, z, mz, up, tz_re, tz_im, pow_z)
             else:  # aline at the depth offset z
-                _phasors(fz, z, mz, ez)
+                _phasors(fz, z, mz, pow_z, ez)
                 for f in range(nfz):
                     ez[f] *= mult[f]
                 for k in range(nfx):
@@ -454,7 +462,7 @@ def refine_shifts(p, mult, fz, fx, mz, mx, up, lateral, tz_re, tz_im, tx_re, tx_
                     for f in range(nfz):
                         acc += ez[f] * p[w, f, k]
                     qx[k] = acc
-                x, v = _refine_line(qx, fx, x, mx, up, tx_re, tx_im)
+                x, v = _refine_line(qx, fx, x, mx, up, tx_re, tx_im, pow_x)
         sz[w] = z
         sx[w] = x
         val[w] = v
