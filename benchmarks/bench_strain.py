@@ -14,9 +14,9 @@ windows (32, 4), no alignment), timed in rounds interleaved with each method (ba
 method, baseline, ...; the median of the rounds' ratios, after one warm-up call). The
 tracker table compares ``speckle.track`` (``method="fft"``) with the per-window
 ``phase_cross_correlation`` reference on the same pair (default windows (32, 16), steps
-(16, 8); the median of the speed-ups of ``--repeat`` interleaved rounds), and lists
-``track_axial`` (the alignment tracker of the phase methods: lateral offset 0, windows (64, 8)
-every (64, 8)).
+(16, 8); the median of the speed-ups of ``--repeat`` interleaved rounds after a warm-up call
+of each), and lists ``track_axial`` (the alignment tracker of the phase methods: lateral
+offset 0, windows (64, 8) every (64, 8)).
 Each row's ``target`` is issue 18's bound on the CPU ratio (tracker: the speed-up).
 """
 
@@ -73,37 +73,38 @@ def timed(func, repeat: int, warmup: bool = True):
     return min(r[0] for r in runs), min(r[1] for r in runs), out
 
 
-def paired(func, base, repeat: int):
-    """``func`` timed in rounds interleaved with the baseline ``base`` (base, func, base, ...):
-    (best wall, best CPU, median of the rounds' wall ratios, of their CPU ratios, result). A
-    load that comes and goes hits both calls of a round alike, so the ratio is steadier than
-    the ratio of two best times measured minutes apart."""
-    out = func()  # warm-up
-    ratios, walls, cpus = [], [], []
+def rounds(func, base, repeat: int):
+    """``func`` timed in rounds interleaved with ``base`` (base, func, base, ...) after one
+    warm-up call of each (lazy imports, compiled kernels, FFT plans): times of shape
+    (repeat, 4), each round's (base wall, base CPU, func wall, func CPU), and the last results
+    of ``func`` and ``base``. A load that comes and
+    goes hits both calls of a round alike, so the rounds' ratios are steadier than the ratio of
+    two best times measured minutes apart."""
+    func()
+    base()
+    times, out, base_out = [], None, None
     for _ in range(repeat):
-        bw, bc, _ = _once(base)
+        bw, bc, base_out = _once(base)
         w, c, out = _once(func)
-        walls.append(w)
-        cpus.append(c)
-        ratios.append((w / bw, c / bc))
-    rw, rc = np.median(np.array(ratios), axis=0)
-    return min(walls), min(cpus), float(rw), float(rc), out
+        times.append((bw, bc, w, c))
+    return np.array(times), out, base_out
 
 
-def speedup(fast, slow, rounds: int):
-    """``fast`` against ``slow`` in interleaved rounds (slow, fast, slow, ...) after one warm-up
-    call of ``fast``: best (slow wall, slow CPU, fast wall, fast CPU), the median of the rounds'
-    slow/fast wall and CPU ratios, and the last (slow, fast) results."""
-    fast()
-    times, outs = [], None
-    for _ in range(rounds):
-        sw, sc, slow_out = _once(slow)
-        fw, fc, fast_out = _once(fast)
-        times.append((sw, sc, fw, fc))
-        outs = (slow_out, fast_out)
-    t = np.array(times)
-    ratio_wall, ratio_cpu = np.median(t[:, 0] / t[:, 2]), np.median(t[:, 1] / t[:, 3])
-    return t.min(axis=0), float(ratio_wall), float(ratio_cpu), outs
+def paired(func, base, repeat: int):
+    """``func`` against the baseline ``base`` (:func:`rounds`): (best wall, best CPU, median of
+    the rounds' wall ratios func/base, of their CPU ratios, result)."""
+    t, out, _ = rounds(func, base, repeat)
+    rw, rc = np.median(t[:, 2:] / t[:, :2], axis=0)
+    return t[:, 2].min(), t[:, 3].min(), float(rw), float(rc), out
+
+
+def speedup(fast, slow, repeat: int):
+    """``fast`` against ``slow`` (:func:`rounds`): best (slow wall, slow CPU, fast wall, fast
+    CPU), the median of the rounds' slow/fast wall and CPU ratios, and the last (slow, fast)
+    results."""
+    t, fast_out, slow_out = rounds(fast, slow, repeat)
+    ratio_wall, ratio_cpu = np.median(t[:, :2] / t[:, 2:], axis=0)
+    return t.min(axis=0), float(ratio_wall), float(ratio_cpu), (slow_out, fast_out)
 
 
 def scores(est: np.ndarray, truth: float) -> tuple[float, float, float]:

@@ -11,7 +11,7 @@ px, Gaussian spectrum FWHM 0.5 delta_k, k0/delta_k 10, 4 scatterers per pixel) i
    the reference resampled ``u`` px deeper, no speckle change): mean (the bias towards zero)
    and spread over the windows of two scenes, next to the derived edge bias
    ``-1/((W - u) beta^2)`` of the circular window correlation (``beta^2 = -2 ln R(1)`` of the
-   amplitude samples, ``W`` = 64 samples);
+   amplitude samples, ``W`` = 64 samples: 32 px at 2 samples per pixel);
 2. the tracking method's rms strain error / strain at 1e-3, 3e-3 and 1e-2 on the real pairs,
    on a pure warp of the reference (envelopes stretched, no decorrelation), and from a model
    that reads each window as ``u + bias(u) + spread(u) x noise`` (the calibration of 1,
@@ -53,10 +53,11 @@ def main() -> None:
         return ref, dfm, k0
 
     refs = [pair(1e-3, 10 + i)[0] for i in range(2)]
-    amp = np.abs(oversample_depth(refs[0], 2))  # the tracker's amplitude samples
+    ov = kw["oversample"]
+    amp = np.abs(oversample_depth(refs[0], ov))  # the tracker's amplitude samples
     x = amp - amp.mean(axis=0)
     beta2 = -2 * np.log(np.mean(x[:-1] * x[1:]) / np.mean(x * x))
-    size = 2 * kw["window"][0]
+    size = ov * kw["window"][0]  # window samples
     bias, spread = [], []
     print("| shift u (px) | bias (px) | derived -1/((W - u) beta^2) | spread (px) |")
     print("|---|---|---|---|")
@@ -66,7 +67,7 @@ def main() -> None:
         )
         bias.append(np.nanmean(d))
         spread.append(np.nanstd(d))
-        derived = -1 / ((size - 2 * u) * beta2) / 2 if u > 0 else 0.0
+        derived = -1 / ((size - ov * u) * beta2) / ov if u > 0 else 0.0
         print(f"| {u:g} | {bias[-1]:+.4f} | {derived:+.4f} | {spread[-1]:.4f} |")
     bias, spread = np.array(bias), np.array(spread)
 
