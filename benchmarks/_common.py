@@ -9,6 +9,8 @@ import time
 
 import numpy as np
 
+PIXEL = 8.0  # µm: the strain benchmarks' pixel size
+
 
 def best_time(func, repeat: int, *, warmup: bool = False):
     """``(best wall time, CPU time of that run, its result)`` over ``repeat`` calls of ``func``.
@@ -43,3 +45,22 @@ def cpu_model() -> str:
     except OSError:
         pass
     return f"{platform.processor() or platform.machine()}, {cores}"
+
+
+def strain_pair(
+    strain: float, n: int = 1024, lines: int = 256
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """The strain benchmarks' image pair: reference and uniformly compressed complex B-scans
+    ``(depth, aline)`` of a Gaussian-spectrum scene (FWHM 0.5 delta_k, k0/delta_k 10, 4
+    scatterers per pixel, :data:`PIXEL` µm pixels, seed 1) and ``k0`` (rad/µm)."""
+    import speckle
+
+    h = n * PIXEL
+    src = speckle.spectrum(n, h, k0_dk=10.0, shape="gaussian", fwhm=0.5 * n * np.pi / h)
+    scene = speckle.deformable_scene(lines, 4.0, n_pixels=n, depth_range=h, seed=1, strain=strain)
+    img = (
+        speckle.bscan(speckle.uniaxial_strain(scene, [0.0, strain]), src, method="nufft", tol=1e-9)
+        .field.transpose("strain", "depth", "aline")
+        .values
+    )
+    return img[0], img[1], float(src.attrs["k0"])

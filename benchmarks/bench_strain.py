@@ -27,7 +27,7 @@ import platform
 import time
 
 import numpy as np
-from _common import cpu_model
+from _common import PIXEL, cpu_model, strain_pair
 from scipy import ndimage
 
 import speckle
@@ -122,21 +122,8 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     args = parser.parse_args()
     n, lines = (256, 64) if args.quick else (1024, 256)
-    pixel = 8.0
-    h = n * pixel
-    src = speckle.spectrum(n, h, k0_dk=10.0, shape="gaussian", fwhm=0.5 * n * np.pi / h)
-    scene = speckle.deformable_scene(
-        lines, 4.0, n_pixels=n, depth_range=h, seed=1, strain=args.strain
-    )
-    img = (
-        speckle.bscan(
-            speckle.uniaxial_strain(scene, [0.0, args.strain]), src, method="nufft", tol=1e-9
-        )
-        .field.transpose("strain", "depth", "aline")
-        .values
-    )
-    ref, dfm = img
-    k0 = float(src.attrs["k0"])
+    pixel = PIXEL
+    ref, dfm, k0 = strain_pair(args.strain, n, lines)
     mpx = ref.size / 1e6
     print(f"{cpu_model()}, Python {platform.python_version()}, numpy {np.__version__}")
     print(f"image {n} x {lines} px, strain {args.strain:g}, best of {args.repeat}\n")
