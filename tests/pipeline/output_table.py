@@ -5,7 +5,8 @@ NaN count, sum, sum of absolute values, sum of squares and a few samples of the 
 (complex values as real and imaginary parts). Timings are excluded: they are measurements of the
 machine, not results of the model (variables in seconds or per second, or whose name says
 time). ``tests/pipeline/test_pipeline.py`` compares a fresh CI run with the checked-in table
-``ci_outputs.json`` to 1e-12 relative.
+``ci_outputs.json``: to :data:`RTOL_SAME` relative on the machine the table was written on (the
+same CPU and numerical libraries, :func:`machine`), to :data:`RTOL_OTHER` elsewhere.
 
 Regenerate the table only where a change of numbers is intended and explained in the commit::
 
@@ -18,14 +19,29 @@ from __future__ import annotations
 import json
 import math
 import sys
+from importlib.metadata import version
 from pathlib import Path
 
+import llvmlite.binding
 import numpy as np
 import xarray as xr
 
 TABLE = Path(__file__).with_name("ci_outputs.json")
-#: Relative agreement asked of every summary number.
-RTOL = 1e-12
+#: Relative agreement asked of every summary number on the machine the table was written on.
+RTOL_SAME = 1e-12
+#: ... and on any other. Another CPU makes numpy, numba (compiled for the host), OpenBLAS and
+#: FINUFFT dispatch other SIMD kernels, so elementwise functions and reductions differ in their
+#: last bits, which the statistics of fits on speckle amplify. Seen between an AVX-512 machine
+#: (AMD EPYC) and a table written elsewhere: 73 of 597 variables above 1e-12, the largest 8e-8
+#: (realism.nc's kurtosis standard errors), nothing structural (shapes, dtypes, NaN counts
+#: equal). At 1e-6 every number still holds to six digits; intended changes smaller than that
+#: (seen: 4e-8 and 2e-7, a float64 refinement kernel and the 8-point resampling) are flagged
+#: only on the table's own machine.
+RTOL_OTHER = 1e-6
+#: Key of the table's record of the machine it was written on.
+MACHINE = "__machine__"
+#: Libraries whose versions decide the outputs' last bits.
+LIBRARIES = ("numpy", "scipy", "numba", "finufft", "scikit-image", "xarray", "netCDF4")
 #: Number of evenly spaced samples of the flattened array.
 N_SAMPLES = 5
 
@@ -89,8 +105,20 @@ def summarise(results: Path) -> dict[str, dict[str, object]]:
     return table
 
 
-def _close(a: float, b: float, scale: float) -> bool:
-    return math.isclose(a, b, rel_tol=RTOL, abs_tol=RTOL * scale)
+def machine() -> dict[str, str]:
+    """What decides the last bits of the outputs: the CPU as LLVM names it (numba compiles for
+    it; numpy, OpenBLAS and FINUFFT choose their kernels by the same features) and the versions
+    of :data:`LIBRARIES`."""
+    return {"cpu": llvmlite.binding.get_host_cpu_name()} | {n: version(n) for n in LIBRARIES}
+
+
+def tolerance(table_machine: dict | None) -> float:
+    """:data:`RTOL_SAME` on the machine a table was written on, else :data:`RTOL_OTHER`."""
+    return RTOL_SAME if table_machine == machine() else RTOL_OTHER
+
+
+def _close(a: float, b: float, scale: float, rtol: float) -> bool:
+    return math.isclose(a, b, rel_tol=rtol, abs_tol=rtol * scale)
 
 
 def _abs_sum(summary: dict, field: str) -> float:
@@ -99,11 +127,11 @@ def _abs_sum(summary: dict, field: str) -> float:
     return float(summary.get(f"{prefix}abs_sum", 0.0))
 
 
-def compare(new: dict, old: dict) -> list[str]:
+def compare(new: dict, old: dict, rtol: float = RTOL_SAME) -> list[str]:
     """Differences between two tables, one line each (empty when they agree).
 
-    Sums are compared to ``RTOL`` times the sum of absolute values (cancellation-safe), sums of
-    squares relative to themselves, samples to ``RTOL`` times the larger of their own magnitude
+    Sums are compared to ``rtol`` times the sum of absolute values (cancellation-safe), sums of
+    squares relative to themselves, samples to ``rtol`` times the larger of their own magnitude
     and the part's mean magnitude; everything else (shape, dtype, NaN counts) exactly.
     """
     problems = [f"{key}: missing from the new run" for key in old.keys() - new.keys()]
@@ -117,13 +145,13 @@ def compare(new: dict, old: dict) -> list[str]:
                 ok = len(va or []) == len(vb) and all(
                     x == y
                     if isinstance(x, str) or isinstance(y, str)
-                    else _close(x, y, max(abs(y), mean))
+                    else _close(x, y, max(abs(y), mean), rtol)
                     for x, y in zip(va, vb, strict=True)
                 )
             elif field.endswith("abs_sum") or field.endswith("sum_sq"):
-                ok = isinstance(va, float) and _close(va, vb, abs(vb))
+                ok = isinstance(va, float) and _close(va, vb, abs(vb), rtol)
             elif field.endswith("sum"):
-                ok = isinstance(va, float) and _close(va, vb, _abs_sum(b, field))
+                ok = isinstance(va, float) and _close(va, vb, _abs_sum(b, field), rtol)
             else:
                 ok = va == vb
             if not ok:
@@ -131,14 +159,16 @@ def compare(new: dict, old: dict) -> list[str]:
     return problems
 
 
-def load_table(path: Path = TABLE) -> dict:
-    """The checked-in table."""
-    return json.loads(path.read_text())
+def load_table(path: Path = TABLE) -> tuple[dict, dict | None]:
+    """The checked-in table's variables, and the machine it was written on (None if unrecorded)."""
+    table = json.loads(path.read_text())
+    return {k: v for k, v in table.items() if k != MACHINE}, table.get(MACHINE)
 
 
 if __name__ == "__main__":
     results, out = Path(sys.argv[1]), Path(sys.argv[2])
     tmp = out.with_suffix(".tmp")
-    tmp.write_text(json.dumps(summarise(results), indent=1, sort_keys=True) + "\n")
+    table = summarise(results) | {MACHINE: machine()}
+    tmp.write_text(json.dumps(table, indent=1, sort_keys=True) + "\n")
     tmp.replace(out)
-    print(f"{out}: {len(load_table(out))} variables")
+    print(f"{out}: {len(load_table(out)[0])} variables, written on {machine()}")

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 import yaml
-from output_table import compare, load_table, summarise
+from output_table import compare, load_table, summarise, tolerance
 from workflow_run import CI_CONFIG, IGNORE, snakemake
 
 import speckle
@@ -96,13 +96,16 @@ def test_pipeline_run_succeeds(run, baseline):
 
 
 def test_outputs_match_the_checked_in_table(run):
-    """Every variable of every NetCDF output equals ``ci_outputs.json`` to 1e-12 relative.
+    """Every variable of every NetCDF output equals ``ci_outputs.json``: to 1e-12 relative on
+    the machine the table was written on, to 1e-6 on another CPU or library versions (their
+    last bits differ; ``output_table.RTOL_OTHER``). Shapes, dtypes and NaN counts exactly.
 
     The table was written from the CI config's outputs before the structure refactor; update it
     (``tests/pipeline/output_table.py``) only where a change of numbers is intended and explained.
     """
     repo, _ = run
-    problems = compare(summarise(repo / "results"), load_table())
+    table, written_on = load_table()
+    problems = compare(summarise(repo / "results"), table, tolerance(written_on))
     assert not problems, "\n".join(problems[:40])
 
 
