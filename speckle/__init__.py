@@ -7,7 +7,9 @@ rad/µm.
 
 The package follows the flow of a simulation: ``scene`` (what is imaged) and ``system`` (the
 OCT system) feed ``imaging`` (Eq. 4 and its fast methods, the beam, scans), whose images
-``analysis`` measures (statistics, correlation, tracking, strain) and ``figures`` draws.
+``analysis`` measures (statistics, correlation, tracking, strain); ``studies`` runs experiments
+on those methods, ``synthoct`` is an open drop-in for the SynthOCT challenge's scanner,
+``figures`` draws and ``pipeline`` connects a config file to all of it.
 ``io`` reads and writes NetCDF atomically; ``sweep`` runs parameter sweeps on Dask.
 
 The top level gathers the functions and classes of the subpackages' ``__all__`` (each
@@ -15,11 +17,18 @@ subpackage lists its own), and loads each on first use (scientific Python's SPEC
 ``lazy_loader``): ``import speckle`` imports neither numba nor dask nor scikit-fem.
 """
 
-from . import analysis, imaging, scene, system
+from . import analysis, imaging, scene, studies, synthoct, system
 from ._lazy import attach
 
 #: Subpackages whose public names the top level gathers, in the order of the flow.
-_GROUPS = {"scene": scene, "system": system, "imaging": imaging, "analysis": analysis}
+_GROUPS = {
+    "scene": scene,
+    "system": system,
+    "imaging": imaging,
+    "analysis": analysis,
+    "studies": studies,
+    "synthoct": synthoct,
+}
 #: Top-level infrastructure modules and the names they contribute (``speckle.sweep`` is the
 #: module of the Dask sweeps; its function is ``speckle.sweep.sweep``).
 _INFRASTRUCTURE = {"io": ["open_dataset", "stream_to_netcdf", "to_netcdf"]}
@@ -44,4 +53,4 @@ def __dir__() -> list[str]:
     return sorted({*__all__, *_lazy_dir()})
 
 
-del analysis, attach, imaging, scene, system
+del analysis, attach, imaging, scene, studies, synthoct, system

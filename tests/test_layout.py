@@ -1,8 +1,9 @@
 """The package layout keeps its layers honest (in the spirit of prysm's import allow-list).
 
-The flow is scene -> system -> imaging -> analysis -> figures. A module may import from its own
-group and the groups before it, never from a later one; only ``speckle.figures`` draws
-(matplotlib); third-party imports are limited per group, each with its reason.
+The flow is scene -> system -> imaging -> analysis -> studies (and the SynthOCT drop-in) ->
+figures -> pipeline. A module may import from its own group and the groups before it, never from
+a later one; only ``speckle.figures`` and ``speckle.pipeline`` draw (matplotlib); third-party
+imports are limited per group, each with its reason.
 """
 
 from __future__ import annotations
@@ -17,7 +18,16 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1] / "speckle"
 
 #: Group -> rank in the flow; top-level modules are infrastructure (rank 0).
-RANK = {"scene": 1, "system": 1, "imaging": 2, "analysis": 3, "figures": 4}
+RANK = {
+    "scene": 1,
+    "system": 1,
+    "imaging": 2,
+    "analysis": 3,
+    "studies": 4,
+    "synthoct": 4,
+    "figures": 5,
+    "pipeline": 6,
+}
 
 #: Third-party packages each group may import, and why.
 ALLOWED = {
@@ -44,7 +54,13 @@ ALLOWED = {
         "zarr",
         "tifffile",
     },
+    # experiments on methods: scenes, images and measurements, on Dask
+    "studies": {"numpy", "xarray", "dask", "distributed", "scipy"},
+    # the challenge's files (PNG: Pillow), its scanner (finufft) and maps (scipy, skimage)
+    "synthoct": {"numpy", "xarray", "scipy", "finufft", "PIL", "skimage", "dask"},
     "figures": {"numpy", "xarray", "scipy", "matplotlib", "dask"},  # drawing
+    # config checks (yaml, jsonschema), running scripts, figure style (matplotlib)
+    "pipeline": {"numpy", "xarray", "yaml", "jsonschema", "matplotlib", "dask", "distributed"},
 }
 STDLIB = set(sys.stdlib_module_names)
 #: Every subpackage ``__init__`` declares its names lazily (SPEC 1).
@@ -91,7 +107,7 @@ def test_imports_follow_the_flow(path, parts):
                 f"{'.'.join(parts)} imports {name}: {group or 'top level'} may not import "
                 f"from the later group {target}"
             )
-            assert not (group is None and parts[1] not in ("figures",)), (
+            assert not (group is None and parts[1] not in ("figures", "pipeline")), (
                 f"infrastructure module {'.'.join(parts)} imports {name}"
             )
         elif top not in STDLIB and top != LAZY:

@@ -1,0 +1,12 @@
+"""Studies: experiments that run imaging and analysis to study a method or a system.
+
+A study builds scenes, images them (``speckle.imaging``) and measures the images
+(``speckle.analysis``) to answer a question about a method: where a strain estimator fails, how
+a speckle-suppression method trades resolution for contrast, how a twin of a measured scanner
+is fitted, how motion decorrelates speckle. Studies stand above the estimators they study; the
+estimators never import them. Names load on first use (SPEC 1, ``lazy_loader``).
+"""
+
+from .._lazy import attach
+
+__getattr__, __dir__, __all__ = attach(__name__, {})
