@@ -6,7 +6,7 @@ from pathlib import Path
 import yaml
 from snakemake.utils import min_version, validate
 
-from speckle.figures.config_check import check_config
+from speckle.pipeline.checks import check_config
 
 min_version("9.0")
 

@@ -85,7 +85,7 @@ sphinx_gallery_conf = {
     "matplotlib_animations": False,
     "image_scrapers": ("matplotlib",),
     # no rcParams reset between examples: the figure modules apply their shared style
-    # (speckle.figures._style.STYLE: fonts, tight bounding box) once, on import
+    # (speckle.figures.style.STYLE: fonts, tight bounding box) once, on import
     "reset_modules": (),
     "show_memory": False,
     "write_computation_times": True,

@@ -33,7 +33,7 @@ from ..provenance import provenance_attrs
 from ..scene import regions as reg
 from ..scene.deformation import required_depth, uniaxial_pixel_displacement
 from ._config import source_spectrum
-from ._style import new_figure
+from .style import new_figure
 
 __all__ = [
     "bscans_data",

@@ -27,7 +27,7 @@ from ..scene.scatterers import amplitude_kurtosis
 from ..sweep import sweep
 from ..system.source import spectrum as make_spectrum
 from ._config import scene_kwargs, spectrum_kwargs
-from ._style import new_figure
+from .style import new_figure
 
 __all__ = [
     "fig6a_data",

@@ -50,15 +50,15 @@ from ..scene import regions as rg
 from ..scene.scatterers import random_scatterers
 from ..scene.shared import shared_scene
 from ..system.source import spectrum
-from ._style import new_figure
+from .style import new_figure
 
 __all__ = [
     "FAMILIES",
     "build_phantom",
-    "check_despeckle_config",
     "failure_data",
     "frequency_compounding_data",
     "methods_data",
+    "parameter_grid",
     "phantom_data",
     "plot_failure",
     "plot_methods",
@@ -363,7 +363,16 @@ def _physical_methods(lk: dict, ph: dict, cfg: Mapping):
     )
 
 
-def _grid(params: Mapping) -> list[dict]:
+def parameter_grid(params: Mapping) -> list[dict]:
+    """Every combination of a filter's swept parameters (``{name: [values]}``), in order.
+
+    Examples
+    --------
+    >>> parameter_grid({"size": [3, 5], "k": [1.0]})
+    [{'size': 3, 'k': 1.0}, {'size': 5, 'k': 1.0}]
+    >>> parameter_grid({})
+    [{}]
+    """
     keys = list(params)
     if not keys:
         return [{}]
@@ -451,7 +460,7 @@ def methods_data(cfg: Mapping, seed: int) -> tuple[xr.Dataset, xr.Dataset]:
         if not dsp.filter_available(name):
             continue
         for domain in cfg["domains"]:
-            for p in _grid(params):
+            for p in parameter_grid(params):
                 t = time.perf_counter()
                 img = dsp.despeckle(noisy_img, name, p, domain=domain)
                 secs = time.perf_counter() - t
@@ -844,107 +853,3 @@ def frequency_compounding_data(cfg: Mapping, seed: int) -> xr.Dataset:
         },
     )
     return ds
-
-
-# --------------------------------------------------------------------------- config checks
-def _key(path: str, check) -> None:
-    try:
-        check()
-    except (ValueError, TypeError) as err:
-        raise ValueError(f"config key despeckle.{path}: {err}") from None
-
-
-def _check_geometry(geo: Mapping, path: str) -> None:
-    n, nl = int(geo["n_pixels"]), int(geo["n_lines"])
-    a, lr = int(geo["air_rows"]), int(geo["layer_row"])
-    inc, pts = geo["inclusion"], geo["points"]
-    if not (0 < a and a + 4 <= lr and lr + 4 <= n):
-        raise ValueError(
-            f"config key despeckle.{path}: need 0 < air_rows ({a}), air_rows + 4 "
-            f"<= layer_row ({lr}), layer_row + 4 <= n_pixels ({n})"
-        )
-    if not (lr < inc["row"] < n and 0 <= inc["line"] < nl):
-        raise ValueError(
-            f"config key despeckle.{path}.inclusion: centre (row {inc['row']}, line "
-            f"{inc['line']}) must lie in layer 2 (rows {lr}..{n}) and lines 0..{nl}"
-        )
-    if not pts["row"] < a or any(not 0 <= v < nl for v in pts["lines"]):
-        raise ValueError(
-            f"config key despeckle.{path}.points: row must be < air_rows ({a}) and "
-            f"lines in [0, n_lines={nl})"
-        )
-
-
-def _check_spec(spec: Mapping, n: int, path: str) -> None:
-    fam = spec["family"]
-    if fam == "frequency":
-        _key(
-            path,
-            lambda: cp.subband_windows(
-                n, spec["looks"], window=spec["window"], overlap=spec["overlap"]
-            ),
-        )
-    elif fam in dsp.FILTERS:
-        _key(path, lambda: dsp.check_filter(fam, spec.get("params"), spec.get("domain", "linear")))
-    elif fam == "temporal":
-        _key(
-            path,
-            lambda: cp.brownian_frames(
-                xr.Dataset({"z": ("scatterer", [0.0])}),
-                spec["frames"],
-                diffusion=spec["diffusion"],
-                interval=spec["interval"],
-                seed=0,
-            ),
-        )
-
-
-def check_despeckle_config(cfg: Mapping) -> None:
-    """What the schema cannot say about the ``despeckle`` section (``ValueError`` naming it).
-
-    Geometry inside the image; sub-bands: ``looks`` at most the spectrum's samples, the
-    windows and overlaps valid, ``frequency_compounding.n_pixels`` a multiple of every
-    ``looks`` (equal sub-bands); subsets no larger than their sets; every filter parameter in
-    its range (:func:`speckle.analysis.filters.check_filter`); failure methods complete.
-    """
-    geo = cfg["phantom"]
-    _check_geometry(geo, "phantom")
-    fgeo = {**geo, **cfg["failure"]["phantom"]}
-    _check_geometry(fgeo, "failure.phantom")
-    n = int(geo["n_pixels"])
-    fr = cfg["physical"]["frequency"]
-    for nl in fr["looks"]:
-        for w in fr["windows"]:
-            for ov in fr["overlap"]:
-                _key(
-                    "physical.frequency",
-                    lambda nl=nl, w=w, ov=ov: cp.subband_windows(n, nl, window=w, overlap=ov),
-                )
-    phys = cfg["physical"]
-    for fam, key in (("angular", "angles"), ("spatial", "offsets")):
-        size = len(phys[fam][key])
-        for m in phys[fam]["sets"]:
-            if m > size or (size - m) % 2:
-                raise ValueError(
-                    f"config key despeckle.physical.{fam}.sets: {m} central {key} of {size} "
-                    f"(need sets <= {size} with the same parity)"
-                )
-    tm = phys["temporal"]
-    if max(tm["sets"]) > tm["frames"]:
-        raise ValueError(
-            f"config key despeckle.physical.temporal.sets must be <= frames "
-            f"({tm['frames']}); got {tm['sets']}"
-        )
-    for name, params in cfg["filters"].items():
-        for p in _grid(params):
-            _key(f"filters.{name}", lambda name=name, p=p: dsp.check_filter(name, p))
-    for name, spec in cfg["failure"]["methods"].items():
-        _check_spec(spec, int(fgeo["n_pixels"]), f"failure.methods.{name}")
-    fc = cfg["frequency_compounding"]
-    for nl in fc["looks"]:
-        _key("frequency_compounding.looks", lambda nl=nl: cp.subband_windows(fc["n_pixels"], nl))
-        if fc["n_pixels"] % nl:
-            raise ValueError(
-                f"config key despeckle.frequency_compounding.looks: {nl} equal sub-bands need "
-                f"n_pixels ({fc['n_pixels']}) to be a multiple of it"
-            )

@@ -33,7 +33,7 @@ from ..scene.mechanics import compress, inclusion_labels
 from ..sweep import sweep
 from ..system.noise import add_complex_noise
 from ._config import dask_options, scene_kwargs, source_spectrum
-from ._style import new_figure
+from .style import new_figure
 
 __all__ = [
     "FAILURE_SWEEPS",

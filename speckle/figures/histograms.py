@@ -31,7 +31,7 @@ from ..imaging.bscan import expected_intensity
 from ..sweep import sweep
 from ..system.detection import add_floor
 from ._config import random_bscan
-from ._style import new_figure
+from .style import new_figure
 
 __all__ = [
     "density_histograms",

@@ -24,7 +24,7 @@ from ..system.attenuation import attenuate_regions
 from ..system.noise import add_noise
 from ..system.rolloff import rolloff
 from ._config import scene_kwargs, source_spectrum
-from ._style import new_figure
+from .style import new_figure
 
 __all__ = [
     "phantom_regions",

@@ -8,7 +8,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from ._style import new_figure
+from .style import new_figure
 
 __all__ = ["pareto_front", "plot_failure_map", "plot_speed_accuracy"]
 

@@ -30,7 +30,7 @@ from ..imaging.aline import ascan, pixel_depths
 from ..provenance import provenance_attrs
 from ..sweep import sweep
 from ._config import dask_options, random_bscan, source_options, source_spectrum
-from ._style import new_figure
+from .style import new_figure
 
 __all__ = [
     "dask_options",

@@ -24,7 +24,7 @@ from ..conventions import attrs, coord
 from ..system import spectrometer as sp
 from ..system.datasheet import System
 from ._config import system_from_config
-from ._style import new_figure
+from .style import new_figure
 
 __all__ = [
     "artefact_bscan",

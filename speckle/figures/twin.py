@@ -16,7 +16,7 @@ from matplotlib.figure import Figure
 
 from ..analysis.image_files import load_image
 from ..analysis.twin import SystemFit, fit_system
-from ._style import new_figure
+from .style import new_figure
 
 __all__ = ["fit_from_config", "plot_compare", "plot_failure", "twin_datasets"]
 

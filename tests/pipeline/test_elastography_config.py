@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from speckle.figures.config_check import check_config
+from speckle.pipeline.checks import check_config
 
 BAD = {
     "elastography.window": {"elastography": {"window": [1, 4]}},

@@ -16,7 +16,7 @@ rule speed_accuracy:
         code=package_code(
             "speckle.imaging.speed",
             "speckle.figures.speed",
-            "speckle.figures._config",
+            "speckle.pipeline.adapters",
             "speckle.io",
             "speckle.provenance",
         ),
@@ -45,7 +45,7 @@ rule failure_map:
         code=package_code(
             "speckle.imaging.speed",
             "speckle.figures.speed",
-            "speckle.figures._config",
+            "speckle.pipeline.adapters",
             "speckle.io",
             "speckle.provenance",
         ),

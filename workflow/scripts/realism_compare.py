@@ -2,13 +2,13 @@
 
 import logging
 
-from speckle._workflow import run
 from speckle.analysis.image_files import load_image
 from speckle.analysis.measured import load_measured
 from speckle.analysis.twin import fit_system
 from speckle.figures import realism
-from speckle.figures._style import save
 from speckle.io import to_netcdf
+from speckle.pipeline.outputs import save
+from speckle.pipeline.runner import run
 from speckle.provenance import provenance_attrs
 
 STEP_STATS = ("score", "ks_distance", "skewness", "excess_kurtosis")
