@@ -11,9 +11,17 @@ import numpy as np
 import xarray as xr
 
 from .._validate import check_int
-from ..conventions import spacing
+from ..conventions import attrs, spacing
 
-__all__ = ["depth_major", "field_of", "grid_spacing", "matched", "parse_window", "same_grid"]
+__all__ = [
+    "depth_major",
+    "field_of",
+    "grid_spacing",
+    "label_looks",
+    "matched",
+    "parse_window",
+    "same_grid",
+]
 
 
 def field_of(data: xr.Dataset | xr.DataArray) -> xr.DataArray:
@@ -123,3 +131,12 @@ def grid_spacing(field: xr.DataArray | xr.Dataset) -> tuple[float, float]:
     """
     dz = spacing(field, "depth")
     return dz, spacing(field, "aline", default=dz)
+
+
+def label_looks(looks: xr.DataArray, kind: str, **extra: object) -> xr.DataArray:
+    """Looks (dim ``look``) numbered, named ``looks`` and labelled as complex ``kind`` looks."""
+    return (
+        looks.assign_coords(look=np.arange(looks.sizes["look"]))
+        .rename("looks")
+        .assign_attrs(attrs("field", f"complex {kind} looks", compounding=kind, **extra))
+    )
