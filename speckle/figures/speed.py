@@ -1,5 +1,5 @@
 """Figures of the speed-versus-accuracy chart and of the failure map (datasets of
-:mod:`speckle.imaging.speed`)."""
+:mod:`speckle.studies.speed`)."""
 
 from __future__ import annotations
 
@@ -78,8 +78,8 @@ def _chart_panel(ax, sc: xr.Dataset, title: str, *, legend: bool) -> None:
 def plot_speed_accuracy(ds: xr.Dataset, beam: xr.Dataset | None = None) -> Figure:
     """Time versus relative error, one panel per scene size, Pareto front as a line.
 
-    ``ds``: the A-scan chart (:func:`speckle.imaging.speed.speed_accuracy`), first row;
-    ``beam``: the scanned-beam chart (:func:`speckle.imaging.speed.beam_speed_accuracy`),
+    ``ds``: the A-scan chart (:func:`speckle.studies.speed.speed_accuracy`), first row;
+    ``beam``: the scanned-beam chart (:func:`speckle.studies.speed.beam_speed_accuracy`),
     second row, if given.
     """
     rows = [ds] if beam is None else [ds, beam]

@@ -8,7 +8,9 @@ estimators never import them.
 
 ``twin`` fits the model's system to a user's image and predicts its strain limits;
 ``realism`` scores which effect makes a simulated image look measured; ``failure`` scores strain
-estimators on pairs of known strain (the failure maps); ``looks`` forms the physical
+estimators on pairs of known strain (the failure maps); ``speed`` times the synthesis methods
+against their accuracy and maps where each fails; ``suppression`` builds the
+speckle-suppression phantom and scores images against its truth; ``looks`` forms the physical
 compounding looks (angle, offset, polarization, time) of one scene.
 Names load on first use (SPEC 1, ``lazy_loader``).
 """

@@ -14,7 +14,7 @@ SPEED_TARGETS = [
 rule speed_accuracy:
     input:
         code=package_code(
-            "speckle.imaging.speed",
+            "speckle.studies.speed",
             "speckle.figures.speed",
             "speckle.pipeline.adapters",
             "speckle.io",
@@ -43,7 +43,7 @@ rule speed_accuracy:
 rule failure_map:
     input:
         code=package_code(
-            "speckle.imaging.speed",
+            "speckle.studies.speed",
             "speckle.figures.speed",
             "speckle.pipeline.adapters",
             "speckle.io",
