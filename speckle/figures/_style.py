@@ -24,6 +24,7 @@ from ..io import atomic_path
 __all__ = [
     "DPI",
     "ESTIMATOR_COLOURS",
+    "ESTIMATOR_NAMES",
     "MIN_LEGEND_PT",
     "NO_COLORBAR",
     "STYLE",
@@ -64,6 +65,17 @@ ESTIMATOR_COLOURS = {
     "wls_unaligned": "#ffbb78",
     "tracking": "#2ca02c",
     "correlation": "#d62728",
+}
+#: Strain estimators (``method`` coordinates) in words, for titles and legends.
+ESTIMATOR_NAMES = {
+    "vector": "vector (phase)",
+    "vector_aligned": "vector, aligned",
+    "vector_unaligned": "vector, unaligned",
+    "wls": "weighted least squares",
+    "wls_aligned": "WLS, aligned",
+    "wls_unaligned": "WLS, unaligned",
+    "tracking": "speckle tracking",
+    "correlation": "correlation",
 }
 #: Gid of an image that needs no colorbar (a region map, a grey-level fragment with a scale bar
 #: drawn elsewhere): the figure checks skip it.

@@ -35,6 +35,9 @@ from ..sweep import sweep
 from ..system.noise import add_complex_noise
 from ._config import dask_options, scene_kwargs, source_spectrum
 from ._style import (
+    ESTIMATOR_NAMES as METHOD_NAMES,
+)
+from ._style import (
     colorbar,
     estimator_colour,
     new_figure,
@@ -62,17 +65,6 @@ __all__ = [
 ]
 
 STRAIN = attrs("strain", "axial strain (compression > 0)")
-#: Estimator labels (``method`` coordinate) in words, for titles and legends.
-METHOD_NAMES = {
-    "vector": "vector (phase)",
-    "vector_aligned": "vector, aligned",
-    "vector_unaligned": "vector, unaligned",
-    "wls": "weighted least squares",
-    "wls_aligned": "WLS, aligned",
-    "wls_unaligned": "WLS, unaligned",
-    "tracking": "speckle tracking",
-    "correlation": "correlation",
-}
 STRAIN_ERROR = attrs("strain", "estimate minus truth")
 
 
