@@ -22,6 +22,7 @@ from collections.abc import Mapping
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 import speckle
 
@@ -33,7 +34,7 @@ from ..provenance import provenance_attrs
 from ..scene import regions as reg
 from ..scene.deformation import required_depth, uniaxial_pixel_displacement
 from ._config import source_spectrum
-from ._style import new_figure
+from ._style import colorbar, new_figure, physical_image
 
 __all__ = [
     "bscans_data",
@@ -298,7 +299,8 @@ def volume_data(source: Mapping, beam: Mapping, seed: int) -> xr.Dataset:
 
 
 def plot_volume(ds: xr.Dataset) -> Figure:
-    """Orthogonal slices (x-z, y-z, en-face x-y) of a volume; only the three slices are read.
+    """Orthogonal slices (x-z, y-z, en-face x-y) of a volume at the physical aspect ratio (1 µm
+    = 1 µm on every axis), in dB with one colorbar; only the three slices are read.
 
     ``ds`` may be a lazily opened file (``speckle.io.open_dataset(path, load=False)``): keep it
     open while this runs.
@@ -306,31 +308,35 @@ def plot_volume(ds: xr.Dataset) -> Figure:
     f = ds.field
     xm, ym = f.sizes["x"] // 2, f.sizes["y"] // 2
     zm = f.sizes["depth"] // 2
-    slices = {
-        f"x-z at y = {float(f.y[ym]):.0f} um": np.abs(f.isel(y=ym).values) ** 2,
-        f"y-z at x = {float(f.x[xm]):.0f} um": np.abs(f.isel(x=xm).values) ** 2,
-        f"x-y at depth {float(f.depth[zm]):.0f} um": np.abs(f.isel(depth=zm).values.T) ** 2,
+    intensity = {
+        "xz": np.abs(f.isel(y=ym).values) ** 2,
+        "yz": np.abs(f.isel(x=xm).values) ** 2,
+        "xy": np.abs(f.isel(depth=zm).values.T) ** 2,
     }
-    ext = {
-        "xz": [f.x[0], f.x[-1], f.depth[-1], f.depth[0]],
-        "yz": [f.y[0], f.y[-1], f.depth[-1], f.depth[0]],
-        "xy": [f.x[0], f.x[-1], f.y[-1], f.y[0]],
+    titles = {
+        "xz": f"x-z slice\nat y = {float(f.y[ym]):.0f} µm",
+        "yz": f"y-z slice\nat x = {float(f.x[xm]):.0f} µm",
+        "xy": f"en face (x-y) slice\nat depth {float(f.depth[zm]):.0f} µm",
     }
-    fig, axes = new_figure(1, 3, width=10.0, height=3.6)
-    mean = np.mean([s.mean() for s in slices.values()])
-    for ax, (title, img), key in zip(axes[0], slices.items(), ext, strict=True):
-        extent = [float(v) for v in ext[key]]
-        ax.imshow(
-            10 * np.log10(img / mean + 1e-12),
-            cmap="gray",
-            vmin=-20,
-            vmax=10,
-            extent=extent,
-            aspect="auto",
-        )
-        ax.set_title(title, fontsize=9)
-        ax.set_xlabel({"xz": "x (µm)", "yz": "y (µm)", "xy": "x (µm)"}[key])
-        ax.set_ylabel("y (µm)" if key == "xy" else "depth (µm)")
+    axes_of = {"xz": (f.depth, f.x, "x"), "yz": (f.depth, f.y, "y"), "xy": (f.y, f.x, "x")}
+    depth_span = float(f.depth[-1] - f.depth[0]) or 1.0
+    lateral_span = max(float(f.x[-1] - f.x[0]), float(f.y[-1] - f.y[0]), 1e-9)
+    # width ratios so the three panels share one height at 1 µm = 1 µm
+    ratio = min(lateral_span / depth_span, 1.0)
+    fig, axes = new_figure(1, 3, width=7.0, height=4.2, width_ratios=[ratio, ratio, 0.8])
+    mean = np.mean([s.mean() for s in intensity.values()])
+    im = None
+    for ax, key in zip(axes[0], intensity, strict=True):
+        rows, cols, xname = axes_of[key]
+        im = physical_image(ax, 10 * np.log10(intensity[key] / mean + 1e-12), rows.values,
+                            cols.values, xlabel=f"{xname} (µm)", cmap="gray", vmin=-20,
+                            vmax=10)  # fmt: skip
+        ax.set_title(titles[key])
+        if key == "xy":
+            ax.set_ylabel("y (µm)")
+        else:
+            ax.xaxis.set_major_locator(MaxNLocator(2))
+    colorbar(fig, im, axes[0].tolist(), "intensity (dB re the slices' mean)", shrink=0.8)
     return fig
 
 
