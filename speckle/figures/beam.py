@@ -34,7 +34,7 @@ from ..provenance import provenance_attrs
 from ..scene import regions as reg
 from ..scene.deformation import required_depth, uniaxial_pixel_displacement
 from ._config import source_spectrum
-from ._style import colorbar, new_figure, physical_image
+from ._style import colorbar, legend_outside, new_figure, physical_image
 
 __all__ = [
     "bscans_data",
@@ -328,9 +328,16 @@ def plot_volume(ds: xr.Dataset) -> Figure:
     im = None
     for ax, key in zip(axes[0], intensity, strict=True):
         rows, cols, xname = axes_of[key]
-        im = physical_image(ax, 10 * np.log10(intensity[key] / mean + 1e-12), rows.values,
-                            cols.values, xlabel=f"{xname} (µm)", cmap="gray", vmin=-20,
-                            vmax=10)  # fmt: skip
+        im = physical_image(
+            ax,
+            10 * np.log10(intensity[key] / mean + 1e-12),
+            rows.values,
+            cols.values,
+            xlabel=f"{xname} (µm)",
+            cmap="gray",
+            vmin=-20,
+            vmax=10,
+        )
         ax.set_title(titles[key])
         if key == "xy":
             ax.set_ylabel("y (µm)")
@@ -346,19 +353,22 @@ def plot_bscans(ds: xr.Dataset) -> Figure:
     fig, axes = new_figure(2, max(len(ratios) + 1, 2), width=3.0 * (len(ratios) + 1), height=6)
     imgs = [(f"w0 = {r:g} pitch", ds.field.sel(waist_pitch=r)) for r in ratios]
     imgs.append(("independent A-lines (paper)", ds.independent))
+    im = None
     for ax, (title, f) in zip(axes[0], imgs, strict=False):
         i = np.abs(f.values) ** 2
-        ax.imshow(
+        im = physical_image(
+            ax,
             10 * np.log10(i / i.mean() + 1e-12),
+            f.depth.values,
+            f.x.values,
+            xlabel="x (µm)",
             cmap="gray",
             vmin=-20,
             vmax=10,
-            aspect="auto",
-            extent=[float(f.x[0]), float(f.x[-1]), float(f.depth[-1]), float(f.depth[0])],
         )
-        ax.set_title(title, fontsize=9)
-        ax.set_xlabel("x (µm)")
-    axes[0, 0].set_ylabel("depth (µm)")
+        ax.xaxis.set_major_locator(MaxNLocator(3))
+        ax.set_title(title)
+    colorbar(fig, im, axes[0].tolist(), "intensity (dB re the image mean)", shrink=0.8)
     for ax, name in zip(axes[1, :2], ("lateral", "axial"), strict=True):
         lag = ds[f"{name}_lag"].values
         for j, r in enumerate(ratios):
@@ -385,8 +395,10 @@ def plot_bscans(ds: xr.Dataset) -> Figure:
             ax.plot(lag, ds[f"{name}_{kind}_independent_theory"], ":", color="k", lw=0.8)
         ax.set_xlabel("lag (lines)" if name == "lateral" else "lag (pixels)")
         ax.set_ylabel("correlation")
-        ax.set_title(f"{name}: markers measured, lines theory", fontsize=9)
-    axes[1, 0].legend(fontsize=6)
+        ax.set_title(f"{name}: markers measured, lines theory")
+    fig.legend(
+        *axes[1, 0].get_legend_handles_labels(), loc="outside lower center", ncols=3, frameon=False
+    )
     for ax in axes[1, 2:]:
         ax.axis("off")
     return fig
@@ -410,5 +422,5 @@ def plot_strain(ds: xr.Dataset) -> Figure:
             ax.plot(s, ds.intensity_lines_theory, ":", color="k", lw=0.8, label="theory, lines")
         ax.set_xlabel("strain (%)")
         ax.set_ylabel(f"{kind} correlation")
-        ax.legend(fontsize=7)
+        legend_outside(ax)
     return fig

@@ -672,20 +672,29 @@ def plot_phantom(ds: xr.Dataset) -> Figure:
     for k, name in enumerate(names):
         axes[0].plot([], [], "s", color=regions.cmap(regions.norm(k)), label=name)
     if names:
-        axes[0].legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), frameon=False,
-                       handlelength=0.8, borderaxespad=0.2)  # fmt: skip
+        axes[0].legend(
+            loc="upper left",
+            bbox_to_anchor=(1.0, 1.0),
+            frameon=False,
+            handlelength=0.8,
+            borderaxespad=0.2,
+        )
     im = show(axes[1], ds.truth.values, "truth E|A|²")
     show(axes[2], ds.single_look.values, "single look + noise")
     for i in range(nb):
         fam = str(ds.family.values[i])
         how = str(ds.best_method.values[i]).removeprefix(fam).removesuffix(" + noise").strip()
-        show(axes[3 + i], ds.best.isel(family=i).values,
-             f"{FAMILY_NAMES.get(fam, fam)}\n{textwrap.shorten(how, 34, placeholder='...')}",
-             color=FAMILY_COLOURS.get(fam, "k"))  # fmt: skip
+        show(
+            axes[3 + i],
+            ds.best.isel(family=i).values,
+            f"{FAMILY_NAMES.get(fam, fam)}\n{textwrap.shorten(how, 34, placeholder='...')}",
+            color=FAMILY_COLOURS.get(fam, "k"),
+        )
     for ax in axes[3 + nb :]:
         ax.axis("off")
-    colorbar(fig, im, axes[: 3 + nb].tolist(), "intensity (dB re the truth's uniform mean)",
-             shrink=0.6)  # fmt: skip
+    colorbar(
+        fig, im, axes[: 3 + nb].tolist(), "intensity (dB re the truth's uniform mean)", shrink=0.6
+    )
     return fig
 
 
@@ -829,8 +838,13 @@ def plot_failure(ds: xr.Dataset) -> Figure:
             axes[0, c].plot(xv[bad], sr[bad], "x", color="k", ms=6)
             er = ds[f"erases_{axis}"].values[i] == 1
             axes[1, c].plot(xv[er], fr[er], "x", color="r", ms=6)
-        axes[0, c].axhline(ds.attrs["helps_threshold"], color="k", lw=0.6, ls="--",
-                           label="stops helping below" if c == 0 else None)  # fmt: skip
+        axes[0, c].axhline(
+            ds.attrs["helps_threshold"],
+            color="k",
+            lw=0.6,
+            ls="--",
+            label="stops helping below" if c == 0 else None,
+        )
         axes[1, c].axhline(ds.attrs["erases_threshold"], color="r", lw=0.6, ls="--")
         for r in range(2):
             if axis == "density":

@@ -34,15 +34,8 @@ from ..scene.mechanics import compress, inclusion_labels
 from ..sweep import sweep
 from ..system.noise import add_complex_noise
 from ._config import dask_options, scene_kwargs, source_spectrum
-from ._style import (
-    ESTIMATOR_NAMES as METHOD_NAMES,
-)
-from ._style import (
-    colorbar,
-    estimator_colour,
-    new_figure,
-    physical_image,
-)
+from ._style import ESTIMATOR_NAMES as METHOD_NAMES
+from ._style import colorbar, estimator_colour, legend_outside, new_figure, physical_image
 
 __all__ = [
     "FAILURE_SWEEPS",
@@ -275,12 +268,20 @@ def plot_phantom(ds: xr.Dataset) -> Figure:
     show(axes[1, 0], ds.modulus, "Young's modulus", f"modulus ({units})", cmap="cividis")
     for i, m in enumerate(methods, start=1):
         name = METHOD_NAMES.get(str(m), str(m))
-        show(axes[0, i], ds.strain.sel({"method": m}), f"{name}\nstrain", "axial strain",
-             **strain_kw)  # fmt: skip
+        show(
+            axes[0, i], ds.strain.sel({"method": m}), f"{name}\nstrain", "axial strain", **strain_kw
+        )
         err = ds.error.sel({"method": m})
         rms = float(np.sqrt((err**2).mean()))
-        show(axes[1, i], err, f"{name}\nerror (rms {rms:.1e})", "strain error",
-             cmap="RdBu_r", vmin=-lim, vmax=lim)  # fmt: skip
+        show(
+            axes[1, i],
+            err,
+            f"{name}\nerror (rms {rms:.1e})",
+            "strain error",
+            cmap="RdBu_r",
+            vmin=-lim,
+            vmax=lim,
+        )
     return fig
 
 
@@ -586,8 +587,14 @@ LIMIT_LABELS = {
 def plot_failure(ds: xr.Dataset) -> Figure:
     """Failure maps: rms error / strain (top) and fraction answered (bottom) per sweep, with
     limits. Points are the means over seeds, bars +- one standard error; one legend, right."""
-    fig, axes = new_figure(2, len(FAILURE_SWEEPS), width=2.3 * len(FAILURE_SWEEPS) + 2.2,
-                           height=5.0)  # fmt: skip
+    fig, axes = new_figure(
+        2,
+        len(FAILURE_SWEEPS),
+        width=2.3 * len(FAILURE_SWEEPS) + 2.2,
+        height=5.0,
+        sharex="col",
+        sharey="row",
+    )
     handles: dict = {}
     for j, name in enumerate(FAILURE_SWEEPS):
         x = ds[name].values.astype(float)
@@ -686,12 +693,16 @@ def plot_speed(ds: xr.Dataset) -> Figure:
         e = ds.relative_rms_error.sel({"method": m}).values
         ax.plot(t, e, "o-", ms=4, lw=0.8, label=str(m))
         for w, ti, ei in zip(ds.window.values, t, e, strict=True):
-            ax.annotate(str(int(w)), (ti, ei), fontsize=5)
+            ax.annotate(str(int(w)), (ti, ei), fontsize=7)
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("time per megapixel (s)")
-    ax.set_ylabel(f"rms error / strain (strain {ds.attrs['strain']:g})")
-    ax.legend()
+    ax.set_ylabel(f"rms strain error / strain (strain {ds.attrs['strain']:g})")
+    ax.set_title("numbers: depth window (pixels)")
+    for line in ax.get_lines():
+        line.set_color(estimator_colour(line.get_label()))
+        line.set_label(METHOD_NAMES.get(line.get_label(), line.get_label()))
+    legend_outside(ax)
     return fig
 
 
@@ -735,13 +746,14 @@ def plot_sequence(ds: xr.Dataset) -> Figure:
     axes[0, 0].plot(f, ds.true_cumulative, "k-", label="truth 1 - (1 - s)^k")
     axes[0, 0].plot(f, ds.median_cumulative, "o", label="accumulated (median)")
     axes[0, 0].set_xlabel("frame")
-    axes[0, 0].set_ylabel("cumulative strain")
-    axes[0, 0].legend()
+    axes[0, 0].set_ylabel("cumulative axial strain")
+    legend_outside(axes[0, 0])
     rel = (ds.median_cumulative - ds.true_cumulative) / ds.true_cumulative
     axes[0, 1].plot(f, rel, "o-", label="median error / truth")
     axes[0, 1].plot(f, ds.rms_error_cumulative / ds.true_cumulative, "s-", label="rms / truth")
     axes[0, 1].set_xlabel("frame")
-    axes[0, 1].legend()
+    axes[0, 1].set_ylabel("relative error of the cumulative strain")
+    legend_outside(axes[0, 1])
     return fig
 
 
@@ -811,8 +823,7 @@ def plot_sequence_large(ds: xr.Dataset, per_frame: float) -> Figure:
     against the nominal ``1 - (1 - s)^k``."""
     fig, axes = new_figure(1, 2, width=7.0, height=3.6, width_ratios=[1, 1.4])
     last = ds["cumulative"].isel(frame=-1)
-    im = physical_image(axes[0, 0], last.values, ds.depth.values, ds.aline.values,
-                        cmap="viridis")  # fmt: skip
+    im = physical_image(axes[0, 0], last.values, ds.depth.values, ds.aline.values, cmap="viridis")
     axes[0, 0].xaxis.set_major_locator(MaxNLocator(2))
     colorbar(fig, im, axes[0, 0], "cumulative axial strain")
     axes[0, 0].set_title(f"frame {int(ds.frame[-1])} against frame 0")
@@ -826,5 +837,5 @@ def plot_sequence_large(ds: xr.Dataset, per_frame: float) -> Figure:
     axes[0, 1].xaxis.set_major_locator(MaxNLocator(integer=True))
     axes[0, 1].set_ylabel("cumulative axial strain")
     axes[0, 1].set_title(f"s = {per_frame:g} per frame")
-    axes[0, 1].legend(loc="upper left", frameon=False)
+    legend_outside(axes[0, 1])
     return fig

@@ -169,7 +169,13 @@ def plot_density_histograms(ds: xr.Dataset) -> Figure:
     for ax, rho in zip(axes.flat, ds.density.values, strict=False):
         p = ds.sel(density=rho)
         _stairs(ax, p.amplitude_density)
-        ax.plot(x, rayleigh_pdf(x, sigma), "k-", lw=1.2, label=f"Rayleigh σ={sigma:.3g}")
+        ax.plot(
+            x,
+            rayleigh_pdf(x, sigma),
+            "k-",
+            lw=1.2,
+            label=f"Rayleigh fit shared by all densities, σ = {sigma:.3g}",
+        )
         ax.set_title(
             f"N_sc/N = {rho:g}\nC = {float(p.contrast):.3f} ± "
             f"{float(p.contrast_se):.3f} (theory {float(p.contrast_theory):.3f})"
@@ -178,7 +184,7 @@ def plot_density_histograms(ds: xr.Dataset) -> Figure:
         ax.set_ylabel("probability density")
     for ax in axes.flat[nd:]:
         ax.set_visible(False)
-    axes.flat[0].legend(loc="upper right")
+    fig.legend(*axes.flat[0].get_legend_handles_labels(), loc="outside lower center", frameon=False)
     return fig
 
 
@@ -343,8 +349,9 @@ def plot_fig4(ds: xr.Dataset) -> Figure:
         x = ds.intensity_bin.values
         _stairs(ax_i, ds[f"{pre}_intensity_density"], label=f"{label.split(',')[0]} histogram")
         mean = float(ds[f"{pre}_exponential_mean"])
-        ax_i.plot(x, exponential_pdf(x, mean), "k--", lw=1,
-                  label=f"exponential fit, <I> = {mean:.3g}")  # fmt: skip
+        ax_i.plot(
+            x, exponential_pdf(x, mean), "k--", lw=1, label=f"exponential fit, <I> = {mean:.3g}"
+        )
         ax_i.set_yscale("log")
         ax_i.set_xlabel("intensity / <I>")
         ax_a.set_ylabel("probability density")
@@ -358,8 +365,9 @@ def plot_fig4(ds: xr.Dataset) -> Figure:
         ax_a.set_xlabel("amplitude / sqrt(<I>)")
         x = ds.z_bin.values
         _stairs(ax_z, ds[f"{pre}_log_density"])
-        ax_z.plot(x, ds.gumbel_log_pdf, "k-", lw=1,
-                  label="ln Exp(1): skewness -1.14, excess kurtosis 2.4")  # fmt: skip
+        ax_z.plot(
+            x, ds.gumbel_log_pdf, "k-", lw=1, label="ln Exp(1): skewness -1.14, excess kurtosis 2.4"
+        )
         if pre == "measured":
             ax_z.plot(
                 x,
@@ -381,8 +389,7 @@ def plot_fig4(ds: xr.Dataset) -> Figure:
             h, lab = ax.get_legend_handles_labels()
             handles += h
             labels += lab
-        ax_z.legend(handles, labels, loc="center left", bbox_to_anchor=(1.03, 0.5),
-                    frameon=False)  # fmt: skip
+        ax_z.legend(handles, labels, loc="center left", bbox_to_anchor=(1.03, 0.5), frameon=False)
     if have:
         axes[1, 0].set_title("linearised with the floor fit's gain and offset")
     return fig

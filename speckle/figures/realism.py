@@ -25,7 +25,7 @@ from ..system.attenuation import attenuate_regions
 from ..system.noise import add_noise
 from ..system.rolloff import rolloff
 from ._config import scene_kwargs, source_spectrum
-from ._style import legend_outside, new_figure
+from ._style import colorbar, legend_outside, new_figure, physical_image
 
 __all__ = [
     "phantom_regions",
@@ -157,12 +157,14 @@ def plot_realism(ds: xr.Dataset) -> Figure:
     needed = [_effect(e) for e in str(ds.attrs["final_effects"]).split(",") if e]
     ax.set(
         xlabel="misfit score (largest deviation in combined SE)",
+        ylabel="model effect",
         title="effects needed (*): " + (", ".join(needed) or "none"),
     )
     handles, labels = axes[0, 0].get_legend_handles_labels()
     more = ax.get_legend_handles_labels()
-    fig.legend(handles + more[0], labels + more[1], loc="outside lower center", ncols=5,
-               frameon=False)  # fmt: skip
+    fig.legend(
+        handles + more[0], labels + more[1], loc="outside lower center", ncols=5, frameon=False
+    )
     fig.suptitle("Measured image against the model, effect by effect")
     return fig
 
@@ -258,7 +260,6 @@ def showcase_dataset(cfg: Mapping, seed: int) -> xr.Dataset:
 def plot_showcase(ds: xr.Dataset, dynamic_range: float = 40.0) -> Figure:
     """Pure model beside the model with system effects, same dB scale."""
     fig, axes = new_figure(1, 2, width=7.0, height=3.4)
-    extent = [ds.x.values[0], ds.x.values[-1], ds.depth.values[-1], ds.depth.values[0]]
     for ax, var, title in zip(
         axes[0],
         ("pure_db", "system_db"),
@@ -269,10 +270,17 @@ def plot_showcase(ds: xr.Dataset, dynamic_range: float = 40.0) -> Figure:
         ),
         strict=True,
     ):
-        im = ax.imshow(
-            ds[var], cmap="gray", vmin=-dynamic_range + 10, vmax=10, extent=extent, aspect="auto"
+        im = physical_image(
+            ax,
+            ds[var].values,
+            ds.depth.values,
+            ds.x.values,
+            xlabel="x (µm)",
+            cmap="gray",
+            vmin=-dynamic_range + 10,
+            vmax=10,
         )
         ax.contour(ds.x, ds.depth, ds.label, levels=[-0.5, 0.5, 1.5], colors="y", linewidths=0.4)
-        ax.set(xlabel="x (µm)", ylabel="depth (µm)", title=title)
-    fig.colorbar(im, ax=axes[0, 1], label="dB re mean tissue intensity")
+        ax.set_title(title)
+    colorbar(fig, im, axes[0].tolist(), "intensity (dB re mean tissue intensity)")
     return fig

@@ -177,12 +177,16 @@ def plot_single_scatterer(ds: xr.Dataset) -> Figure:
             if i == 0:
                 kind = "formal Fourier transform" if float(ds.k0_dk[j]) == 0 else "OCT"
                 ax.set_title(f"k0/Δk = {float(ds.k0_dk[j]):g} ({kind})")
-            if j == 0:
-                ax.set_ylabel("S(k_n) exp(2i k_n z0)")
+            ax.set_ylabel("S(k_n) exp(2i k_n z0)")
     handles, labels = axes[0, 1].get_legend_handles_labels()
     star = axes[0, 0].lines[0]
-    fig.legend([star, *handles], ["scatterer position z0", *labels], loc="outside lower center",
-               ncols=3, frameon=False)  # fmt: skip
+    fig.legend(
+        [star, *handles],
+        ["scatterer position z0", *labels],
+        loc="outside lower center",
+        ncols=3,
+        frameon=False,
+    )
     fig.suptitle("One scatterer at depth z0 per row: pixel amplitudes and spectral components")
     axes[-1, 0].set_xlabel("pixel q")
     for j in range(nk):
@@ -346,8 +350,9 @@ def _fragment_panels(axes, ds: xr.Dataset, dim: str, frag: Mapping[str, int], la
     im = None
     for ax, value in zip(axes, ds[dim].values, strict=True):
         img = part.sel({dim: value}).transpose("depth", "aline")
-        im = physical_image(ax, img.values, img.depth.values, img.aline.values, cmap="gray",
-                            vmin=0, vmax=vmax)  # fmt: skip
+        im = physical_image(
+            ax, img.values, img.depth.values, img.aline.values, cmap="gray", vmin=0, vmax=vmax
+        )
         ax.xaxis.set_major_locator(MaxNLocator(3))
         ax.set_title(f"{label} = {value:g}")
     return im
@@ -400,6 +405,7 @@ def plot_k0_fragments(ds: xr.Dataset, frag: Mapping[str, int]) -> Figure:
         ax.set_ylabel("probability density")
         npx = ds.sizes["depth"] * ds.sizes["aline"]
         ax.set_title(f"k0/Δk = {value:g}: {npx} pixels, fit σ = {sig:.3g}")
-    fig.legend(*axes[1, 0].get_legend_handles_labels(), loc="outside lower center",
-               ncols=2, frameon=False)  # fmt: skip
+    fig.legend(
+        *axes[1, 0].get_legend_handles_labels(), loc="outside lower center", ncols=2, frameon=False
+    )
     return fig

@@ -67,8 +67,9 @@ def plot_compare(ds: xr.Dataset) -> Figure:
     for ax, name in zip(axes[0, :2], ("measured", "twin"), strict=True):
         img = ds[f"{name}_image"]
         lo, hi = np.percentile(ds["measured_image"], [1, 99])
-        physical_image(ax, img, ds.depth.values, ds.x.values, xlabel="x (µm)", cmap="gray",
-                       vmin=lo, vmax=hi)  # fmt: skip
+        physical_image(
+            ax, img, ds.depth.values, ds.x.values, xlabel="x (µm)", cmap="gray", vmin=lo, vmax=hi
+        )
         ax.set_title(f"{name} region")
     colorbar(fig, axes[0, 1].images[-1], axes[0, :2].tolist(), "log data (file's grey levels)")
     ax = axes[0, 2]
@@ -121,8 +122,12 @@ def plot_failure(ds: xr.Dataset) -> Figure:
         axes[0, 0].plot(s, ds.rms_error.sel({"method": m}) / np.abs(s), "o-", label=label, **style)
         axes[1, 0].plot(s, ds.answered.sel({"method": m}), "o-", **style)
     axes[0, 0].axhline(1.0, color="k", ls=":", lw=0.7, label="error = strain")
-    axes[0, 0].set(xscale="log", yscale="log", ylabel="rms strain error / strain",
-                   title="Strain estimators on the digital twin")  # fmt: skip
+    axes[0, 0].set(
+        xscale="log",
+        yscale="log",
+        ylabel="rms strain error / strain",
+        title="Strain estimators on the digital twin",
+    )
     axes[1, 0].set(xscale="log", xlabel="interframe strain", ylabel="fraction of pixels answered")
     fig.legend(*axes[0, 0].get_legend_handles_labels(), loc="outside right upper", frameon=False)
     return fig
