@@ -9,4 +9,15 @@ micrometres. Names load on first use (SPEC 1, ``lazy_loader``).
 
 from .._lazy import attach
 
-__getattr__, __dir__, __all__ = attach(__name__, {})
+__getattr__, __dir__, __all__ = attach(
+    __name__,
+    {
+        "maps": [
+            "MAP_NAMES",
+            "OFFICIAL_DYNAMIC_RANGE",
+            "SCAN_DYNAMIC_RANGE",
+            "SYNTHOCT_PIXEL_SIZE",
+            "synthoct_maps",
+        ],
+    },
+)
