@@ -19,5 +19,6 @@ __getattr__, __dir__, __all__ = attach(
             "SYNTHOCT_PIXEL_SIZE",
             "synthoct_maps",
         ],
+        "metrics": ["METRIC_NAMES", "SYNTHOCT_MAPS", "synthoct_metrics"],
     },
 )

@@ -10,6 +10,7 @@ import xarray as xr
 from PIL import Image
 
 import speckle
+
 # private: the PNG colour table and the linearisation tables are checked against their sources
 from speckle.synthoct.maps import _LUT, _linear_table
 
