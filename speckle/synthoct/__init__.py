@@ -12,6 +12,16 @@ from .._lazy import attach
 __getattr__, __dir__, __all__ = attach(
     __name__,
     {
+        "files": [
+            "ScannerConfig",
+            "baseline_phantom",
+            "read_phantom",
+            "read_scan",
+            "read_scanner_config",
+            "write_phantom",
+            "write_scan",
+            "write_scanner_config",
+        ],
         "maps": [
             "MAP_NAMES",
             "OFFICIAL_DYNAMIC_RANGE",
