@@ -22,5 +22,6 @@ __getattr__, __dir__, __all__ = attach(
             "write_scan",
             "write_scanner_config",
         ],
+        "scanner": ["synthoct_scan"],
     },
 )
