@@ -30,5 +30,6 @@ __getattr__, __dir__, __all__ = attach(
             "synthoct_maps",
         ],
         "metrics": ["METRIC_NAMES", "SYNTHOCT_MAPS", "synthoct_metrics"],
+        "scanner": ["synthoct_scan"],
     },
 )
