@@ -26,6 +26,7 @@ position      pixel       scatterer depth in pixels (``H/N``)
 pixel         1           pixel index ``q``
 n             1           spectral index ``n``
 reflector     um          depth of a point reflector
+velocity      um/s        scatterer velocity (flow)
 ============  ==========  ===============================================================
 
 Data variables (:data:`QUANTITIES`): ``field``, ``amplitude``, ``weight``, ``correlation``,
@@ -88,6 +89,7 @@ COORDS: dict[str, tuple[str, str]] = {
     "pixel": ("1", "pixel index q"),
     "n": ("1", "spectral index"),
     "reflector": ("um", "reflector depth"),
+    "velocity": ("um/s", "velocity"),
 }
 
 #: Data-variable quantity -> (units, long_name); a variable's own long name may be more specific.
