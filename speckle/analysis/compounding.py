@@ -46,6 +46,7 @@ from ..conventions import attrs, coord, depth_range_of, units_of
 from ..imaging.scan import image
 from ..scene.motion import brownian_motion
 from ..system.polarization import depolarize
+from .dynamics_theory import g1_brownian
 
 __all__ = [
     "AVERAGING",
@@ -498,14 +499,10 @@ def polarization_looks(
 def brownian_g1(tau: object, diffusion: float, k0: float) -> np.ndarray:
     """Field autocorrelation ``exp(-q^2 D tau)``, ``q = 2 k0`` (rad/µm, in the medium).
 
-    ``tau`` in s (>= 0), ``diffusion`` ``D`` in µm^2/s (>= 0).
+    ``tau`` in s (>= 0), ``diffusion`` ``D`` in µm^2/s (>= 0); the one implementation is
+    :func:`speckle.analysis.dynamics_theory.g1_brownian`.
     """
-    t = as_finite_array(tau, "tau")
-    if np.any(t < 0):
-        raise ValueError("tau must be >= 0 s")
-    d = check_real(diffusion, "diffusion", low=0)
-    k = check_real(k0, "k0", low=0)
-    return np.exp(-((2 * k) ** 2) * d * t)
+    return g1_brownian(tau, diffusion=diffusion, k0=k0)
 
 
 def brownian_frames(

@@ -110,3 +110,24 @@ def test_raster_times_must_match(setup):
         ts.bscan_series(moved, src, waist=W0, x=x, line_rate=2000.0)
     with pytest.raises(ValueError, match="n_frames"):
         ts.bscan_series(moved, src, waist=W0, x=speckle.scan_lines(3, P), line_rate=1000.0)
+
+
+def test_series_streams_to_netcdf_with_the_same_numbers(setup, tmp_path):
+    """Raster series: synchronous, threads and processes schedulers, and the file streamed
+    chunk by chunk, hold the same numbers bit for bit."""
+    sc, src = setup
+    x = speckle.scan_lines(6, P, start=30.0)
+    t = ts.raster_times(3, x.size, line_rate=5000.0)
+    moved = mo.brownian_motion(sc, t, diffusion=2.0, seed=3)
+    out = ts.bscan_series(moved, src, waist=W0, x=x, line_rate=5000.0, chunk=4)
+    values = {}
+    for sched in ("synchronous", "threads", "processes"):
+        with dask.config.set(scheduler=sched):
+            values[sched] = out.field.values
+    np.testing.assert_array_equal(values["synchronous"], values["threads"])
+    np.testing.assert_array_equal(values["synchronous"], values["processes"])
+    path = tmp_path / "series.nc"
+    speckle.stream_to_netcdf(out, path, progress=False)
+    back = speckle.open_dataset(path)
+    np.testing.assert_array_equal(back.field.values, values["synchronous"])
+    np.testing.assert_array_equal(back.line_time.values, out.line_time.values)
