@@ -6,7 +6,9 @@ displacement and strain (OCT elastography); ``autocorrelation``, ``beam`` and ``
 the resolution cell and noise; ``measured`` and ``realism`` compare a measured image with the
 model; ``compounding`` (physical compounding looks), ``filters`` (digital despeckling) and
 ``image_quality`` (metrics against a known truth) test speckle suppression; ``image_files``
-reads a user's own image and ``twin`` fits the model's system to it.
+reads a user's own image and ``twin`` fits the model's system to it; ``dynamics`` computes
+the contrasts of speckle in time (g1, g2, Doppler, speckle variance, SSADA, LIV, OCDS) and
+``dynamics_theory`` their expected values.
 Names load on first use (SPEC 1, ``lazy_loader``).
 """
 
@@ -28,6 +30,8 @@ __getattr__, __dir__, __all__ = attach(
             "resample_depth",
             "sample_field",
         ],
+        "dynamics": functions_of(__name__, "dynamics"),
+        "dynamics_theory": functions_of(__name__, "dynamics_theory"),
         "filters": ["FILTERS", "despeckle", "filter_available", "frost", "kuan", "lee"],
         "image_files": ["IMAGE_KINDS", "load_image"],
         "image_quality": [

@@ -7,6 +7,8 @@ is fitted, how motion decorrelates speckle. Studies stand above the estimators t
 estimators never import them. Names load on first use (SPEC 1, ``lazy_loader``).
 """
 
-from .._lazy import attach
+from .._lazy import attach, functions_of
 
-__getattr__, __dir__, __all__ = attach(__name__, {})
+__getattr__, __dir__, __all__ = attach(
+    __name__, {"dynamics": ["FLOW_CONTRASTS", *functions_of(__name__, "dynamics")]}
+)
