@@ -92,8 +92,26 @@ def mark_no_colorbar(image):
 
 
 def physical_image(ax, img, depth, lateral, *, xlabel: str = "lateral position (µm)", **kw):
-    """``img`` (depth x lateral) drawn at its physical aspect ratio (1 µm = 1 µm on both axes)
-    between the pixel centres ``depth`` and ``lateral`` (µm), with both axes labelled."""
+    """``img`` (depth x lateral) drawn at its physical aspect ratio (1 µm = 1 µm on both axes).
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Where to draw.
+    img : array_like
+        The image, depth along its first axis.
+    depth, lateral : array_like
+        The pixel centres (µm) along depth and laterally: the ``depth`` and lateral coordinates.
+    xlabel : str
+        The lateral axis' label.
+    **kw
+        Passed on to :meth:`~matplotlib.axes.Axes.imshow`.
+
+    Returns
+    -------
+    matplotlib.image.AxesImage
+        The image, both axes labelled.
+    """
     depth, lateral = np.asarray(depth, float), np.asarray(lateral, float)
     dz = float(depth[1] - depth[0]) if depth.size > 1 else 1.0
     dx = float(lateral[1] - lateral[0]) if lateral.size > 1 else 1.0
