@@ -2,12 +2,14 @@
 
 A module whose names moved keeps only a shim: ``__getattr__ = moved(__name__, new_module,
 names)``. Each old name resolves to the new module's object on use and warns, naming the new
-spelling; ``tests/test_layout.py`` lists the shims (``SHIMS``), the only modules allowed to
-import against the flow.
+spelling; ``tests/test_layout.py`` lists the shim modules (``SHIMS``), the only modules allowed
+to import against the flow. A module that keeps code of its own and lost some names to a later
+layer passes the new module's name instead: it is imported only when an old name is used.
 """
 
 from __future__ import annotations
 
+import importlib
 import types
 import warnings
 from collections.abc import Callable, Iterable, Mapping
@@ -17,7 +19,7 @@ __all__ = ["moved"]
 
 def moved(
     old: str,
-    new: types.ModuleType,
+    new: types.ModuleType | str,
     names: Iterable[str],
     renamed: Mapping[str, str] | None = None,
 ) -> Callable[[str], object]:
@@ -27,8 +29,9 @@ def moved(
     ----------
     old : str
         The old module's ``__name__``.
-    new : module
-        The module the names now live in.
+    new : module or str
+        The module the names now live in, or its name: imported when an old name is first
+        used (for a name that moved to a later layer, which the old module may not import).
     names : iterable of str
         Names kept under the same spelling.
     renamed : mapping, optional
@@ -55,12 +58,13 @@ def moved(
     def __getattr__(name: str) -> object:
         if name not in table:
             raise AttributeError(f"module {old!r} has no attribute {name!r}")
-        target = f"{new.__name__}.{table[name]}"
+        module = importlib.import_module(new) if isinstance(new, str) else new
+        target = f"{module.__name__}.{table[name]}"
         warnings.warn(
             f"{old}.{name} moved to {target}; the old name will be removed in the next release",
             FutureWarning,
             stacklevel=2,
         )
-        return getattr(new, table[name])
+        return getattr(module, table[name])
 
     return __getattr__

@@ -128,6 +128,21 @@ def test_imports_follow_the_flow(path, parts):
             assert top in ALLOWED[group], f"{'.'.join(parts)} imports {top}: not allowed in {group}"
 
 
+#: Groups that may not import a group ranked before them, and why (issue 32).
+FORBIDDEN = {
+    "analysis": {"imaging": "analysis measures images; experiments that image are studies"},
+}
+
+
+@pytest.mark.parametrize("path,parts", list(_modules()), ids=lambda v: str(v)[-40:])
+def test_analysis_imports_no_imaging(path, parts):
+    group = _group(".".join(parts))
+    for name in _imports(path, parts):
+        target = _group(name) if name.startswith("speckle.") else None
+        reason = FORBIDDEN.get(group, {}).get(target)
+        assert reason is None, f"{'.'.join(parts)} imports {name}: {reason}"
+
+
 def _module_name(parts: list[str]) -> str:
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 

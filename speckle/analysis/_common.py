@@ -11,13 +11,14 @@ import numpy as np
 import xarray as xr
 
 from .._validate import check_int, check_real
-from ..conventions import spacing
+from ..conventions import attrs, spacing
 
 __all__ = [
     "delay_selection",
     "depth_major",
     "field_of",
     "grid_spacing",
+    "label_looks",
     "matched",
     "parse_window",
     "same_grid",
@@ -151,3 +152,12 @@ def delay_selection(t: np.ndarray, delays: object) -> np.ndarray:
             "line through at least two"
         )
     return sel
+
+
+def label_looks(looks: xr.DataArray, kind: str, **extra: object) -> xr.DataArray:
+    """Looks (dim ``look``) numbered, named ``looks`` and labelled as complex ``kind`` looks."""
+    return (
+        looks.assign_coords(look=np.arange(looks.sizes["look"]))
+        .rename("looks")
+        .assign_attrs(attrs("field", f"complex {kind} looks", compounding=kind, **extra))
+    )

@@ -23,7 +23,6 @@ from matplotlib.ticker import MaxNLocator
 from scipy import ndimage
 
 from ..analysis.correlation import expected_correlation
-from ..analysis.failure import mean_and_se, method_options, strain_scores
 from ..analysis.phase import choose_lag, depth_autocorrelation, noise_power
 from ..analysis.strain import accumulate_strain, estimate_strain, predicted_strain_std
 from ..conventions import attrs, coord
@@ -31,6 +30,7 @@ from ..imaging.bscan import bscan
 from ..provenance import provenance_attrs
 from ..scene.deformation import deformable_scene, displace
 from ..scene.mechanics import compress, inclusion_labels
+from ..studies.failure import mean_and_se, method_options, strain_scores
 from ..sweep import sweep
 from ..system.noise import add_complex_noise
 from ._config import dask_options, scene_kwargs, source_spectrum

@@ -1,6 +1,6 @@
 """Realism figures: the measured image against the model effect by effect, and a showcase.
 
-:func:`realism_dataset` / :func:`plot_realism` draw :func:`speckle.analysis.realism.realism_study`
+:func:`realism_dataset` / :func:`plot_realism` draw :func:`speckle.studies.realism.realism_study`
 (autocorrelations along depth and across A-lines, the misfit score of each step and of the full
 model without each effect). :func:`showcase_dataset` / :func:`plot_showcase` image a layered
 phantom with an inclusion under the pure model and with attenuation, roll-off and noise, in dB.
@@ -15,12 +15,12 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from ..analysis.realism import EFFECTS, realism_study
-from ..analysis.twin import SystemFit
 from ..conventions import attrs
 from ..imaging.beam import beam_scan
 from ..scene.regions import cell_density, ellipse, layer, make_regions, rasterize
 from ..scene.shared import shared_scene
+from ..studies.realism import EFFECTS, realism_study
+from ..studies.twin.system_fit import SystemFit
 from ..system.attenuation import attenuate_regions
 from ..system.noise import add_noise
 from ..system.rolloff import rolloff
@@ -49,7 +49,7 @@ def realism_dataset(
 ) -> xr.Dataset:
     """Run the realism study from the pipeline's ``realism`` config section.
 
-    ``fit``: the measured image's :func:`speckle.analysis.twin.fit_system` (its effect
+    ``fit``: the measured image's :func:`speckle.studies.twin.fit_system` (its effect
     parameters are used; ``None``: fitted from ``measured`` and ``air``).
     """
     ds = realism_study(

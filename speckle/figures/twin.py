@@ -1,6 +1,6 @@
 """The scanner's twin (results/twin/): fit, measured against twin, predicted failure maps.
 
-:func:`twin_datasets` runs :func:`speckle.analysis.twin.fit_system` on the image named in the
+:func:`twin_datasets` runs :func:`speckle.studies.twin.fit_system` on the image named in the
 pipeline's ``twin`` config section and returns the three datasets the rule writes;
 :func:`plot_compare` and :func:`plot_failure` draw them (the failure maps as the elastography
 failure maps' strain column: rms error over strain, and the answered fraction).
@@ -15,7 +15,8 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from ..analysis.image_files import load_image
-from ..analysis.twin import SystemFit, fit_system
+from ..studies.twin.fit import fit_system
+from ..studies.twin.system_fit import SystemFit
 from .style import ESTIMATOR_NAMES, colorbar, estimator_colour, new_figure, physical_image
 
 __all__ = ["fit_from_config", "plot_compare", "plot_failure", "twin_datasets"]
