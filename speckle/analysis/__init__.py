@@ -8,8 +8,8 @@ the resolution cell and noise; ``measured`` compares a measured image with the m
 ``image_quality`` (metrics against a known truth) measure speckle suppression; ``image_files``
 reads a user's own image; ``dynamics`` computes the contrasts of speckle in time (g1, g2,
 Doppler, speckle variance, SSADA, LIV, OCDS) and ``dynamics_theory`` their expected values.
-``analysis`` imports no imaging: the experiments that image scenes to study these estimators (the twin, realism, failure maps, the compounding looks) are in
-:mod:`speckle.studies`.
+``analysis`` imports no imaging: the experiments that image scenes to study these estimators
+(the twin, realism, failure maps, the compounding looks) are in :mod:`speckle.studies`.
 Names load on first use (SPEC 1, ``lazy_loader``).
 """
 

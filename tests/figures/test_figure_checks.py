@@ -257,8 +257,8 @@ def _histograms():
 
 
 def _system():
-    from speckle.pipeline import adapters as _config
     from speckle.figures import system as fs
+    from speckle.pipeline import adapters as _config
 
     system = _config.system_from_config(SHEET)
     bscan = {**_merged_config()["system"]["bscan"], "n_alines": 8, "seed": 1, "dispersion": {}}
