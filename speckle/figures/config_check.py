@@ -169,6 +169,10 @@ def check_config(config: Mapping, schema: Mapping | None = None) -> None:
         check_despeckle_config(config["despeckle"])
     if "twin" in config:
         check_twin(config["twin"])
+    if "synthoct" in config:
+        from .synthoct import check_synthoct_config
+
+        check_synthoct_config(config["synthoct"])
 
 
 def _elastography(el: Mapping) -> None:
