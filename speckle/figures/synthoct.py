@@ -54,6 +54,8 @@ PHANTOMS = {
     "Exp2_Layers_A": ("layers", "A"),
     "Exp2_Layers_B": ("layers", "B"),
 }
+#: The published two-layer phantom: boundary (µm) and bottom-layer energy (%).
+LAYERS = (400.0, 2.5)
 #: The phantom whose maps the figure shows.
 SHOWN = "Exp2_Layers_A"
 
@@ -333,6 +335,8 @@ def plot_batch(ds: xr.Dataset, metric: str = "SSIM") -> Figure:
         fig.colorbar(im, ax=ax, label=f"{metric} against {ds.attrs['reference']}")
         i = np.unravel_index(np.nanargmax(values), values.shape)
         ax.plot(b[i[1]], e[i[0]], "r+", ms=8, label="best candidate")
+        if str(ds.attrs["reference"]).startswith("Exp2_Layers"):  # the published phantom
+            ax.plot(LAYERS[0], LAYERS[1], "wx", ms=6, label="published phantom")
         ax.set_title(name)
         ax.set_xlabel("boundary depth (µm)")
         ax.set_ylabel("bottom-layer energy (%)")
