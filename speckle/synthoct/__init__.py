@@ -36,5 +36,6 @@ __getattr__, __dir__, __all__ = attach(
             "read_metrics_report",
             "synthoct_metrics",
         ],
+        "scanner": ["synthoct_scan"],
     },
 )
