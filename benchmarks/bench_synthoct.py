@@ -46,7 +46,7 @@ import numpy as np
 from _common import cpu_model, rel_err
 
 import speckle
-from speckle.synthoct import _scan
+from speckle.synthoct import _scan  # private: the command's numpy core, timed alone
 from speckle.synthoct.files import ScannerConfig, baseline_table
 
 REPO = Path(__file__).resolve().parents[1]
@@ -55,7 +55,7 @@ GENERAL_API_SCRIPT = textwrap.dedent(
     """
     import sys, numpy as np, speckle
     from PIL import Image
-    from speckle.synthoct import _scan
+    from speckle.synthoct import _scan  # private: the 51 dB mapping, as the command's
     t = np.loadtxt(sys.argv[2])
     cfg = speckle.read_scanner_config(sys.argv[1])
     r = cfg.beam_radius

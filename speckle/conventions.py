@@ -30,6 +30,12 @@ time          s           time of a frame, A-line or scatterer position (dim of 
                           and image series, :mod:`speckle.scene.motion`)
 lag           s           a time lag ``tau`` (:mod:`speckle.analysis.dynamics`): the dim
                           ``lag`` with the attributes of ``time_lag``
+map           1           image of the SynthOCT comparison: the scan (Struct), OAC, SC, RSC
+experiment    1           a comparison of two SynthOCT scans (the orchestrator's rows)
+phantom       1           a SynthOCT phantom by name (e.g. Exp2_Layers_A)
+origin        1           where a SynthOCT scan or score comes from (published, drop-in)
+boundary      um          depth of a two-layer phantom's boundary
+energy        percent     backscattered energy of a phantom's scatterers (the file's %)
 ============  ==========  ===============================================================
 
 Data variables (:data:`QUANTITIES`): ``field``, ``amplitude``, ``weight``, ``correlation``,
@@ -96,6 +102,12 @@ COORDS: dict[str, tuple[str, str]] = {
     "reflector": ("um", "reflector depth"),
     "time": ("s", "time"),
     "time_lag": ("s", "time lag tau"),
+    "map": ("1", "image compared: the scan (Struct) or a map (OAC, SC, RSC)"),
+    "experiment": ("1", "comparison of two scans"),
+    "phantom": ("1", "phantom"),
+    "origin": ("1", "origin of a scan or score"),
+    "boundary": ("um", "depth of the layer boundary"),
+    "energy": ("percent", "backscattered energy per scatterer"),
 }
 
 #: Data-variable quantity -> (units, long_name); a variable's own long name may be more specific.

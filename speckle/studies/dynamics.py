@@ -49,7 +49,6 @@ import xarray as xr
 from scipy import special
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
-from ..analysis.failure import mean_and_se
 from ..conventions import attrs, coord, units_of
 from ..imaging.scan import beam_reach, image
 from ..imaging.truth import speckle_free_image
@@ -57,6 +56,7 @@ from ..scene.regions import background, cell_density, make_regions
 from ..scene.shared import shared_scene
 from ..system.noise import add_noise
 from ..system.source import spectrum
+from .failure import mean_and_se
 
 __all__ = [
     "FLOW_CONTRASTS",

@@ -29,7 +29,13 @@ __getattr__, __dir__, __all__ = attach(
             "SYNTHOCT_PIXEL_SIZE",
             "synthoct_maps",
         ],
-        "metrics": ["METRIC_NAMES", "SYNTHOCT_MAPS", "synthoct_metrics"],
+        "metrics": [
+            "METRIC_NAMES",
+            "SYNTHOCT_EXPERIMENTS",
+            "SYNTHOCT_MAPS",
+            "read_metrics_report",
+            "synthoct_metrics",
+        ],
         "scanner": ["synthoct_scan"],
     },
 )

@@ -49,6 +49,7 @@ __all__ = [
     "ScannerConfig",
     "baseline_phantom",
     "baseline_table",
+    "phantom_table",
     "read_phantom",
     "read_phantom_table",
     "read_png",
@@ -457,8 +458,9 @@ def read_phantom(path: str | os.PathLike, *, config: ScannerConfig | None = None
     return _scene(table, config, str(path))
 
 
-def _phantom_table(phantom: object, energy_scale: float) -> np.ndarray:
-    """(M, 4) table of a scene Dataset or an array."""
+def phantom_table(phantom: object, energy_scale: float = 100.0) -> np.ndarray:
+    """The ``(M, 4)`` table (X, Y, Z, Energy = ``energy_scale |a|^2``) of a shared scene, or
+    an ``(M, 4)`` array as float64 (not checked further: :func:`write_phantom` checks)."""
     if isinstance(phantom, np.ndarray):
         table = np.asarray(phantom, dtype=np.float64)
         if table.ndim != 2 or table.shape[1] != 4:
@@ -520,7 +522,7 @@ def write_phantom(
     """
     if not (isinstance(energy_scale, (int, float)) and 0 < energy_scale < math.inf):
         raise ValueError(f"energy_scale must be a positive finite number, got {energy_scale!r}")
-    table = _phantom_table(phantom, float(energy_scale))
+    table = phantom_table(phantom, float(energy_scale))
     bad = np.flatnonzero(~np.all(np.isfinite(table), axis=1))
     if bad.size:
         raise ValueError(f"phantom scatterer {bad[0]} has a NaN or infinite value: {table[bad[0]]}")

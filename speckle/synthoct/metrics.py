@@ -37,21 +37,36 @@ Quirks of the official reading (``variant="official"``; each one's measured effe
 
 from __future__ import annotations
 
+import os
 import warnings
 
 import numpy as np
 import xarray as xr
 
 from .._validate import check_choice
-from ..conventions import attrs
+from ..conventions import attrs, coord
 from .maps import MAP_NAMES, VARIANTS, scan_grey, synthoct_maps
 
-__all__ = ["METRIC_NAMES", "SYNTHOCT_MAPS", "synthoct_metrics"]
+__all__ = [
+    "METRIC_NAMES",
+    "SYNTHOCT_EXPERIMENTS",
+    "SYNTHOCT_MAPS",
+    "read_metrics_report",
+    "synthoct_metrics",
+]
 
 #: The images the orchestrator compares: the scan itself and the processor's three maps.
 SYNTHOCT_MAPS = ("Struct", *MAP_NAMES)
 #: The orchestrator's metrics (its CSV columns).
 METRIC_NAMES = ("SSIM", "MS-SSIM", "PSNR", "MSE", "VIF", "LPIPS")
+
+#: The orchestrator's three comparisons (reference, target scan): each phantom's seed A against
+#: seed B, and "Cross_Uniform_vs_Layers" the uniform phantom's A against the layered one's A.
+SYNTHOCT_EXPERIMENTS = {
+    "Exp1_Uniform": ("Exp1_Uniform_A", "Exp1_Uniform_B"),
+    "Exp2_Layers": ("Exp2_Layers_A", "Exp2_Layers_B"),
+    "Cross_Uniform_vs_Layers": ("Exp1_Uniform_A", "Exp2_Layers_A"),
+}
 
 _MSSSIM_WEIGHTS = (0.0448, 0.2856, 0.3001, 0.2363, 0.1333)
 _LUMA = (0.2125, 0.7154, 0.0721)  # scikit-image's rgb2gray
@@ -295,6 +310,69 @@ def synthoct_metrics(
             m: ("map", [row[m] for row in rows], attrs(q, long_name=name))
             for m, (q, name) in _DESCRIPTION.items()
         },
-        coords={"map": list(SYNTHOCT_MAPS)},
+        coords={"map": coord("map", list(SYNTHOCT_MAPS))},
         attrs={"variant": variant},
+    )
+
+
+def read_metrics_report(path: str | os.PathLike) -> xr.Dataset:
+    """Read the orchestrator's ``Final_Metrics_Report.csv`` as a Dataset ``(experiment, map)``.
+
+    Parameters
+    ----------
+    path : str or path-like
+        A CSV with the columns ``Experiment``, ``Map_Type`` and one per metric
+        (:data:`METRIC_NAMES`; an absent metric is NaN).
+
+    Returns
+    -------
+    xarray.Dataset
+        One variable per metric, as :func:`synthoct_metrics`, along ``experiment`` (in the
+        file's order) and ``map``.
+
+    Raises
+    ------
+    ValueError
+        If a column ``Experiment`` or ``Map_Type`` is missing, a row is repeated or a value
+        is not a number.
+
+    Examples
+    --------
+    >>> from importlib.resources import files
+    >>> folder = files("speckle.data") / "synthoct"
+    >>> report = read_metrics_report(folder / "Final_Metrics_Report.csv")
+    >>> report.sizes["experiment"], round(float(report.SSIM[1, 3]), 4)
+    (3, 0.911)
+    """
+    import csv
+
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    if not rows or not {"Experiment", "Map_Type"} <= set(rows[0]):
+        raise ValueError(f"path {str(path)!r}: needs the columns Experiment and Map_Type")
+    experiments = list(dict.fromkeys(r["Experiment"] for r in rows))
+    maps = list(dict.fromkeys(r["Map_Type"] for r in rows))
+    values = {m: np.full((len(experiments), len(maps)), np.nan) for m in METRIC_NAMES}
+    seen = set()
+    for line, r in enumerate(rows, start=2):
+        key = (r["Experiment"], r["Map_Type"])
+        if key in seen:
+            raise ValueError(f"path {str(path)!r} line {line}: row {key} repeated")
+        seen.add(key)
+        i, j = experiments.index(key[0]), maps.index(key[1])
+        for m in METRIC_NAMES:
+            text = (r.get(m) or "").strip()
+            try:
+                values[m][i, j] = float(text) if text else np.nan
+            except ValueError:
+                raise ValueError(
+                    f"path {str(path)!r} line {line}: {m} = {text!r} is not a number"
+                ) from None
+    return xr.Dataset(
+        {
+            m: (("experiment", "map"), values[m], attrs(q, long_name=name))
+            for m, (q, name) in _DESCRIPTION.items()
+        },
+        coords={"experiment": coord("experiment", experiments), "map": coord("map", maps)},
+        attrs={"source": str(path)},
     )

@@ -35,7 +35,7 @@ import numpy as np
 from . import _scan
 from .files import (
     ScannerConfig,
-    _phantom_table,
+    phantom_table,
     read_phantom_table,
     read_scanner_config,
 )
@@ -61,7 +61,7 @@ def _config(config: object) -> ScannerConfig:
 def _table(phantom: object, config: ScannerConfig) -> np.ndarray:
     if isinstance(phantom, (str, os.PathLike)):
         return read_phantom_table(phantom, n_scatterers=config.n_scatterers)
-    table = _phantom_table(phantom, 100.0)
+    table = phantom_table(phantom)
     if not np.all(np.isfinite(table)):
         raise ValueError("phantom positions and energies must be finite")
     if np.any((table[:, 3] < 0) | (table[:, 3] > 100)):

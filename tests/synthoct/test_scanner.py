@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import speckle
-from speckle.synthoct import _scan
+from speckle.synthoct import _scan  # private: the core against its direct sum, its options
 from speckle.synthoct.files import ScannerConfig, baseline_table, read_png
 from speckle.synthoct.scanner import scan_agreement
 
