@@ -115,6 +115,11 @@ def api_topics() -> dict[str, tuple[str, str, dict[str, list[str]]]]:
         "system": ("System", "The OCT system: source, datasheet, spectrometer chain, effects."),
         "imaging": ("Imaging", "Eq. 4 and its fast methods, B-scans, the scanned beam, scans."),
         "analysis": ("Analysis", "Statistics, correlation, tracking, strain, measured images."),
+        "synthoct": (
+            "SynthOCT",
+            "The open drop-in for the SynthOCT 2026 challenge's virtual scanner: its files, "
+            "its scanner (and the ``speckle-scan`` command), its maps and metrics.",
+        ),
     }
     topics = {
         name: (title, intro, {f"speckle.{name}": _public(f"speckle.{name}")})

@@ -56,8 +56,9 @@ ALLOWED = {
     },
     # experiments on methods: scenes, images and measurements, on Dask
     "studies": {"numpy", "xarray", "dask", "distributed", "scipy"},
-    # the challenge's files (PNG: Pillow), its scanner (finufft) and maps (scipy, skimage)
-    "synthoct": {"numpy", "xarray", "scipy", "finufft", "PIL", "skimage", "dask"},
+    # the challenge's files (PNG: Pillow), its scanner (finufft) and maps (scipy, skimage);
+    # its LPIPS metric (lpips, torch) only where the optional extra speckle-oct[lpips] is installed
+    "synthoct": {"numpy", "xarray", "scipy", "finufft", "PIL", "skimage", "dask", "lpips", "torch"},
     "figures": {"numpy", "xarray", "scipy", "matplotlib", "dask"},  # drawing
     # config checks (yaml, jsonschema), running scripts, figure style (matplotlib)
     "pipeline": {"numpy", "xarray", "yaml", "jsonschema", "matplotlib", "dask", "distributed"},

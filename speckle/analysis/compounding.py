@@ -44,7 +44,9 @@ import xarray as xr
 from .._deprecate import moved
 from .._validate import as_finite_array, check_choice, check_int, check_real
 from ..conventions import attrs, coord, units_of
+from ..scene.motion import brownian_motion
 from ._common import label_looks
+from .dynamics_theory import g1_brownian
 
 #: Looks that form images moved to :mod:`speckle.studies.looks` (issue 32); the old names warn.
 __getattr__ = moved(
@@ -364,14 +366,10 @@ def noisy_looks(
 def brownian_g1(tau: object, diffusion: float, k0: float) -> np.ndarray:
     """Field autocorrelation ``exp(-q^2 D tau)``, ``q = 2 k0`` (rad/µm, in the medium).
 
-    ``tau`` in s (>= 0), ``diffusion`` ``D`` in µm^2/s (>= 0).
+    ``tau`` in s (>= 0), ``diffusion`` ``D`` in µm^2/s (>= 0); the one implementation is
+    :func:`speckle.analysis.dynamics_theory.g1_brownian`.
     """
-    t = as_finite_array(tau, "tau")
-    if np.any(t < 0):
-        raise ValueError("tau must be >= 0 s")
-    d = check_real(diffusion, "diffusion", low=0)
-    k = check_real(k0, "k0", low=0)
-    return np.exp(-((2 * k) ** 2) * d * t)
+    return g1_brownian(tau, diffusion=diffusion, k0=k0)
 
 
 def brownian_frames(
@@ -406,20 +404,13 @@ def brownian_frames(
     sd = check_int(seed, "seed", low=0)
     if not isinstance(scene, xr.Dataset) or "z" not in scene:
         raise TypeError("scene must be a scatterer Dataset with a variable 'z'")
-    rng = np.random.default_rng(np.random.SeedSequence(sd))
-    step = np.sqrt(2 * d * dt)
-    moved = {}
-    for ax in ("z", "x", "y"):
-        if ax not in scene.data_vars:
-            continue
-        v = scene[ax]
-        steps = rng.standard_normal((nf, *v.shape)) * step
-        steps[0] = 0.0
-        moved[ax] = (("frame", *v.dims), v.values[None] + np.cumsum(steps, axis=0), v.attrs)
-    out = scene.assign(moved)
-    times = np.arange(nf) * dt
-    return out.assign_coords(
-        time=coord("time", times, "time of the frame", dims="frame")
-    ).assign_attrs(
+    # one implementation: the scene layer's Brownian motion, its time dim named frame here
+    out = brownian_motion(scene, np.arange(nf) * dt, diffusion=d, seed=sd)
+    out = out.rename_dims(time="frame").assign_coords(
+        time=coord("time", out.time.values, "time of the frame", dims="frame")
+    )
+    for k in [k for k in out.attrs if k not in scene.attrs]:
+        del out.attrs[k]
+    return out.assign_attrs(
         diffusion=d, diffusion_units=units_of("diffusion"), frame_interval=dt, brownian_seed=sd
     )

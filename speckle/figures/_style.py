@@ -6,6 +6,7 @@ the public modules.
 
 from ..pipeline.outputs import save
 from ..pipeline.runner import log_to
-from .style import DPI, STYLE, new_figure
+from .style import *  # noqa: F403
+from .style import __all__ as _STYLE_NAMES
 
-__all__ = ["DPI", "STYLE", "log_to", "new_figure", "save"]
+__all__ = [*_STYLE_NAMES, "log_to", "save"]

@@ -23,14 +23,17 @@ intensity), CNR inclusion/background and PSNR/SSIM on dB images referred to the 
 uniform-region mean (window ``[-30, +15]`` dB), point-target FWHM (axial, lateral) on linear
 intensity, and the 10-90 % width of the layer step edge with its standard error (4 blocks of
 lines); ``resolution_loss`` is the larger of the two point-target FWHM ratios to the single
-look's (the edge width of a speckled image carries an SE as large as itself, so it is reported,
-not used). Physical methods' ``time_per_mpx`` is the
+look's, and ``resolution_loss_with_edge`` the larger of that and the edge-width ratio (the
+edge width of a speckled image carries an SE as large as itself, but a filter that widens the
+edge 3 times loses resolution even where its point targets stay sharp); the Pareto charts use
+``resolution_loss_with_edge``. Physical methods' ``time_per_mpx`` is the
 processing of the acquired looks (splitting, registration, averaging), their acquisition
 count is ``acquisitions``; filters' is the filter's run time.
 """
 
 from __future__ import annotations
 
+import textwrap
 import time
 from collections.abc import Mapping
 
@@ -49,7 +52,7 @@ from ..scene.scatterers import random_scatterers
 from ..studies.looks import angular_looks, polarization_looks, spatial_looks, temporal_looks
 from ..studies.suppression import DB_RANGE, DB_TOP, METRICS, build_phantom, quality
 from ..system.source import spectrum
-from .style import new_figure
+from .style import colorbar, mark_no_colorbar, new_figure, physical_image
 
 __all__ = [
     "FAMILIES",
@@ -313,6 +316,12 @@ def methods_data(cfg: Mapping, seed: int) -> tuple[xr.Dataset, xr.Dataset]:
             "larger of the axial and lateral point-target FWHM ratios to the single look",
         )
     )
+    ds["resolution_loss_with_edge"] = np.fmax(ds.resolution_loss, ds.edge_width_ratio).assign_attrs(
+        attrs(
+            "dimensionless",
+            "larger of resolution_loss and edge_width_ratio (either where the other is NaN)",
+        )
+    )
     ds.attrs.update(
         snr_db=snr,
         helps_threshold=HELPS,
@@ -379,22 +388,69 @@ def _pareto(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return np.array(front, int)
 
 
-def _colours(fams) -> dict:
-    import matplotlib.pyplot as plt
+#: One colour per method family in every speckle-suppression figure (methods, failure,
+#: phantom): the single look black, physical compounding in the first five of matplotlib's
+#: ``tab10``, digital filters in the other five and four dark colours; with the markers of
+#: :data:`FAMILY_MARKERS` no two families look alike.
+FAMILY_COLOURS = {
+    "single": "#000000",
+    "frequency": "#1f77b4",
+    "angular": "#ff7f0e",
+    "spatial": "#2ca02c",
+    "polarization": "#d62728",
+    "temporal": "#9467bd",
+    "median": "#8c564b",
+    "nlm": "#e377c2",
+    "tv": "#7f7f7f",
+    "wavelet": "#bcbd22",
+    "bilateral": "#17becf",
+    "lee": "#000080",
+    "kuan": "#b8860b",
+    "frost": "#006400",
+    "bm3d": "#800080",
+}
+#: Markers: square for the single look, circles for physical compounding, triangles for filters.
+FAMILY_MARKERS = {"single": "s", **dict.fromkeys(FAMILIES[:5], "o")}
+#: Family names in words (legends).
+FAMILY_NAMES = {
+    "single": "single look",
+    "frequency": "frequency compounding",
+    "angular": "angular compounding",
+    "spatial": "spatial compounding",
+    "polarization": "polarization diversity",
+    "temporal": "temporal averaging",
+    "median": "median filter",
+    "nlm": "non-local means",
+    "tv": "total variation",
+    "wavelet": "wavelet shrinkage",
+    "bilateral": "bilateral filter",
+    "lee": "Lee filter",
+    "kuan": "Kuan filter",
+    "frost": "Frost filter",
+    "bm3d": "BM3D",
+}
 
-    cmap = plt.get_cmap("tab20")
-    return {f: cmap(i % 20) for i, f in enumerate(fams)}
+
+def _family_style(fam: str) -> dict:
+    """Colour and marker of method family ``fam`` (the same in every figure of the family)."""
+    return {"color": FAMILY_COLOURS.get(fam, "k"), "marker": FAMILY_MARKERS.get(fam, "^")}
 
 
 def plot_methods(ds: xr.Dataset) -> Figure:
-    """Pareto charts: speckle reduction vs resolution loss, and vs time per megapixel."""
-    fig, axes = new_figure(1, 2, width=9.0, height=3.8)
+    """Pareto charts: speckle reduction against resolution loss (the worse of the point-target
+    FWHM and edge-width ratios, ``resolution_loss_with_edge``) and against time per megapixel.
+    """
+    fig, axes = new_figure(1, 2, width=9.5, height=3.8)
     axes = axes[0]
     sel = ds.isel(technique=np.flatnonzero(ds.noise.values == 1))
     fams = list(dict.fromkeys(sel.family.values.tolist()))
-    col = _colours(fams)
+    loss = "resolution_loss_with_edge" if "resolution_loss_with_edge" in sel else "resolution_loss"
     for ax, xv, xl in (
-        (axes[0], "resolution_loss", "resolution loss (ratio to single look)"),
+        (
+            axes[0],
+            loss,
+            "resolution loss: worse of point FWHM\nand edge width, ratio to single look",
+        ),
         (axes[1], "time_per_mpx", "processing time per megapixel (s)"),
     ):
         x = sel[xv].values.astype(float)
@@ -404,42 +460,66 @@ def plot_methods(ds: xr.Dataset) -> Figure:
             ax.set_xscale("log")
         for f in fams:
             m = sel.family.values == f
-            ax.scatter(x[m], y[m], s=12, color=col[f], label=f)
+            ax.scatter(x[m], y[m], s=16, label=FAMILY_NAMES.get(f, f), **_family_style(f))
         front = _pareto(x, y)
         ax.plot(x[front], y[front], "k-", lw=0.8, label="Pareto front")
         ax.set_xlabel(xl)
         ax.set_ylabel("speckle reduction C_single / C")
         ax.axhline(1.0, color="0.6", lw=0.5)
-    axes[0].legend(ncol=2, fontsize=6, loc="best")
-    fig.suptitle(f"every method on the phantom (receiver noise at {ds.attrs.get('snr_db')} dB)")
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside right upper", frameon=False)
+    fig.suptitle(f"Every method on the phantom, receiver SNR {ds.attrs.get('snr_db'):g} dB")
     return fig
 
 
 def plot_phantom(ds: xr.Dataset) -> Figure:
-    """Region map, truth, single look and the best method of each family, in dB."""
+    """Region map, truth, single look (with receiver noise) and the best method of each family
+    (highest SSIM; noisy looks), in dB, at the physical aspect ratio with axes in µm and one
+    intensity colorbar."""
     nb = ds.sizes["family"]
     ncol = 5
     nrow = int(np.ceil((3 + nb) / ncol))
-    fig, axes = new_figure(nrow, ncol, width=10.0, height=2.1 * nrow)
+    fig, axes = new_figure(nrow, ncol, width=11.0, height=2.3 * nrow + 0.3)
     axes = np.atleast_1d(axes).ravel()
     ref = float(ds.attrs["reference_intensity"])
-    ext = [float(ds.x[0]), float(ds.x[-1]), float(ds.depth[-1]), float(ds.depth[0])]
+    depth, x = ds.depth.values, ds.x.values
+    im = None
 
-    def show(ax, img, title, db=True):
+    def show(ax, img, title, db=True, color="k"):
         data = iq.to_db(img, ref) if db else img
         kw = {"vmin": -30, "vmax": 15, "cmap": "gray"} if db else {"cmap": "tab10"}
-        ax.imshow(data, extent=ext, aspect="auto", **kw)
-        ax.set_title(title, fontsize=6)
-        ax.set_xticks([])
-        ax.set_yticks([])
+        shown = physical_image(ax, data, depth, x, xlabel="x (µm)", **kw)
+        ax.set_title(title, color=color)
+        return shown
 
-    show(axes[0], ds.labels.values, "region map", db=False)
-    show(axes[1], ds.truth.values, "truth E|A|^2")
+    regions = show(axes[0], ds.labels.values, "regions", db=False)
+    mark_no_colorbar(regions)
+    names = [n.strip() for n in str(ds.attrs.get("region_names", "")).split(",") if n.strip()]
+    for k, name in enumerate(names):
+        axes[0].plot([], [], "s", color=regions.cmap(regions.norm(k)), label=name)
+    if names:
+        axes[0].legend(
+            loc="upper left",
+            bbox_to_anchor=(1.0, 1.0),
+            frameon=False,
+            handlelength=0.8,
+            borderaxespad=0.2,
+        )
+    im = show(axes[1], ds.truth.values, "truth E|A|²")
     show(axes[2], ds.single_look.values, "single look + noise")
     for i in range(nb):
-        show(axes[3 + i], ds.best.isel(family=i).values, str(ds.best_method.values[i]))
+        fam = str(ds.family.values[i])
+        how = str(ds.best_method.values[i]).removeprefix(fam).removesuffix(" + noise").strip()
+        show(
+            axes[3 + i],
+            ds.best.isel(family=i).values,
+            f"{FAMILY_NAMES.get(fam, fam)}\n{textwrap.shorten(how, 34, placeholder='...')}",
+            color=FAMILY_COLOURS.get(fam, "k"),
+        )
     for ax in axes[3 + nb :]:
         ax.axis("off")
+    colorbar(
+        fig, im, axes[: 3 + nb].tolist(), "intensity (dB re the truth's uniform mean)", shrink=0.6
+    )
     return fig
 
 
@@ -562,25 +642,34 @@ def failure_data(cfg: Mapping, seed: int) -> xr.Dataset:
 
 
 def plot_failure(ds: xr.Dataset) -> Figure:
-    """Speckle reduction and feature retained against density, SNR and feature size."""
+    """Speckle reduction and feature retained against density, SNR and feature size; each
+    family in its colour of :data:`FAMILY_COLOURS`, one legend right of the panels."""
     axes_names = ("density", "snr_db", "feature_radius")
-    fig, axes = new_figure(2, 3, width=10.0, height=5.5)
+    fig, axes = new_figure(2, 3, width=11.0, height=5.5)
     names = [str(m) for m in ds.technique.values]
+    fams = [str(f) for f in ds.family.values]
     methods = [m for m in names if m != "single"]
-    col = _colours(methods)
     for c, axis in enumerate(axes_names):
         xv = ds[axis].values
         for m in methods:
             i = names.index(m)
+            style = _family_style(fams[i])
             sr = ds[f"speckle_reduction_{axis}"].values[i]
             fr = ds[f"feature_retained_{axis}"].values[i]
-            axes[0, c].plot(xv, sr, "-o", ms=3, color=col[m], label=m)
-            axes[1, c].plot(xv, fr, "-o", ms=3, color=col[m])
+            label = FAMILY_NAMES.get(fams[i], m) if c == 0 else None
+            axes[0, c].plot(xv, sr, "-", ms=3, label=label, **style)
+            axes[1, c].plot(xv, fr, "-", ms=3, **style)
             bad = ds[f"helps_{axis}"].values[i] == 0
             axes[0, c].plot(xv[bad], sr[bad], "x", color="k", ms=6)
             er = ds[f"erases_{axis}"].values[i] == 1
             axes[1, c].plot(xv[er], fr[er], "x", color="r", ms=6)
-        axes[0, c].axhline(ds.attrs["helps_threshold"], color="k", lw=0.6, ls="--")
+        axes[0, c].axhline(
+            ds.attrs["helps_threshold"],
+            color="k",
+            lw=0.6,
+            ls="--",
+            label="stops helping below" if c == 0 else None,
+        )
         axes[1, c].axhline(ds.attrs["erases_threshold"], color="r", lw=0.6, ls="--")
         for r in range(2):
             if axis == "density":
@@ -588,13 +677,20 @@ def plot_failure(ds: xr.Dataset) -> Figure:
             axes[r, c].set_xlabel(
                 {
                     "density": "scatterers per pixel",
-                    "snr_db": "SNR (dB)",
+                    "snr_db": "receiver SNR (dB)",
                     "feature_radius": "inclusion radius (pixels)",
                 }[axis]
             )
-        axes[0, c].set_ylabel("speckle reduction (x: stops helping)")
-        axes[1, c].set_ylabel("feature contrast kept (x: erased)")
-    axes[0, 0].legend(fontsize=5, ncol=2)
+        for r in range(2):
+            axes[r, c].set_xticks(xv, [f"{v:g}" for v in xv])
+            axes[r, c].minorticks_off()
+        axes[0, c].set_ylabel("speckle reduction C_single / C")
+        axes[1, c].set_ylabel("inclusion contrast kept (fraction)")
+    axes[0, 0].plot([], [], "x", color="k", label="x: stops helping")
+    axes[0, 0].plot([], [], "x", color="r", label="x: erases the inclusion")
+    axes[0, 0].plot([], [], "--", color="r", lw=0.6, label="erased below")
+    fig.legend(*axes[0, 0].get_legend_handles_labels(), loc="outside right upper", frameon=False)
+    fig.suptitle("Where each family's method stops helping (top) or erases the inclusion (bottom)")
     return fig
 
 

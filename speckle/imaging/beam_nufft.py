@@ -60,6 +60,7 @@ from ._beam_kernels import _sort_scene, _spread_beam
 from ._kernels import (
     C2,
     LANES,
+    finufft_threads,
     parallel_section,
 )
 from ._rules import (
@@ -609,7 +610,7 @@ def finufft_beam_scan(
     opts = {} if upsampfac is None else {"upsampfac": upsampfac}
     f = finufft.nufft2d1(
         t, phi, c, (scene.n_pixels, n_modes), eps=tol / 20 if eps is None else eps, isign=1,
-        nthreads=numba.get_num_threads() if nthreads is None else nthreads, **opts,
+        nthreads=finufft_threads() if nthreads is None else nthreads, **opts,
     )  # fmt: skip
     m = np.arange(n_modes) - n_modes // 2
     ghat = w0 * math.sqrt(math.pi / 2) * np.exp(-((2 * np.pi * m / period) ** 2) * w0**2 / 8)

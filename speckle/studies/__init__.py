@@ -20,6 +20,7 @@ from .._lazy import attach, functions_of
 __getattr__, __dir__, __all__ = attach(
     __name__,
     {
+        "dynamics": ["FLOW_CONTRASTS", *functions_of(__name__, "dynamics")],
         "looks": functions_of(__name__, "looks"),
         "twin": ["SystemFit", "fit_system"],
     },

@@ -146,7 +146,7 @@ def test_bad_section_stops_before_any_job(repo, case, config_runs):
     name = f"bad21_{abs(hash(case))}.yaml"
     (repo / name).write_text(yaml.safe_dump(override))
     config_runs.assert_refused(config_runs.dry_run(repo, name), key)
-    assert not (repo / "results").exists()
+    assert not (repo / "results").exists() and not (repo / "results_ci").exists()
 
 
 @pytest.mark.parametrize("case", [c for c in BAD if "enum" not in c])
