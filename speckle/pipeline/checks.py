@@ -600,7 +600,8 @@ def _check_geometry(geo: Mapping, path: str) -> None:
         )
 
 
-def _check_spec(spec: Mapping, n: int, path: str) -> None:
+def _check_spec(spec: Mapping, n: int, depth: float, path: str) -> None:
+    """One failure method's spec; ``n`` pixels and ``depth`` (µm) are its phantom's."""
     fam = spec["family"]
     if fam == "frequency":
         _key(
@@ -615,7 +616,8 @@ def _check_spec(spec: Mapping, n: int, path: str) -> None:
         _key(
             path,
             lambda: cp.brownian_frames(
-                xr.Dataset({"z": ("scatterer", [0.0])}),
+                # one scatterer in the phantom's depth window (a step is checked against it)
+                xr.Dataset({"z": ("scatterer", [0.0])}, attrs={"z_min": 0.0, "z_max": depth}),
                 spec["frames"],
                 diffusion=spec["diffusion"],
                 interval=spec["interval"],
@@ -664,7 +666,8 @@ def check_despeckle(cfg: Mapping) -> None:
         for p in parameter_grid(params):
             _key(f"filters.{name}", lambda name=name, p=p: dsp.check_filter(name, p))
     for name, spec in cfg["failure"]["methods"].items():
-        _check_spec(spec, int(fgeo["n_pixels"]), f"failure.methods.{name}")
+        depth = int(fgeo["n_pixels"]) * float(fgeo["pixel_size"])
+        _check_spec(spec, int(fgeo["n_pixels"]), depth, f"failure.methods.{name}")
     fc = cfg["frequency_compounding"]
     for nl in fc["looks"]:
         _key("frequency_compounding.looks", lambda nl=nl: cp.subband_windows(fc["n_pixels"], nl))
