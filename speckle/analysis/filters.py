@@ -41,9 +41,9 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 import scipy.ndimage as ndi
-import xarray as xr
 
 from .._validate import check_choice, check_int, check_real
+from .._wrap import preprocess_and_wrap
 
 __all__ = ["DOMAINS", "FILTERS", "despeckle", "filter_available", "frost", "kuan", "lee"]
 
@@ -248,6 +248,9 @@ def check_filter(name: str, params: Mapping | None = None, domain: str = "linear
     return {k: allowed[k](v, k) for k, v in params.items()}
 
 
+@preprocess_and_wrap(
+    arrays=["intensity"], wrap_like="intensity", attrs_from={"filter": "name", "domain": "domain"}
+)
 def despeckle(
     intensity: object, name: str, params: Mapping | None = None, *, domain: str = "linear"
 ) -> object:
@@ -283,7 +286,7 @@ def despeckle(
             "filter 'bm3d' needs the optional package: pip install bm3d "
             "(licence: non-commercial use only)"
         )
-    a = np.asarray(intensity.values if isinstance(intensity, xr.DataArray) else intensity)
+    a = np.asarray(intensity)
     if a.ndim != 2:
         raise ValueError(f"intensity must be a 2-D image, got shape {a.shape}")
     a = a.astype(float)
@@ -293,7 +296,4 @@ def despeckle(
     floor = a.max() * 1e-10 if a.max() > 0 else 1.0  # 100 dB below the maximum
     data = 10 * np.log10(np.maximum(a, floor)) if log else a
     out = FILTERS[name][0](data, log=log, **p)
-    out = 10 ** (out / 10) if log else np.maximum(out, 0.0)
-    if isinstance(intensity, xr.DataArray):
-        return intensity.copy(data=out).assign_attrs(filter=name, domain=domain)
-    return out
+    return 10 ** (out / 10) if log else np.maximum(out, 0.0)  # labelled like intensity
