@@ -13,9 +13,10 @@ Doppler, speckle variance, SSADA, LIV, OCDS) and ``dynamics_theory`` their expec
 Names load on first use (SPEC 1, ``lazy_loader``).
 """
 
+from .._deprecate import moved
 from .._lazy import attach, functions_of
 
-__getattr__, __dir__, __all__ = attach(
+_lazy_getattr, __dir__, __all__ = attach(
     __name__,
     {
         "compounding": functions_of(__name__, "compounding"),
@@ -51,3 +52,19 @@ __getattr__, __dir__, __all__ = attach(
         "tracking": ["TRACK_METHODS", *functions_of(__name__, "tracking")],
     },
 )
+#: Names that moved to speckle.studies (issue 32); the old spelling warns for a release.
+_MOVED = {
+    "SystemFit": "speckle.studies.twin",
+    "fit_system": "speckle.studies.twin",
+    **dict.fromkeys(
+        ["angular_looks", "polarization_looks", "spatial_looks", "temporal_looks"],
+        "speckle.studies.looks",
+    ),
+}
+
+
+def __getattr__(name: str):
+    """Lazy public names (SPEC 1); names that moved to ``speckle.studies`` warn."""
+    if name in _MOVED:
+        return moved(__name__, _MOVED[name], [name])(name)
+    return _lazy_getattr(name)
