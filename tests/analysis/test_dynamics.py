@@ -179,6 +179,54 @@ def test_ballistic_gaussian_decay():
     np.testing.assert_allclose(lg / lg[0], np.arange(1, 6) ** 2, rtol=1e-12)
 
 
+def test_ballistic_constant_speed_oscillates():
+    """Speed s along +-z (independent lines, one axis): g1 = cos(q s tau), band-averaged."""
+    k0 = speckle.spectrum(N, H, k0_dk=10).attrs["k0"]
+    s = 1.0
+    dt = 0.5 / (2 * k0 * s)  # q s dt = 0.5 rad
+    src, f = _lines_series(
+        lambda sc, t: mo.ballistic_motion(sc, t, speed=s, seed=4, distribution="constant"),
+        density=32.0,
+        n_lines=128,
+        frames=6,
+        dt=dt,
+    )
+    lags = np.arange(6) * dt
+    re, se = _blocked(lambda x: dy.g1(x).values.real, f, "aline")
+    theory = th.g1_ballistic(lags, speed=s, k0=k0, ndim=1, distribution="constant", spectrum=src)
+    np.testing.assert_allclose(
+        th.g1_ballistic(lags, speed=s, k0=k0, ndim=1, distribution="constant"),
+        np.cos(2 * k0 * s * lags),
+        atol=1e-12,
+    )
+    for i in range(1, 6):
+        _report(f"ballistic constant-speed Re g1, lag {i}", re[i], theory[i], se[i])
+        assert abs(re[i] - theory[i]) < 3 * se[i], (i, re[i], theory[i], se[i])
+    assert theory[5] < -0.7  # cos(2.5): the correlation changes sign
+
+
+def test_static_and_moving_fractions_mix():
+    """A moving fraction f of equal-amplitude scatterers: g1 = (1 - f) + f g1_moving."""
+    src0 = speckle.spectrum(N, H, k0_dk=10)
+    k0 = src0.attrs["k0"]
+    d, frac = 0.05, 0.4
+    dt = 0.5 / (4 * k0**2 * d)
+    src, f = _lines_series(
+        lambda sc, t: mo.brownian_motion(sc, t, diffusion=d, seed=6, fraction=frac),
+        density=32.0,
+        n_lines=128,
+        frames=5,
+        dt=dt,
+    )
+    res = dy.g1(f, blocks=K)
+    moving = th.g1_brownian(np.arange(5) * dt, diffusion=d, k0=k0, spectrum=src)
+    expect = (1 - frac) + frac * moving
+    for i in range(1, 5):
+        g, se = abs(res.g1.values[i]), res.g1_se.values[i]
+        _report(f"static + moving fraction 0.4 |g1|, lag {i}", g, expect[i], se)
+        assert abs(g - expect[i]) < 3 * se, (i, g, expect[i], se)
+
+
 @pytest.fixture(scope="module")
 def axial():
     k0 = speckle.spectrum(N, H, k0_dk=10).attrs["k0"]
@@ -266,6 +314,38 @@ def test_transverse_flow_decorrelates_through_the_beam(shared):
     for i, lag in enumerate(lags):
         _report(f"transverse flow g1, lag {lag}", g[i], expect[i], se[i])
         assert abs(g[i] - expect[i]) < 3 * se[i], (lag, g[i], expect[i], se[i])
+
+
+def test_flow_through_the_imaging_plane():
+    """3-D scene, flow along y through the B-scan plane: the same exp(-(v tau)^2/w0^2)."""
+    regs = make_regions(background(density=0.1))
+    sc = speckle.shared_scene(
+        regs, z_range=(0.0, 128.0), x_range=(0.0, 100.0), y_range=(0.0, 80.0), seed=1, tile=32.0
+    )
+    src = speckle.spectrum(32, 128.0, k0_dk=10)
+    v, dt, w0 = 1000.0, 3e-3, 6.0
+    moved = mo.flow_motion(sc, np.arange(3) * dt, velocity=[0.0, 0.0, v])
+    x = speckle.scan_lines(32, PITCH, start=18.0)
+    f = ts.bscan_series(moved, src, waist=w0, x=x, y=40.0, method="nufft", tol=1e-9, wrap=True)
+    res = dy.g1(f.field, lags=[1, 2], blocks=K, block_dim="depth")
+    expect = th.g1_transverse_flow(np.array([1, 2]) * dt, velocity=v, waist=w0)
+    for i in range(2):
+        g, se = abs(res.g1.values[i]), res.g1_se.values[i]
+        _report(f"through-plane flow |g1|, lag {i + 1}", g, expect[i], se)
+        assert abs(g - expect[i]) < 3 * se, (i, g, expect[i], se)
+
+
+def test_ballistic_in_a_shared_scene_under_the_beam(shared):
+    """2-D Gaussian ballistic motion: axial exp(-q^2 sigma^2 tau^2/2) x lateral factor."""
+    k0 = speckle.spectrum(NS, HS, k0_dk=10).attrs["k0"]
+    s = 1.0  # rms speed over 2 axes: sigma = s/sqrt(2)
+    dt = 0.4 * np.sqrt(2) / (2 * k0 * s)  # q sigma dt = 0.4
+    moved = mo.ballistic_motion(shared, np.arange(4) * dt, speed=s, seed=9, wrap=True)
+    g, se, src = _beam_g1(moved, k0_dk=10, waist=6.0, lags=[1, 2, 3])
+    expect = th.g1_ballistic(np.arange(1, 4) * dt, speed=s, k0=k0, ndim=2, waist=6.0, spectrum=src)
+    for i in range(3):
+        _report(f"ballistic 2-D under the beam |g1|, lag {i + 1}", g[i], expect[i], se[i])
+        assert abs(g[i] - expect[i]) < 3 * se[i], (i, g[i], expect[i], se[i])
 
 
 def test_tsukuba_wavelength_and_resolution_dependence(shared):
