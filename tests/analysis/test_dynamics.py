@@ -424,6 +424,19 @@ def test_no_answer_is_nan_with_a_reason():
         assert np.isnan(float(dy.doppler_phase(z)))
 
 
+def test_a_time_dim_in_one_input_only_is_refused():
+    img = xr.DataArray(
+        np.exp(1j * np.arange(64.0)).reshape(8, 8),
+        dims=("depth", "aline"),
+        coords={"depth": np.arange(8.0), "aline": np.arange(8.0)},
+    )
+    series = xr.concat([img, img], "time").assign_coords(time=[0.0, 1.0])
+    with pytest.raises(ValueError, match="'time' dim in deformed only"):
+        speckle.correlation_map(img, series, window=4)
+    both = speckle.correlation_map(series, series, window=4)  # same times: fine
+    assert both.sizes["time"] == 2
+
+
 @pytest.mark.parametrize(
     "call,exc,match",
     [
