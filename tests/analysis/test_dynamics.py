@@ -348,6 +348,43 @@ def test_ballistic_in_a_shared_scene_under_the_beam(shared):
         assert abs(g[i] - expect[i]) < 3 * se[i], (i, g[i], expect[i], se[i])
 
 
+def test_liv_and_ocds_of_a_brownian_layer_in_static_tissue():
+    """A Brownian layer (region 1) in static tissue under the beam: LIV and OCDS of its interior
+    rows against their expected values from g1.
+
+    Interior rows are >= 15 pixels from the layer's edges: the static intensity leaking in
+    through the rectangular band's PSF tails is ~ 1/(2 pi^2 m) < 0.4 % there (0.1 dB^2 of LIV
+    at most, below 0.3 SE); blocks of depth rows are independent (module docstring).
+    """
+    from speckle.scene.regions import layer
+
+    regs = make_regions(background(density=1.0), layer(40.0, 216.0, density=1.0))
+    sc = speckle.shared_scene(regs, z_range=(0.0, HS), x_range=(0.0, 300.0), seed=8)
+    src = speckle.spectrum(NS, HS, k0_dk=10)
+    k0, d, w0 = src.attrs["k0"], 0.05, 6.0
+    dt = 0.3 / (4 * k0**2 * d)
+    n = 8
+    moved = mo.brownian_motion(sc, np.arange(n) * dt, diffusion=d, seed=3, regions=[1])
+    x = speckle.scan_lines(96, PITCH, start=54.0)
+    f = ts.bscan_series(moved, src, waist=w0, x=x, method="finufft", tol=1e-11, wrap=True)
+    intensity = f.intensity.transpose("time", "depth", "x").load()
+    rows = np.arange(NS)[
+        (np.arange(NS) * 4.0 >= 40.0 + 60.0) & (np.arange(NS) * 4.0 < 216.0 - 60.0)
+    ]
+    inner = intensity.isel(depth=rows)
+    g1t = th.g1_brownian(
+        np.arange(n) * dt, diffusion=d, k0=k0, spectrum=src, waist=w0, lateral_axes=1
+    )
+    lv, lv_se = _blocked(lambda x: dy.liv(x).values, inner, "depth", k=len(rows))
+    _report("LIV of a Brownian layer under the beam (dB^2)", lv, th.liv_expected(g1t), lv_se)
+    assert abs(lv - th.liv_expected(g1t)) < 3 * lv_se
+    delays = (dt, 4 * dt)
+    oc, oc_se = _blocked(lambda x: dy.ocds(x, delays=delays).values, inner, "depth", k=len(rows))
+    oc_exp = th.ocds_expected(g1t, np.arange(n) * dt, delays=delays)
+    _report("OCDS of a Brownian layer under the beam (1/s)", oc, oc_exp, oc_se)
+    assert abs(oc - oc_exp) < 3 * oc_se
+
+
 def test_tsukuba_wavelength_and_resolution_dependence(shared):
     """Diffusion decorrelates with k0 (wavelength), not with the waist; transverse flow with
     the waist (resolution), not with k0 (Fujimura et al. 2025)."""
