@@ -52,19 +52,24 @@ _lazy_getattr, __dir__, __all__ = attach(
         "tracking": ["TRACK_METHODS", *functions_of(__name__, "tracking")],
     },
 )
-#: Names that moved to speckle.studies (issue 32); the old spelling warns for a release.
-_MOVED = {
-    "SystemFit": "speckle.studies.twin",
-    "fit_system": "speckle.studies.twin",
-    **dict.fromkeys(
-        ["angular_looks", "polarization_looks", "spatial_looks", "temporal_looks"],
-        "speckle.studies.looks",
-    ),
-}
+#: Names that moved to :mod:`speckle.studies` (issue 32): they warn for a release.
+_moved = moved(
+    __name__,
+    "speckle.studies",
+    [
+        "SystemFit",
+        "angular_looks",
+        "fit_system",
+        "polarization_looks",
+        "spatial_looks",
+        "temporal_looks",
+    ],
+)
 
 
 def __getattr__(name: str):
-    """Lazy public names (SPEC 1); names that moved to ``speckle.studies`` warn."""
-    if name in _MOVED:
-        return moved(__name__, _MOVED[name], [name])(name)
-    return _lazy_getattr(name)
+    """Lazy public names; the twin's old names warn (``FutureWarning``) and resolve."""
+    try:
+        return _lazy_getattr(name)
+    except AttributeError:
+        return _moved(name)
