@@ -39,6 +39,7 @@ include: "workflow/rules/realism.smk"
 include: "workflow/rules/beam.smk"
 include: "workflow/rules/despeckle.smk"
 include: "workflow/rules/twin.smk"
+include: "workflow/rules/dynamics.smk"
 
 
 rule all:
@@ -54,4 +55,5 @@ rule all:
         + REALISM_TARGETS
         + BEAM_TARGETS
         + DESPECKLE_TARGETS
-        + TWIN_TARGETS,
+        + TWIN_TARGETS
+        + DYNAMICS_TARGETS,

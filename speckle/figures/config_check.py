@@ -169,6 +169,16 @@ def check_config(config: Mapping, schema: Mapping | None = None) -> None:
         check_despeckle_config(config["despeckle"])
     if "twin" in config:
         check_twin(config["twin"])
+    if "dynamics" in config:
+        from .dynamics import check_dynamics_config
+
+        dyn = config["dynamics"]
+        check_dynamics_config(dyn)
+        for part in (None, "g1", "failure", "calibration"):
+            own = (dyn[part].get("geometry") or {}) if part else {}
+            geo = {**dyn["geometry"], **own}
+            key = f"dynamics.{part + '.' if part and 'tol' in own else ''}geometry.tol"
+            _tol(geo.get("method", "finufft"), geo.get("tol"), key, int(geo["n_pixels"]), False)
 
 
 def _elastography(el: Mapping) -> None:

@@ -890,7 +890,9 @@ def _check_spec(spec: Mapping, n: int, path: str) -> None:
         _key(
             path,
             lambda: cp.brownian_frames(
-                xr.Dataset({"z": ("scatterer", [0.0])}),
+                # one scatterer in a deep window: the motion's step bound (a fraction of the
+                # scene's extent) does not apply to the phantom's scene, only D, frames, interval
+                xr.Dataset({"z": ("scatterer", [0.0])}, attrs={"z_min": 0.0, "z_max": 1e12}),
                 spec["frames"],
                 diffusion=spec["diffusion"],
                 interval=spec["interval"],
