@@ -11,7 +11,10 @@ image here is the project's beam imaging (:func:`speckle.beam_scan` through the 
   imaged at its own time: the scene must hold ``n_frames x n_lines`` times, line ``i`` of
   frame ``f`` at time index ``f*n_lines + i`` (:func:`raster_times` builds them), and the
   output's ``time`` is each frame's first line time with a coordinate ``line_time`` (s) over
-  ``(time, x)``.
+  ``(time, x)``. The moved scene then holds positions at every line time (``n_frames x
+  n_lines x scatterers`` per axis, refused above :data:`speckle._validate.MAX_BYTES` by the
+  motion functions): raster timing suits windows of a few hundred lines and frames; long
+  series use snapshots.
 
 Results are Datasets with ``field`` (complex, Dask) and ``intensity`` over ``(time, depth,
 ...)``, ``time`` in s, streamed as the strain sequences are: one task per frame (and chunk of

@@ -153,6 +153,24 @@ def test_ocds_of_a_brownian_region(brownian):
     assert abs(oc - oc_exp) < 3 * oc_se, (oc, oc_exp, oc_se)
 
 
+def test_ssada_of_a_brownian_region(brownian):
+    """SSADA against 1 - mean_b (E(m_b) - (1 - m_b) K(m_b))/m_b, m_b = |g1_b(dt)|^2 of each
+    sub-band's spectrum S W_b (frequency_looks is exact: imaging with S W_b)."""
+    from speckle.analysis.compounding import subband_windows
+
+    src, f, d, dt, k0 = brownian
+    windows = subband_windows(N, 4, window="hann", overlap=0.5)
+    bands = [
+        th.g1_brownian(dt, diffusion=d, k0=k0, spectrum=src.copy(data=src.values * w))
+        for w in windows
+    ]
+    expect = th.ssada_expected(bands)
+    est, se = _blocked(lambda x: dy.ssada(x, n_bands=4).values, f, "aline")
+    _report("SSADA of a Brownian region (4 Hann bands)", est, expect, se)
+    assert abs(est - expect) < 3 * se, (est, expect, se)
+    assert 0 < expect < 1 - np.pi / 4
+
+
 # ------------------------------------------------------------------------------------------
 # Ballistic motion and axial flow (independent lines)
 # ------------------------------------------------------------------------------------------
