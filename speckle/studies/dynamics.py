@@ -20,14 +20,15 @@ here, and their expectations (derived in ``docs/explanation/dynamics_failure.md`
   ``1 - mean of A_t A_t+1 / ((A_t^2 + A_t+1^2)/2)`` per pixel (SSADA of one band,
   :func:`speckle.analysis.dynamics.ssada_array`):
   ``E = 1 - (E(mu_1) - (1 - mu_1) K(mu_1))/mu_1`` (complete elliptic integrals,
-  :func:`ssada_expected`); split into sub-bands it is the same for transverse flow;
+  :func:`speckle.analysis.dynamics_theory.ssada_expected`); split into sub-bands it is
+  the same for transverse flow;
 * **logarithmic intensity variance** (``liv``, the Tsukuba group's LIV): the temporal variance
   of ``10 log10 I`` (``1/N``): ``E = (10/ln 10)^2 (N-1)/N (pi^2/6 - <Li2(mu_ij)>)``, since
   ``Cov(ln I_i, ln I_j) = Li2(mu_ij)`` for correlated speckle (Laguerre expansion of the
   bivariate exponential law).
 
 The **static-tissue floor** of a contrast is its value for ``g1 = 1`` (static scatterers, the
-frames differ by their noise only): ``(N-1)/N (1 - s^2)``, ``ssada_expected(s^2)`` and
+frames differ by their noise only): ``(N-1)/N (1 - s^2)``, ``ssada_expected([s])`` and
 ``(10/ln 10)^2 (N-1)/N (pi^2/6 - Li2(s^2))``, zero without noise. The **noise floor** is its
 value where the frames are uncorrelated (``rho = 0``: noise alone, or flow fast enough to
 decorrelate completely): ``(N-1)/N``, ``1 - pi/4`` and ``(10/ln 10)^2 (N-1)/N pi^2/6``. A
@@ -48,7 +49,7 @@ from collections.abc import Sequence
 
 import numpy as np
 import xarray as xr
-from scipy import special
+from scipy.optimize import brentq
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
 from ..analysis.dynamics import (
@@ -66,6 +67,7 @@ from ..analysis.dynamics_theory import (
     g1_transverse_flow,
     liv_expected,
     speckle_variance_expected,
+    ssada_expected,
 )
 from ..analysis.failure import mean_and_se
 from ..conventions import attrs, coord, units_of
@@ -88,7 +90,6 @@ __all__ = [
     "flow_failure",
     "g1_curves",
     "phantom_series",
-    "ssada_expected",
     "velocity_range",
 ]
 
@@ -111,44 +112,6 @@ def _snr(snr_db: object) -> float:
     return check_real(snr_db, "snr_db", low=-300.0, high=300.0)
 
 
-def ssada_expected(mu: object) -> np.ndarray:
-    """Expected amplitude decorrelation of two frames of developed speckle (per-pixel ratio).
-
-    For intensities of correlated circular Gaussian fields (``mu = |rho|^2``) the ratio
-    ``r = I1/I2`` has the density ``(1 - mu)(1 + r)/((1 + r)^2 - 4 mu r)^(3/2)``, and
-    ``A1 A2/((I1 + I2)/2) = 2 sqrt(r)/(1 + r)``; with ``r = tan^2(phi/2)`` its mean is
-    ``(1 - mu) int_0^(pi/2) sin^2 phi (1 - mu sin^2 phi)^(-3/2) dphi = (E(mu) - (1 - mu)
-    K(mu))/mu`` (complete elliptic integrals of parameter ``mu``). Hence
-
-    ``E[D] = 1 - (E(mu) - (1 - mu) K(mu))/mu``: 0 for ``mu = 1``, ``1 - pi/4`` for ``mu = 0``.
-
-    Parameters
-    ----------
-    mu : array_like
-        ``|rho|^2`` in [0, 1] of the two frames' total fields.
-
-    Returns
-    -------
-    numpy.ndarray
-        Expected :func:`speckle.analysis.dynamics.ssada_array` of one band (dimensionless).
-
-    Examples
-    --------
-    >>> round(float(ssada_expected(0.0)), 6)  # 1 - pi/4
-    0.214602
-    """
-    m = as_finite_array(mu, "mu")
-    if np.any((m < 0) | (m > 1)):
-        raise ValueError("mu must lie in [0, 1] (|rho|^2 of two frames)")
-    small = m < 1e-6
-    ms = np.where(small | (m >= 1.0), 0.5, m)  # the ends are set below
-    ratio = (special.ellipe(ms) - (1 - ms) * special.ellipk(ms)) / ms
-    ratio = np.where(m >= 1.0, 1.0, ratio)
-    # series at small mu: pi/4 (1 + mu/8 + 3 mu^2/128 ...)
-    ratio = np.where(small, math.pi / 4 * (1 + m / 8 + 3 * m**2 / 128), ratio)
-    return 1.0 - ratio
-
-
 def expected_contrast(contrast: str, g1: object, *, snr_db: float = math.inf) -> float:
     """Expected flow contrast of ``N`` frames of developed speckle with receiver noise.
 
@@ -156,7 +119,7 @@ def expected_contrast(contrast: str, g1: object, *, snr_db: float = math.inf) ->
     white noise independent between frames); the speckle variance and LIV follow from
     :func:`speckle.analysis.dynamics_theory.speckle_variance_expected` and
     :func:`~speckle.analysis.dynamics_theory.liv_expected` (``ddof = 0``) of ``rho``, the
-    decorrelation from :func:`ssada_expected` of ``rho_1^2``.
+    decorrelation from :func:`~speckle.analysis.dynamics_theory.ssada_expected` of ``rho_1``.
 
     Parameters
     ----------
@@ -184,7 +147,7 @@ def expected_contrast(contrast: str, g1: object, *, snr_db: float = math.inf) ->
         raise ValueError("g1 must hold |g1| in [0, 1] at frame lags 1 ... N-1 (N >= 2 frames)")
     rho = np.r_[1.0, _signal_fraction(snr_db) * g]
     if contrast == "decorrelation":
-        return float(ssada_expected(rho[1] ** 2))
+        return ssada_expected([rho[1]])
     if contrast == "speckle_variance":
         return speckle_variance_expected(rho, ddof=0)
     return liv_expected(rho, ddof=0)
@@ -280,8 +243,6 @@ def velocity_range(
     def solve(level: float) -> float:
         if not static < level < noise:
             return math.nan
-        from scipy.optimize import brentq
-
         hi = 1.0
         while value(hi) < level:
             hi *= 2.0
@@ -699,7 +660,7 @@ def decorrelation_calibration(
     -------
     xarray.Dataset
         Over ``velocity``: ``decorrelation`` (mean over repeats of the region value),
-        ``decorrelation_se`` and ``theory`` :func:`ssada_expected` of ``s^2 g1^2`` with
+        ``decorrelation_se`` and ``theory`` (``ssada_expected`` of ``s g1``) with
         ``g1 = exp(-(v interval)^2/w0^2)``; attrs: the geometry, ``interval``, ``snr_db``.
 
     Examples

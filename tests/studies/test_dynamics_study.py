@@ -26,7 +26,6 @@ from speckle.studies.dynamics import (
     decorrelation_calibration,
     expected_contrast,
     flow_failure,
-    ssada_expected,
     velocity_range,
 )
 
@@ -84,15 +83,6 @@ def test_expected_contrast_on_gaussian_frames(contrast):
     se = win.std(ddof=1) / math.sqrt(win.size)  # independent pixels
     assert value == pytest.approx(win.mean(), rel=1e-12)
     assert abs(value - theory) < 3.5 * se, (value, theory, se)
-
-
-def test_ssada_expected_limits_and_series():
-    assert float(ssada_expected(1.0)) == 0.0
-    assert float(ssada_expected(0.0)) == pytest.approx(1 - math.pi / 4, abs=1e-15)
-    # the small-mu series joins the elliptic form continuously
-    assert float(ssada_expected(0.999e-6)) == pytest.approx(float(ssada_expected(1.001e-6)))
-    m = np.linspace(0, 1, 101)
-    assert np.all(np.diff(ssada_expected(m)) < 0)
 
 
 def test_transverse_flow_g1_and_velocity_range_invert():
