@@ -20,9 +20,12 @@ Results are Datasets with ``field`` (complex, Dask) and ``intensity`` over ``(ti
 ...)``, ``time`` in s, streamed as the strain sequences are: one task per frame (and chunk of
 lines) or per chunk of times, so memory holds the scene and one task's field at a time
 (:func:`speckle.io.stream_to_netcdf` writes them frame by frame). The numbers do not depend on
-the scheduler or the chunking: each task images fixed inputs with a deterministic method
-(tested bit for bit for ``"direct"``). Independent-line scenes (dims ``aline, scatterer``)
-are imaged by :func:`speckle.bscan`, one frame per time.
+the scheduler: each task images fixed inputs with a deterministic method. M-mode and raster
+series image each A-line from the same scatterers whatever the chunking, so they are
+identical bit for bit under any chunking and scheduler (tested: synchronous, threads,
+processes, streamed to NetCDF); snapshot series are :func:`speckle.image` per time (the same
+under any chunking to rounding). Independent-line scenes (dims ``aline, scatterer``) are
+imaged by :func:`speckle.bscan`, one frame per time.
 """
 
 from __future__ import annotations
