@@ -683,7 +683,13 @@ def plot_phantom(ds: xr.Dataset) -> Figure:
     show(axes[2], ds.single_look.values, "single look + noise")
     for i in range(nb):
         fam = str(ds.family.values[i])
-        how = str(ds.best_method.values[i]).removeprefix(fam).removesuffix(" + noise").strip()
+        how = (
+            str(ds.best_method.values[i])
+            .removeprefix(fam)
+            .removesuffix(" + noise")
+            .strip()
+            .replace("_", " ")
+        )
         show(
             axes[3 + i],
             ds.best.isel(family=i).values,

@@ -753,6 +753,8 @@ def plot_sequence(ds: xr.Dataset) -> Figure:
     axes[0, 1].plot(f, ds.rms_error_cumulative / ds.true_cumulative, "s-", label="rms / truth")
     axes[0, 1].set_xlabel("frame")
     axes[0, 1].set_ylabel("relative error of the cumulative strain")
+    for ax in axes[0]:
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     legend_outside(axes[0, 1])
     return fig
 
