@@ -636,7 +636,7 @@ def plot_failure(ds: xr.Dataset) -> Figure:
             handles.setdefault("predicted noise error (vector)", line)
     axes[0, 0].set_ylabel("rms strain error / strain")
     axes[1, 0].set_ylabel("fraction of pixels answered")
-    fig.legend(list(handles.values()), list(handles), loc="outside right upper", frameon=False)
+    fig.legend(list(handles.values()), list(handles), loc="outside right center", frameon=False)
     fig.suptitle(
         f"Where each strain estimator fails: {ds.attrs['n_pixels']} x {ds.attrs['n_alines']} "
         f"pixel images, mean ± standard error over {ds.attrs['n_seeds']} seeds"
