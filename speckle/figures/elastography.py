@@ -593,7 +593,6 @@ def plot_failure(ds: xr.Dataset) -> Figure:
         width=2.3 * len(FAILURE_SWEEPS) + 2.2,
         height=5.0,
         sharex="col",
-        sharey="row",
     )
     handles: dict = {}
     for j, name in enumerate(FAILURE_SWEEPS):
@@ -634,8 +633,10 @@ def plot_failure(ds: xr.Dataset) -> Figure:
             pred = ds["predicted_noise_snr_db"].values / ds.attrs["base_strain"]
             (line,) = axes[0, j].plot(xplot, pred, "k--", lw=0.8)
             handles.setdefault("predicted noise error (vector)", line)
-    axes[0, 0].set_ylabel("rms strain error / strain")
-    axes[1, 0].set_ylabel("fraction of pixels answered")
+    for ax in axes[0]:
+        ax.set_ylabel("rms strain error / strain")
+    for ax in axes[1]:
+        ax.set_ylabel("fraction of pixels answered")
     fig.legend(list(handles.values()), list(handles), loc="outside right center", frameon=False)
     fig.suptitle(
         f"Where each strain estimator fails: {ds.attrs['n_pixels']} x {ds.attrs['n_alines']} "

@@ -140,6 +140,9 @@ def plot_failure_map(ds: xr.Dataset) -> Figure:
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel(label + (" (0 drawn at 0.1)" if axis == "k0_dk" else ""))
+        ok = np.isfinite(xplot)
+        ax.set_xticks(xplot[ok], [f"{v:g}" for v in x[ok]])
+        ax.minorticks_off()
         ax.axhline(1e-6, color="0.6", lw=0.6, ls=":")
         if axis == "n_pixels":
             ax.set_ylabel("relative error against the direct sum")
