@@ -29,7 +29,7 @@ import yaml
 from matplotlib.collections import QuadMesh
 from matplotlib.image import AxesImage
 
-from speckle.figures import _style
+from speckle.figures import _style  # private: the figures' shared style (legend size, marks)
 
 ROOT = Path(__file__).resolve().parents[2]
 MODULES = (
@@ -280,10 +280,11 @@ def _histograms():
 
 
 def _system():
-    from speckle.figures import _config
+    import speckle
     from speckle.figures import system as fs
 
-    system = _config.system_from_config(SHEET)
+    sheet = {k: v for k, v in SHEET.items() if v is not None}
+    system = speckle.datasheet(**{**sheet, "camera_range_nm": tuple(SHEET["camera_range_nm"])})
     bscan = {**_merged_config()["system"]["bscan"], "n_alines": 8, "seed": 1, "dispersion": {}}
     return {
         "plot_psf": (fs.psf_dataset(system, [0.2, 0.6], {}),),
