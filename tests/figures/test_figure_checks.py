@@ -8,7 +8,8 @@ drawn from a small Dataset, is checked for
 * no "um" for micrometres and no raw config key (``snr_db``, ``k0_dk``, ...: every key of the
   pipeline's config files with an underscore) in any text;
 * legend text of at least ``MIN_LEGEND_PT`` points, and no legend inside an axes covering its
-  data points.
+  data points;
+* the physical aspect ratio (1:1) for an image whose two axes are lengths in the same unit.
 
 Small inputs: the cheap data builders run at a few pixels; the expensive ones (sweeps over many
 methods, fits to the measured image) are replaced by Datasets of the same layout filled with
@@ -68,6 +69,8 @@ def _config_keys() -> set[str]:
 
 RAW_KEYS = _config_keys()
 MICRON = re.compile(r"(?<![A-Za-z])um(?![A-Za-z])")
+#: An axis label in a length unit (an image with lengths on both axes is drawn 1:1).
+LENGTH = re.compile(r"\((µm|mm)\b")
 
 
 # --------------------------------------------------------------------------- the checks
@@ -176,6 +179,11 @@ def figure_problems(fig) -> list[str]:
         for which in ("x", "y"):
             if not _labelled(ax, which):
                 problems.append(f"{name}: no {which} label")
+    for ax in fig.axes:
+        lengths = [LENGTH.search(lab) for lab in (ax.get_xlabel(), ax.get_ylabel())]
+        if ax.images and all(lengths) and lengths[0][1] == lengths[1][1]:
+            if ax.get_aspect() != 1.0:
+                problems.append(f"image in {ax.get_title()!r}: lengths on both axes, not 1:1")
     images = _images(fig, bars)
     covered = {_key(m) for m in images if m.colorbar is not None}
     for m in images:
@@ -645,9 +653,10 @@ def test_the_checks_find_what_they_look_for():
     axes[0, 0].plot([0, 1], [1, 0], label="a")  # through the upper left corner
     axes[0, 0].legend(fontsize=5, loc="upper left")
     axes[0, 0].set_title("depth (um) against snr_db")
-    axes[0, 1].imshow(np.eye(3))
+    axes[0, 1].imshow(np.eye(3), aspect="auto", extent=[0, 1, 1, 0])
+    axes[0, 1].set(xlabel="x (µm)", ylabel="depth (µm)")
     found = "\n".join(figure_problems(fig))
-    for what in ("no x label", "no y label", "no colorbar", "'um'", "snr_db", "5 pt", "covers"):
+    for what in ("no x label", "no colorbar", "'um'", "snr_db", "5 pt", "covers", "not 1:1"):
         assert what in found, what
     plt.close(fig)
     fig, axes = _style.new_figure(1, 2)
