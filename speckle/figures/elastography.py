@@ -243,7 +243,7 @@ def _map_figure(n_columns: int, ds: xr.Dataset):
     ratio = depth / (ds.sizes["aline"] * float(ds.attrs["pixel_size"]))
     width = 1.5 + 1.9 * n_columns
     panel = min(max((width / n_columns - 0.9) * ratio, 1.6), 4.0)
-    return new_figure(2, n_columns, width=width, height=2 * panel + 0.9)
+    return new_figure(2, n_columns, width=width, height=2 * panel + 0.9, sharey=True)
 
 
 def plot_phantom(ds: xr.Dataset) -> Figure:
@@ -262,6 +262,8 @@ def plot_phantom(ds: xr.Dataset) -> Figure:
         im = physical_image(ax, img, depth, x, **kw)
         ax.set_title(title)
         ax.xaxis.set_major_locator(MaxNLocator(2))
+        if ax.get_subplotspec().colspan.start > 0:
+            ax.set_ylabel("")  # the depth axis is shared along the row
         colorbar(fig, im, ax, label)
 
     show(axes[0, 0], ds.true_strain, "true strain", "axial strain", **strain_kw)
