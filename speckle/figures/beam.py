@@ -410,13 +410,13 @@ def plot_strain(ds: xr.Dataset) -> Figure:
     s = 100 * ds.strain.values
     nu = ds.attrs["poisson_ratio"]
     for ax, kind in zip(axes[0], ("complex", "intensity"), strict=True):
-        ax.plot(s, ds[f"{kind}_beam"], "o", label="beam, nu = 0")
-        ax.plot(s, ds[f"{kind}_beam_poisson"], "s", label=f"beam, nu = {nu:g}")
+        ax.plot(s, ds[f"{kind}_beam"], "o", label="beam, Poisson ratio ν = 0")
+        ax.plot(s, ds[f"{kind}_beam_poisson"], "s", label=f"beam, Poisson ratio ν = {nu:g}")
         ax.plot(s, ds[f"{kind}_lines"], "x", color="k", label="independent lines")
         if kind == "complex":
-            ax.plot(s, ds.complex_theory, "-", color="C0", lw=0.8, label="theory, nu = 0")
+            ax.plot(s, ds.complex_theory, "-", color="C0", lw=0.8, label="theory, ν = 0")
             ax.plot(
-                s, ds.complex_poisson_theory, "-", color="C1", lw=0.8, label=f"theory, nu = {nu:g}"
+                s, ds.complex_poisson_theory, "-", color="C1", lw=0.8, label=f"theory, ν = {nu:g}"
             )
         else:
             ax.plot(s, ds.intensity_lines_theory, ":", color="k", lw=0.8, label="theory, lines")

@@ -520,8 +520,12 @@ def scan_combine(points: list[xr.Dataset]) -> xr.Dataset:
 
 
 def plot_fig6a(ds: xr.Dataset) -> Figure:
-    """Reference image and correlation maps before/after exact and tracked compensation."""
-    fig, axes = new_figure(1, 4, width=14, height=4.4, sharey=True)
+    """Reference image and correlation maps before/after exact and tracked compensation, at the
+    physical aspect ratio (mm on both axes)."""
+    span_z = float(ds.depth[-1] - ds.depth[0]) or 1.0
+    span_x = float(ds.aline[-1] - ds.aline[0]) or 1.0
+    height = min(max(1.5 * span_z / span_x, 2.5), 6.0) + 1.0  # panels at 1 µm = 1 µm
+    fig, axes = new_figure(1, 4, width=11, height=height, sharey=True)
     axes = axes[0]
     extent = [
         float(ds.aline[0]) / 1e3,
@@ -536,7 +540,7 @@ def plot_fig6a(ds: xr.Dataset) -> Figure:
         vmin=-40,
         vmax=0,
         extent=extent,
-        aspect="auto",
+        aspect="equal",
     )
     axes[0].set_title("reference image")
     colorbar(fig, ref, axes[0], "|A| (dB re its maximum)", shrink=0.9)
@@ -548,7 +552,7 @@ def plot_fig6a(ds: xr.Dataset) -> Figure:
     im = None
     for ax, comp in zip(axes[1:], ds.compensation.values, strict=True):
         m = ds.correlation.sel(compensation=comp).transpose("depth", "aline")
-        im = ax.imshow(m, vmin=0, vmax=1, cmap="viridis", extent=extent, aspect="auto")
+        im = ax.imshow(m, vmin=0, vmax=1, cmap="viridis", extent=extent, aspect="equal")
         ax.set_title(f"{titles[str(comp)]}\nmean {float(m.mean()):.3f}")
     failed = ds.tracked_failed.values
     if failed.any():

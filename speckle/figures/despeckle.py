@@ -466,7 +466,7 @@ def plot_methods(ds: xr.Dataset) -> Figure:
         ax.set_xlabel(xl)
         ax.set_ylabel("speckle reduction C_single / C")
         ax.axhline(1.0, color="0.6", lw=0.5)
-    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside right upper", frameon=False)
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside right center", frameon=False)
     fig.suptitle(f"Every method on the phantom, receiver SNR {ds.attrs.get('snr_db'):g} dB")
     return fig
 
@@ -508,7 +508,13 @@ def plot_phantom(ds: xr.Dataset) -> Figure:
     show(axes[2], ds.single_look.values, "single look + noise")
     for i in range(nb):
         fam = str(ds.family.values[i])
-        how = str(ds.best_method.values[i]).removeprefix(fam).removesuffix(" + noise").strip()
+        how = (
+            str(ds.best_method.values[i])
+            .removeprefix(fam)
+            .removesuffix(" + noise")
+            .strip()
+            .replace("_", " ")
+        )
         show(
             axes[3 + i],
             ds.best.isel(family=i).values,
@@ -689,7 +695,7 @@ def plot_failure(ds: xr.Dataset) -> Figure:
     axes[0, 0].plot([], [], "x", color="k", label="x: stops helping")
     axes[0, 0].plot([], [], "x", color="r", label="x: erases the inclusion")
     axes[0, 0].plot([], [], "--", color="r", lw=0.6, label="erased below")
-    fig.legend(*axes[0, 0].get_legend_handles_labels(), loc="outside right upper", frameon=False)
+    fig.legend(*axes[0, 0].get_legend_handles_labels(), loc="outside right center", frameon=False)
     fig.suptitle("Where each family's method stops helping (top) or erases the inclusion (bottom)")
     return fig
 

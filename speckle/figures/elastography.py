@@ -167,7 +167,7 @@ def _map_figure(n_columns: int, ds: xr.Dataset):
     ratio = depth / (ds.sizes["aline"] * float(ds.attrs["pixel_size"]))
     width = 1.5 + 1.9 * n_columns
     panel = min(max((width / n_columns - 0.9) * ratio, 1.6), 4.0)
-    return new_figure(2, n_columns, width=width, height=2 * panel + 0.9)
+    return new_figure(2, n_columns, width=width, height=2 * panel + 0.9, sharey=True)
 
 
 def plot_phantom(ds: xr.Dataset) -> Figure:
@@ -186,6 +186,8 @@ def plot_phantom(ds: xr.Dataset) -> Figure:
         im = physical_image(ax, img, depth, x, **kw)
         ax.set_title(title)
         ax.xaxis.set_major_locator(MaxNLocator(2))
+        if ax.get_subplotspec().colspan.start > 0:
+            ax.set_ylabel("")  # the depth axis is shared along the row
         colorbar(fig, im, ax, label)
 
     show(axes[0, 0], ds.true_strain, "true strain", "axial strain", **strain_kw)
@@ -517,7 +519,6 @@ def plot_failure(ds: xr.Dataset) -> Figure:
         width=2.3 * len(FAILURE_SWEEPS) + 2.2,
         height=5.0,
         sharex="col",
-        sharey="row",
     )
     handles: dict = {}
     for j, name in enumerate(FAILURE_SWEEPS):
@@ -558,9 +559,11 @@ def plot_failure(ds: xr.Dataset) -> Figure:
             pred = ds["predicted_noise_snr_db"].values / ds.attrs["base_strain"]
             (line,) = axes[0, j].plot(xplot, pred, "k--", lw=0.8)
             handles.setdefault("predicted noise error (vector)", line)
-    axes[0, 0].set_ylabel("rms strain error / strain")
-    axes[1, 0].set_ylabel("fraction of pixels answered")
-    fig.legend(list(handles.values()), list(handles), loc="outside right upper", frameon=False)
+    for ax in axes[0]:
+        ax.set_ylabel("rms strain error / strain")
+    for ax in axes[1]:
+        ax.set_ylabel("fraction of pixels answered")
+    fig.legend(list(handles.values()), list(handles), loc="outside right center", frameon=False)
     fig.suptitle(
         f"Where each strain estimator fails: {ds.attrs['n_pixels']} x {ds.attrs['n_alines']} "
         f"pixel images, mean ± standard error over {ds.attrs['n_seeds']} seeds"
@@ -677,6 +680,8 @@ def plot_sequence(ds: xr.Dataset) -> Figure:
     axes[0, 1].plot(f, ds.rms_error_cumulative / ds.true_cumulative, "s-", label="rms / truth")
     axes[0, 1].set_xlabel("frame")
     axes[0, 1].set_ylabel("relative error of the cumulative strain")
+    for ax in axes[0]:
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     legend_outside(axes[0, 1])
     return fig
 

@@ -7,8 +7,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter
 
-from .style import legend_outside, new_figure
+from .style import new_figure
 
 __all__ = ["pareto_front", "plot_failure_map", "plot_speed_accuracy"]
 
@@ -68,11 +69,11 @@ def _chart_panel(ax, sc: xr.Dataset, title: str, *, legend: bool) -> None:
         ax.axhline(tol, color="0.8", lw=0.5, zorder=0)
     ax.set_xscale("log")
     ax.set_yscale("log")
+    ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("wall time (s)")
     ax.set_title(title)
     if legend:
         ax.set_ylabel("relative error against the direct sum")
-        legend_outside(ax)
 
 
 def plot_speed_accuracy(ds: xr.Dataset, beam: xr.Dataset | None = None) -> Figure:
@@ -84,7 +85,7 @@ def plot_speed_accuracy(ds: xr.Dataset, beam: xr.Dataset | None = None) -> Figur
     """
     rows = [ds] if beam is None else [ds, beam]
     n_col = max(r.sizes["scene"] for r in rows)
-    fig, axes = new_figure(len(rows), n_col, width=3.4 * n_col, height=3.4 * len(rows))
+    fig, axes = new_figure(len(rows), n_col, width=3.4 * n_col + 1.6, height=3.4 * len(rows))
     for i in range(ds.sizes["scene"]):
         sc = ds.isel(scene=i)
         title = f"N={int(sc.n_pixels)} px, {int(sc.n_lines)} lines, {float(sc.density):g}/px"
@@ -99,10 +100,15 @@ def plot_speed_accuracy(ds: xr.Dataset, beam: xr.Dataset | None = None) -> Figur
     for r, row in enumerate(rows):  # rows with fewer scenes than columns
         for ax in axes[r, row.sizes["scene"] :]:
             ax.remove()
+    handles: dict = {}
+    for ax in fig.axes:
+        for h, label in zip(*ax.get_legend_handles_labels(), strict=True):
+            handles.setdefault(label, h)
+    fig.legend(list(handles.values()), list(handles), loc="outside right center", frameon=False)
     tols = ds["tol"].values
     what = "A-scan methods (top) and scanned-beam methods (bottom)" if beam is not None else ""
     fig.suptitle(
-        f"Speed vs accuracy{', ' + what if what else ''}, knob tol = "
+        f"Speed against accuracy{', ' + what if what else ''}\ntolerance knob "
         f"{', '.join(f'{t:g}' for t in tols)} (grey lines); spectrum "
         f"{ds.attrs.get('spectrum_shape')}, k0/Δk = {ds.attrs.get('k0_dk')}; pipeline timings "
         "are noisy",
@@ -134,19 +140,22 @@ def plot_failure_map(ds: xr.Dataset) -> Figure:
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel(label + (" (0 drawn at 0.1)" if axis == "k0_dk" else ""))
+        ok = np.isfinite(xplot)
+        ax.set_xticks(xplot[ok], [f"{v:g}" for v in x[ok]])
+        ax.minorticks_off()
         ax.axhline(1e-6, color="0.6", lw=0.6, ls=":")
         if axis == "n_pixels":
             ax.set_ylabel("relative error against the direct sum")
     fig.legend(
         *axes[0].get_legend_handles_labels(),
-        loc="outside right upper",
+        loc="outside right center",
         frameon=False,
         title="case (dashed: predicted)",
     )
     fig.suptitle(
         "Failure map: markers measured, dashed predicted (auto's rules; < 1e-12 drawn "
         "at 1e-12); dotted: "
-        f"tol = 1e-6. Base N={ds.attrs.get('base_n_pixels')}, "
+        f"tolerance 1e-6.\nBase N={ds.attrs.get('base_n_pixels')}, "
         f"density={ds.attrs.get('base_density')}, k0/Δk={ds.attrs.get('base_k0_dk')}, "
         "depths over [0, 2H)",
         fontsize=8,

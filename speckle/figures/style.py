@@ -46,15 +46,14 @@ plt.rcParams.update(STYLE)
 #: Smallest legend font (points at :data:`DPI`) a reader can read; the figure checks hold it.
 MIN_LEGEND_PT = 8.0
 #: Strain estimators of the elastography figures (and the twin's failure chart): one colour per
-#: method in every figure of the family; ``*_aligned`` / ``*_unaligned`` share their method's
-#: hue family.
+#: method in every figure of the family (matplotlib's ``tab10``, none pale).
 ESTIMATOR_COLOURS = {
     "vector": "#1f77b4",
     "vector_aligned": "#17becf",
-    "vector_unaligned": "#9edae5",
+    "vector_unaligned": "#9467bd",
     "wls": "#ff7f0e",
     "wls_aligned": "#bcbd22",
-    "wls_unaligned": "#ffbb78",
+    "wls_unaligned": "#8c564b",
     "tracking": "#2ca02c",
     "correlation": "#d62728",
 }

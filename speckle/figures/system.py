@@ -264,7 +264,7 @@ def plot_psf(ds: xr.Dataset) -> Figure:
 
 def plot_rolloff(ds: xr.Dataset) -> Figure:
     """Measured roll-off (markers) against the closed form (line)."""
-    fig, axes = new_figure(1, 1, width=4.0, height=3.0)
+    fig, axes = new_figure(1, 1, width=6.5, height=3.2)
     ax = axes[0, 0]
     ax.plot(ds.depth, ds.camera_db, "k:", lw=1, label="analytic, camera only (exact)")
     ax.plot(ds.depth, ds.analytic_db, "k-", lw=1,

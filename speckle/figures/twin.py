@@ -108,7 +108,7 @@ def plot_compare(ds: xr.Dataset) -> Figure:
             ms=2,
         )
     ax.set(xlabel="row of the region", ylabel="mean ln I (minus its mean)", title="depth profile")
-    fig.legend(*axes[1, 0].get_legend_handles_labels(), loc="outside right upper", frameon=False)
+    fig.legend(*axes[1, 0].get_legend_handles_labels(), loc="outside right center", frameon=False)
     return fig
 
 
@@ -130,5 +130,5 @@ def plot_failure(ds: xr.Dataset) -> Figure:
         title="Strain estimators on the digital twin",
     )
     axes[1, 0].set(xscale="log", xlabel="interframe strain", ylabel="fraction of pixels answered")
-    fig.legend(*axes[0, 0].get_legend_handles_labels(), loc="outside right upper", frameon=False)
+    fig.legend(*axes[0, 0].get_legend_handles_labels(), loc="outside right center", frameon=False)
     return fig

@@ -69,7 +69,6 @@ from ..analysis.dynamics_theory import (
     speckle_variance_expected,
     ssada_expected,
 )
-from .failure import mean_and_se
 from ..conventions import attrs, coord, units_of
 from ..imaging.aline import pixel_depths
 from ..imaging.scan import beam_reach, image

@@ -8,7 +8,8 @@ drawn from a small Dataset, is checked for
 * no "um" for micrometres and no raw config key (``snr_db``, ``k0_dk``, ...: every key of the
   pipeline's config files with an underscore) in any text;
 * legend text of at least ``MIN_LEGEND_PT`` points, and no legend inside an axes covering its
-  data points.
+  data points;
+* the physical aspect ratio (1:1) for an image whose two axes are lengths in the same unit.
 
 Small inputs: the cheap data builders run at a few pixels; the expensive ones (sweeps over many
 methods, fits to the measured image) are replaced by Datasets of the same layout filled with
@@ -28,7 +29,6 @@ import xarray as xr
 import yaml
 from matplotlib.collections import QuadMesh
 from matplotlib.image import AxesImage
-from matplotlib.text import Text
 
 from speckle.figures import style as _style
 
@@ -69,6 +69,8 @@ def _config_keys() -> set[str]:
 
 RAW_KEYS = _config_keys()
 MICRON = re.compile(r"(?<![A-Za-z])um(?![A-Za-z])")
+#: An axis label in a length unit (an image with lengths on both axes is drawn 1:1).
+LENGTH = re.compile(r"\((µm|mm)\b")
 
 
 # --------------------------------------------------------------------------- the checks
@@ -110,13 +112,21 @@ def _legends(fig) -> list:
     return [*fig.legends, *[ax.get_legend() for ax in fig.axes if ax.get_legend() is not None]]
 
 
-def _covers_data(legend) -> bool:
-    """A legend drawn inside its axes over a data point of that axes."""
+def _anchored_outside(legend) -> bool:
+    """A legend anchored (``bbox_to_anchor``) to a point outside its axes: off the data."""
     ax = legend.axes
-    if ax is None or legend in fig_legends(ax.figure):
+    box = legend.get_bbox_to_anchor()
+    if box is ax.bbox:
         return False
+    corners = ax.transAxes.inverted().transform(box.get_points())
+    return bool(np.any((corners < 0) | (corners > 1)))
+
+
+def _covers_data(legend) -> bool:
+    """A legend drawn inside its axes over a data point (or line) of that axes."""
+    ax = legend.axes
     box = legend.get_window_extent()
-    if not ax.get_window_extent().contains(*box.p0) or not ax.bbox.contains(*box.p1):
+    if not ax.bbox.contains(*box.p0) or not ax.bbox.contains(*box.p1):
         return False  # placed outside the axes
     for line in ax.lines:
         xy = line.get_xydata()
@@ -137,13 +147,29 @@ def _covers_data(legend) -> bool:
     return False
 
 
-def fig_legends(fig) -> list:
-    return list(fig.legends)
+def _texts(fig) -> list:
+    """Titles, axis labels, annotations and legend entries (tick labels are numbers)."""
+    out = [*fig.texts]
+    for title in ("_suptitle", "_supxlabel", "_supylabel"):
+        if getattr(fig, title, None) is not None:
+            out.append(getattr(fig, title))
+    for ax in fig.axes:
+        out += [ax.title, ax._left_title, ax._right_title, ax.xaxis.label, ax.yaxis.label]
+        out += ax.texts
+    for legend in _legends(fig):
+        out += [*legend.get_texts(), legend.get_title()]
+    return out
 
 
 def figure_problems(fig) -> list[str]:
     """What a reader could not read off ``fig`` without the code (the module docstring)."""
-    fig.canvas.draw()
+    inside = [
+        ax.get_legend()
+        for ax in fig.axes
+        if ax.get_legend() is not None and not _anchored_outside(ax.get_legend())
+    ]
+    if inside:
+        fig.canvas.draw()  # where the legends inside an axes fall
     problems = []
     bars = _colorbar_axes(fig)
     for i, ax in enumerate(fig.axes):
@@ -153,6 +179,11 @@ def figure_problems(fig) -> list[str]:
         for which in ("x", "y"):
             if not _labelled(ax, which):
                 problems.append(f"{name}: no {which} label")
+    for ax in fig.axes:
+        lengths = [LENGTH.search(lab) for lab in (ax.get_xlabel(), ax.get_ylabel())]
+        if ax.images and all(lengths) and lengths[0][1] == lengths[1][1]:
+            if ax.get_aspect() != 1.0:
+                problems.append(f"image in {ax.get_title()!r}: lengths on both axes, not 1:1")
     images = _images(fig, bars)
     covered = {_key(m) for m in images if m.colorbar is not None}
     for m in images:
@@ -161,7 +192,7 @@ def figure_problems(fig) -> list[str]:
         problems.append(
             f"image in axes {fig.axes.index(m.axes)} ({m.axes.get_title()!r}): no colorbar"
         )
-    for text in fig.findobj(Text):
+    for text in _texts(fig):
         s = text.get_text()
         if not text.get_visible() or not s:
             continue
@@ -175,7 +206,7 @@ def figure_problems(fig) -> list[str]:
         for t in legend.get_texts():
             if t.get_fontsize() < _style.MIN_LEGEND_PT:
                 problems.append(f"legend text {t.get_text()!r} at {t.get_fontsize():g} pt")
-        if _covers_data(legend):
+        if legend in inside and _covers_data(legend):
             problems.append(f"legend {[t.get_text() for t in legend.get_texts()][:3]} covers data")
     return problems
 
@@ -257,10 +288,11 @@ def _histograms():
 
 
 def _system():
+    import speckle
     from speckle.figures import system as fs
-    from speckle.pipeline import adapters as _config
 
-    system = _config.system_from_config(SHEET)
+    sheet = {k: v for k, v in SHEET.items() if v is not None}
+    system = speckle.datasheet(**{**sheet, "camera_range_nm": tuple(SHEET["camera_range_nm"])})
     bscan = {**_merged_config()["system"]["bscan"], "n_alines": 8, "seed": 1, "dispersion": {}}
     return {
         "plot_psf": (fs.psf_dataset(system, [0.2, 0.6], {}),),
@@ -270,12 +302,7 @@ def _system():
 
 
 def _beam():
-    from speckle.figures import beam
-
-    cfg = _merged_config()
-    src, sec = cfg["source"], cfg["beam"]
-    ratios = [1.0, 2.0]
-    depth, x = np.arange(16) * 8.0, np.arange(6) * 4.0
+    depth, x, y = np.arange(16) * 8.0, np.arange(6) * 4.0, np.arange(5) * 4.0
     lag = np.arange(4)
     rng = _rng()
     field = rng.normal(size=(2, 16, 6)) + 1j * rng.normal(size=(2, 16, 6))
@@ -300,13 +327,22 @@ def _beam():
             "lateral_lag": ("lag", lag),
             "axial_lag": ("lag", lag),
         },
-        coords={"waist_pitch": ratios, "depth": depth, "x": x},
+        coords={"waist_pitch": [1.0, 2.0], "depth": depth, "x": x},
     )
-    return {
-        "plot_bscans": (bscans,),
-        "plot_strain": (beam.strain_data(src, sec, 1),),
-        "plot_volume": (beam.volume_data(src, sec, 1).load(),),
-    }
+    names = [
+        f"{k}_{w}" for k in ("complex", "intensity") for w in ("beam", "beam_poisson", "lines")
+    ]
+    strain = _fake(
+        {"strain": [0.0, 0.01, 0.02]},
+        {n: ("strain",) for n in [*names, "complex_theory", "complex_poisson_theory",
+                                  "intensity_lines_theory"]},
+        {"poisson_ratio": 0.45},
+    )  # fmt: skip
+    volume = xr.Dataset(
+        {"field": (("depth", "x", "y"), rng.normal(size=(16, 6, 5)) + 1j)},
+        coords={"depth": depth, "x": x, "y": y},
+    )
+    return {"plot_bscans": (bscans,), "plot_strain": (strain,), "plot_volume": (volume,)}
 
 
 def _deformation():
@@ -437,11 +473,6 @@ def _despeckle():
 def _elastography():
     from speckle.figures import elastography as el
 
-    cfg = _merged_config()["elastography"]
-    cfg.update(n_pixels=64, n_alines=8, methods=["vector", "wls"], window=[16, 4])
-    cfg["inclusion"].update(n_alines=8, radius=24.0)
-    cfg["sequence"]["n_frames"] = 3
-    cfg["speed"].update(windows=[16], repeat=1)
     methods = ["vector", "wls", "tracking", "correlation"]
     sweeps = {
         "strain": [1e-3, 1e-2],
@@ -463,17 +494,38 @@ def _elastography():
          "limit_speckle_displacement": 0.02, "base_strain": 2e-3, "n_pixels": 128,
          "n_alines": 8, "n_seeds": 2},
     )  # fmt: skip
+    depth, aline = np.arange(32) * 8.0, np.arange(8)
+    maps = _fake(
+        {"method": ["vector", "wls"], "depth": depth, "aline": aline},
+        {
+            "modulus": ("depth", "aline"),
+            "true_strain": ("depth", "aline"),
+            "strain": ("method", "depth", "aline"),
+            "error": ("method", "depth", "aline"),
+        },
+        {"pixel_size": 8.0},
+    )
+    maps["modulus"].attrs["units"] = "kPa"
+    speed = _fake(
+        {"method": ["vector", "wls"], "window": [16, 32]},
+        {"time_per_megapixel": ("method", "window"), "relative_rms_error": ("method", "window")},
+        {"strain": 2e-3},
+    )
+    sequence = _fake(
+        {"frame": [1, 2, 3]},
+        {f"{v}_cumulative": ("frame",) for v in ("true", "median", "rms_error")},
+    )
     large = _fake(
         {"frame": [1, 2], "depth": np.arange(32) * 8.0, "aline": np.arange(8) * 8.0},
         {"cumulative": ("frame", "depth", "aline")},
         {"pixel_size": 8.0},
     )
     return {
-        "plot_phantom": (el.phantom_data(cfg, 1),),
-        "plot_inclusion": (el.inclusion_data(cfg, 1),),
+        "plot_phantom": (maps,),
+        "plot_inclusion": (maps,),
         "plot_failure": (failure,),
-        "plot_speed": (el.speed_data(cfg, 1),),
-        "plot_sequence": (el.sequence_data(cfg, 1),),
+        "plot_speed": (speed,),
+        "plot_sequence": (sequence,),
         "plot_sequence_large": (large, 5e-4),
     }
 
@@ -601,9 +653,10 @@ def test_the_checks_find_what_they_look_for():
     axes[0, 0].plot([0, 1], [1, 0], label="a")  # through the upper left corner
     axes[0, 0].legend(fontsize=5, loc="upper left")
     axes[0, 0].set_title("depth (um) against snr_db")
-    axes[0, 1].imshow(np.eye(3))
+    axes[0, 1].imshow(np.eye(3), aspect="auto", extent=[0, 1, 1, 0])
+    axes[0, 1].set(xlabel="x (µm)", ylabel="depth (µm)")
     found = "\n".join(figure_problems(fig))
-    for what in ("no x label", "no y label", "no colorbar", "'um'", "snr_db", "5 pt", "covers"):
+    for what in ("no x label", "no colorbar", "'um'", "snr_db", "5 pt", "covers", "not 1:1"):
         assert what in found, what
     plt.close(fig)
     fig, axes = _style.new_figure(1, 2)

@@ -54,6 +54,8 @@ UNSTABLE_FITS = {
     "despeckle/methods.nc:edge_width": "erf fit of a step edge on speckle (seen 5e-12 apart)",
     "despeckle/methods.nc:edge_width_ratio": "the same fit, over the single look's",
     "despeckle/methods.nc:edge_width_se": "the same fit on each quarter of the lines",
+    "despeckle/methods.nc:resolution_loss_with_edge": "the larger of resolution_loss and "
+    "edge_width_ratio (the same fit)",
 }
 
 

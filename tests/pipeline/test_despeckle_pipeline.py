@@ -88,10 +88,14 @@ def test_methods_table_has_every_family_and_metric(results):
         "fwhm_lateral",
         "edge_width",
         "resolution_loss",
+        "resolution_loss_with_edge",
         "speckle_reduction",
         "time_per_mpx",
     ):
         assert np.isfinite(ds[v].values).mean() > 0.9, v
+    # the Pareto chart's resolution loss: the worse of the point-target and edge-width ratios
+    worse = np.fmax(ds.resolution_loss, ds.edge_width_ratio)
+    np.testing.assert_array_equal(ds.resolution_loss_with_edge, worse)
     # complex averaging of one realisation removes no speckle: rectangular sub-bands tiling the
     # band sum to the full-band field, so the contrast is the single look's exactly
     names = ds.technique.values.tolist()
