@@ -71,6 +71,7 @@ from ._rules import (
     NUFFT_TOL_FLOOR,
     choose,
     estimate_table,
+    finufft_threads,
     memory_limit,
     refuse_below_floor,
     refuse_float32,
@@ -89,7 +90,6 @@ from .carrier import float64_error_estimate
 from .gaussian_beam import Beam, BeamScene
 from .nufft import (
     FLOAT64_SHARE,
-    _finufft_threads,
     check_float64_placement,
     fine_grid_plan,
     fine_grid_size,
@@ -871,7 +871,7 @@ def finufft_beam_scan(
     opts = {} if upsampfac is None else {"upsampfac": upsampfac}
     f = finufft.nufft2d1(
         t, phi, c, (scene.n_pixels, n_modes), eps=tol / 20 if eps is None else eps, isign=1,
-        nthreads=_finufft_threads() if nthreads is None else nthreads, **opts,
+        nthreads=finufft_threads() if nthreads is None else nthreads, **opts,
     )  # fmt: skip
     m = np.arange(n_modes) - n_modes // 2
     ghat = w0 * math.sqrt(math.pi / 2) * np.exp(-((2 * np.pi * m / period) ** 2) * w0**2 / 8)

@@ -80,22 +80,6 @@ CHUNK_ELEMENTS = 1 << 21
 _EPS32 = float(np.finfo(np.float32).eps)
 
 
-def _finufft_threads() -> int:
-    """Threads to give FINUFFT by default: numba's thread count, capped by OpenMP's limit.
-
-    FINUFFT runs on OpenMP, whose limit is ``OMP_NUM_THREADS`` when it is set (Snakemake sets it
-    to a job's ``threads``); asking for more prints "nthreads=..., more than the ... physically
-    cores available" on every call. Explicit ``nthreads`` arguments are passed on unchanged.
-    """
-    import os
-
-    threads = numba.get_num_threads()
-    omp = os.environ.get("OMP_NUM_THREADS", "").split(",")[0].strip()
-    if omp.isdigit() and int(omp) > 0:
-        threads = min(threads, int(omp))
-    return max(1, threads)
-
-
 def kernel_width(tol: float) -> int:
     """ES kernel width ``w`` (fine-grid points) reaching relative accuracy ``tol`` at upsampling 2.
 

@@ -123,10 +123,10 @@ def test_finufft_threads_respect_openmp_limit(monkeypatch):
     sets to a job's threads): asking for more prints a warning on every call."""
     import numba
 
-    from speckle.imaging.nufft import _finufft_threads
+    from speckle.imaging._rules import finufft_threads  # private: the package's thread rule
 
     monkeypatch.setenv("OMP_NUM_THREADS", "1")
-    assert _finufft_threads() == 1
+    assert finufft_threads() == 1
     for unset in ("", "0", "x"):
         monkeypatch.setenv("OMP_NUM_THREADS", unset)
-        assert _finufft_threads() == numba.get_num_threads()
+        assert finufft_threads() == numba.get_num_threads()
