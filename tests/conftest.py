@@ -6,10 +6,17 @@ import os
 from pathlib import Path
 
 import matplotlib
+import numpy  # noqa: F401  (numpy's and scipy's OpenBLAS loaded, then limited below)
 import pytest
+import scipy.linalg  # noqa: F401
 from hypothesis import settings
+from threadpoolctl import threadpool_limits
 
 matplotlib.use("Agg")
+# One BLAS thread per test process: `pytest -n 2` runs two processes on two cores, where
+# OpenBLAS's second thread only spins (a 49 x 49 eigh: 0.17 ms of CPU on one thread, 11.5 ms on
+# two on the loaded machine). In this process only: Snakemake jobs set their own thread counts.
+threadpool_limits(1, user_api="blas")
 
 settings.register_profile("ci", max_examples=30, deadline=None, derandomize=True)
 settings.register_profile("dev", max_examples=30, deadline=None)

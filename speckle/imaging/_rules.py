@@ -22,6 +22,7 @@ __all__ = [
     "check_tol",
     "choose",
     "estimate_table",
+    "finufft_threads",
     "memory_limit",
     "psf_slots",
     "refuse_below_floor",
@@ -146,3 +147,21 @@ def choose(
         if err <= tol:
             ok[name] = cost
     return min(ok, key=ok.get)
+
+
+def finufft_threads() -> int:
+    """Threads to give FINUFFT by default: numba's thread count, capped by OpenMP's limit.
+
+    FINUFFT runs on OpenMP, whose limit is ``OMP_NUM_THREADS`` when it is set (Snakemake sets it
+    to a job's ``threads``); asking for more prints "nthreads=..., more than the ... physically
+    cores available" on every call. Explicit ``nthreads`` arguments are passed on unchanged.
+    """
+    import os
+
+    import numba
+
+    threads = numba.get_num_threads()
+    omp = os.environ.get("OMP_NUM_THREADS", "").split(",")[0].strip()
+    if omp.isdigit() and int(omp) > 0:
+        threads = min(threads, int(omp))
+    return max(1, threads)

@@ -60,13 +60,13 @@ from ._beam_kernels import _sort_scene, _spread_beam
 from ._kernels import (
     C2,
     LANES,
-    finufft_threads,
     parallel_section,
 )
 from ._rules import (
     NUFFT_TOL_FLOOR,
     choose,
     estimate_table,
+    finufft_threads,
     memory_limit,
     refuse_below_floor,
     refuse_float32,

@@ -123,8 +123,7 @@ def test_finufft_threads_respect_openmp_limit(monkeypatch):
     sets to a job's threads): asking for more prints a warning on every call."""
     import numba
 
-    # private: the thread-count rule is an implementation detail of the NUFFT paths
-    from speckle.imaging._kernels import finufft_threads
+    from speckle.imaging._rules import finufft_threads  # private: the package's thread rule
 
     monkeypatch.setenv("OMP_NUM_THREADS", "1")
     assert finufft_threads() == 1
