@@ -43,10 +43,12 @@ from ..imaging.scan import beam_reach
 from ..scene.shared import MAX_TILES
 from ..synthoct.files import ScannerConfig
 from .adapters import system_from_config
+from .dynamics_checks import check_dynamics
 
 __all__ = [
     "check_config",
     "check_despeckle",
+    "check_dynamics",
     "check_scan_table",
     "check_sections",
     "check_synthoct",
@@ -188,6 +190,14 @@ def check_config(config: Mapping, schema: Mapping | None = None) -> None:
         check_twin(config["twin"])
     if "synthoct" in config:
         check_synthoct(config["synthoct"])
+    if "dynamics" in config:
+        dyn = config["dynamics"]
+        check_dynamics(dyn)
+        for part in (None, "g1", "failure", "calibration"):
+            own = (dyn[part].get("geometry") or {}) if part else {}
+            geo = {**dyn["geometry"], **own}
+            key = f"dynamics.{part + '.' if part and 'tol' in own else ''}geometry.tol"
+            _tol(geo.get("method", "finufft"), geo.get("tol"), key, int(geo["n_pixels"]), False)
 
 
 def _elastography(el: Mapping) -> None:

@@ -21,6 +21,7 @@ __getattr__, __dir__, __all__ = attach(
     __name__,
     {
         "dynamics": ["FLOW_CONTRASTS", *functions_of(__name__, "dynamics")],
+        "dynamics_series": functions_of(__name__, "dynamics_series"),
         "looks": functions_of(__name__, "looks"),
         "twin": ["SystemFit", "fit_system"],
     },

@@ -53,32 +53,29 @@ from scipy.optimize import brentq
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
 from ..analysis.dynamics import (
-    g1,
-    liv,
     liv_array,
-    ocds,
-    speckle_variance,
     speckle_variance_array,
-    ssada,
     ssada_array,
 )
 from ..analysis.dynamics_theory import (
-    g1_brownian,
     g1_transverse_flow,
     liv_expected,
     speckle_variance_expected,
     ssada_expected,
 )
 from ..conventions import attrs, coord, units_of
-from ..imaging.aline import pixel_depths
-from ..imaging.scan import beam_reach, image
-from ..imaging.timeseries import bscan_series
-from ..imaging.truth import speckle_free_image
-from ..scene.motion import brownian_motion, flow_motion, poiseuille_velocity
-from ..scene.regions import background, cell_density, circle, layer, make_regions, region_label
-from ..scene.shared import shared_scene
+from ..imaging.scan import image
 from ..system.noise import add_noise
-from ..system.source import spectrum
+from ._flow import (
+    analysed_rows,
+    check_geometry,
+    homogeneous_phantom,
+    run_attrs,
+    scan_options,
+    signal_fraction,
+    signal_intensity,
+    snr_value,
+)
 from .failure import mean_and_se
 
 __all__ = [
@@ -88,8 +85,6 @@ __all__ = [
     "decorrelation_calibration",
     "expected_contrast",
     "flow_failure",
-    "g1_curves",
-    "phantom_series",
     "velocity_range",
 ]
 
@@ -97,19 +92,6 @@ __all__ = [
 FLOW_CONTRASTS = ("speckle_variance", "decorrelation", "liv")
 #: Status codes of the failure maps.
 BELOW_FLOOR, MEASURABLE, SATURATED = 0, 1, 2
-
-
-def _signal_fraction(snr_db: float) -> float:
-    """``s = SNR/(1 + SNR)``: the field correlation of two frames of one static pixel."""
-    snr = _snr(snr_db)
-    return 1.0 if math.isinf(snr) else 1.0 / (1.0 + 10.0 ** (-snr / 10.0))
-
-
-def _snr(snr_db: object) -> float:
-    """SNR in dB: a real number in [-300, 300], or +inf (no noise)."""
-    if isinstance(snr_db, int | float | np.floating) and np.isposinf(snr_db):
-        return math.inf
-    return check_real(snr_db, "snr_db", low=-300.0, high=300.0)
 
 
 def expected_contrast(contrast: str, g1: object, *, snr_db: float = math.inf) -> float:
@@ -145,7 +127,7 @@ def expected_contrast(contrast: str, g1: object, *, snr_db: float = math.inf) ->
     g = np.atleast_1d(as_finite_array(g1, "g1"))
     if g.ndim != 1 or g.size < 1 or np.any((g < 0) | (g > 1)):
         raise ValueError("g1 must hold |g1| in [0, 1] at frame lags 1 ... N-1 (N >= 2 frames)")
-    rho = np.r_[1.0, _signal_fraction(snr_db) * g]
+    rho = np.r_[1.0, signal_fraction(snr_db) * g]
     if contrast == "decorrelation":
         return ssada_expected([rho[1]])
     if contrast == "speckle_variance":
@@ -322,36 +304,6 @@ def contrast_estimates(
 # --- simulation --------------------------------------------------------------------------------
 
 
-def _phantom(geometry: dict, seed: int, max_shift: float) -> dict:
-    """A homogeneous 2-D shared scene wide enough for every shift, its spectrum and lines.
-
-    Equal amplitudes: the non-Gaussian (finite-density) part of the intensity covariance,
-    ``E|a|^4/(E|a|^2)^2`` over the scatterers per resolution cell, is half the Rayleigh one.
-    """
-    n = int(geometry["n_pixels"])
-    p = float(geometry["pixel_size"])
-    pitch = float(geometry.get("pitch", p))
-    w0 = float(geometry["waist"])
-    src = spectrum(n, n * p, k0_dk=float(geometry["k0_dk"]))
-    lines = np.arange(int(geometry["n_lines"])) * pitch
-    reach = beam_reach(w0)
-    rho = cell_density(float(geometry["density"]), p, pitch)
-    scene = shared_scene(
-        make_regions(background(density=rho, amplitude_model="equal")),
-        z_range=(0.0, n * p),
-        x_range=(lines[0] - max_shift - reach, lines[-1] + reach + pitch),
-        seed=seed,
-        tile=float(geometry.get("tile", 64.0)),
-    )
-    return {"scene": scene, "source": src, "lines": lines, "waist": w0}
-
-
-def _kw(geometry: dict) -> dict:
-    method = geometry.get("method", "finufft")
-    tol = geometry.get("tol", 1e-9) if method != "direct" else None
-    return {"method": method, "tol": tol}
-
-
 def _frames(ph: dict, shifts: np.ndarray, kw: dict) -> np.ndarray:
     """Complex frames of the scene translated by ``shifts`` (µm, along +x): (frame, depth, x).
 
@@ -371,12 +323,6 @@ def _noise(shape: tuple, seed: int) -> np.ndarray:
     return add_noise(ds, 0.0, seed=seed, signal_intensity=1.0).noise.values
 
 
-def _rows(geometry: dict) -> slice:
-    """Depth rows analysed: away from the scene's top and bottom (the PSF is cut there)."""
-    m = int(geometry.get("margin", 4))
-    return slice(m, int(geometry["n_pixels"]) - m)
-
-
 def _repeat_seeds(seed: int, repeats: int) -> list[tuple[int, int]]:
     """(scene seed, noise seed) of each repeat, from ``SeedSequence(seed)``."""
     out = []
@@ -384,20 +330,6 @@ def _repeat_seeds(seed: int, repeats: int) -> list[tuple[int, int]]:
         a, b = np.random.SeedSequence(seed, spawn_key=(r,)).generate_state(2)
         out.append((int(a), int(b)))
     return out
-
-
-def _check_geometry(geometry: object) -> dict:
-    if not isinstance(geometry, dict):
-        raise TypeError("geometry must be a dict (n_pixels, n_lines, pixel_size, ...)")
-    g = dict(geometry)
-    check_int(g.get("n_pixels"), "geometry.n_pixels", low=8)
-    check_int(g.get("n_lines"), "geometry.n_lines", low=2)
-    for key in ("pixel_size", "waist", "density", "k0_dk"):
-        check_real(g.get(key), f"geometry.{key}", low=0, low_inclusive=False)
-    m = check_int(g.get("margin", 4), "geometry.margin", low=0)
-    if 2 * m >= int(g["n_pixels"]) - 1:
-        raise ValueError("geometry.margin leaves fewer than 2 rows (need 2 margin < n_pixels - 1)")
-    return g
 
 
 def _positive_sorted(values: object, name: str, *, low: float = 0.0) -> np.ndarray:
@@ -471,7 +403,7 @@ def flow_failure(
     >>> ds.measured.dims
     ('contrast', 'velocity', 'snr_db', 'interval')
     """
-    g = _check_geometry(geometry)
+    g = check_geometry(geometry)
     vel = _positive_sorted(velocities, "velocities")
     snrs = np.atleast_1d(as_finite_array(snr_db, "snr_db"))
     if snrs.ndim != 1 or snrs.size == 0 or np.any(np.diff(snrs) <= 0):
@@ -487,8 +419,8 @@ def flow_failure(
     zz = check_real(z, "z", low=0, low_inclusive=False)
     if not isinstance(window, Sequence) or len(window) != 2:
         raise ValueError(f"window must be (pixels, lines), got {window!r}")
-    rows = _rows(g)
-    kw = _kw(g)
+    rows = analysed_rows(g)
+    kw = scan_options(g)
     max_shift = float(vel[-1] * dts[-1] * (nf - 1))
     nc, nv, ns, ni = len(FLOW_CONTRASTS), vel.size, snrs.size, dts.size
     flow = np.full((nc, nv, ns, ni, nr), np.nan)
@@ -497,8 +429,8 @@ def flow_failure(
     static_w: list[list[list[np.ndarray]]] = [[[] for _ in range(ns)] for _ in range(nc)]
     noise_w: list[list[list[np.ndarray]]] = [[[] for _ in range(ns)] for _ in range(nc)]
     for r, (scene_seed, noise_seed) in enumerate(_repeat_seeds(sd, nr)):
-        ph = _phantom(g, scene_seed, max_shift)
-        i_s = _signal_intensity(ph, g, kw)
+        ph = homogeneous_phantom(g, scene_seed, max_shift)
+        i_s = signal_intensity(ph, g, kw)
         cache: dict[float, np.ndarray] = {}
         frame0 = _frames(ph, np.zeros(1), kw)[0]
         unit = _noise((nf, *frame0.shape), noise_seed)
@@ -596,35 +528,7 @@ def flow_failure(
             "interval": coord("time", dts, "time between frames", dims="interval"),
         },
     )
-    return ds.assign_attrs(_meta(g, nf, window, nr, sd) | {"z": zz})
-
-
-def _signal_intensity(ph: dict, g: dict, kw: dict) -> float:
-    """Expected signal intensity ``E|A|^2`` of the analysed rows (speckle-free image)."""
-    truth = speckle_free_image(ph["scene"], ph["source"], waist=ph["waist"], x=ph["lines"], **kw)
-    return float(truth.values[_rows(g)].mean())
-
-
-def _meta(g: dict, nf: int, window: tuple, nr: int, sd: int) -> dict:
-    k0 = float(g["k0_dk"]) * math.pi / float(g["pixel_size"])  # k0 = k0_dk * N pi / H
-    return {
-        "n_pixels": int(g["n_pixels"]),
-        "n_lines": int(g["n_lines"]),
-        "pixel_size": float(g["pixel_size"]),
-        "pitch": float(g.get("pitch", g["pixel_size"])),
-        "waist": float(g["waist"]),
-        "waist_units": units_of("length"),
-        "k0": k0,
-        "k0_units": units_of("wavenumber"),
-        "density": float(g["density"]),
-        "n_frames": nf,
-        "window": list(int(w) for w in window),
-        "repeats": nr,
-        "seed": sd,
-        "motion": "transverse flow along +x (uniform), frames translated by v t interval",
-        "contrasts": "speckle_variance: var_t(I)/<I>^2 (1/N); decorrelation: ssada of one "
-        "band, 1 - mean A_t A_t+1 / ((A_t^2 + A_t+1^2)/2); liv: var_t(10 log10 I) in dB^2 (1/N)",
-    }
+    return ds.assign_attrs(run_attrs(g, nf, window, nr, sd) | {"z": zz})
 
 
 def decorrelation_calibration(
@@ -672,18 +576,18 @@ def decorrelation_calibration(
     >>> round(float(ds.theory[1]), 3)
     0.201
     """
-    g = _check_geometry(geometry)
+    g = check_geometry(geometry)
     vel = _positive_sorted(velocities, "velocities")
     dt = check_real(interval, "interval", low=0, low_inclusive=False)
-    snr = _snr(snr_db)
+    snr = snr_value(snr_db)
     nf = check_int(n_frames, "n_frames", low=2)
     nr = check_int(repeats, "repeats", low=2)
     sd = check_int(seed, "seed", low=0)
-    rows, kw = _rows(g), _kw(g)
+    rows, kw = analysed_rows(g), scan_options(g)
     out = np.full((vel.size, nr), np.nan)
     for r, (scene_seed, noise_seed) in enumerate(_repeat_seeds(sd, nr)):
-        ph = _phantom(g, scene_seed, float(vel[-1] * dt * (nf - 1)))
-        i_s = _signal_intensity(ph, g, kw)
+        ph = homogeneous_phantom(g, scene_seed, float(vel[-1] * dt * (nf - 1)))
+        i_s = signal_intensity(ph, g, kw)
         i_n = 0.0 if math.isinf(snr) else i_s / 10.0 ** (snr / 10.0)
         unit = None
         for i, v in enumerate(vel):
@@ -707,306 +611,8 @@ def decorrelation_calibration(
         },
         coords={"velocity": coord("velocity", vel)},
     )
-    meta = _meta(g, nf, (1, 1), nr, sd)
+    meta = run_attrs(g, nf, (1, 1), nr, sd)
     meta.pop("window")
     return ds.assign_attrs(
         meta | {"interval": dt, "interval_units": units_of("time"), "snr_db": snr}
-    )
-
-
-# --- the pipeline's phantom and g1 curves ------------------------------------------------------
-
-
-def _series(ph: dict, moved: xr.Dataset, kw: dict, snr_db: float, seed: int) -> xr.Dataset:
-    """Snapshot B-scans of a moved scene with receiver noise (one stream per frame and line)."""
-    out = bscan_series(moved, ph["source"], waist=ph["waist"], x=ph["lines"], **kw).compute()
-    if math.isinf(snr_db):
-        return out
-    return add_noise(out, snr_db, seed=seed, signal_intensity=ph["signal"])
-
-
-def g1_curves(
-    geometry: dict,
-    *,
-    diffusion: float,
-    velocity: float,
-    interval: float,
-    n_frames: int,
-    blocks: int,
-    snr_db: float,
-    seed: int,
-) -> xr.Dataset:
-    """Measured ``|g1|`` against lag of Brownian motion and transverse flow, with theory.
-
-    Each model moves a homogeneous 2-D shared scene (:func:`speckle.scene.motion.brownian_motion`,
-    :func:`~speckle.scene.motion.flow_motion` along ``+x``) over ``n_frames`` times
-    ``interval`` s apart, images it as repeated B-scans
-    (:func:`speckle.imaging.timeseries.bscan_series`) with receiver noise, and measures the
-    pooled ``|g1|`` over the analysed rows (:func:`speckle.analysis.dynamics.g1`, standard
-    error from ``blocks`` blocks of lines). Theory: ``s g1`` for lags > 0 (``s = SNR/(1 +
-    SNR)``, noise uncorrelated between frames) with
-    :func:`~speckle.analysis.dynamics_theory.g1_brownian` (the sampled band and the lateral
-    steps through the beam) and :func:`~speckle.analysis.dynamics_theory.g1_transverse_flow`.
-
-    Parameters
-    ----------
-    geometry : dict
-        As in :func:`flow_failure`.
-    diffusion : float
-        ``D`` in µm^2/s (>= 0).
-    velocity : float
-        Transverse flow velocity in µm/s (>= 0).
-    interval : float
-        Time between frames in s (> 0).
-    n_frames : int
-        Frames (>= 2): lags ``0 ... n_frames - 1``.
-    blocks : int
-        Blocks of lines for the standard error (>= 2).
-    snr_db : float
-        Receiver SNR in dB (``inf``: no noise).
-    seed : int
-        Root seed (scene, motion and noise streams spawned from it).
-
-    Returns
-    -------
-    xarray.Dataset
-        Over ``(model, lag)``, ``model`` = ``brownian``, ``transverse_flow`` and ``lag`` in s:
-        ``g1`` (measured ``|g1|``), ``g1_se``, ``g1_theory``; over ``model``: ``diffusion``
-        (µm^2/s, NaN for flow) and ``velocity`` (µm/s, NaN for Brownian); attrs ``k0``
-        (rad/µm, in the medium), ``refractive_index``, ``waist`` (µm), ``snr_db``.
-
-    Examples
-    --------
-    >>> geo = dict(n_pixels=16, n_lines=8, pixel_size=4.0, k0_dk=10.0, waist=8.0,
-    ...            density=4.0, margin=2)
-    >>> ds = g1_curves(geo, diffusion=0.5, velocity=1000.0, interval=1e-3, n_frames=3,
-    ...                blocks=2, snr_db=30.0, seed=0)
-    >>> ds.g1.dims, ds.lag.attrs["units"]
-    (('model', 'lag'), 's')
-    """
-    g = _check_geometry(geometry)
-    d = check_real(diffusion, "diffusion", low=0)
-    v = check_real(velocity, "velocity", low=0)
-    dt = check_real(interval, "interval", low=0, low_inclusive=False)
-    nf = check_int(n_frames, "n_frames", low=2)
-    nb = check_int(blocks, "blocks", low=2, high=int(g["n_lines"]))
-    snr = _snr(snr_db)
-    sd = check_int(seed, "seed", low=0)
-    kw = _kw(g)
-    rows = _rows(g)
-    times = np.arange(nf) * dt
-    seeds = np.random.SeedSequence(sd).generate_state(4)
-    ph = _phantom(g, int(seeds[0]), v * dt * (nf - 1))
-    ph["signal"] = _signal_intensity(ph, g, kw)
-    k0 = float(ph["source"].attrs["k0"])
-    s = _signal_fraction(snr)
-    moved = {
-        "brownian": brownian_motion(ph["scene"], times, diffusion=d, seed=int(seeds[1])),
-        "transverse_flow": flow_motion(ph["scene"], times, velocity=[0.0, v]),
-    }
-    theory = {
-        "brownian": g1_brownian(
-            times, diffusion=d, k0=k0, spectrum=ph["source"], waist=g["waist"], lateral_axes=1
-        ),
-        "transverse_flow": g1_transverse_flow(times, velocity=v, waist=g["waist"]),
-    }
-    parts = []
-    for name, sc in moved.items():
-        series = _series(ph, sc, kw, snr, int(seeds[2]))
-        meas = g1(series.field.isel(depth=rows), blocks=nb)
-        th = np.where(np.arange(nf) == 0, 1.0, s * theory[name])
-        parts.append(
-            xr.Dataset(
-                {
-                    "g1": np.abs(meas.g1).assign_attrs(attrs("correlation", "measured |g1|")),
-                    "g1_se": meas.g1_se,
-                    "g1_theory": ("lag", th, attrs("correlation", "|g1| theory (with noise)")),
-                }
-            )
-        )
-    ds = xr.concat(parts, dim="model", coords="minimal", compat="override")
-    ds = ds.assign_coords(model=("model", list(moved)))
-    ds["diffusion"] = ("model", [d, np.nan], attrs("diffusion", "diffusion coefficient D"))
-    ds["velocity"] = ("model", [np.nan, v], attrs("velocity", "transverse flow velocity"))
-    meta = _meta(g, nf, (1, 1), 1, sd)
-    for key in ("window", "repeats", "motion", "contrasts"):
-        meta.pop(key)
-    return ds.assign_attrs(
-        meta
-        | {
-            "k0": k0,
-            "refractive_index": 1.0,
-            "interval": dt,
-            "interval_units": units_of("time"),
-            "snr_db": snr,
-            "blocks": nb,
-            "signal_fraction": s,
-        }
-    )
-
-
-def phantom_series(
-    geometry: dict,
-    phantom: dict,
-    *,
-    snr_db: float,
-    seed: int,
-) -> xr.Dataset:
-    """A phantom imaged as an angiography protocol and as a dynamic-OCT series, with contrasts.
-
-    Static layer 1 (``z < interface``) holding a disc of Brownian "cells", static layer 2 below
-    holding a vessel (a band of half-width ``radius`` about ``depth``) with Poiseuille flow
-    along ``+x``. The angiography protocol images ``angiography.frames`` snapshot B-scans
-    ``angiography.interval`` s apart and computes speckle variance (over the mean intensity
-    squared of each pixel's series pooled in the window), SSADA and LIV; the dOCT series images
-    ``doct.frames`` B-scans ``doct.interval`` s apart and computes LIV and OCDS (delays
-    ``doct.delays``). Receiver noise at ``snr_db`` over the mean signal intensity.
-
-    Parameters
-    ----------
-    geometry : dict
-        As in :func:`flow_failure` (``n_lines`` lines of pitch ``pixel_size``).
-    phantom : dict
-        ``interface`` (µm), ``backscatter`` (two layers), ``cells`` (``centre`` (z, x) µm,
-        ``radius`` µm, ``diffusion`` µm^2/s, ``fraction`` moving), ``vessel`` (``depth``,
-        ``radius`` µm, ``peak_velocity`` µm/s), ``angiography`` and ``doct`` (``frames``,
-        ``interval`` s; dOCT ``delays`` (s, s)), ``window`` (pixels, lines), ``n_bands``
-        (SSADA sub-bands).
-    snr_db : float
-        Receiver SNR in dB.
-    seed : int
-        Root seed.
-
-    Returns
-    -------
-    xarray.Dataset
-        The contrast images over ``(depth, x)``: ``labels``, ``structure`` (dB re the mean
-        signal), ``speckle_variance``, ``ssada``, ``liv`` (angiography), ``liv_doct``,
-        ``ocds`` (dOCT), and over ``region`` each contrast's mean (``<name>_region``).
-
-    Examples
-    --------
-    >>> geo = dict(n_pixels=16, n_lines=8, pixel_size=4.0, k0_dk=10.0, waist=8.0,
-    ...            density=4.0, method="direct")
-    >>> ph = dict(interface=24.0, backscatter=[1.0, 2.0],
-    ...           cells=dict(centre=[12.0, 16.0], radius=6.0, diffusion=0.5),
-    ...           vessel=dict(depth=44.0, radius=8.0, peak_velocity=2000.0),
-    ...           angiography=dict(frames=3, interval=2e-3),
-    ...           doct=dict(frames=4, interval=4e-3, delays=[4e-3, 8e-3]),
-    ...           window=[3, 3], n_bands=2)
-    >>> phantom_series(geo, ph, snr_db=30.0, seed=1).ssada.dims
-    ('depth', 'x')
-    """
-    g = _check_geometry(geometry)
-    sd = check_int(seed, "seed", low=0)
-    snr = _snr(snr_db)
-    kw = _kw(g)
-    n, p = int(g["n_pixels"]), float(g["pixel_size"])
-    pitch = float(g.get("pitch", p))
-    w0 = float(g["waist"])
-    src = spectrum(n, n * p, k0_dk=float(g["k0_dk"]))
-    lines = np.arange(int(g["n_lines"])) * pitch
-    rho = cell_density(float(g["density"]), p, pitch)
-    cells, vessel = phantom["cells"], phantom["vessel"]
-    b1, b2 = (float(b) for b in phantom["backscatter"])
-    regions = make_regions(
-        layer(0.0, float(phantom["interface"]), density=rho, backscatter=b1),
-        layer(float(phantom["interface"]), n * p, density=rho, backscatter=b2),
-        circle(*cells["centre"], cells["radius"], density=rho, backscatter=b1),
-        layer(
-            float(vessel["depth"]) - float(vessel["radius"]),
-            float(vessel["depth"]) + float(vessel["radius"]),
-            density=rho,
-            backscatter=b2,
-        ),
-    )
-    seeds = np.random.SeedSequence(sd).generate_state(6)
-    reach = beam_reach(w0)
-    scene = shared_scene(
-        regions,
-        z_range=(0.0, n * p),
-        x_range=(lines[0] - reach, lines[-1] + reach + pitch),
-        seed=int(seeds[0]),
-        tile=float(g.get("tile", 64.0)),
-    )
-    ph = {"scene": scene, "source": src, "lines": lines, "waist": w0}
-    truth = speckle_free_image(scene, src, waist=w0, x=lines, **kw)
-    ph["signal"] = float(truth.values.mean())
-    vel = poiseuille_velocity(
-        scene,
-        peak_velocity=float(vessel["peak_velocity"]),
-        radius=float(vessel["radius"]),
-        centre=(float(vessel["depth"]), 0.0),
-        direction=(0.0, 1.0),
-    )
-
-    def move(times: np.ndarray, key: int) -> xr.Dataset:
-        moved = brownian_motion(
-            scene,
-            times,
-            diffusion=float(cells["diffusion"]),
-            seed=int(seeds[key]),
-            regions=[2],
-            fraction=float(cells.get("fraction", 1.0)),
-        )
-        return flow_motion(moved, times, velocity=vel, regions=[3])
-
-    an, dc = phantom["angiography"], phantom["doct"]
-    window = tuple(int(w) for w in phantom["window"])
-    t_an = np.arange(int(an["frames"])) * float(an["interval"])
-    t_dc = np.arange(int(dc["frames"])) * float(dc["interval"])
-    angio = _series(ph, move(t_an, 1), kw, snr, int(seeds[3]))
-    doct = _series(ph, move(t_dc, 2), kw, snr, int(seeds[4]))
-    mean_i = angio.intensity.mean("time")
-    sv = speckle_variance(angio, window=window) / (
-        mean_i.rolling(depth=window[0], x=window[1], center=True, min_periods=1).mean() ** 2
-    )
-    labels = _labels(regions, src, lines)
-    out = xr.Dataset(
-        {
-            "labels": labels,
-            "structure": (10 * np.log10(mean_i / ph["signal"])).assign_attrs(
-                attrs("dimensionless", "mean intensity, dB re the mean signal")
-            ),
-            "speckle_variance": sv.assign_attrs(
-                attrs("dimensionless", "speckle variance over the local mean intensity squared")
-            ),
-            "ssada": ssada(angio, n_bands=int(phantom.get("n_bands", 4)), window=window),
-            "liv": liv(angio, window=window),
-            "liv_doct": liv(doct, window=window),
-            "ocds": ocds(doct, delays=tuple(float(t) for t in dc["delays"]), window=window),
-        }
-    )
-    out.attrs.update(
-        _meta(g, int(an["frames"]), window, 1, sd)
-        | {
-            "angiography_interval": float(an["interval"]),
-            "doct_frames": int(dc["frames"]),
-            "doct_interval": float(dc["interval"]),
-            "interval_units": units_of("time"),
-            "snr_db": snr,
-            "region_names": "layer 1, layer 2, cells (Brownian), vessel (Poiseuille flow)",
-        }
-    )
-    for key in ("motion", "contrasts", "repeats"):
-        out.attrs.pop(key)
-    names = ("speckle_variance", "ssada", "liv", "liv_doct", "ocds")
-    region = coord("region", np.arange(4))
-    for name in names:
-        means = [float(out[name].where(labels == r).mean()) for r in range(4)]
-        out[f"{name}_region"] = ("region", means, {**out[name].attrs})
-    out = out.assign_coords(region=region)
-    return out
-
-
-def _labels(regions: xr.Dataset, src: xr.DataArray, lines: np.ndarray) -> xr.DataArray:
-    """Region label of every pixel centre (depth, x)."""
-    depth = pixel_depths(int(src.attrs["n_pixels"]), float(src.attrs["depth_range"]))
-    zz, xx = np.meshgrid(depth, lines, indexing="ij")
-    lab = np.asarray(region_label(regions, zz, xx))
-    return xr.DataArray(
-        lab.astype(np.int32),
-        dims=("depth", "x"),
-        coords={"depth": coord("depth", depth), "x": coord("x", lines)},
-        attrs=attrs("label", "region label (0, 1 layers, 2 cells, 3 vessel)"),
     )
