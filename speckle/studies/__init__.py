@@ -9,7 +9,8 @@ estimators never import them.
 ``twin`` fits the model's system to a user's image and predicts its strain limits;
 ``realism`` scores which effect makes a simulated image look measured; ``failure`` scores strain
 estimators on pairs of known strain (the failure maps); ``looks`` forms the physical
-compounding looks (angle, offset, polarization, time) of one scene.
+compounding looks (angle, offset, polarization, time) of one scene; ``phantom`` fits a
+layered SynthOCT phantom to a scan (the challenge's inverse problem).
 Names load on first use (SPEC 1, ``lazy_loader``).
 """
 
@@ -20,6 +21,7 @@ __getattr__, __dir__, __all__ = attach(
     {
         "dynamics": ["FLOW_CONTRASTS", *functions_of(__name__, "dynamics")],
         "looks": functions_of(__name__, "looks"),
+        "phantom": ["PhantomFit", "fit_phantom"],
         "twin": ["SystemFit", "fit_system"],
     },
 )
