@@ -576,8 +576,8 @@ def fit_phantom(
         },
         coords={"layer": coord("layer", np.arange(n_layers))},
         attrs={
-            "window_top": wt,
-            "window_top_se": wt_se,
+            "window_top": wt * _NEPER_DB,
+            "window_top_se": wt_se * _NEPER_DB,
             "window_top_units": units_of("level"),
             "criterion": "least BIC = sum (residual/s_q)^2 + (3K - 1) ln n of the row-mean ln I "
             "profile, fewer layers while a boundary's slope and level steps are both < 3 SE",
