@@ -291,3 +291,22 @@ def test_closed_loop_scored_at_the_floor():
     # 0.851 / 0.733 / 0.847 / 0.782; SE of the difference 0.002 / 0.006 / 0.017 / 0.037
     assert np.all(ours.mean(axis=0) > floor.mean(axis=0) - 0.02 - 2 * se)
     assert np.all(np.abs(ours.mean(axis=0) - floor.mean(axis=0))[:2] < 0.02)
+
+
+def test_render_and_ini_path(tmp_path):
+    cfg, table, tops, _ = virtual_patient(1)
+    scan = speckle.synthoct_scan(table, cfg)
+    ini = tmp_path / "Configuration.ini"
+    speckle.write_scanner_config(cfg, ini)
+    png = tmp_path / "scan.png"
+    speckle.write_scan(scan, png)
+    fit = fit_phantom(png, ini)
+    same = fit_phantom(scan, cfg)
+    assert fit.layers.identical(same.layers)
+    again = fit.render(5)
+    assert again.dims == ("depth", "x") and again.shape == scan.shape
+    assert again.dtype == np.uint8 and int(again.max()) == 255
+    # the re-rendered scan is fitted back to the same layers
+    refit = fit_phantom(again, cfg).layers
+    assert refit.sizes["layer"] == tops.size
+    assert abs(float(refit.top[1]) - float(fit.layers.top[1])) < cfg.pixel_size
