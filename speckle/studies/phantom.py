@@ -219,7 +219,8 @@ class PhantomFit:
         attenuation ``mu``, 1/µm), ``density`` (scatterers per µm^3, in the slab ``|y| <= r``),
         ``energy`` (%), ``rho_e`` (``rho E/100``, per µm^3, what the scan identifies at high
         density), each with ``*_se``; ``density_bound`` (lower bound where ``density`` is NaN)
-        and ``energy_bound`` (upper bound), ``log_variance`` (``var ln I``, shadowing spread
+        and ``energy_bound`` (upper bound; both NaN too where the layer has no rows with at
+        most 1 % clipped pixels), ``log_variance`` (``var ln I``, shadowing spread
         removed) with its SE. Attributes: ``window_top`` (dB re ``|A| = 1``, the 51 dB window's
         top) and ``window_top_se``, ``criterion``, ``bic`` (per ``K``), ``rows``.
     config : ScannerConfig
