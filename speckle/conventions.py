@@ -36,11 +36,13 @@ phantom       1           a SynthOCT phantom by name (e.g. Exp2_Layers_A)
 origin        1           where a SynthOCT scan or score comes from (published, drop-in)
 boundary      um          depth of a two-layer phantom's boundary
 energy        percent     backscattered energy of a phantom's scatterers (the file's %)
+layer         1           layer of a fitted phantom, 0 at the top (:mod:`speckle.studies.phantom`)
 ============  ==========  ===============================================================
 
 Data variables (:data:`QUANTITIES`): ``field``, ``amplitude``, ``weight``, ``correlation``,
 ``contrast``, ``dimensionless``, ``label``, ``count``, ``probability`` (1); ``length``,
-``displacement``, ``depth_range`` (um); ``area_density`` (um-2); ``scene_density`` (um^-d,
+``displacement``, ``depth_range`` (um); ``area_density`` (um-2); ``volume_density`` (um-3);
+``percent``; ``scene_density`` (um^-d,
 per µm^2 or µm^3 of a 2-D or 3-D scene); ``level`` (dB,
 ``20 log10 |A|``); ``pixels`` (pixel); ``line_density`` (1/pixel) and ``beam_density``
 (1/(pixel line)); ``modulus``, ``stress`` (kPa); ``attenuation`` (1/um); ``diffusion``
@@ -108,6 +110,7 @@ COORDS: dict[str, tuple[str, str]] = {
     "origin": ("1", "origin of a scan or score"),
     "boundary": ("um", "depth of the layer boundary"),
     "energy": ("percent", "backscattered energy per scatterer"),
+    "layer": ("1", "layer index from the top"),
 }
 
 #: Data-variable quantity -> (units, long_name); a variable's own long name may be more specific.
@@ -122,6 +125,8 @@ QUANTITIES: dict[str, tuple[str, str]] = {
     "displacement": ("um", "displacement"),
     "depth_range": ("um", "unambiguous depth H"),
     "area_density": ("um-2", "scatterers per square micrometre"),
+    "volume_density": ("um-3", "scatterers per cubic micrometre"),
+    "percent": ("percent", "percentage"),
     "scene_density": ("um^-d", "scatterers per um^d of a d-dimensional scene (d = 2 or 3)"),
     "level": ("dB", "level 20 log10 |A|"),
     "label": ("1", "region label"),

@@ -11,7 +11,8 @@ estimators never import them.
 estimators on pairs of known strain (the failure maps); ``speed`` times the synthesis methods
 against their accuracy and maps where each fails; ``suppression`` builds the
 speckle-suppression phantom and scores images against its truth; ``looks`` forms the physical
-compounding looks (angle, offset, polarization, time) of one scene.
+compounding looks (angle, offset, polarization, time) of one scene; ``phantom`` fits a
+layered SynthOCT phantom to a scan (the challenge's inverse problem).
 Names load on first use (SPEC 1, ``lazy_loader``).
 """
 
@@ -23,6 +24,7 @@ __getattr__, __dir__, __all__ = attach(
         "dynamics": ["FLOW_CONTRASTS", *functions_of(__name__, "dynamics")],
         "dynamics_series": functions_of(__name__, "dynamics_series"),
         "looks": functions_of(__name__, "looks"),
+        "phantom": ["PhantomFit", "fit_phantom"],
         "twin": ["SystemFit", "fit_system"],
     },
 )
