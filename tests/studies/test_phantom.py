@@ -328,6 +328,7 @@ def test_mean_shadowing_constant_against_the_scanners_law():
 
     SE of that mean (compound Poisson): ``(E/100) sqrt(rho H int (mean_i W_i^2)^2 dx dy)``.
     """
+    # private: the scanner core's own shadowing law is what this test holds the constant against
     from speckle.synthoct import _scan
 
     cfg = SMALL
