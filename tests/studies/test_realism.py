@@ -99,14 +99,14 @@ def test_realism_target_without_the_measured_file(tmp_path, repo_root):
         "workflow/config/ci.yaml",
         str(override),
         "--",
-        "results/realism/realism.png",
+        "results_ci/realism/realism.png",  # the CI config writes to results_ci/
     ]
     env = {"PYTHONPATH": str(tmp_path), "PATH": __import__("os").environ["PATH"]}
     proc = subprocess.run(cmd, cwd=tmp_path, env=env, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    ds = open_dataset(tmp_path / "results/realism/realism.nc")
+    ds = open_dataset(tmp_path / "results_ci/realism/realism.nc")
     assert ds.attrs["measured"].startswith("none: not configured")
     assert "model_autocorrelation" in ds and "measured_autocorrelation" not in ds
     assert np.all(np.isfinite(ds.model_autocorrelation))
-    log = (tmp_path / "results/logs/realism.log").read_text()
+    log = (tmp_path / "results_ci/logs/realism.log").read_text()
     assert "drawing the model only" in log
