@@ -266,6 +266,8 @@ def frequency_looks(img: xr.Dataset | xr.DataArray, windows: object) -> xr.DataA
         raise ValueError(
             f"windows must have shape (looks, {n}) for an image of {n} depth pixels, got {w.shape}"
         )
+    if np.any(w < 0):
+        raise ValueError("windows must be non-negative spectral weights (subband_windows)")
     idx = np.arange(n) - n // 2  # spectral index n of sample position 0 ... N-1
     wrapped = np.zeros_like(w)
     wrapped[:, idx % n] = w  # window on the FFT's bin order

@@ -40,6 +40,8 @@ Methods (``method=``)
     stepped by ``step`` pixels in depth and side by side in aline, interpolated to every pixel,
     then a least-squares gradient over the window (unit weights: closed form from two running
     sums). Serves supra-pixel displacements; its noise floor is set by the registration error.
+    Quality: ``1 - registration error``; NaN below ``min_quality`` (:data:`TRACK_MIN_QUALITY`,
+    0.1: unrelated images stay below it).
 ``"correlation"``
     Correlation stability: the deformed image is compensated with the tracked displacement
     (:func:`speckle.compensate`, no carrier; tracked every 16 px by default, the displacement
@@ -48,7 +50,8 @@ Methods (``method=``)
     the spectrum measured from the reference image (computed by
     :func:`speckle.analysis.expected_gamma`: the same integrals, one NUFFT for every strain)
     is inverted: returns the strain *magnitude*. Quality = the local correlation; NaN where it
-    is below the theory's range.
+    is below the theory's range or below ``min_quality`` (:data:`CORRELATION_MIN_QUALITY`,
+    0.25: unrelated images reach lower correlations by chance).
 
 Alignment (``align=``, vector and wls)
 -------------------------------------
@@ -97,6 +100,20 @@ __all__ = [
 METHODS = ("vector", "wls", "tracking", "correlation")
 DISPLACEMENT_METHODS = ("phase", "tracking")
 DEFAULT_METHOD = "vector"
+#: Tracking quality ``1 - registration error`` below which a tracked window has no answer
+#: (tracking and correlation methods): ``1 - sqrt(1 - rho^2)`` = 0.1 is a normalised peak
+#: correlation ``rho`` = 0.44. Measured (issue 36; 256 x 32 pixels, Gaussian spectrum, R = 10):
+#: unrelated scenes give at most 0.042 (99 % below 0.034); 2 % strain at least 0.13 (1st
+#: percentile), 1 % 0.37; at 4 % strain (0.02, as unrelated) the tracked strain is wrong.
+#: Narrower windows have a higher null (single A-line windows: 56 % of unrelated pixels pass
+#: 0.1): raise ``min_quality`` with them.
+TRACK_MIN_QUALITY = 0.1
+#: Local amplitude correlation (the correlation method's quality) below which it has no answer:
+#: unrelated scenes reach it by chance. Measured (issue 36; 256 x 32 pixels, R = 10, windows
+#: 32 x 8): unrelated scenes give correlations up to 0.26 (99 % below 0.17; 31 % of the pixels
+#: answered a median strain of 0.048 without this bound, 0.09 % with it); 3 % strain has median
+#: 0.37 (its median estimate moves from 0.0275 to 0.0268), 2 % 0.64 (unchanged).
+CORRELATION_MIN_QUALITY = 0.25
 #: Default window (depth, aline) in pixels of each method.
 DEFAULT_WINDOWS = {
     "vector": (32, 4),
@@ -114,10 +131,22 @@ OPTIONS = {
         "align": "auto",
     },
     "wls": {"lag": None, "max_bias": DEFAULT_MAX_BIAS, "min_quality": 0.5, "align": "auto"},
-    "tracking": {"track_window": 32, "step": 8, "upsample": 20, "oversample": 2},
+    "tracking": {
+        "track_window": 32,
+        "step": 8,
+        "upsample": 20,
+        "oversample": 2,
+        "min_quality": TRACK_MIN_QUALITY,
+    },
     # the correlation method tracks only to compensate: a smooth displacement, so coarser steps
     # do (step 16: same rms error as 8 on the benchmark pair, half the registrations)
-    "correlation": {"track_window": 32, "step": 16, "upsample": 20, "oversample": 2},
+    "correlation": {
+        "track_window": 32,
+        "step": 16,
+        "upsample": 20,
+        "oversample": 2,
+        "min_quality": CORRELATION_MIN_QUALITY,
+    },
 }
 #: Tracking that aligns the pair for the phase methods (``align``): window (depth, aline)
 #: pixels, step (depth, aline) pixels; the displacement field is smooth, so coarse steps do.
@@ -467,6 +496,17 @@ def _tracked(a1, a2, window, step, upsample, oversample, lateral=True, outside="
     return out[0], out[1], tr
 
 
+def _check_shape_options(opts: dict, n: int) -> None:
+    """Options whose range depends on the image's ``n`` depth pixels (``lag``,
+    ``track_window``, ``step``), checked as the methods will (:func:`_lag`,
+    :func:`_track_options`) but up front: a lazy frame stack would meet them at ``compute``."""
+    if opts.get("lag") is not None:
+        check_int(opts["lag"], "lag", low=1, high=n - 2)
+    if "track_window" in opts:
+        tw = check_int(opts["track_window"], "track_window", low=4, high=n)
+        check_int(opts["step"], "step", low=1, high=tw)
+
+
 def _track_options(a1, wx, opts):
     tw = check_int(opts["track_window"], "track_window", low=4, high=a1.shape[0])
     step = check_int(opts["step"], "step", low=1, high=tw)
@@ -484,6 +524,7 @@ def _track_options(a1, wx, opts):
 def _tracking(a1, a2, k0, p, wz, wx, opts):
     kw = _track_options(a1, wx, opts)
     uz, quality, _ = _tracked(a1, a2, **kw)
+    uz = np.where(quality >= opts["min_quality"], uz, np.nan)  # no answer below the threshold
     strain = -_pooled_slope(uz, None, wz, 1)
     return strain, quality, {"track_window": kw["window"][0]}
 
@@ -624,7 +665,7 @@ def _correlation(a1, a2, k0, p, wz, wx, opts):
     r = correlation_array(np.abs(a1), np.abs(comp), (wz, wx))
     ts, tv = (x[::-1] for x in correlation_theory(_measured_spectrum(a1, k0, p)))
     strain = np.interp(r, tv, ts, left=np.nan, right=0.0)
-    strain = np.where(covered & np.isfinite(r), strain, np.nan)
+    strain = np.where(covered & np.isfinite(r) & (r >= opts["min_quality"]), strain, np.nan)
     return strain, r, {"theory_min_correlation": float(tv[0])}
 
 
@@ -719,9 +760,10 @@ def estimate_strain(
         Also return the quality map (correlation or phase coherence, 0-1).
     **options
         Method options (:data:`OPTIONS`): ``lag`` (pixels; default from the image's
-        autocorrelation), ``max_bias``, ``min_quality`` (NaN below it), ``align`` (True, False
-        or "auto", default), ``wrap_check`` (vector: multi-lag unwrapping); ``track_window``,
-        ``step``, ``upsample``, ``oversample`` (tracking, correlation).
+        autocorrelation), ``max_bias``, ``min_quality`` (NaN below it; every method),
+        ``align`` (True, False or "auto", default), ``wrap_check`` (vector: multi-lag
+        unwrapping); ``track_window``, ``step``, ``upsample``, ``oversample`` (tracking,
+        correlation).
 
     Returns
     -------
@@ -900,7 +942,8 @@ def estimate_displacement(
     _, wx = _check_window(window, (2, 1), a1.shape)
     if method == "tracking":
         opts = _options("tracking", options)
-        uz = _tracked(a1, a2, **_track_options(a1, wx, opts))[0] * p
+        uz, quality, _ = _tracked(a1, a2, **_track_options(a1, wx, opts))
+        uz = np.where(quality >= opts["min_quality"], uz, np.nan) * p  # no answer below it
     else:
         allowed = {"lag": None, "max_bias": DEFAULT_MAX_BIAS}
         unknown = set(options) - set(allowed)
@@ -1094,7 +1137,9 @@ def accumulate_strain(
         relative to frame 0 on frame 0's pixels) and ``position`` (pixel ``y_{i+1}`` of each
         frame-0 pixel in frame ``i+1``). The input's depth and aline coordinates are kept
         (else depth = pixel index times ``pixel_size``). The numbers do not depend on the
-        scheduler or the number of workers.
+        scheduler or the number of workers. Read the variables by key
+        (``result["cumulative"]``): ``result.cumulative`` is xarray's
+        :meth:`xarray.Dataset.cumulative` method, not the variable.
 
     Raises
     ------
@@ -1108,7 +1153,8 @@ def accumulate_strain(
     check_choice(method, "method", METHODS)
     n_frames, n, m = data.shape
     wz, wx = _check_window(window, DEFAULT_WINDOWS[method], (n, m))
-    _options(method, options)  # unknown or malformed options: refused before any work
+    opts = _options(method, options)  # unknown or malformed options: refused before any work
+    _check_shape_options(opts, n)  # and those bounded by the image, before a lazy graph
     _check_finite_frames(data)
     if path is not None and not isinstance(path, (str, bytes)) and not hasattr(path, "__fspath__"):
         raise TypeError(f"path must be a file path, got {type(path).__name__}")

@@ -31,7 +31,7 @@ import scipy.fft as sfft
 import xarray as xr
 from skimage.registration import phase_cross_correlation
 
-from .._validate import check_choice, check_int, check_real
+from .._validate import check_choice, check_int, check_memory, check_real
 from ..conventions import attrs, coord
 from ._common import field_of, grid_spacing, matched, parse_window
 from ._kernels import refine_shifts, window_moments
@@ -164,6 +164,13 @@ def _window_power(x: np.ndarray, count, size, step) -> np.ndarray:
     return np.maximum(s2 - s1 * s1 / (size[0] * size[1]), 0.0)
 
 
+def _check_upsample(up: int, nf: int, mx: int) -> None:
+    """The refinement tables' memory (``ceil(1.5 up)`` offsets x the depth frequencies ``nf``
+    and lateral ``mx``, complex and its real/imaginary copies) within the bound."""
+    region = float(np.ceil(1.5 * up))
+    check_memory(32.0 * region * (nf + mx), "upsample", "the sub-pixel refinement tables")
+
+
 def _table(f: np.ndarray, size: int, up: int) -> np.ndarray:
     """``exp(2i pi f (u - centre)/(up size))`` for the ``ceil(1.5 up)`` offsets ``u`` of the
     refinement region (centre ``region//2``): the factor shared by every window."""
@@ -249,6 +256,7 @@ def track_array(
     stz, stx = parse_window(step, "step", low=1)
     up = check_int(upsample, "upsample", low=1)
     ov = check_int(oversample, "oversample", low=1)
+    _check_upsample(up, wz * ov, wx)
     a, b, bad = _zero_bad(a, b)
     if method == "reference":  # today's path: per-sample trigonometric interpolation
         fine = np.arange(0, a.shape[0], 1 / ov)
@@ -330,6 +338,7 @@ def track_axial(
     stz, stx = parse_window(step, "step", low=1)
     up = check_int(upsample, "upsample", low=1)
     ov = check_int(oversample, "oversample", low=1)
+    _check_upsample(up, wz * ov, 1)
     if not isinstance(keep_samples, (bool, np.bool_)):
         raise TypeError(f"keep_samples must be True or False, got {keep_samples!r}")
     a, b, bad = _zero_bad(a, b)

@@ -875,6 +875,21 @@ def _check_geometry(geo: Mapping, path: str) -> None:
         )
 
 
+def _check_radii(geo: Mapping, radii) -> None:
+    """The failure sweep's inclusion radii (pixels) keep the inclusion inside layer 2 and the
+    lines of the failure phantom."""
+    n, nl, lr = int(geo["n_pixels"]), int(geo["n_lines"]), int(geo["layer_row"])
+    row, line = geo["inclusion"]["row"], geo["inclusion"]["line"]
+    room = min(row - lr, n - row, line + 1, nl - line)
+    for i, r in enumerate(radii):
+        if r >= room:
+            raise ValueError(
+                f"config key despeckle.failure.feature_radius[{i}] = {r} does not fit in the "
+                f"failure phantom: the inclusion at (row {row}, line {line}) must stay inside "
+                f"layer 2 (rows {lr}..{n}) and lines 0..{nl}; need radius < {room}"
+            )
+
+
 def _check_spec(spec: Mapping, n: int, path: str) -> None:
     fam = spec["family"]
     if fam == "frequency":
@@ -907,10 +922,14 @@ def check_despeckle_config(cfg: Mapping) -> None:
     ``looks`` (equal sub-bands); subsets no larger than their sets; every filter parameter in
     its range (:func:`speckle.analysis.filters.check_filter`); failure methods complete.
     """
+    from .config_check import _tol
+
     geo = cfg["phantom"]
     _check_geometry(geo, "phantom")
+    _tol(geo["method"], geo.get("tol"), "despeckle.phantom.tol", int(geo["n_pixels"]), False)
     fgeo = {**geo, **cfg["failure"]["phantom"]}
     _check_geometry(fgeo, "failure.phantom")
+    _check_radii(fgeo, cfg["failure"]["feature_radius"])
     n = int(geo["n_pixels"])
     fr = cfg["physical"]["frequency"]
     for nl in fr["looks"]:
