@@ -269,6 +269,8 @@ def _slice(v, stop):
     if isinstance(v, xr.DataArray | xr.Dataset):
         return v.isel({d: slice(0, stop) for d in v.dims})
     a = np.asarray(v)
+    if a.ndim == 0:  # a scalar: its empty and one-element versions are 1-D
+        return np.full(stop, a)
     return a[tuple(slice(0, stop) for _ in range(a.ndim))]
 
 
@@ -1203,7 +1205,17 @@ ENTRIES: dict[str, Entry] = {
 }
 
 #: (function, parameter, bad value) -> why the call's answer is the right one.
-ANSWERS: dict[tuple[str, str, str], str] = {}
+ANSWERS: dict[tuple[str, str, str], str] = {
+    ("interpolate_windows", "values", "nan"): "a NaN window (no answer) spreads only to the "
+    "pixels whose interpolation uses it (docstring)",
+    ("interpolate_windows", "depth", "empty"): "no pixel asked: an empty grid",
+    ("interpolate_windows", "aline", "empty"): "no pixel asked: an empty grid",
+    ("interpolate_displacement", "depth", "empty"): "no pixel asked: an empty grid",
+    ("interpolate_displacement", "aline", "empty"): "no pixel asked: an empty grid",
+    ("correlation_array", "x", "nan"): "NaN pixels blank only the windows holding them "
+    "(docstring; tests/test_strict.py)",
+    ("correlation_array", "y", "nan"): "as x",
+}
 
 
 # --- the walk ------------------------------------------------------------------------------

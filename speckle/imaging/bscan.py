@@ -13,10 +13,10 @@ import numpy as np
 import xarray as xr
 
 from .._validate import check_choice, check_int, check_real
-from ..system.source import check_weights
 from ..conventions import attrs, coord, depth_range_of, units_of
 from ..provenance import provenance_attrs
 from ..scene.scatterers import AMPLITUDE_MODELS
+from ..system.source import check_weights
 from ._rules import check_tol
 from .aline import METHODS, ascan, pixel_depths
 

@@ -107,13 +107,14 @@ def _estimator(
     """``(tol, estimate)``: the resolved tol and ``estimate(method) -> (error, cost_ns)``.
 
     The arguments are checked first (counts, the spectrum's ``n_pixels`` finite weights, tol
-    in (0, 1), ``float64_error`` >= 0), naming the bad one.
+    in (0, 1), ``float64_error`` >= 0 or inf), naming the bad one.
     """
     n_lines = check_int(n_lines, "n_lines", low=1)
     n_scatterers = check_int(n_scatterers, "n_scatterers", low=0)
     n_pixels = check_int(n_pixels, "n_pixels", low=1)
     check_memory(8.0 * n_pixels, "n_pixels", "the spectrum's weights")
-    float64_error = check_real(float64_error, "float64_error", low=0.0)
+    if float64_error != math.inf:  # inf: depths beyond float64 (no fast method admissible)
+        float64_error = check_real(float64_error, "float64_error", low=0.0)
     tolv = resolve_tol(check_tol(tol))
     s = np.ones(n_pixels) if spectrum is None else check_weights(spectrum, n_pixels)
 
