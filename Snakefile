@@ -6,7 +6,7 @@ from pathlib import Path
 import yaml
 from snakemake.utils import min_version, validate
 
-from speckle.figures.config_check import check_config
+from speckle.pipeline.checks import check_config
 
 min_version("9.0")
 
@@ -39,6 +39,7 @@ include: "workflow/rules/realism.smk"
 include: "workflow/rules/beam.smk"
 include: "workflow/rules/despeckle.smk"
 include: "workflow/rules/twin.smk"
+include: "workflow/rules/synthoct.smk"
 
 
 rule all:
@@ -54,4 +55,5 @@ rule all:
         + REALISM_TARGETS
         + BEAM_TARGETS
         + DESPECKLE_TARGETS
-        + TWIN_TARGETS,
+        + TWIN_TARGETS
+        + SYNTHOCT_TARGETS,

@@ -31,7 +31,7 @@ import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 CI = "workflow/config/ci.yaml"
-SWEEPS = ["results/fig2/fig2.nc", "results/fig3/fig3.nc", "results/fig5/fig5.nc"]
+SWEEPS = ["results_ci/fig2/fig2.nc", "results_ci/fig3/fig3.nc", "results_ci/fig5/fig5.nc"]
 IGNORE = shutil.ignore_patterns(".git", ".snakemake", "results", "results_*", "__pycache__")
 
 

@@ -28,7 +28,7 @@ import numpy as np
 import yaml
 
 from speckle.analysis import oversample_depth, resample_depth, track_array
-from speckle.analysis.strain import (  # private: the tracking method's own options and fit
+from speckle.analysis._strain_methods import (  # private: the tracking method's options, fit
     OPTIONS,
     _pooled_slope,
     _track_options,

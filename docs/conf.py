@@ -85,7 +85,7 @@ sphinx_gallery_conf = {
     "matplotlib_animations": False,
     "image_scrapers": ("matplotlib",),
     # no rcParams reset between examples: the figure modules apply their shared style
-    # (speckle.figures._style.STYLE: fonts, tight bounding box) once, on import
+    # (speckle.figures.style.STYLE: fonts, tight bounding box) once, on import
     "reset_modules": (),
     "show_memory": False,
     "write_computation_times": True,
@@ -115,6 +115,11 @@ def api_topics() -> dict[str, tuple[str, str, dict[str, list[str]]]]:
         "system": ("System", "The OCT system: source, datasheet, spectrometer chain, effects."),
         "imaging": ("Imaging", "Eq. 4 and its fast methods, B-scans, the scanned beam, scans."),
         "analysis": ("Analysis", "Statistics, correlation, tracking, strain, measured images."),
+        "synthoct": (
+            "SynthOCT",
+            "The open drop-in for the SynthOCT 2026 challenge's virtual scanner: its files, "
+            "its scanner (and the ``speckle-scan`` command), its maps and metrics.",
+        ),
     }
     topics = {
         name: (title, intro, {f"speckle.{name}": _public(f"speckle.{name}")})

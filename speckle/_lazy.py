@@ -107,10 +107,16 @@ def defining_module(package: str, name: str) -> str | None:
     longer says which modules a script needs.
     """
     import importlib
+    import importlib.util
 
     try:
+        # only packages hold a table: a plain module (often heavy) is not imported
+        if package not in sys.modules:
+            spec = importlib.util.find_spec(package)
+            if spec is None or spec.submodule_search_locations is None:
+                return None
         table = importlib.import_module(package).__dict__.get("_lazy_table", {})
-    except ImportError:
+    except (ImportError, AttributeError, ValueError):
         return None
     if name not in table:
         return None

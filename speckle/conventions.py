@@ -26,6 +26,16 @@ position      pixel       scatterer depth in pixels (``H/N``)
 pixel         1           pixel index ``q``
 n             1           spectral index ``n``
 reflector     um          depth of a point reflector
+time          s           time of a frame, A-line or scatterer position (dim of moved scenes
+                          and image series, :mod:`speckle.scene.motion`)
+lag           s           a time lag ``tau`` (:mod:`speckle.analysis.dynamics`): the dim
+                          ``lag`` with the attributes of ``time_lag``
+map           1           image of the SynthOCT comparison: the scan (Struct), OAC, SC, RSC
+experiment    1           a comparison of two SynthOCT scans (the orchestrator's rows)
+phantom       1           a SynthOCT phantom by name (e.g. Exp2_Layers_A)
+origin        1           where a SynthOCT scan or score comes from (published, drop-in)
+boundary      um          depth of a two-layer phantom's boundary
+energy        percent     backscattered energy of a phantom's scatterers (the file's %)
 ============  ==========  ===============================================================
 
 Data variables (:data:`QUANTITIES`): ``field``, ``amplitude``, ``weight``, ``correlation``,
@@ -34,7 +44,9 @@ Data variables (:data:`QUANTITIES`): ``field``, ``amplitude``, ``weight``, ``cor
 per µm^2 or µm^3 of a 2-D or 3-D scene); ``level`` (dB,
 ``20 log10 |A|``); ``pixels`` (pixel); ``line_density`` (1/pixel) and ``beam_density``
 (1/(pixel line)); ``modulus``, ``stress`` (kPa); ``attenuation`` (1/um); ``diffusion``
-(um^2/s); ``time`` (s); ``rate`` (1/s); ``angle`` (degree); and, for measured images of
+(um^2/s); ``time`` (s); ``rate`` (1/s); ``velocity`` (um/s); ``line_rate`` (Hz);
+``phase`` (rad); ``log_variance`` (dB^2); ``decay_speed`` (1/s); ``angle`` (degree); and, for
+measured images of
 unknown calibration, ``data``, ``data_slope``, ``mean_intensity`` and ``log_data``.
 
 A quantity whose units are carried over from an input (a histogram of a variable in µm, a
@@ -88,6 +100,14 @@ COORDS: dict[str, tuple[str, str]] = {
     "pixel": ("1", "pixel index q"),
     "n": ("1", "spectral index"),
     "reflector": ("um", "reflector depth"),
+    "time": ("s", "time"),
+    "time_lag": ("s", "time lag tau"),
+    "map": ("1", "image compared: the scan (Struct) or a map (OAC, SC, RSC)"),
+    "experiment": ("1", "comparison of two scans"),
+    "phantom": ("1", "phantom"),
+    "origin": ("1", "origin of a scan or score"),
+    "boundary": ("um", "depth of the layer boundary"),
+    "energy": ("percent", "backscattered energy per scatterer"),
 }
 
 #: Data-variable quantity -> (units, long_name); a variable's own long name may be more specific.
@@ -116,6 +136,11 @@ QUANTITIES: dict[str, tuple[str, str]] = {
     "time": ("s", "time"),
     "rate": ("1/s", "scatterers per second"),
     "angle": ("degree", "angle"),
+    "velocity": ("um/s", "velocity"),
+    "line_rate": ("Hz", "A-line rate"),
+    "phase": ("rad", "phase"),
+    "log_variance": ("dB^2", "variance of the dB-scaled intensity 10 log10 I"),
+    "decay_speed": ("1/s", "decay speed of a correlation"),
     "diffusion": ("um^2/s", "diffusion coefficient"),
     "data": ("data units", "value in the units of the measured data"),
     "data_slope": ("data units per pixel", "slope in the units of the measured data per pixel"),

@@ -118,7 +118,6 @@ def module_sources(*modules: str) -> list[str]:
     list of str
         Absolute paths, sorted, including the package ``__init__`` files on the way.
     """
-    import ast
     import importlib.util
     from pathlib import Path
 
@@ -150,5 +149,23 @@ def module_sources(*modules: str) -> list[str]:
             if parent is not None:
                 seen.add(parent)
         package = parts if path.name == "__init__.py" else parts[:-1]
-        todo.extend(_imported_modules(ast.parse(path.read_text()), package))
+        todo.extend(_file_imports(path, tuple(package)))
     return sorted(str(p) for p in seen)
+
+
+#: ``_imported_modules`` of each parsed file, keyed by path, package and the file's
+#: modification time and size (an edited file is parsed again). The workflow calls
+#: ``module_sources`` once per rule; parsing each module once instead of once per rule
+#: takes ``snakemake -n`` from ~30 s to a few seconds.
+_IMPORTS_CACHE: dict[tuple, list[str]] = {}
+
+
+def _file_imports(path, package: tuple[str, ...]) -> list[str]:
+    """``_imported_modules`` of the file at ``path`` (a Path) in ``package``, memoised."""
+    import ast
+
+    stat = path.stat()
+    key = (str(path), package, stat.st_mtime_ns, stat.st_size)
+    if key not in _IMPORTS_CACHE:
+        _IMPORTS_CACHE[key] = _imported_modules(ast.parse(path.read_text()), list(package))
+    return _IMPORTS_CACHE[key]

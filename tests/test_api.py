@@ -15,7 +15,7 @@ import pytest
 import speckle
 
 REPO = Path(__file__).resolve().parents[1]
-SUBPACKAGES = ["scene", "system", "imaging", "analysis"]
+SUBPACKAGES = ["scene", "system", "imaging", "analysis", "studies"]
 #: Heavy dependencies that ``import speckle`` must not load (they load on first use).
 HEAVY = ["numba", "dask", "scipy", "skfem", "matplotlib", "skimage", "finufft", "netCDF4"]
 

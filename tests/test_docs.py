@@ -51,6 +51,15 @@ def test_the_pages_have_code_to_run():
     assert any(n.startswith("docs/tutorials/") for n in names), names
 
 
+def test_readme_lists_every_tutorial_and_howto():
+    readme = (REPO / "README.md").read_text(encoding="utf-8")
+    pages = sorted([*REPO.glob("docs/tutorials/*.md"), *REPO.glob("docs/howto/*.md")])
+    assert pages
+    missing = [p.relative_to(REPO).as_posix() for p in pages]
+    missing = [m for m in missing if f"]({m})" not in readme]
+    assert not missing, f"README.md does not link {missing}"
+
+
 def test_block_pattern_finds_only_python_fences():
     text = "```python\na = 1\n```\n\n```bash\nls\n```\n\n```pycon\n>>> 1\n```\n"
     assert BLOCK.findall(text) == ["a = 1\n"]

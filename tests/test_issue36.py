@@ -362,7 +362,7 @@ def ci_config(repo_root, config_runs):
 
 @pytest.mark.parametrize("key", list(LATE))
 def test_late_config_values_are_refused_at_load(ci_config, config_runs, key):
-    from speckle.figures.config_check import check_config
+    from speckle.pipeline.checks import check_config
 
     merged, schema = ci_config
     check_config(merged, schema)

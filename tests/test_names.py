@@ -13,7 +13,14 @@ import pytest
 import speckle
 from speckle.conventions import QUANTITIES, depth_range_of
 
-PACKAGES = ["speckle", "speckle.scene", "speckle.system", "speckle.imaging", "speckle.analysis"]
+PACKAGES = [
+    "speckle",
+    "speckle.scene",
+    "speckle.system",
+    "speckle.imaging",
+    "speckle.analysis",
+    "speckle.studies",
+]
 
 
 def _public_modules() -> list[str]:

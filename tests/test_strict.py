@@ -123,7 +123,8 @@ def test_killed_writer_leaves_the_existing_file_intact(img, tmp_path):
 def test_figure_save_is_atomic(tmp_path, monkeypatch):
     import matplotlib.figure
 
-    from speckle.figures._style import new_figure, save  # private: the scripts' atomic save
+    from speckle.figures.style import new_figure
+    from speckle.pipeline.outputs import save
 
     path = tmp_path / "f.png"
     fig, _ = new_figure(1, 1)

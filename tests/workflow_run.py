@@ -13,10 +13,13 @@ import sys
 from pathlib import Path
 
 CI_CONFIG = "workflow/config/ci.yaml"
+#: Where the CI config writes (its ``results`` key), apart from the default ``results/``.
+CI_RESULTS = "results_ci"
 IGNORE = shutil.ignore_patterns(
     ".git",
     ".snakemake",
     "results",
+    "results_*",
     "__pycache__",
     ".pytest_cache",
     ".hypothesis",

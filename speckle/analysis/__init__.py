@@ -3,10 +3,13 @@
 ``statistics`` fits the speckle histograms and contrast; ``correlation`` maps the correlation of
 two images with and without displacement compensation; ``tracking`` and ``strain`` estimate
 displacement and strain (OCT elastography); ``autocorrelation``, ``beam`` and ``phase`` measure
-the resolution cell and noise; ``measured`` and ``realism`` compare a measured image with the
-model; ``compounding`` (physical compounding looks), ``filters`` (digital despeckling) and
-``image_quality`` (metrics against a known truth) test speckle suppression; ``image_files``
-reads a user's own image and ``twin`` fits the model's system to it.
+the resolution cell and noise; ``measured`` compares a measured image with the model;
+``compounding`` (averaging looks and its theory), ``filters`` (digital despeckling) and
+``image_quality`` (metrics against a known truth) measure speckle suppression; ``image_files``
+reads a user's own image; ``dynamics`` computes the contrasts of speckle in time (g1, g2,
+Doppler, speckle variance, SSADA, LIV, OCDS) and ``dynamics_theory`` their expected values.
+``analysis`` imports no imaging: the experiments that image scenes to study these estimators
+(the twin, realism, failure maps, the compounding looks) are in :mod:`speckle.studies`.
 Names load on first use (SPEC 1, ``lazy_loader``).
 """
 
@@ -28,6 +31,8 @@ __getattr__, __dir__, __all__ = attach(
             "resample_depth",
             "sample_field",
         ],
+        "dynamics": functions_of(__name__, "dynamics"),
+        "dynamics_theory": functions_of(__name__, "dynamics_theory"),
         "filters": ["FILTERS", "despeckle", "filter_available", "frost", "kuan", "lee"],
         "image_files": ["IMAGE_KINDS", "load_image"],
         "image_quality": [
@@ -44,6 +49,5 @@ __getattr__, __dir__, __all__ = attach(
         "statistics": ["contrast_theory", "fit_exponential", "fit_rayleigh", "speckle_contrast"],
         "strain": ["accumulate_strain", "estimate_displacement", "estimate_strain"],
         "tracking": ["TRACK_METHODS", *functions_of(__name__, "tracking")],
-        "twin": ["SystemFit", "fit_system"],
     },
 )

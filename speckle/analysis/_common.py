@@ -10,10 +10,19 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .._validate import check_int
-from ..conventions import spacing
+from .._validate import check_int, check_real
+from ..conventions import attrs, spacing
 
-__all__ = ["depth_major", "field_of", "grid_spacing", "matched", "parse_window", "same_grid"]
+__all__ = [
+    "delay_selection",
+    "depth_major",
+    "field_of",
+    "grid_spacing",
+    "label_looks",
+    "matched",
+    "parse_window",
+    "same_grid",
+]
 
 
 def field_of(data: xr.Dataset | xr.DataArray) -> xr.DataArray:
@@ -123,3 +132,32 @@ def grid_spacing(field: xr.DataArray | xr.Dataset) -> tuple[float, float]:
     """
     dz = spacing(field, "depth")
     return dz, spacing(field, "aline", default=dz)
+
+
+def delay_selection(t: np.ndarray, delays: object) -> np.ndarray:
+    """Lags ``t`` (s) within the delay range ``delays = (tau1, tau2)`` (s); at least two.
+
+    The fit range of the correlation decay speed (:func:`speckle.analysis.dynamics.ocds`
+    and its expected value).
+    """
+    if isinstance(delays, str) or not hasattr(delays, "__len__") or len(delays) != 2:
+        raise ValueError(f"delays must be (tau1, tau2) in s, got {delays!r}")
+    lo = check_real(delays[0], "delays[0]", low=0)
+    hi = check_real(delays[1], "delays[1]", low=lo, low_inclusive=False)
+    eps = 1e-9 * hi
+    sel = (t >= lo - eps) & (t <= hi + eps)
+    if sel.sum() < 2:
+        raise ValueError(
+            f"delays ({lo:g}, {hi:g}) s hold {int(sel.sum())} lag(s) of the series: OCDS fits a "
+            "line through at least two"
+        )
+    return sel
+
+
+def label_looks(looks: xr.DataArray, kind: str, **extra: object) -> xr.DataArray:
+    """Looks (dim ``look``) numbered, named ``looks`` and labelled as complex ``kind`` looks."""
+    return (
+        looks.assign_coords(look=np.arange(looks.sizes["look"]))
+        .rename("looks")
+        .assign_attrs(attrs("field", f"complex {kind} looks", compounding=kind, **extra))
+    )

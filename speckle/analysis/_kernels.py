@@ -5,7 +5,8 @@
   ``|C_L|`` summed over (depth, aline) windows (running sums in depth, the window's A-lines
   added in order), the phase of the sum, its quality and the multi-lag branch check. Nothing
   of image size is allocated but the two outputs.
-* :func:`box_sums`: the (depth, aline) window sums of :func:`speckle.analysis.strain._box`,
+* :func:`box_sums`: the (depth, aline) window sums of
+  :func:`speckle.analysis._strain_methods._box`,
   bit-identical to its numpy running sums (the same additions in the same order), in the
   input's memory layout.
 * :func:`lagrange_resample`: the 8-point Lagrange interpolation of

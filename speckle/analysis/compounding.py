@@ -30,38 +30,43 @@ spectrum the overlap of the windows weighted by ``|S|^2`` (:func:`window_correla
 :func:`split_spectrum_contrast` adds the finite-density (Poisson) term exactly. A sub-band of
 ``M`` of the ``N`` samples has the intensity PSF ``|sin(pi M x/N)/(M sin(pi x/N))|^2``, ``N/M``
 times wider (:func:`subband_fwhm`).
+
+The looks that form images (angular, spatial, polarization, temporal) are in
+:mod:`speckle.studies.looks` (this module imports no imaging); their old names here warn.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-
 import numpy as np
-import scipy.ndimage as ndi
 import scipy.optimize as opt
 import xarray as xr
 
+from .._deprecate import moved
 from .._validate import as_finite_array, check_choice, check_int, check_real
-from ..conventions import attrs, coord, depth_range_of, units_of
-from ..imaging.scan import image
-from ..system.polarization import depolarize
+from ..conventions import attrs, coord, units_of
+from ..scene.motion import brownian_motion
+from ._common import label_looks
+from .dynamics_theory import g1_brownian
+
+#: Looks that form images moved to :mod:`speckle.studies.looks` (issue 32); the old names warn.
+__getattr__ = moved(
+    __name__,
+    "speckle.studies.looks",
+    ["angular_looks", "polarization_looks", "spatial_looks", "temporal_looks"],
+)
 
 __all__ = [
     "AVERAGING",
     "WINDOWS",
-    "angular_looks",
     "brownian_frames",
     "brownian_g1",
     "compound",
     "compounded_contrast",
     "frequency_looks",
     "noisy_looks",
-    "polarization_looks",
-    "spatial_looks",
     "split_spectrum_contrast",
     "subband_fwhm",
     "subband_windows",
-    "temporal_looks",
     "window_correlation",
 ]
 
@@ -283,15 +288,7 @@ def frequency_looks(img: xr.Dataset | xr.DataArray, windows: object) -> xr.DataA
         output_core_dims=[["look", "depth"]],
         dask="forbidden",
     )
-    return _looks(looks.transpose("look", *f.dims), "frequency")
-
-
-def _looks(looks: xr.DataArray, kind: str, **extra: object) -> xr.DataArray:
-    return (
-        looks.assign_coords(look=np.arange(looks.sizes["look"]))
-        .rename("looks")
-        .assign_attrs(attrs("field", f"complex {kind} looks", compounding=kind, **extra))
-    )
+    return label_looks(looks.transpose("look", *f.dims), "frequency")
 
 
 def compound(looks: xr.DataArray, mode: str = "intensity") -> xr.DataArray:
@@ -368,145 +365,16 @@ def noisy_looks(
     return res.assign_attrs(looks.attrs, snr_db=snr, noise_intensity=sigma2[0])
 
 
-def _image_kw(waist, x, method, tol, chunk) -> dict:
-    return {"waist": waist, "x": x, "method": method, "tol": tol, "chunk": chunk}
-
-
-def _moved_field(scene: xr.Dataset, source: xr.DataArray, kw: dict) -> np.ndarray:
-    """Complex field of a shared scene whose scatterers moved (sorted by ``x`` again first)."""
-    order = np.argsort(scene.x.values, kind="stable")
-    return image(scene.isel(scatterer=order), source, **kw).field.values
-
-
-def _stacked_looks(
-    fields: list[np.ndarray], kind: str, name: str, coordinate: tuple, **extra: object
-) -> xr.DataArray:
-    """Looks ``(look, depth, x)`` of the fields, coordinate ``name`` along ``look``."""
-    looks = xr.DataArray(np.stack(fields), dims=("look", "depth", "x"), coords={name: coordinate})
-    return _looks(looks, kind, **extra)
-
-
-def angular_looks(
-    scene: xr.Dataset,
-    source: xr.DataArray,
-    angles: Sequence[float],
-    *,
-    waist: float,
-    x: object,
-    method: str = "direct",
-    tol: float | None = None,
-    chunk: int = 64,
-) -> xr.DataArray:
-    """Looks at beam angles ``angles`` (degrees): rotated scene, image resampled back.
-
-    The scene is rotated by ``-angle`` about the centre of the image (depths ``[0, H)``, the
-    lines ``x``), so the beam crosses it at ``angle`` to the depth axis; the complex image is
-    then sampled at the rotated pixel positions (cubic spline of its real and imaginary parts)
-    onto the reference grid. Draw the scene with a margin of ``H |sin(angle)|`` in x (and the
-    beam reach), or the corners come from empty space.
-
-    Returns
-    -------
-    xarray.DataArray
-        Complex looks ``(look, depth, x)``; coordinate ``angle`` (degrees) along ``look``.
-    """
-    ang = as_finite_array(angles, "angles")
-    if ang.ndim != 1 or ang.size == 0 or np.any(np.abs(ang) >= 90):
-        raise ValueError("angles must be a non-empty 1-D list of degrees in (-90, 90)")
-    n = int(source.attrs["n_pixels"])
-    h = depth_range_of(source, "source")
-    xs = np.asarray(x, dtype=float)
-    p = h / n
-    pitch = xs[1] - xs[0] if xs.size > 1 else p
-    zc, xc = (n - 1) / 2 * p, (xs[0] + xs[-1]) / 2
-    zz, xx = np.meshgrid(np.arange(n) * p - zc, xs - xc, indexing="ij")
-    out = []
-    for a in np.deg2rad(ang):
-        c, s = np.cos(a), np.sin(a)
-        z, xv = scene.z.values - zc, scene.x.values - xc
-        rot = scene.assign(
-            z=("scatterer", zc + c * z + s * xv), x=("scatterer", xc - s * z + c * xv)
-        )
-        f = _moved_field(rot, source, _image_kw(waist, xs, method, tol, chunk))
-        # object point (z, x) sits at the rotated position in the look's image
-        zr, xr_ = zc + c * zz + s * xx, xc - s * zz + c * xx
-        coords = np.stack([zr / p, (xr_ - xs[0]) / pitch])
-        part = [
-            ndi.map_coordinates(comp, coords, order=3, mode="constant", cval=0.0)
-            for comp in (f.real, f.imag)
-        ]
-        out.append(part[0] + 1j * part[1])
-    angle = coord("angle", ang, "beam angle", dims="look")
-    return _stacked_looks(out, "angular", "angle", angle)
-
-
-def spatial_looks(
-    scene: xr.Dataset,
-    source: xr.DataArray,
-    offsets: Sequence[float],
-    *,
-    waist: float,
-    x: object,
-    method: str = "direct",
-    tol: float | None = None,
-    chunk: int = 64,
-) -> xr.DataArray:
-    """Looks of A-lines offset laterally by ``offsets`` (µm), kept at the lines ``x``.
-
-    The complex correlation of two looks ``d`` apart is ``exp(-d^2/w0^2)`` (dense scene).
-
-    Returns
-    -------
-    xarray.DataArray
-        Complex looks ``(look, depth, x)``; coordinate ``offset`` (µm) along ``look``.
-    """
-    off = as_finite_array(offsets, "offsets")
-    if off.ndim != 1 or off.size == 0:
-        raise ValueError("offsets must be a non-empty 1-D list of lateral offsets in µm")
-    xs = np.asarray(x, dtype=float)
-    out = [
-        image(scene, source, **_image_kw(waist, xs + d, method, tol, chunk)).field.values
-        for d in off
-    ]
-    offset = coord("length", off, "lateral offset of the lines", dims="look")
-    return _stacked_looks(out, "spatial", "offset", offset)
-
-
-def polarization_looks(
-    scene: xr.Dataset,
-    source: xr.DataArray,
-    depolarization: float,
-    *,
-    seed: int,
-    waist: float,
-    x: object,
-    method: str = "direct",
-    tol: float | None = None,
-    chunk: int = 64,
-) -> xr.DataArray:
-    """The co and cross channels of :func:`speckle.depolarize` as two looks.
-
-    Intensity-averaged they give the polarization-insensitive image, contrast
-    ``sqrt((1 + P^2)/2)``, ``P = |1 - 2 f|`` (dense scene).
-    """
-    dep = depolarize(scene, depolarization, seed=seed)
-    f = image(dep, source, **_image_kw(waist, np.asarray(x, float), method, tol, chunk)).field
-    looks = f.rename(channel="look").transpose("look", "depth", "x")
-    looks = looks.assign_coords(channel=("look", looks.look.values)).drop_vars("look")
-    return _looks(looks, "polarization", depolarization=float(depolarization))
-
-
 def brownian_g1(tau: object, diffusion: float, k0: float) -> np.ndarray:
     """Field autocorrelation ``exp(-q^2 D tau)``, ``q = 2 k0`` (rad/µm, in the medium).
 
-    ``tau`` in s (>= 0), ``diffusion`` ``D`` in µm^2/s (>= 0).
+    ``tau`` in s (>= 0), ``diffusion`` ``D`` in µm^2/s (>= 0); the one implementation is
+    :func:`speckle.analysis.dynamics_theory.g1_brownian`.
     """
-    t = as_finite_array(tau, "tau")
+    t = as_finite_array(tau, "tau")  # named as here (g1_brownian calls it lag)
     if np.any(t < 0):
-        raise ValueError("tau must be >= 0 s")
-    d = check_real(diffusion, "diffusion", low=0)
-    k = check_real(k0, "k0", low=0)
-    return np.exp(-((2 * k) ** 2) * d * t)
+        raise ValueError("tau must be >= 0 (s)")
+    return g1_brownian(t, diffusion=diffusion, k0=k0)
 
 
 def brownian_frames(
@@ -541,48 +409,13 @@ def brownian_frames(
     sd = check_int(seed, "seed", low=0)
     if not isinstance(scene, xr.Dataset) or "z" not in scene:
         raise TypeError("scene must be a scatterer Dataset with a variable 'z'")
-    rng = np.random.default_rng(np.random.SeedSequence(sd))
-    step = np.sqrt(2 * d * dt)
-    moved = {}
-    for ax in ("z", "x", "y"):
-        if ax not in scene.data_vars:
-            continue
-        v = scene[ax]
-        steps = rng.standard_normal((nf, *v.shape)) * step
-        steps[0] = 0.0
-        moved[ax] = (("frame", *v.dims), v.values[None] + np.cumsum(steps, axis=0), v.attrs)
-    out = scene.assign(moved)
-    times = np.arange(nf) * dt
-    return out.assign_coords(
-        time=coord("time", times, "time of the frame", dims="frame")
-    ).assign_attrs(
-        diffusion=d, diffusion_units=units_of("diffusion"), frame_interval=dt, brownian_seed=sd
+    # one implementation: the scene layer's Brownian motion, its time dim named frame here
+    out = brownian_motion(scene, np.arange(nf) * dt, diffusion=d, seed=sd)
+    out = out.rename_dims(time="frame").assign_coords(
+        time=coord("time", out.time.values, "time of the frame", dims="frame")
     )
-
-
-def temporal_looks(
-    scene: xr.Dataset,
-    source: xr.DataArray,
-    n_frames: int,
-    *,
-    diffusion: float,
-    interval: float,
-    seed: int,
-    waist: float,
-    x: object,
-    method: str = "direct",
-    tol: float | None = None,
-    chunk: int = 64,
-) -> xr.DataArray:
-    """Frames of a shared scene in Brownian motion (:func:`brownian_frames`) as looks."""
-    frames = brownian_frames(scene, n_frames, diffusion=diffusion, interval=interval, seed=seed)
-    xs = np.asarray(x, dtype=float)
-    kw = _image_kw(waist, xs, method, tol, chunk)
-    out = [
-        _moved_field(frames.isel(frame=i).drop_vars("time"), source, kw)
-        for i in range(frames.sizes["frame"])
-    ]
-    time = ("look", frames.time.values, frames.time.attrs)
-    return _stacked_looks(
-        out, "temporal", "time", time, diffusion=float(diffusion), frame_interval=float(interval)
+    for k in [k for k in out.attrs if k not in scene.attrs]:
+        del out.attrs[k]
+    return out.assign_attrs(
+        diffusion=d, diffusion_units=units_of("diffusion"), frame_interval=dt, brownian_seed=sd
     )

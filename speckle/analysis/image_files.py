@@ -2,7 +2,7 @@
 
 :func:`load_image` returns a labelled ``(depth, x)`` DataArray (``(frame, depth, x)`` for pairs
 and sequences) with coordinates in µm and the image's ``kind`` recorded, so that
-:func:`speckle.analysis.twin.fit_system` and the other analyses know what the numbers are:
+:func:`speckle.studies.twin.fit_system` and the other analyses know what the numbers are:
 
 ``complex``
     the complex field ``A`` (complex dtype);

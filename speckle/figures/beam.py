@@ -22,6 +22,7 @@ from collections.abc import Mapping
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 import speckle
 
@@ -33,7 +34,7 @@ from ..provenance import provenance_attrs
 from ..scene import regions as reg
 from ..scene.deformation import required_depth, uniaxial_pixel_displacement
 from ._config import source_spectrum
-from ._style import new_figure
+from .style import colorbar, legend_outside, new_figure, physical_image
 
 __all__ = [
     "bscans_data",
@@ -298,7 +299,8 @@ def volume_data(source: Mapping, beam: Mapping, seed: int) -> xr.Dataset:
 
 
 def plot_volume(ds: xr.Dataset) -> Figure:
-    """Orthogonal slices (x-z, y-z, en-face x-y) of a volume; only the three slices are read.
+    """Orthogonal slices (x-z, y-z, en-face x-y) of a volume at the physical aspect ratio (1 µm
+    = 1 µm on every axis), in dB with one colorbar; only the three slices are read.
 
     ``ds`` may be a lazily opened file (``speckle.io.open_dataset(path, load=False)``): keep it
     open while this runs.
@@ -306,31 +308,42 @@ def plot_volume(ds: xr.Dataset) -> Figure:
     f = ds.field
     xm, ym = f.sizes["x"] // 2, f.sizes["y"] // 2
     zm = f.sizes["depth"] // 2
-    slices = {
-        f"x-z at y = {float(f.y[ym]):.0f} um": np.abs(f.isel(y=ym).values) ** 2,
-        f"y-z at x = {float(f.x[xm]):.0f} um": np.abs(f.isel(x=xm).values) ** 2,
-        f"x-y at depth {float(f.depth[zm]):.0f} um": np.abs(f.isel(depth=zm).values.T) ** 2,
+    intensity = {
+        "xz": np.abs(f.isel(y=ym).values) ** 2,
+        "yz": np.abs(f.isel(x=xm).values) ** 2,
+        "xy": np.abs(f.isel(depth=zm).values.T) ** 2,
     }
-    ext = {
-        "xz": [f.x[0], f.x[-1], f.depth[-1], f.depth[0]],
-        "yz": [f.y[0], f.y[-1], f.depth[-1], f.depth[0]],
-        "xy": [f.x[0], f.x[-1], f.y[-1], f.y[0]],
+    titles = {
+        "xz": f"x-z slice\nat y = {float(f.y[ym]):.0f} µm",
+        "yz": f"y-z slice\nat x = {float(f.x[xm]):.0f} µm",
+        "xy": f"en face (x-y) slice\nat depth {float(f.depth[zm]):.0f} µm",
     }
-    fig, axes = new_figure(1, 3, width=10.0, height=3.6)
-    mean = np.mean([s.mean() for s in slices.values()])
-    for ax, (title, img), key in zip(axes[0], slices.items(), ext, strict=True):
-        extent = [float(v) for v in ext[key]]
-        ax.imshow(
-            10 * np.log10(img / mean + 1e-12),
+    axes_of = {"xz": (f.depth, f.x, "x"), "yz": (f.depth, f.y, "y"), "xy": (f.y, f.x, "x")}
+    depth_span = float(f.depth[-1] - f.depth[0]) or 1.0
+    lateral_span = max(float(f.x[-1] - f.x[0]), float(f.y[-1] - f.y[0]), 1e-9)
+    # width ratios so the three panels share one height at 1 µm = 1 µm
+    ratio = min(lateral_span / depth_span, 1.0)
+    fig, axes = new_figure(1, 3, width=7.0, height=4.2, width_ratios=[ratio, ratio, 0.8])
+    mean = np.mean([s.mean() for s in intensity.values()])
+    im = None
+    for ax, key in zip(axes[0], intensity, strict=True):
+        rows, cols, xname = axes_of[key]
+        im = physical_image(
+            ax,
+            10 * np.log10(intensity[key] / mean + 1e-12),
+            rows.values,
+            cols.values,
+            xlabel=f"{xname} (µm)",
             cmap="gray",
             vmin=-20,
             vmax=10,
-            extent=extent,
-            aspect="auto",
         )
-        ax.set_title(title, fontsize=9)
-        ax.set_xlabel({"xz": "x (µm)", "yz": "y (µm)", "xy": "x (µm)"}[key])
-        ax.set_ylabel("y (µm)" if key == "xy" else "depth (µm)")
+        ax.set_title(titles[key])
+        if key == "xy":
+            ax.set_ylabel("y (µm)")
+        else:
+            ax.xaxis.set_major_locator(MaxNLocator(2))
+    colorbar(fig, im, axes[0].tolist(), "intensity (dB re the slices' mean)", shrink=0.8)
     return fig
 
 
@@ -340,19 +353,22 @@ def plot_bscans(ds: xr.Dataset) -> Figure:
     fig, axes = new_figure(2, max(len(ratios) + 1, 2), width=3.0 * (len(ratios) + 1), height=6)
     imgs = [(f"w0 = {r:g} pitch", ds.field.sel(waist_pitch=r)) for r in ratios]
     imgs.append(("independent A-lines (paper)", ds.independent))
+    im = None
     for ax, (title, f) in zip(axes[0], imgs, strict=False):
         i = np.abs(f.values) ** 2
-        ax.imshow(
+        im = physical_image(
+            ax,
             10 * np.log10(i / i.mean() + 1e-12),
+            f.depth.values,
+            f.x.values,
+            xlabel="x (µm)",
             cmap="gray",
             vmin=-20,
             vmax=10,
-            aspect="auto",
-            extent=[float(f.x[0]), float(f.x[-1]), float(f.depth[-1]), float(f.depth[0])],
         )
-        ax.set_title(title, fontsize=9)
-        ax.set_xlabel("x (µm)")
-    axes[0, 0].set_ylabel("depth (µm)")
+        ax.xaxis.set_major_locator(MaxNLocator(3))
+        ax.set_title(title)
+    colorbar(fig, im, axes[0].tolist(), "intensity (dB re the image mean)", shrink=0.8)
     for ax, name in zip(axes[1, :2], ("lateral", "axial"), strict=True):
         lag = ds[f"{name}_lag"].values
         for j, r in enumerate(ratios):
@@ -379,8 +395,10 @@ def plot_bscans(ds: xr.Dataset) -> Figure:
             ax.plot(lag, ds[f"{name}_{kind}_independent_theory"], ":", color="k", lw=0.8)
         ax.set_xlabel("lag (lines)" if name == "lateral" else "lag (pixels)")
         ax.set_ylabel("correlation")
-        ax.set_title(f"{name}: markers measured, lines theory", fontsize=9)
-    axes[1, 0].legend(fontsize=6)
+        ax.set_title(f"{name}: markers measured, lines theory")
+    fig.legend(
+        *axes[1, 0].get_legend_handles_labels(), loc="outside lower center", ncols=3, frameon=False
+    )
     for ax in axes[1, 2:]:
         ax.axis("off")
     return fig
@@ -404,5 +422,5 @@ def plot_strain(ds: xr.Dataset) -> Figure:
             ax.plot(s, ds.intensity_lines_theory, ":", color="k", lw=0.8, label="theory, lines")
         ax.set_xlabel("strain (%)")
         ax.set_ylabel(f"{kind} correlation")
-        ax.legend(fontsize=7)
+        legend_outside(ax)
     return fig

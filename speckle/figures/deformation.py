@@ -27,7 +27,7 @@ from ..scene.scatterers import amplitude_kurtosis
 from ..sweep import sweep
 from ..system.source import spectrum as make_spectrum
 from ._config import scene_kwargs, spectrum_kwargs
-from ._style import new_figure
+from .style import colorbar, legend_outside, new_figure
 
 __all__ = [
     "fig6a_data",
@@ -530,7 +530,7 @@ def plot_fig6a(ds: xr.Dataset) -> Figure:
         float(ds.depth[0]) / 1e3,
     ]
     amp = ds.reference_amplitude.transpose("depth", "aline")
-    axes[0].imshow(
+    ref = axes[0].imshow(
         20 * np.log10(amp / amp.max() + 1e-6),
         cmap="gray",
         vmin=-40,
@@ -538,7 +538,8 @@ def plot_fig6a(ds: xr.Dataset) -> Figure:
         extent=extent,
         aspect="auto",
     )
-    axes[0].set_title("reference |A| (dB)")
+    axes[0].set_title("reference image")
+    colorbar(fig, ref, axes[0], "|A| (dB re its maximum)", shrink=0.9)
     titles = {
         "none": "before compensation",
         "exact": "after exact compensation",
@@ -553,7 +554,7 @@ def plot_fig6a(ds: xr.Dataset) -> Figure:
     if failed.any():
         zz, xx = np.meshgrid(ds.window_depth.values, ds.window_aline.values, indexing="ij")
         axes[3].plot(xx[failed] / 1e3, zz[failed] / 1e3, "rx", ms=4, label="tracking failed")
-        axes[3].legend(loc="lower left", fontsize=7)
+        legend_outside(axes[3])
     for ax in axes:
         ax.set_xlabel("lateral position (mm)")
     axes[0].set_ylabel("depth (mm)")
@@ -582,7 +583,7 @@ def _strain_axes(axes, ylabel: str) -> None:
         ax.set_ylabel(ylabel)
         ax.set_ylim(0, 1.02)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+        legend_outside(ax)
 
 
 def plot_fig6b(ds: xr.Dataset) -> Figure:

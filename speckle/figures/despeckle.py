@@ -23,14 +23,17 @@ intensity), CNR inclusion/background and PSNR/SSIM on dB images referred to the 
 uniform-region mean (window ``[-30, +15]`` dB), point-target FWHM (axial, lateral) on linear
 intensity, and the 10-90 % width of the layer step edge with its standard error (4 blocks of
 lines); ``resolution_loss`` is the larger of the two point-target FWHM ratios to the single
-look's (the edge width of a speckled image carries an SE as large as itself, so it is reported,
-not used). Physical methods' ``time_per_mpx`` is the
+look's, and ``resolution_loss_with_edge`` the larger of that and the edge-width ratio (the
+edge width of a speckled image carries an SE as large as itself, but a filter that widens the
+edge 3 times loses resolution even where its point targets stay sharp); the Pareto charts use
+``resolution_loss_with_edge``. Physical methods' ``time_per_mpx`` is the
 processing of the acquired looks (splitting, registration, averaging), their acquisition
 count is ``acquisitions``; filters' is the filter's run time.
 """
 
 from __future__ import annotations
 
+import textwrap
 import time
 from collections.abc import Mapping
 
@@ -44,21 +47,20 @@ from ..analysis import image_quality as iq
 from ..conventions import attrs, coord
 from ..imaging.aline import ascan
 from ..imaging.bscan import bscan
-from ..imaging.scan import beam_reach, image, scan_lines
-from ..imaging.truth import speckle_free_image
-from ..scene import regions as rg
+from ..imaging.scan import image
 from ..scene.scatterers import random_scatterers
-from ..scene.shared import shared_scene
+from ..studies.looks import angular_looks, polarization_looks, spatial_looks, temporal_looks
+from ..studies.suppression import DB_RANGE, DB_TOP, METRICS, build_phantom, quality
 from ..system.source import spectrum
-from ._style import new_figure
+from .style import colorbar, mark_no_colorbar, new_figure, physical_image
 
 __all__ = [
     "FAMILIES",
     "build_phantom",
-    "check_despeckle_config",
     "failure_data",
     "frequency_compounding_data",
     "methods_data",
+    "parameter_grid",
     "phantom_data",
     "plot_failure",
     "plot_methods",
@@ -67,193 +69,10 @@ __all__ = [
 
 #: Method families, physical then digital.
 FAMILIES = ("frequency", "angular", "spatial", "polarization", "temporal", *dsp.FILTERS)
-#: dB window of PSNR/SSIM, relative to the truth's mean in the uniform region.
-DB_TOP, DB_RANGE = 15.0, 45.0
 #: "Stops helping": speckle reduction (single-look contrast / contrast) below this.
 HELPS = 1.1
 #: "Erases the feature": less than this fraction of the truth's inclusion contrast (dB) kept.
 ERASES = 0.5
-
-
-# --------------------------------------------------------------------------- the phantom
-def build_phantom(
-    geo: Mapping,
-    *,
-    seed: int,
-    density: float | None = None,
-    radius: float | None = None,
-    margin_angle: float = 0.0,
-) -> dict:
-    """The phantom of a ``despeckle`` geometry section: scene, source, lines, truth, masks.
-
-    ``geo`` keys: ``n_pixels``, ``n_lines``, ``pixel_size`` (µm; the line pitch too),
-    ``k0_dk``, ``waist`` (µm), ``density`` (scatterers per pixel cell), ``air_rows``,
-    ``layer_row``, ``backscatter`` ([layer 1, layer 2]), ``inclusion`` ({row, line, radius
-    (pixels), backscatter}), ``points`` ({row, lines, db: peak over the layer-1 mean}),
-    ``method``, ``tol``. ``density``/``radius`` override the section's; ``margin_angle``
-    (degrees) widens the drawn scene for rotated looks.
-    """
-    n, nl, p = int(geo["n_pixels"]), int(geo["n_lines"]), float(geo["pixel_size"])
-    h = n * p
-    rho = float(geo["density"] if density is None else density)
-    inc = dict(geo["inclusion"])
-    r_inc = float(inc["radius"] if radius is None else radius)
-    w0 = float(geo["waist"])
-    src = spectrum(n, h, k0_dk=float(geo["k0_dk"]))
-    x = scan_lines(nl, p)
-    dens = rg.cell_density(rho, p, p)
-    b1, b2 = (float(v) for v in geo["backscatter"])
-    z_air, z_layer = geo["air_rows"] * p, geo["layer_row"] * p
-    sin = abs(np.sin(np.deg2rad(margin_angle)))
-    zmax = h * (1 + sin) + p
-    regions = rg.make_regions(
-        rg.background(density=0.0, name="air"),
-        rg.layer(z_air, zmax, density=dens, backscatter=b1, name="layer 1"),
-        rg.layer(z_layer, zmax, density=dens, backscatter=b2, name="layer 2"),
-        rg.circle(
-            inc["row"] * p,
-            inc["line"] * p,
-            r_inc * p,
-            density=dens,
-            backscatter=float(inc["backscatter"]),
-            name="inclusion",
-        ),
-    )
-    reach = beam_reach(w0) + h * sin
-    sc = shared_scene(
-        regions,
-        z_range=(0.0, zmax),
-        x_range=(x[0] - reach, x[-1] + reach + p),
-        seed=seed,
-        tile=64.0 * p,
-    )
-    # point targets: peak intensity `db` above the layer-1 mean rho N sum S^2 w0 sqrt(pi)/(2 p)
-    s2 = float(np.sum(src.values**2))
-    mean1 = b1 * rho * n * s2 * w0 * np.sqrt(np.pi) / (2 * p)
-    pts = geo["points"]
-    amp = np.sqrt(10 ** (pts["db"] / 10) * mean1) / float(np.sum(src.values))
-    zp = np.full(len(pts["lines"]), (pts["row"] + 0.3) * p)
-    xp = np.asarray(pts["lines"], float) * p + 0.2 * p
-    sc = xr.concat(
-        [
-            sc,
-            xr.Dataset(
-                {
-                    "z": ("scatterer", zp),
-                    "x": ("scatterer", xp),
-                    "amplitude": ("scatterer", np.full(zp.size, amp + 0j)),
-                    "region": ("scatterer", np.full(zp.size, -1, sc.region.dtype)),
-                }
-            ),
-        ],
-        dim="scatterer",
-        data_vars="all",
-        combine_attrs="override",
-    )
-    sc = sc.isel(scatterer=np.argsort(sc.x.values, kind="stable"))
-    kw = {"waist": w0, "x": x, "method": geo["method"], "tol": geo["tol"]}
-    truth = speckle_free_image(sc, src, **kw).values
-    labels = rg.rasterize(regions, np.arange(n) * p, x)
-    rows, cols = np.mgrid[0:n, 0:nl]
-    d_inc = np.hypot(rows - inc["row"], cols - inc["line"])
-    a, lr = int(geo["air_rows"]), int(geo["layer_row"])
-    gap = max(1, min(6, (lr - a) // 4))  # rows kept clear of the layer-1 boundaries
-    half = max(2, min(12, (lr - a) // 2, (n - lr) // 2))  # half-height of the edge window
-    masks = {
-        "uniform": (rows >= a + gap) & (rows < lr - gap),
-        "inclusion": d_inc <= max(0.5 * r_inc, 1.0),
-        "background": (d_inc >= r_inc + 4) & (d_inc <= r_inc + 10) & (rows > lr + 4),
-    }
-    ref = float(truth[masks["uniform"]].mean())
-    return {
-        "geo": geo,
-        "source": src,
-        "scene": sc,
-        "x": x,
-        "truth": truth,
-        "labels": labels,
-        "masks": masks,
-        "ref": ref,
-        "kw": kw,
-        "pixel": p,
-        "points": pts,
-        "edge_rows": (lr - half, lr + half),
-        "regions": regions,
-        # lines clear of the inclusion where it reaches into the edge window
-        "edge_lines": (np.abs(np.arange(nl) - inc["line"]) > r_inc + 2)
-        | (inc["row"] - r_inc - 2 >= lr + half),
-    }
-
-
-def _point_fwhm(img: np.ndarray, ph: dict) -> tuple[float, float]:
-    """Mean axial and lateral FWHM (µm) of the point targets (linear intensity)."""
-    pts, p = ph["points"], ph["pixel"]
-    ax, lat = [], []
-    for line in pts["lines"]:
-        r0, c0 = int(pts["row"]), int(line)
-        win = img[max(r0 - 6, 0) : r0 + 7, max(c0 - 10, 0) : c0 + 11]
-        i, j = np.unravel_index(np.argmax(win), win.shape)
-        ax.append(iq.peak_fwhm(win[:, j], p))
-        lat.append(iq.peak_fwhm(win[i, :], p))
-    return _finite_mean(ax), _finite_mean(lat)
-
-
-def _finite_mean(values: list[float]) -> float:
-    v = np.asarray(values, float)
-    v = v[np.isfinite(v)]
-    return float(v.mean()) if v.size else np.nan
-
-
-def quality(intensity: np.ndarray, ph: dict, *, edge: bool = True) -> dict:
-    """Every metric of one processed intensity image of phantom ``ph`` (module docstring).
-
-    ``edge``: also the step-edge width and its standard error from 4 blocks of lines (NaN
-    otherwise; the failure map does not use them).
-    """
-    m = ph["masks"]
-    img = np.asarray(intensity, float)
-    img = img * ph["ref"] / max(float(img[m["uniform"]].mean()), 1e-300)
-    db = iq.to_db(img, ph["ref"])
-    tdb = iq.to_db(ph["truth"], ph["ref"])
-    fa, fl = _point_fwhm(img, ph)
-    e0, e1 = ph["edge_rows"]
-    band = img[e0:e1, ph["edge_lines"]]
-    width, se = np.nan, np.nan
-    if edge:
-        width = iq.edge_width(band.mean(axis=1), ph["pixel"])
-        parts = np.array_split(band, 4, axis=1)
-        blocks = np.array([iq.edge_width(b.mean(axis=1), ph["pixel"]) for b in parts])
-        if np.isfinite(blocks).sum() > 1:
-            se = float(np.nanstd(blocks, ddof=1) / np.sqrt(np.isfinite(blocks).sum()))
-    inc = db[m["inclusion"]].mean() - db[m["background"]].mean()
-    tinc = tdb[m["inclusion"]].mean() - tdb[m["background"]].mean()
-    return {
-        "contrast": iq.contrast(img, m["uniform"]),
-        "enl": iq.enl(img, m["uniform"]),
-        "cnr": iq.cnr(db, m["inclusion"], m["background"]),
-        "psnr": iq.psnr_db(db, tdb, db_top=DB_TOP, db_range=DB_RANGE),
-        "ssim": iq.ssim_db(db, tdb, db_top=DB_TOP, db_range=DB_RANGE),
-        "fwhm_axial": fa,
-        "fwhm_lateral": fl,
-        "edge_width": width,
-        "edge_width_se": se,
-        "feature_retained": float(inc / tinc) if tinc != 0 else np.nan,
-    }
-
-
-#: metric -> (its quantity in :data:`speckle.conventions.QUANTITIES`, long name)
-METRICS = {
-    "contrast": ("contrast", "speckle contrast std/mean in the uniform region"),
-    "enl": ("dimensionless", "equivalent number of looks mean^2/var in the uniform region"),
-    "cnr": ("dimensionless", "contrast-to-noise ratio inclusion/background (dB images)"),
-    "psnr": ("level", "PSNR against the truth (dB images)"),
-    "ssim": ("dimensionless", "SSIM against the truth (dB images)"),
-    "fwhm_axial": ("length", "axial FWHM of the point targets"),
-    "fwhm_lateral": ("length", "lateral FWHM of the point targets"),
-    "edge_width": ("length", "10-90 % width of the layer step edge"),
-    "edge_width_se": ("length", "standard error of edge_width (4 blocks of lines)"),
-    "feature_retained": ("dimensionless", "inclusion contrast (dB) kept, over the truth's"),
-}
 
 
 # --------------------------------------------------------------------------- the methods
@@ -283,13 +102,13 @@ def _family_looks(fam: str, spec: Mapping, ph: dict, seed: int) -> xr.DataArray:
     """
     src, sc, kw = ph["source"], ph["scene"], ph["kw"]
     if fam == "angular":
-        return cp.angular_looks(sc, src, spec["angles"], **kw)
+        return angular_looks(sc, src, spec["angles"], **kw)
     if fam == "spatial":
-        return cp.spatial_looks(sc, src, spec["offsets"], **kw)
+        return spatial_looks(sc, src, spec["offsets"], **kw)
     if fam == "polarization":
-        return cp.polarization_looks(sc, src, spec["depolarization"], seed=seed + 1, **kw)
+        return polarization_looks(sc, src, spec["depolarization"], seed=seed + 1, **kw)
     if fam == "temporal":
-        return cp.temporal_looks(
+        return temporal_looks(
             sc,
             src,
             spec["frames"],
@@ -363,7 +182,16 @@ def _physical_methods(lk: dict, ph: dict, cfg: Mapping):
     )
 
 
-def _grid(params: Mapping) -> list[dict]:
+def parameter_grid(params: Mapping) -> list[dict]:
+    """Every combination of a filter's swept parameters (``{name: [values]}``), in order.
+
+    Examples
+    --------
+    >>> parameter_grid({"size": [3, 5], "k": [1.0]})
+    [{'size': 3, 'k': 1.0}, {'size': 5, 'k': 1.0}]
+    >>> parameter_grid({})
+    [{}]
+    """
     keys = list(params)
     if not keys:
         return [{}]
@@ -451,7 +279,7 @@ def methods_data(cfg: Mapping, seed: int) -> tuple[xr.Dataset, xr.Dataset]:
         if not dsp.filter_available(name):
             continue
         for domain in cfg["domains"]:
-            for p in _grid(params):
+            for p in parameter_grid(params):
                 t = time.perf_counter()
                 img = dsp.despeckle(noisy_img, name, p, domain=domain)
                 secs = time.perf_counter() - t
@@ -486,6 +314,12 @@ def methods_data(cfg: Mapping, seed: int) -> tuple[xr.Dataset, xr.Dataset]:
         attrs(
             "dimensionless",
             "larger of the axial and lateral point-target FWHM ratios to the single look",
+        )
+    )
+    ds["resolution_loss_with_edge"] = np.fmax(ds.resolution_loss, ds.edge_width_ratio).assign_attrs(
+        attrs(
+            "dimensionless",
+            "larger of resolution_loss and edge_width_ratio (either where the other is NaN)",
         )
     )
     ds.attrs.update(
@@ -554,22 +388,69 @@ def _pareto(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return np.array(front, int)
 
 
-def _colours(fams) -> dict:
-    import matplotlib.pyplot as plt
+#: One colour per method family in every speckle-suppression figure (methods, failure,
+#: phantom): the single look black, physical compounding in the first five of matplotlib's
+#: ``tab10``, digital filters in the other five and four dark colours; with the markers of
+#: :data:`FAMILY_MARKERS` no two families look alike.
+FAMILY_COLOURS = {
+    "single": "#000000",
+    "frequency": "#1f77b4",
+    "angular": "#ff7f0e",
+    "spatial": "#2ca02c",
+    "polarization": "#d62728",
+    "temporal": "#9467bd",
+    "median": "#8c564b",
+    "nlm": "#e377c2",
+    "tv": "#7f7f7f",
+    "wavelet": "#bcbd22",
+    "bilateral": "#17becf",
+    "lee": "#000080",
+    "kuan": "#b8860b",
+    "frost": "#006400",
+    "bm3d": "#800080",
+}
+#: Markers: square for the single look, circles for physical compounding, triangles for filters.
+FAMILY_MARKERS = {"single": "s", **dict.fromkeys(FAMILIES[:5], "o")}
+#: Family names in words (legends).
+FAMILY_NAMES = {
+    "single": "single look",
+    "frequency": "frequency compounding",
+    "angular": "angular compounding",
+    "spatial": "spatial compounding",
+    "polarization": "polarization diversity",
+    "temporal": "temporal averaging",
+    "median": "median filter",
+    "nlm": "non-local means",
+    "tv": "total variation",
+    "wavelet": "wavelet shrinkage",
+    "bilateral": "bilateral filter",
+    "lee": "Lee filter",
+    "kuan": "Kuan filter",
+    "frost": "Frost filter",
+    "bm3d": "BM3D",
+}
 
-    cmap = plt.get_cmap("tab20")
-    return {f: cmap(i % 20) for i, f in enumerate(fams)}
+
+def _family_style(fam: str) -> dict:
+    """Colour and marker of method family ``fam`` (the same in every figure of the family)."""
+    return {"color": FAMILY_COLOURS.get(fam, "k"), "marker": FAMILY_MARKERS.get(fam, "^")}
 
 
 def plot_methods(ds: xr.Dataset) -> Figure:
-    """Pareto charts: speckle reduction vs resolution loss, and vs time per megapixel."""
-    fig, axes = new_figure(1, 2, width=9.0, height=3.8)
+    """Pareto charts: speckle reduction against resolution loss (the worse of the point-target
+    FWHM and edge-width ratios, ``resolution_loss_with_edge``) and against time per megapixel.
+    """
+    fig, axes = new_figure(1, 2, width=9.5, height=3.8)
     axes = axes[0]
     sel = ds.isel(technique=np.flatnonzero(ds.noise.values == 1))
     fams = list(dict.fromkeys(sel.family.values.tolist()))
-    col = _colours(fams)
+    loss = "resolution_loss_with_edge" if "resolution_loss_with_edge" in sel else "resolution_loss"
     for ax, xv, xl in (
-        (axes[0], "resolution_loss", "resolution loss (ratio to single look)"),
+        (
+            axes[0],
+            loss,
+            "resolution loss: worse of point FWHM\nand edge width, ratio to single look",
+        ),
         (axes[1], "time_per_mpx", "processing time per megapixel (s)"),
     ):
         x = sel[xv].values.astype(float)
@@ -579,42 +460,66 @@ def plot_methods(ds: xr.Dataset) -> Figure:
             ax.set_xscale("log")
         for f in fams:
             m = sel.family.values == f
-            ax.scatter(x[m], y[m], s=12, color=col[f], label=f)
+            ax.scatter(x[m], y[m], s=16, label=FAMILY_NAMES.get(f, f), **_family_style(f))
         front = _pareto(x, y)
         ax.plot(x[front], y[front], "k-", lw=0.8, label="Pareto front")
         ax.set_xlabel(xl)
         ax.set_ylabel("speckle reduction C_single / C")
         ax.axhline(1.0, color="0.6", lw=0.5)
-    axes[0].legend(ncol=2, fontsize=6, loc="best")
-    fig.suptitle(f"every method on the phantom (receiver noise at {ds.attrs.get('snr_db')} dB)")
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside right upper", frameon=False)
+    fig.suptitle(f"Every method on the phantom, receiver SNR {ds.attrs.get('snr_db'):g} dB")
     return fig
 
 
 def plot_phantom(ds: xr.Dataset) -> Figure:
-    """Region map, truth, single look and the best method of each family, in dB."""
+    """Region map, truth, single look (with receiver noise) and the best method of each family
+    (highest SSIM; noisy looks), in dB, at the physical aspect ratio with axes in µm and one
+    intensity colorbar."""
     nb = ds.sizes["family"]
     ncol = 5
     nrow = int(np.ceil((3 + nb) / ncol))
-    fig, axes = new_figure(nrow, ncol, width=10.0, height=2.1 * nrow)
+    fig, axes = new_figure(nrow, ncol, width=11.0, height=2.3 * nrow + 0.3)
     axes = np.atleast_1d(axes).ravel()
     ref = float(ds.attrs["reference_intensity"])
-    ext = [float(ds.x[0]), float(ds.x[-1]), float(ds.depth[-1]), float(ds.depth[0])]
+    depth, x = ds.depth.values, ds.x.values
+    im = None
 
-    def show(ax, img, title, db=True):
+    def show(ax, img, title, db=True, color="k"):
         data = iq.to_db(img, ref) if db else img
         kw = {"vmin": -30, "vmax": 15, "cmap": "gray"} if db else {"cmap": "tab10"}
-        ax.imshow(data, extent=ext, aspect="auto", **kw)
-        ax.set_title(title, fontsize=6)
-        ax.set_xticks([])
-        ax.set_yticks([])
+        shown = physical_image(ax, data, depth, x, xlabel="x (µm)", **kw)
+        ax.set_title(title, color=color)
+        return shown
 
-    show(axes[0], ds.labels.values, "region map", db=False)
-    show(axes[1], ds.truth.values, "truth E|A|^2")
+    regions = show(axes[0], ds.labels.values, "regions", db=False)
+    mark_no_colorbar(regions)
+    names = [n.strip() for n in str(ds.attrs.get("region_names", "")).split(",") if n.strip()]
+    for k, name in enumerate(names):
+        axes[0].plot([], [], "s", color=regions.cmap(regions.norm(k)), label=name)
+    if names:
+        axes[0].legend(
+            loc="upper left",
+            bbox_to_anchor=(1.0, 1.0),
+            frameon=False,
+            handlelength=0.8,
+            borderaxespad=0.2,
+        )
+    im = show(axes[1], ds.truth.values, "truth E|A|²")
     show(axes[2], ds.single_look.values, "single look + noise")
     for i in range(nb):
-        show(axes[3 + i], ds.best.isel(family=i).values, str(ds.best_method.values[i]))
+        fam = str(ds.family.values[i])
+        how = str(ds.best_method.values[i]).removeprefix(fam).removesuffix(" + noise").strip()
+        show(
+            axes[3 + i],
+            ds.best.isel(family=i).values,
+            f"{FAMILY_NAMES.get(fam, fam)}\n{textwrap.shorten(how, 34, placeholder='...')}",
+            color=FAMILY_COLOURS.get(fam, "k"),
+        )
     for ax in axes[3 + nb :]:
         ax.axis("off")
+    colorbar(
+        fig, im, axes[: 3 + nb].tolist(), "intensity (dB re the truth's uniform mean)", shrink=0.6
+    )
     return fig
 
 
@@ -737,25 +642,34 @@ def failure_data(cfg: Mapping, seed: int) -> xr.Dataset:
 
 
 def plot_failure(ds: xr.Dataset) -> Figure:
-    """Speckle reduction and feature retained against density, SNR and feature size."""
+    """Speckle reduction and feature retained against density, SNR and feature size; each
+    family in its colour of :data:`FAMILY_COLOURS`, one legend right of the panels."""
     axes_names = ("density", "snr_db", "feature_radius")
-    fig, axes = new_figure(2, 3, width=10.0, height=5.5)
+    fig, axes = new_figure(2, 3, width=11.0, height=5.5)
     names = [str(m) for m in ds.technique.values]
+    fams = [str(f) for f in ds.family.values]
     methods = [m for m in names if m != "single"]
-    col = _colours(methods)
     for c, axis in enumerate(axes_names):
         xv = ds[axis].values
         for m in methods:
             i = names.index(m)
+            style = _family_style(fams[i])
             sr = ds[f"speckle_reduction_{axis}"].values[i]
             fr = ds[f"feature_retained_{axis}"].values[i]
-            axes[0, c].plot(xv, sr, "-o", ms=3, color=col[m], label=m)
-            axes[1, c].plot(xv, fr, "-o", ms=3, color=col[m])
+            label = FAMILY_NAMES.get(fams[i], m) if c == 0 else None
+            axes[0, c].plot(xv, sr, "-", ms=3, label=label, **style)
+            axes[1, c].plot(xv, fr, "-", ms=3, **style)
             bad = ds[f"helps_{axis}"].values[i] == 0
             axes[0, c].plot(xv[bad], sr[bad], "x", color="k", ms=6)
             er = ds[f"erases_{axis}"].values[i] == 1
             axes[1, c].plot(xv[er], fr[er], "x", color="r", ms=6)
-        axes[0, c].axhline(ds.attrs["helps_threshold"], color="k", lw=0.6, ls="--")
+        axes[0, c].axhline(
+            ds.attrs["helps_threshold"],
+            color="k",
+            lw=0.6,
+            ls="--",
+            label="stops helping below" if c == 0 else None,
+        )
         axes[1, c].axhline(ds.attrs["erases_threshold"], color="r", lw=0.6, ls="--")
         for r in range(2):
             if axis == "density":
@@ -763,13 +677,20 @@ def plot_failure(ds: xr.Dataset) -> Figure:
             axes[r, c].set_xlabel(
                 {
                     "density": "scatterers per pixel",
-                    "snr_db": "SNR (dB)",
+                    "snr_db": "receiver SNR (dB)",
                     "feature_radius": "inclusion radius (pixels)",
                 }[axis]
             )
-        axes[0, c].set_ylabel("speckle reduction (x: stops helping)")
-        axes[1, c].set_ylabel("feature contrast kept (x: erased)")
-    axes[0, 0].legend(fontsize=5, ncol=2)
+        for r in range(2):
+            axes[r, c].set_xticks(xv, [f"{v:g}" for v in xv])
+            axes[r, c].minorticks_off()
+        axes[0, c].set_ylabel("speckle reduction C_single / C")
+        axes[1, c].set_ylabel("inclusion contrast kept (fraction)")
+    axes[0, 0].plot([], [], "x", color="k", label="x: stops helping")
+    axes[0, 0].plot([], [], "x", color="r", label="x: erases the inclusion")
+    axes[0, 0].plot([], [], "--", color="r", lw=0.6, label="erased below")
+    fig.legend(*axes[0, 0].get_legend_handles_labels(), loc="outside right upper", frameon=False)
+    fig.suptitle("Where each family's method stops helping (top) or erases the inclusion (bottom)")
     return fig
 
 
@@ -844,126 +765,3 @@ def frequency_compounding_data(cfg: Mapping, seed: int) -> xr.Dataset:
         },
     )
     return ds
-
-
-# --------------------------------------------------------------------------- config checks
-def _key(path: str, check) -> None:
-    try:
-        check()
-    except (ValueError, TypeError) as err:
-        raise ValueError(f"config key despeckle.{path}: {err}") from None
-
-
-def _check_geometry(geo: Mapping, path: str) -> None:
-    n, nl = int(geo["n_pixels"]), int(geo["n_lines"])
-    a, lr = int(geo["air_rows"]), int(geo["layer_row"])
-    inc, pts = geo["inclusion"], geo["points"]
-    if not (0 < a and a + 4 <= lr and lr + 4 <= n):
-        raise ValueError(
-            f"config key despeckle.{path}: need 0 < air_rows ({a}), air_rows + 4 "
-            f"<= layer_row ({lr}), layer_row + 4 <= n_pixels ({n})"
-        )
-    if not (lr < inc["row"] < n and 0 <= inc["line"] < nl):
-        raise ValueError(
-            f"config key despeckle.{path}.inclusion: centre (row {inc['row']}, line "
-            f"{inc['line']}) must lie in layer 2 (rows {lr}..{n}) and lines 0..{nl}"
-        )
-    if not pts["row"] < a or any(not 0 <= v < nl for v in pts["lines"]):
-        raise ValueError(
-            f"config key despeckle.{path}.points: row must be < air_rows ({a}) and "
-            f"lines in [0, n_lines={nl})"
-        )
-
-
-def _check_radii(geo: Mapping, radii) -> None:
-    """The failure sweep's inclusion radii (pixels) keep the inclusion inside layer 2 and the
-    lines of the failure phantom."""
-    n, nl, lr = int(geo["n_pixels"]), int(geo["n_lines"]), int(geo["layer_row"])
-    row, line = geo["inclusion"]["row"], geo["inclusion"]["line"]
-    room = min(row - lr, n - row, line + 1, nl - line)
-    for i, r in enumerate(radii):
-        if r >= room:
-            raise ValueError(
-                f"config key despeckle.failure.feature_radius[{i}] = {r} does not fit in the "
-                f"failure phantom: the inclusion at (row {row}, line {line}) must stay inside "
-                f"layer 2 (rows {lr}..{n}) and lines 0..{nl}; need radius < {room}"
-            )
-
-
-def _check_spec(spec: Mapping, n: int, path: str) -> None:
-    fam = spec["family"]
-    if fam == "frequency":
-        _key(
-            path,
-            lambda: cp.subband_windows(
-                n, spec["looks"], window=spec["window"], overlap=spec["overlap"]
-            ),
-        )
-    elif fam in dsp.FILTERS:
-        _key(path, lambda: dsp.check_filter(fam, spec.get("params"), spec.get("domain", "linear")))
-    elif fam == "temporal":
-        _key(
-            path,
-            lambda: cp.brownian_frames(
-                xr.Dataset({"z": ("scatterer", [0.0])}),
-                spec["frames"],
-                diffusion=spec["diffusion"],
-                interval=spec["interval"],
-                seed=0,
-            ),
-        )
-
-
-def check_despeckle_config(cfg: Mapping) -> None:
-    """What the schema cannot say about the ``despeckle`` section (``ValueError`` naming it).
-
-    Geometry inside the image; sub-bands: ``looks`` at most the spectrum's samples, the
-    windows and overlaps valid, ``frequency_compounding.n_pixels`` a multiple of every
-    ``looks`` (equal sub-bands); subsets no larger than their sets; every filter parameter in
-    its range (:func:`speckle.analysis.filters.check_filter`); failure methods complete.
-    """
-    from .config_check import _tol
-
-    geo = cfg["phantom"]
-    _check_geometry(geo, "phantom")
-    _tol(geo["method"], geo.get("tol"), "despeckle.phantom.tol", int(geo["n_pixels"]), False)
-    fgeo = {**geo, **cfg["failure"]["phantom"]}
-    _check_geometry(fgeo, "failure.phantom")
-    _check_radii(fgeo, cfg["failure"]["feature_radius"])
-    n = int(geo["n_pixels"])
-    fr = cfg["physical"]["frequency"]
-    for nl in fr["looks"]:
-        for w in fr["windows"]:
-            for ov in fr["overlap"]:
-                _key(
-                    "physical.frequency",
-                    lambda nl=nl, w=w, ov=ov: cp.subband_windows(n, nl, window=w, overlap=ov),
-                )
-    phys = cfg["physical"]
-    for fam, key in (("angular", "angles"), ("spatial", "offsets")):
-        size = len(phys[fam][key])
-        for m in phys[fam]["sets"]:
-            if m > size or (size - m) % 2:
-                raise ValueError(
-                    f"config key despeckle.physical.{fam}.sets: {m} central {key} of {size} "
-                    f"(need sets <= {size} with the same parity)"
-                )
-    tm = phys["temporal"]
-    if max(tm["sets"]) > tm["frames"]:
-        raise ValueError(
-            f"config key despeckle.physical.temporal.sets must be <= frames "
-            f"({tm['frames']}); got {tm['sets']}"
-        )
-    for name, params in cfg["filters"].items():
-        for p in _grid(params):
-            _key(f"filters.{name}", lambda name=name, p=p: dsp.check_filter(name, p))
-    for name, spec in cfg["failure"]["methods"].items():
-        _check_spec(spec, int(fgeo["n_pixels"]), f"failure.methods.{name}")
-    fc = cfg["frequency_compounding"]
-    for nl in fc["looks"]:
-        _key("frequency_compounding.looks", lambda nl=nl: cp.subband_windows(fc["n_pixels"], nl))
-        if fc["n_pixels"] % nl:
-            raise ValueError(
-                f"config key despeckle.frequency_compounding.looks: {nl} equal sub-bands need "
-                f"n_pixels ({fc['n_pixels']}) to be a multiple of it"
-            )

@@ -19,10 +19,10 @@ from collections.abc import Callable, Mapping
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 from scipy import ndimage
 
 from ..analysis.correlation import expected_correlation
-from ..analysis.failure import mean_and_se, method_options, strain_scores
 from ..analysis.phase import choose_lag, depth_autocorrelation, noise_power
 from ..analysis.strain import accumulate_strain, estimate_strain, predicted_strain_std
 from ..conventions import attrs, coord
@@ -30,10 +30,12 @@ from ..imaging.bscan import bscan
 from ..provenance import provenance_attrs
 from ..scene.deformation import deformable_scene, displace
 from ..scene.mechanics import compress, inclusion_labels
+from ..studies.failure import mean_and_se, method_options, strain_scores
 from ..sweep import sweep
 from ..system.noise import add_complex_noise
 from ._config import dask_options, scene_kwargs, source_spectrum
-from ._style import new_figure
+from .style import ESTIMATOR_NAMES as METHOD_NAMES
+from .style import colorbar, estimator_colour, legend_outside, new_figure, physical_image
 
 __all__ = [
     "FAILURE_SWEEPS",
@@ -230,33 +232,56 @@ def inclusion_data(cfg: Mapping, seed: int) -> xr.Dataset:
     return ds
 
 
+def _lateral(ds: xr.Dataset) -> np.ndarray:
+    """Lateral A-line positions (µm): the A-line pitch of the scenes is the pixel size."""
+    return np.arange(ds.sizes["aline"]) * float(ds.attrs["pixel_size"])
+
+
+def _map_figure(n_columns: int, ds: xr.Dataset):
+    """Two rows of ``n_columns`` depth x lateral maps sized to their physical aspect ratio."""
+    depth = float(ds.depth[-1] - ds.depth[0]) + float(ds.attrs["pixel_size"])
+    ratio = depth / (ds.sizes["aline"] * float(ds.attrs["pixel_size"]))
+    width = 1.5 + 1.9 * n_columns
+    panel = min(max((width / n_columns - 0.9) * ratio, 1.6), 4.0)
+    return new_figure(2, n_columns, width=width, height=2 * panel + 0.9)
+
+
 def plot_phantom(ds: xr.Dataset) -> Figure:
-    """Modulus and true strain (left), each method's strain map (top) and error map (bottom)."""
+    """True strain and each method's strain map (top), modulus and each method's error map
+    (bottom), at the physical aspect ratio (1 µm depth = 1 µm lateral), each with its colorbar.
+    """
     methods = list(ds.method.values)
-    fig, axes = new_figure(2, len(methods) + 1, width=2.0 * (len(methods) + 1), height=5.0)
-    extent = [0, ds.sizes["aline"], float(ds.depth[-1]), 0]
+    fig, axes = _map_figure(len(methods) + 1, ds)
+    depth, x = ds.depth.values, _lateral(ds)
     vmax = float(ds.true_strain.max()) * 1.3
-    im = axes[0, 0].imshow(ds.modulus, aspect="auto", extent=extent, cmap="viridis")
-    axes[0, 0].set_title(f"modulus ({ds.modulus.attrs.get('units', '')})")
-    fig.colorbar(im, ax=axes[0, 0])
-    im = axes[1, 0].imshow(ds.true_strain, aspect="auto", extent=extent, vmin=0, vmax=vmax)
-    axes[1, 0].set_title("true strain")
-    fig.colorbar(im, ax=axes[1, 0])
+    lim = vmax / 4
+    strain_kw = {"vmin": 0, "vmax": vmax, "cmap": "viridis"}
+    units = ds.modulus.attrs.get("units", "")
+
+    def show(ax, img, title, label, **kw):
+        im = physical_image(ax, img, depth, x, **kw)
+        ax.set_title(title)
+        ax.xaxis.set_major_locator(MaxNLocator(2))
+        colorbar(fig, im, ax, label)
+
+    show(axes[0, 0], ds.true_strain, "true strain", "axial strain", **strain_kw)
+    show(axes[1, 0], ds.modulus, "Young's modulus", f"modulus ({units})", cmap="cividis")
     for i, m in enumerate(methods, start=1):
-        im = axes[0, i].imshow(
-            ds.strain.sel({"method": m}), aspect="auto", extent=extent, vmin=0, vmax=vmax
+        name = METHOD_NAMES.get(str(m), str(m))
+        show(
+            axes[0, i], ds.strain.sel({"method": m}), f"{name}\nstrain", "axial strain", **strain_kw
         )
-        axes[0, i].set_title(f"{m}")
         err = ds.error.sel({"method": m})
-        lim = vmax / 4
-        im2 = axes[1, i].imshow(
-            err, aspect="auto", extent=extent, cmap="RdBu_r", vmin=-lim, vmax=lim
+        rms = float(np.sqrt((err**2).mean()))
+        show(
+            axes[1, i],
+            err,
+            f"{name}\nerror (rms {rms:.1e})",
+            "strain error",
+            cmap="RdBu_r",
+            vmin=-lim,
+            vmax=lim,
         )
-        axes[1, i].set_title(f"error, rms {float(np.sqrt((err**2).mean())):.1e}")
-    fig.colorbar(im, ax=axes[0, -1])
-    fig.colorbar(im2, ax=axes[1, -1])
-    for ax in axes[:, 0]:
-        ax.set_ylabel("depth (µm)")
     return fig
 
 
@@ -541,10 +566,36 @@ def _seed_bars(ax, ds: xr.Dataset, var: str, sel: dict, x: np.ndarray, **style):
     return ax.errorbar(x, mean, yerr=se, fmt="o-", ms=3, lw=0.8, capsize=2, **style)
 
 
+#: Axis labels of the failure maps' sweeps, in words with units.
+SWEEP_LABELS = {
+    "strain": "applied strain",
+    "snr_db": "SNR (dB; noise-free drawn right)",
+    "window": "depth window (pixels)",
+    "k0_dk": "k0/Δk",
+    "fwhm_fraction": "spectrum FWHM / Δk",
+    "density": "scatterers per pixel",
+}
+#: Predicted strain limits (``limit_<key>`` attributes) in words.
+LIMIT_LABELS = {
+    "wrap_single_lag": "phase wraps (single lag)",
+    "wrap_lag1": "phase wraps (lag 1)",
+    "decorrelation": "decorrelation",
+    "speckle_displacement": "speckle displacement",
+}
+
+
 def plot_failure(ds: xr.Dataset) -> Figure:
     """Failure maps: rms error / strain (top) and fraction answered (bottom) per sweep, with
-    limits. Points are the means over seeds, bars +- one standard error."""
-    fig, axes = new_figure(2, len(FAILURE_SWEEPS), width=2.4 * len(FAILURE_SWEEPS), height=5.0)
+    limits. Points are the means over seeds, bars +- one standard error; one legend, right."""
+    fig, axes = new_figure(
+        2,
+        len(FAILURE_SWEEPS),
+        width=2.3 * len(FAILURE_SWEEPS) + 2.2,
+        height=5.0,
+        sharex="col",
+        sharey="row",
+    )
+    handles: dict = {}
     for j, name in enumerate(FAILURE_SWEEPS):
         x = ds[name].values.astype(float)
         xplot = (
@@ -552,17 +603,22 @@ def plot_failure(ds: xr.Dataset) -> Figure:
         )
         for i, m in enumerate(ds.method.values):
             sel = {"method": i}  # by position: a str index read back from NetCDF may not select
+            style = {"color": estimator_colour(m)}
             var = f"relative_rms_error_{name}"
-            line = _seed_bars(axes[0, j], ds, var, sel, xplot, label=str(m))
-            _seed_bars(axes[1, j], ds, f"answered_{name}", sel, xplot, color=line[0].get_color())
+            line = _seed_bars(axes[0, j], ds, var, sel, xplot, **style)
+            _seed_bars(axes[1, j], ds, f"answered_{name}", sel, xplot, **style)
+            handles.setdefault(METHOD_NAMES.get(str(m), str(m)), line)
         axes[0, j].set_yscale("log")
-        axes[0, j].set_title(f"rms error / strain vs {name}")
-        axes[1, j].set_xlabel(
-            name + (" (inf = noise-free, drawn right)" if name == "snr_db" else "")
-        )
+        axes[0, j].set_title(f"against {SWEEP_LABELS[name].split(' (')[0]}")
+        axes[1, j].set_xlabel(SWEEP_LABELS[name])
         if name in ("strain", "density"):
             axes[0, j].set_xscale("log")
             axes[1, j].set_xscale("log")
+        if name == "snr_db" and np.isinf(x).any():
+            ticks = [v for v in xplot if np.isfinite(v)]
+            labels = ["∞" if np.isinf(v) else f"{v:g}" for v in x]
+            for ax in axes[:, j]:
+                ax.set_xticks(ticks, labels)
         if name == "strain":
             for key, ls in (
                 ("wrap_single_lag", ":"),
@@ -572,17 +628,18 @@ def plot_failure(ds: xr.Dataset) -> Figure:
             ):
                 v = ds.attrs[f"limit_{key}"]
                 if np.isfinite(v):
-                    axes[0, j].axvline(v, color="k", ls=ls, lw=0.7, label=f"predicted {key}")
+                    line = axes[0, j].axvline(v, color="k", ls=ls, lw=0.7)
+                    handles.setdefault(f"predicted limit: {LIMIT_LABELS[key]}", line)
         if name == "snr_db":
             pred = ds["predicted_noise_snr_db"].values / ds.attrs["base_strain"]
-            axes[0, j].plot(xplot, pred, "k--", lw=0.8, label="predicted noise (vector)")
-    axes[0, 0].legend(fontsize=5)
-    axes[0, 1].legend(fontsize=5)
+            (line,) = axes[0, j].plot(xplot, pred, "k--", lw=0.8)
+            handles.setdefault("predicted noise error (vector)", line)
+    axes[0, 0].set_ylabel("rms strain error / strain")
     axes[1, 0].set_ylabel("fraction of pixels answered")
+    fig.legend(list(handles.values()), list(handles), loc="outside right upper", frameon=False)
     fig.suptitle(
-        f"{ds.attrs['n_pixels']} x {ds.attrs['n_alines']} px, mean +- SE over "
-        f"{ds.attrs['n_seeds']} seeds",
-        fontsize=8,
+        f"Where each strain estimator fails: {ds.attrs['n_pixels']} x {ds.attrs['n_alines']} "
+        f"pixel images, mean ± standard error over {ds.attrs['n_seeds']} seeds"
     )
     return fig
 
@@ -636,12 +693,16 @@ def plot_speed(ds: xr.Dataset) -> Figure:
         e = ds.relative_rms_error.sel({"method": m}).values
         ax.plot(t, e, "o-", ms=4, lw=0.8, label=str(m))
         for w, ti, ei in zip(ds.window.values, t, e, strict=True):
-            ax.annotate(str(int(w)), (ti, ei), fontsize=5)
+            ax.annotate(str(int(w)), (ti, ei), fontsize=7)
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("time per megapixel (s)")
-    ax.set_ylabel(f"rms error / strain (strain {ds.attrs['strain']:g})")
-    ax.legend()
+    ax.set_ylabel(f"rms strain error / strain (strain {ds.attrs['strain']:g})")
+    ax.set_title("numbers: depth window (pixels)")
+    for line in ax.get_lines():
+        line.set_color(estimator_colour(line.get_label()))
+        line.set_label(METHOD_NAMES.get(line.get_label(), line.get_label()))
+    legend_outside(ax)
     return fig
 
 
@@ -685,13 +746,14 @@ def plot_sequence(ds: xr.Dataset) -> Figure:
     axes[0, 0].plot(f, ds.true_cumulative, "k-", label="truth 1 - (1 - s)^k")
     axes[0, 0].plot(f, ds.median_cumulative, "o", label="accumulated (median)")
     axes[0, 0].set_xlabel("frame")
-    axes[0, 0].set_ylabel("cumulative strain")
-    axes[0, 0].legend()
+    axes[0, 0].set_ylabel("cumulative axial strain")
+    legend_outside(axes[0, 0])
     rel = (ds.median_cumulative - ds.true_cumulative) / ds.true_cumulative
     axes[0, 1].plot(f, rel, "o-", label="median error / truth")
     axes[0, 1].plot(f, ds.rms_error_cumulative / ds.true_cumulative, "s-", label="rms / truth")
     axes[0, 1].set_xlabel("frame")
-    axes[0, 1].legend()
+    axes[0, 1].set_ylabel("relative error of the cumulative strain")
+    legend_outside(axes[0, 1])
     return fig
 
 
@@ -757,19 +819,23 @@ def sequence_large_data(cfg: Mapping, seed: int, path: str) -> xr.Dataset:
 
 
 def plot_sequence_large(ds: xr.Dataset, per_frame: float) -> Figure:
-    """Cumulative strain of the last frame, and its median per frame against the nominal."""
-    fig, axes = new_figure(1, 2, width=7.0, height=3.0)
+    """Cumulative strain of the last frame (physical aspect ratio), and its median per frame
+    against the nominal ``1 - (1 - s)^k``."""
+    fig, axes = new_figure(1, 2, width=7.0, height=3.6, width_ratios=[1, 1.4])
     last = ds["cumulative"].isel(frame=-1)
-    im = axes[0, 0].imshow(last.values, aspect="auto", cmap="viridis")
-    fig.colorbar(im, ax=axes[0, 0], label="cumulative strain")
-    axes[0, 0].set_title(f"frame {int(ds.frame[-1])} vs frame 0")
+    im = physical_image(axes[0, 0], last.values, ds.depth.values, ds.aline.values, cmap="viridis")
+    axes[0, 0].xaxis.set_major_locator(MaxNLocator(2))
+    colorbar(fig, im, axes[0, 0], "cumulative axial strain")
+    axes[0, 0].set_title(f"frame {int(ds.frame[-1])} against frame 0")
     med = [
         float(np.nanmedian(ds["cumulative"].isel(frame=i).values)) for i in range(ds.sizes["frame"])
     ]
     f = ds.frame.values
     axes[0, 1].plot(f, med, "o", label="accumulated (median)")
     axes[0, 1].plot(f, 1 - (1 - per_frame) ** f, "k-", label="nominal 1 - (1 - s)^k")
-    axes[0, 1].set_xlabel("frame")
-    axes[0, 1].set_ylabel("cumulative strain")
-    axes[0, 1].legend()
+    axes[0, 1].set_xlabel("frame k")
+    axes[0, 1].xaxis.set_major_locator(MaxNLocator(integer=True))
+    axes[0, 1].set_ylabel("cumulative axial strain")
+    axes[0, 1].set_title(f"s = {per_frame:g} per frame")
+    legend_outside(axes[0, 1])
     return fig

@@ -31,7 +31,7 @@ from ..imaging.bscan import expected_intensity
 from ..sweep import sweep
 from ..system.detection import add_floor
 from ._config import random_bscan
-from ._style import new_figure
+from .style import new_figure
 
 __all__ = [
     "density_histograms",
@@ -169,7 +169,13 @@ def plot_density_histograms(ds: xr.Dataset) -> Figure:
     for ax, rho in zip(axes.flat, ds.density.values, strict=False):
         p = ds.sel(density=rho)
         _stairs(ax, p.amplitude_density)
-        ax.plot(x, rayleigh_pdf(x, sigma), "k-", lw=1.2, label=f"Rayleigh σ={sigma:.3g}")
+        ax.plot(
+            x,
+            rayleigh_pdf(x, sigma),
+            "k-",
+            lw=1.2,
+            label=f"Rayleigh fit shared by all densities, σ = {sigma:.3g}",
+        )
         ax.set_title(
             f"N_sc/N = {rho:g}\nC = {float(p.contrast):.3f} ± "
             f"{float(p.contrast_se):.3f} (theory {float(p.contrast_theory):.3f})"
@@ -178,7 +184,7 @@ def plot_density_histograms(ds: xr.Dataset) -> Figure:
         ax.set_ylabel("probability density")
     for ax in axes.flat[nd:]:
         ax.set_visible(False)
-    axes.flat[0].legend(loc="upper right")
+    fig.legend(*axes.flat[0].get_legend_handles_labels(), loc="outside lower center", frameon=False)
     return fig
 
 
@@ -329,7 +335,7 @@ def _stairs(ax, density: xr.DataArray, **kw) -> None:
 
 def plot_fig4(ds: xr.Dataset) -> Figure:
     """Fig. 4: rows simulated / measured; columns intensity (log y), amplitude, log intensity."""
-    fig, axes = new_figure(2, 3, width=7.5, height=4.6)
+    fig, axes = new_figure(2, 3, width=10.0, height=4.8)
     have = ds.attrs.get("measured") == "available"
     rows = [("sim", f"simulated, N_sc/N = {ds.attrs.get('density', np.nan):g}")]
     rows.append(("measured", "measured ROI") if have else (None, ds.attrs.get("measured")))
@@ -341,27 +347,34 @@ def plot_fig4(ds: xr.Dataset) -> Figure:
             fig.text(0.5, 0.25, f"measured image {label}", ha="center", va="center")
             continue
         x = ds.intensity_bin.values
-        _stairs(ax_i, ds[f"{pre}_intensity_density"])
+        _stairs(ax_i, ds[f"{pre}_intensity_density"], label=f"{label.split(',')[0]} histogram")
         mean = float(ds[f"{pre}_exponential_mean"])
-        ax_i.plot(x, exponential_pdf(x, mean), "k--", lw=1, label=f"exp., <I>={mean:.3g}")
+        ax_i.plot(
+            x, exponential_pdf(x, mean), "k--", lw=1, label=f"exponential fit, <I> = {mean:.3g}"
+        )
         ax_i.set_yscale("log")
         ax_i.set_xlabel("intensity / <I>")
+        ax_a.set_ylabel("probability density")
         ax_i.set_xlim(0, float(ds.intensity_upper[-1]))
         ax_a.set_xlim(0, float(ds.amplitude_upper[-1]))
         ax_i.set_ylabel(f"{label}\nprobability density")
-        ax_i.legend()
         x = ds.amplitude_bin.values
         _stairs(ax_a, ds[f"{pre}_amplitude_density"])
         sigma = float(ds[f"{pre}_rayleigh_sigma"])
-        ax_a.plot(x, rayleigh_pdf(x, sigma), "k--", lw=1, label=f"Rayleigh σ={sigma:.3g}")
+        ax_a.plot(x, rayleigh_pdf(x, sigma), "k-.", lw=1, label=f"Rayleigh fit, σ = {sigma:.3g}")
         ax_a.set_xlabel("amplitude / sqrt(<I>)")
-        ax_a.legend()
         x = ds.z_bin.values
         _stairs(ax_z, ds[f"{pre}_log_density"])
-        ax_z.plot(x, ds.gumbel_log_pdf, "k-", lw=1, label="ln Exp(1) (skew -1.14, ex.kurt 2.4)")
+        ax_z.plot(
+            x, ds.gumbel_log_pdf, "k-", lw=1, label="ln Exp(1): skewness -1.14, excess kurtosis 2.4"
+        )
         if pre == "measured":
             ax_z.plot(
-                x, ds.floor_log_pdf, "r--", lw=1, label=f"ln(Exp(1)+{float(ds.measured_floor):.4f})"
+                x,
+                ds.floor_log_pdf,
+                "r--",
+                lw=1,
+                label=f"ln(Exp(1) + {float(ds.measured_floor):.4f}): with the fitted floor",
             )
             skew, kurt = float(ds.measured_skewness), float(ds.measured_excess_kurtosis)
         else:
@@ -369,15 +382,14 @@ def plot_fig4(ds: xr.Dataset) -> Figure:
         ax_z.set_yscale("log")
         ax_z.set_ylim(1e-4, 1)
         ax_z.set_xlabel("standardised log intensity")
-        ax_z.set_title(f"skew {skew:.3f}, ex. kurt {kurt:.3f}")
-        ax_z.legend(loc="upper left", fontsize=5)
+        ax_z.set_ylabel("probability density")
+        ax_z.set_title(f"skewness {skew:.3f}, excess kurtosis {kurt:.3f}")
+        handles, labels = [], []
+        for ax in (ax_i, ax_a, ax_z):
+            h, lab = ax.get_legend_handles_labels()
+            handles += h
+            labels += lab
+        ax_z.legend(handles, labels, loc="center left", bbox_to_anchor=(1.03, 0.5), frameon=False)
     if have:
-        axes[1, 0].text(
-            0.98,
-            0.7,
-            "linearised with the\nfloor fit's gain/offset",
-            transform=axes[1, 0].transAxes,
-            ha="right",
-            fontsize=6,
-        )
+        axes[1, 0].set_title("linearised with the floor fit's gain and offset")
     return fig

@@ -1,6 +1,6 @@
 """Realism figures: the measured image against the model effect by effect, and a showcase.
 
-:func:`realism_dataset` / :func:`plot_realism` draw :func:`speckle.analysis.realism.realism_study`
+:func:`realism_dataset` / :func:`plot_realism` draw :func:`speckle.studies.realism.realism_study`
 (autocorrelations along depth and across A-lines, the misfit score of each step and of the full
 model without each effect). :func:`showcase_dataset` / :func:`plot_showcase` image a layered
 phantom with an inclusion under the pure model and with attenuation, roll-off and noise, in dB.
@@ -10,21 +10,22 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from ..analysis.realism import EFFECTS, realism_study
-from ..analysis.twin import SystemFit
 from ..conventions import attrs
 from ..imaging.beam import beam_scan
 from ..scene.regions import cell_density, ellipse, layer, make_regions, rasterize
 from ..scene.shared import shared_scene
+from ..studies.realism import EFFECTS, realism_study
+from ..studies.twin.system_fit import SystemFit
 from ..system.attenuation import attenuate_regions
 from ..system.noise import add_noise
 from ..system.rolloff import rolloff
 from ._config import scene_kwargs, source_spectrum
-from ._style import new_figure
+from .style import colorbar, legend_outside, new_figure, physical_image
 
 __all__ = [
     "phantom_regions",
@@ -48,7 +49,7 @@ def realism_dataset(
 ) -> xr.Dataset:
     """Run the realism study from the pipeline's ``realism`` config section.
 
-    ``fit``: the measured image's :func:`speckle.analysis.twin.fit_system` (its effect
+    ``fit``: the measured image's :func:`speckle.studies.twin.fit_system` (its effect
     parameters are used; ``None``: fitted from ``measured`` and ``air``).
     """
     ds = realism_study(
@@ -72,19 +73,42 @@ def realism_dataset(
     return ds
 
 
+#: Model effects (:data:`speckle.analysis.realism.EFFECTS`) in words.
+EFFECT_NAMES = {
+    "spectral_width": "spectral width",
+    "beam": "Gaussian beam",
+    "noise": "receiver noise",
+    "floor": "intensity floor",
+    "attenuation": "attenuation",
+    "quantisation": "8-bit quantisation",
+    "phase": "phase perturbation",
+}
+
+
+def _effect(name: str) -> str:
+    return EFFECT_NAMES.get(name, name.replace("_", " "))
+
+
+def _step(step: str) -> str:
+    """A cumulative step (``pure``, ``+beam``) in words."""
+    return "pure model" if step == "pure" else f"+ {_effect(step.lstrip('+'))}"
+
+
 def plot_realism(ds: xr.Dataset) -> Figure:
     """Autocorrelations (depth, lateral) and the misfit of each model; model only without data."""
     have = "measured_autocorrelation" in ds
-    fig, axes = new_figure(1, 3 if have else 2, width=10.0 if have else 7.0, height=3.2)
+    fig, axes = new_figure(1, 3 if have else 2, width=11.0 if have else 8.0, height=3.4)
     lags = ds.lag.values
+    steps = list(ds.step.values)
+    cmap = plt.get_cmap("viridis")
     for ax, axis in zip(axes[0], ("depth", "lateral"), strict=False):
-        for step in ds.step.values:
+        for k, step in enumerate(steps):
             ax.plot(
                 lags,
                 ds.cumulative_autocorrelation.sel(step=step, axis=axis),
-                lw=0.7,
-                alpha=0.5,
-                label=str(step),
+                lw=0.9,
+                color=cmap(k / max(len(steps) - 1, 1)),
+                label=_step(str(step)),
             )
         ax.plot(
             lags,
@@ -100,23 +124,22 @@ def plot_realism(ds: xr.Dataset) -> Figure:
                 yerr=2 * ds.measured_autocorrelation_se.sel(axis=axis),
                 fmt="ro",
                 ms=3,
-                label="measured (2 SE)",
+                label="measured (± 2 SE)",
             )
         ax.set(
-            xlabel="lag (pixels)" if axis == "depth" else "lag (A-lines)",
+            xlabel="depth lag (pixels)" if axis == "depth" else "lateral lag (A-lines)",
             ylabel="intensity autocorrelation",
             title=f"{axis} autocorrelation",
         )
         ax.axhline(0, color="0.7", lw=0.5)
-    axes[0, 0].legend(fontsize=5, ncol=2)
     if not have:
+        legend_outside(axes[0, 0], where="below", ncols=3)
         axes[0, 1].text(
             0.02,
             0.98,
             f"measured image {ds.attrs['measured']}",
             transform=axes[0, 1].transAxes,
             va="top",
-            fontsize=6,
             wrap=True,
         )
         return fig
@@ -125,17 +148,24 @@ def plot_realism(ds: xr.Dataset) -> Figure:
     ax.barh(y + 0.2, ds.dropped_score, height=0.4, label="full model without it")
     ax.barh(y - 0.2, ds.cumulative_score.values[1:], height=0.4, label="added (cumulative)")
     full = float(ds.cumulative_score.isel(step=-1))
-    ax.axvline(full, color="k", lw=0.8, label=f"full model {full:.1f}")
-    ax.axvline(full + 2, color="k", ls=":", lw=0.8, label="needed threshold")
+    ax.axvline(full, color="k", lw=0.8, label=f"full model ({full:.1f})")
+    ax.axvline(full + 2, color="k", ls=":", lw=0.8, label="threshold for 'needed'")
     ax.set_yticks(
         y,
-        [f"{e}{' *' if bool(ds.needed.sel(effect=e)) else ''}" for e in EFFECTS],
+        [f"{_effect(e)}{' *' if bool(ds.needed.sel(effect=e)) else ''}" for e in EFFECTS],
     )
+    needed = [_effect(e) for e in str(ds.attrs["final_effects"]).split(",") if e]
     ax.set(
         xlabel="misfit score (largest deviation in combined SE)",
-        title=f"needed (*): {ds.attrs['final_effects']}",
+        ylabel="model effect",
+        title="effects needed (*): " + (", ".join(needed) or "none"),
     )
-    ax.legend(fontsize=5)
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    more = ax.get_legend_handles_labels()
+    fig.legend(
+        handles + more[0], labels + more[1], loc="outside lower center", ncols=5, frameon=False
+    )
+    fig.suptitle("Measured image against the model, effect by effect")
     return fig
 
 
@@ -230,7 +260,6 @@ def showcase_dataset(cfg: Mapping, seed: int) -> xr.Dataset:
 def plot_showcase(ds: xr.Dataset, dynamic_range: float = 40.0) -> Figure:
     """Pure model beside the model with system effects, same dB scale."""
     fig, axes = new_figure(1, 2, width=7.0, height=3.4)
-    extent = [ds.x.values[0], ds.x.values[-1], ds.depth.values[-1], ds.depth.values[0]]
     for ax, var, title in zip(
         axes[0],
         ("pure_db", "system_db"),
@@ -241,10 +270,17 @@ def plot_showcase(ds: xr.Dataset, dynamic_range: float = 40.0) -> Figure:
         ),
         strict=True,
     ):
-        im = ax.imshow(
-            ds[var], cmap="gray", vmin=-dynamic_range + 10, vmax=10, extent=extent, aspect="auto"
+        im = physical_image(
+            ax,
+            ds[var].values,
+            ds.depth.values,
+            ds.x.values,
+            xlabel="x (µm)",
+            cmap="gray",
+            vmin=-dynamic_range + 10,
+            vmax=10,
         )
         ax.contour(ds.x, ds.depth, ds.label, levels=[-0.5, 0.5, 1.5], colors="y", linewidths=0.4)
-        ax.set(xlabel="x (µm)", ylabel="depth (µm)", title=title)
-    fig.colorbar(im, ax=axes[0, 1], label="dB re mean tissue intensity")
+        ax.set_title(title)
+    colorbar(fig, im, axes[0].tolist(), "intensity (dB re mean tissue intensity)")
     return fig

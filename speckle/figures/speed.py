@@ -1,5 +1,5 @@
 """Figures of the speed-versus-accuracy chart and of the failure map (datasets of
-:mod:`speckle.imaging.speed`)."""
+:mod:`speckle.studies.speed`)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from ._style import new_figure
+from .style import legend_outside, new_figure
 
 __all__ = ["pareto_front", "plot_failure_map", "plot_speed_accuracy"]
 
@@ -71,15 +71,15 @@ def _chart_panel(ax, sc: xr.Dataset, title: str, *, legend: bool) -> None:
     ax.set_xlabel("wall time (s)")
     ax.set_title(title)
     if legend:
-        ax.set_ylabel("relative error vs direct")
-        ax.legend(fontsize=7, loc="lower left")
+        ax.set_ylabel("relative error against the direct sum")
+        legend_outside(ax)
 
 
 def plot_speed_accuracy(ds: xr.Dataset, beam: xr.Dataset | None = None) -> Figure:
     """Time versus relative error, one panel per scene size, Pareto front as a line.
 
-    ``ds``: the A-scan chart (:func:`speckle.imaging.speed.speed_accuracy`), first row;
-    ``beam``: the scanned-beam chart (:func:`speckle.imaging.speed.beam_speed_accuracy`),
+    ``ds``: the A-scan chart (:func:`speckle.studies.speed.speed_accuracy`), first row;
+    ``beam``: the scanned-beam chart (:func:`speckle.studies.speed.beam_speed_accuracy`),
     second row, if given.
     """
     rows = [ds] if beam is None else [ds, beam]
@@ -104,7 +104,7 @@ def plot_speed_accuracy(ds: xr.Dataset, beam: xr.Dataset | None = None) -> Figur
     fig.suptitle(
         f"Speed vs accuracy{', ' + what if what else ''}, knob tol = "
         f"{', '.join(f'{t:g}' for t in tols)} (grey lines); spectrum "
-        f"{ds.attrs.get('spectrum_shape')}, k0/dk = {ds.attrs.get('k0_dk')}; pipeline timings "
+        f"{ds.attrs.get('spectrum_shape')}, k0/Δk = {ds.attrs.get('k0_dk')}; pipeline timings "
         "are noisy",
         fontsize=8,
     )
@@ -116,9 +116,9 @@ def plot_failure_map(ds: xr.Dataset) -> Figure:
     axes_names = [
         ("n_pixels", "pixels N"),
         ("density", "scatterers per pixel"),
-        ("k0_dk", "k0 / delta_k"),
+        ("k0_dk", "k0/Δk"),
     ]
-    fig, axes = new_figure(1, 3, width=10.5, height=3.6)
+    fig, axes = new_figure(1, 3, width=10.5, height=3.6, sharey=True)
     axes = axes[0]
     cases = ds["case"].values
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
@@ -136,13 +136,18 @@ def plot_failure_map(ds: xr.Dataset) -> Figure:
         ax.set_xlabel(label + (" (0 drawn at 0.1)" if axis == "k0_dk" else ""))
         ax.axhline(1e-6, color="0.6", lw=0.6, ls=":")
         if axis == "n_pixels":
-            ax.set_ylabel("relative error vs direct")
-            ax.legend(fontsize=7)
+            ax.set_ylabel("relative error against the direct sum")
+    fig.legend(
+        *axes[0].get_legend_handles_labels(),
+        loc="outside right upper",
+        frameon=False,
+        title="case (dashed: predicted)",
+    )
     fig.suptitle(
         "Failure map: markers measured, dashed predicted (auto's rules; < 1e-12 drawn "
         "at 1e-12); dotted: "
         f"tol = 1e-6. Base N={ds.attrs.get('base_n_pixels')}, "
-        f"density={ds.attrs.get('base_density')}, k0/dk={ds.attrs.get('base_k0_dk')}, "
+        f"density={ds.attrs.get('base_density')}, k0/Δk={ds.attrs.get('base_k0_dk')}, "
         "depths over [0, 2H)",
         fontsize=8,
     )

@@ -22,6 +22,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 from .._validate import as_finite_array, check_int
 from ..analysis.statistics import fit_rayleigh, histogram, rayleigh_pdf
@@ -30,7 +31,7 @@ from ..imaging.aline import ascan, pixel_depths
 from ..provenance import provenance_attrs
 from ..sweep import sweep
 from ._config import dask_options, random_bscan, source_options, source_spectrum
-from ._style import new_figure
+from .style import colorbar, new_figure, physical_image
 
 __all__ = [
     "dask_options",
@@ -169,14 +170,24 @@ def plot_single_scatterer(ds: xr.Dataset) -> Figure:
             comp = row.spectral_component.isel(k0_dk=j).values
             ax = axes[i, 1 + j]
             n = ds.n.values
-            ax.vlines(n - 0.12, 0, comp.real, color="C0", lw=1.2, label="Re")
-            ax.vlines(n + 0.12, 0, comp.imag, color="C3", lw=1.2, label="Im")
+            ax.vlines(n - 0.12, 0, comp.real, color="C0", lw=1.2, label="real part")
+            ax.vlines(n + 0.12, 0, comp.imag, color="C3", lw=1.2, label="imaginary part")
             ax.axhline(0, color="k", lw=0.5)
             ax.set_ylim(-1.15 * float(ds.spectrum.max()), 1.15 * float(ds.spectrum.max()))
-            kind = "formal FT" if float(ds.k0_dk[j]) == 0 else "OCT"
-            ax.set_title(f"S(k_n) exp(2i k_n z0), k0/Δk = {float(ds.k0_dk[j]):g} ({kind})")
-            if i == 0 and j == 0:
-                ax.legend(loc="lower right", ncols=2, frameon=False)
+            if i == 0:
+                kind = "formal Fourier transform" if float(ds.k0_dk[j]) == 0 else "OCT"
+                ax.set_title(f"k0/Δk = {float(ds.k0_dk[j]):g} ({kind})")
+            ax.set_ylabel("S(k_n) exp(2i k_n z0)")
+    handles, labels = axes[0, 1].get_legend_handles_labels()
+    star = axes[0, 0].lines[0]
+    fig.legend(
+        [star, *handles],
+        ["scatterer position z0", *labels],
+        loc="outside lower center",
+        ncols=3,
+        frameon=False,
+    )
+    fig.suptitle("One scatterer at depth z0 per row: pixel amplitudes and spectral components")
     axes[-1, 0].set_xlabel("pixel q")
     for j in range(nk):
         axes[-1, 1 + j].set_xlabel("spectral index n")
@@ -327,31 +338,33 @@ def fragment(ds: xr.Dataset, frag: Mapping[str, int]) -> xr.Dataset:
     return ds.isel(depth=slice(d0, d0 + size), aline=slice(a0, a0 + size))
 
 
+def _amplitude_label(ds: xr.Dataset) -> str:
+    norm = ds.attrs.get("normalise", "density")
+    return "|A| / sqrt(N_sc/N)" if norm == "density" else f"|A| ({norm})"
+
+
 def _fragment_panels(axes, ds: xr.Dataset, dim: str, frag: Mapping[str, int], label: str):
+    """The fragment of each ``dim`` value on one grey scale, axes in µm (physical aspect)."""
     part = fragment(ds, frag).amplitude
     vmax = float(part.max())
     im = None
     for ax, value in zip(axes, ds[dim].values, strict=True):
-        img = part.sel({dim: value}).transpose("depth", "aline").values
-        im = ax.imshow(img, cmap="gray", vmin=0, vmax=vmax, origin="upper")
+        img = part.sel({dim: value}).transpose("depth", "aline")
+        im = physical_image(
+            ax, img.values, img.depth.values, img.aline.values, cmap="gray", vmin=0, vmax=vmax
+        )
+        ax.xaxis.set_major_locator(MaxNLocator(3))
         ax.set_title(f"{label} = {value:g}")
-        ax.set_xticks([])
-        ax.set_yticks([])
     return im
 
 
 def plot_density_fragments(ds: xr.Dataset, frag: Mapping[str, int]) -> Figure:
-    """Fig. 2: the same-size amplitude fragment for each density, one grey scale for all."""
+    """Fig. 2: the same-size amplitude fragment for each density, one grey scale for all,
+    axes in µm."""
     n = ds.sizes["density"]
-    fig, axes = new_figure(1, n, width=1.8 * n + 0.8, height=2.1)
+    fig, axes = new_figure(1, n, width=2.0 * n + 1.0, height=2.6)
     im = _fragment_panels(axes[0], ds, "density", frag, "N_sc/N")
-    norm = ds.attrs.get("normalise", "density")
-    fig.colorbar(
-        im,
-        ax=axes[0].tolist(),
-        shrink=0.8,
-        label="|A| / sqrt(N_sc/N)" if norm == "density" else f"|A| ({norm})",
-    )
+    colorbar(fig, im, axes[0].tolist(), _amplitude_label(ds), shrink=0.8)
     return fig
 
 
@@ -363,7 +376,8 @@ def plot_k0_fragments(ds: xr.Dataset, frag: Mapping[str, int]) -> Figure:
     """
     n = ds.sizes["k0_dk"]
     fig, axes = new_figure(2, n, width=2.6 * n + 0.6, height=5.0)
-    _fragment_panels(axes[0], ds, "k0_dk", frag, "k0/Δk")
+    im = _fragment_panels(axes[0], ds, "k0_dk", frag, "k0/Δk")
+    colorbar(fig, im, axes[0].tolist(), _amplitude_label(ds), shrink=0.8)
     hist = ds.amplitude_density
     x = hist.bin.values
     width = float(np.diff(x).mean()) if x.size > 1 else 1.0
@@ -379,16 +393,19 @@ def plot_k0_fragments(ds: xr.Dataset, frag: Mapping[str, int]) -> Figure:
             edgecolor="0.4",
             linewidth=0.3,
         )
-        ax.plot(xs, rayleigh_pdf(xs, sig), "k-", lw=1.2, label=f"Rayleigh fit, σ = {sig:.3g}")
+        ax.plot(xs, rayleigh_pdf(xs, sig), "k-", lw=1.2, label="Rayleigh fit to this histogram")
         ax.plot(
             xs,
             rayleigh_pdf(xs, sigma0),
             "r--",
             lw=0.8,
-            label=f"fit at k0/Δk = {float(ds.k0_dk[0]):g}",
+            label=f"Rayleigh fit at k0/Δk = {float(ds.k0_dk[0]):g}",
         )
-        ax.set_xlabel("pixel amplitude |A|")
+        ax.set_xlabel(f"pixel amplitude {_amplitude_label(ds)}")
         ax.set_ylabel("probability density")
-        ax.set_title(f"k0/Δk = {value:g}, {ds.sizes['depth'] * ds.sizes['aline']} pixels")
-        ax.legend(loc="upper right", frameon=False)
+        npx = ds.sizes["depth"] * ds.sizes["aline"]
+        ax.set_title(f"k0/Δk = {value:g}: {npx} pixels, fit σ = {sig:.3g}")
+    fig.legend(
+        *axes[1, 0].get_legend_handles_labels(), loc="outside lower center", ncols=2, frameon=False
+    )
     return fig

@@ -24,7 +24,7 @@ from ..conventions import attrs, coord
 from ..system import spectrometer as sp
 from ..system.datasheet import System
 from ._config import system_from_config
-from ._style import new_figure
+from .style import colorbar, legend_outside, new_figure
 
 __all__ = [
     "artefact_bscan",
@@ -254,7 +254,7 @@ def plot_psf(ds: xr.Dataset) -> Figure:
             sel = ds.psf_db.sel(variant=v, reflector=r)
             ax.plot(ds.depth, sel, lw=0.7)
         widths = ", ".join(f"{w:.0f}" for w in ds.width.sel(variant=v).values)
-        ax.set_title(f"{v}\nwidths {widths} µm", fontsize=7)
+        ax.set_title(f"{v}\nwidths {widths} µm")
         ax.set_xlim(0, zmax)
         ax.set_ylim(-60, 3)
         ax.set_xlabel("depth (µm)")
@@ -273,8 +273,8 @@ def plot_rolloff(ds: xr.Dataset) -> Figure:
     ax.plot(ds.depth, ds.measured_db, "x", ms=3,
             label=f"chain, {ds.measured_db.attrs['resample']} resampling")  # fmt: skip
     ax.set_xlabel("reflector depth (µm, in the sample)")
-    ax.set_ylabel("peak (dB)")
-    ax.legend()
+    ax.set_ylabel("peak intensity (dB)")
+    legend_outside(ax)
     return fig
 
 
@@ -290,7 +290,7 @@ def plot_artefact_bscan(ds: xr.Dataset, dynamic_range: float = 60.0) -> Figure:
                        vmin=-dynamic_range, vmax=0)  # fmt: skip
         ax.axhline(0, color="tab:red", lw=0.5, ls=":")
         ax.set_title(title)
-        ax.set_xlabel("A-line")
+        ax.set_xlabel("A-line index")
     axes[0, 0].set_ylabel("depth from zero delay (µm)")
-    fig.colorbar(im, ax=axes[0, 1], label="dB")
+    colorbar(fig, im, axes[0].tolist(), "intensity (dB re the processed peak)")
     return fig

@@ -1,6 +1,6 @@
 """The scanner's twin (results/twin/): fit, measured against twin, predicted failure maps.
 
-:func:`twin_datasets` runs :func:`speckle.analysis.twin.fit_system` on the image named in the
+:func:`twin_datasets` runs :func:`speckle.studies.twin.fit_system` on the image named in the
 pipeline's ``twin`` config section and returns the three datasets the rule writes;
 :func:`plot_compare` and :func:`plot_failure` draw them (the failure maps as the elastography
 failure maps' strain column: rms error over strain, and the answered fraction).
@@ -15,8 +15,9 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from ..analysis.image_files import load_image
-from ..analysis.twin import SystemFit, fit_system
-from ._style import new_figure
+from ..studies.twin.fit import fit_system
+from ..studies.twin.system_fit import SystemFit
+from .style import ESTIMATOR_NAMES, colorbar, estimator_colour, new_figure, physical_image
 
 __all__ = ["fit_from_config", "plot_compare", "plot_failure", "twin_datasets"]
 
@@ -61,30 +62,26 @@ def twin_datasets(cfg: Mapping, seed: int) -> tuple[xr.Dataset, xr.Dataset, xr.D
 
 
 def plot_compare(ds: xr.Dataset) -> Figure:
-    """Image panels, autocorrelations (2 SE bars) and log-data histograms: measured vs twin."""
-    fig, axes = new_figure(2, 3, width=10.0, height=5.6)
+    """Image panels (physical aspect ratio), autocorrelations (2 SE bars), log-data histograms
+    and depth profiles: measured (black) against twin (red), one legend right of the panels."""
+    fig, axes = new_figure(2, 3, width=11.0, height=5.6)
     for ax, name in zip(axes[0, :2], ("measured", "twin"), strict=True):
         img = ds[f"{name}_image"]
         lo, hi = np.percentile(ds["measured_image"], [1, 99])
-        ax.imshow(
-            img,
-            cmap="gray",
-            vmin=lo,
-            vmax=hi,
-            aspect="auto",
-            extent=[ds.x.values[0], ds.x.values[-1], ds.depth.values[-1], ds.depth.values[0]],
+        physical_image(
+            ax, img, ds.depth.values, ds.x.values, xlabel="x (µm)", cmap="gray", vmin=lo, vmax=hi
         )
-        ax.set(title=f"{name} region", xlabel="x (µm)", ylabel="depth (µm)")
+        ax.set_title(f"{name} region")
+    colorbar(fig, axes[0, 1].images[-1], axes[0, :2].tolist(), "log data (file's grey levels)")
     ax = axes[0, 2]
     for name, style in (("measured", "ko"), ("twin", "r-")):
-        ax.plot(ds.bin, ds[f"{name}_log_histogram"], style, ms=2, lw=1, label=name)
+        ax.plot(ds.bin, ds[f"{name}_log_histogram"], style, ms=2, lw=1)
     ax.set(
         xlabel="standardised log intensity",
-        ylabel="density",
+        ylabel="probability density",
         title=f"log data: skewness z = {float(ds.z_skewness):.1f}, "
         f"kurtosis z = {float(ds.z_excess_kurtosis):.1f}",
     )
-    ax.legend(fontsize=6)
     for ax, axis in zip(axes[1, :2], ("depth", "lateral"), strict=True):
         for name, fmt in (("measured", "ko"), ("twin", "rs")):
             ax.errorbar(
@@ -93,7 +90,7 @@ def plot_compare(ds: xr.Dataset) -> Figure:
                 yerr=2 * ds.autocorrelation_se.sel(source=name, axis=axis),
                 fmt=fmt,
                 ms=3,
-                label=f"{name} (2 SE)",
+                label=f"{name} (± 2 SE)",
             )
         ax.axhline(0, color="0.7", lw=0.5)
         ax.set(
@@ -101,7 +98,6 @@ def plot_compare(ds: xr.Dataset) -> Figure:
             ylabel="intensity autocorrelation",
             title=f"{axis} autocorrelation",
         )
-        ax.legend(fontsize=6)
     ax = axes[1, 2]
     for name, fmt in (("measured", "ko"), ("twin", "rs")):
         ax.errorbar(
@@ -110,22 +106,29 @@ def plot_compare(ds: xr.Dataset) -> Figure:
             yerr=2 * ds.mean_log_profile_se.sel(source=name),
             fmt=fmt,
             ms=2,
-            label=name,
         )
     ax.set(xlabel="row of the region", ylabel="mean ln I (minus its mean)", title="depth profile")
-    ax.legend(fontsize=6)
+    fig.legend(*axes[1, 0].get_legend_handles_labels(), loc="outside right upper", frameon=False)
     return fig
 
 
 def plot_failure(ds: xr.Dataset) -> Figure:
-    """rms error / strain and the answered fraction against strain, one line per estimator."""
-    fig, axes = new_figure(2, 1, width=4.0, height=5.0)
+    """rms error / strain and the answered fraction against strain, one line per estimator
+    (colours of the elastography figures), one legend right of the panels."""
+    fig, axes = new_figure(2, 1, width=5.6, height=5.0, sharex=True)
     s = ds.strain.values
     for m in ds.method.values:
-        axes[0, 0].plot(s, ds.rms_error.sel({"method": m}) / np.abs(s), "o-", ms=3, lw=0.8, label=m)
-        axes[1, 0].plot(s, ds.answered.sel({"method": m}), "o-", ms=3, lw=0.8)
+        style = {"color": estimator_colour(m), "ms": 3, "lw": 0.8}
+        label = ESTIMATOR_NAMES.get(str(m), str(m))
+        axes[0, 0].plot(s, ds.rms_error.sel({"method": m}) / np.abs(s), "o-", label=label, **style)
+        axes[1, 0].plot(s, ds.answered.sel({"method": m}), "o-", **style)
     axes[0, 0].axhline(1.0, color="k", ls=":", lw=0.7, label="error = strain")
-    axes[0, 0].set(xscale="log", yscale="log", title="twin: rms error / strain vs strain")
-    axes[1, 0].set(xscale="log", xlabel="interframe strain", ylabel="fraction answered")
-    axes[0, 0].legend(fontsize=5)
+    axes[0, 0].set(
+        xscale="log",
+        yscale="log",
+        ylabel="rms strain error / strain",
+        title="Strain estimators on the digital twin",
+    )
+    axes[1, 0].set(xscale="log", xlabel="interframe strain", ylabel="fraction of pixels answered")
+    fig.legend(*axes[0, 0].get_legend_handles_labels(), loc="outside right upper", frameon=False)
     return fig

@@ -3,7 +3,8 @@
 ``aline.ascan`` is Eq. 4 for independent A-lines, computed by the method ``synthesis`` chooses
 (direct sums, NUFFT, PSF tables); ``bscan`` stacks A-lines; ``beam.beam_scan`` images a shared
 scene under a scanned, optionally focused Gaussian beam; ``scan`` ties scenes, beam and system
-effects into labelled images; ``truth`` gives the speckle-free image (the expected intensity
+effects into labelled images; ``timeseries`` images moved scenes in time (M-mode,
+repeated B-scans, raster timing); ``truth`` gives the speckle-free image (the expected intensity
 over scatterer phases through the same spectrum and beam).
 Names load on first use (SPEC 1, ``lazy_loader``).
 """
@@ -19,8 +20,9 @@ __getattr__, __dir__, __all__ = attach(
         "bscan": ["bscan", "expected_intensity"],
         "gaussian_beam": ["Beam", "BeamScene", "beam_problem", "beam_weight"],
         "methods": ["ASCAN_METHODS", "BEAM_METHODS"],
-        "scan": ["beam_reach", "image", "image_regions", "scan_lines"],
+        "scan": ["beam_reach", "image", "image_regions", "scan_kernel", "scan_lines"],
         "synthesis": ["choose_method", "method_estimates"],
+        "timeseries": ["bscan_series", "mmode", "raster_times"],
         "truth": ["intensity_spectrum", "speckle_free_image", "speckle_free_lines"],
     },
 )

@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 import contextlib
+import os
 import threading
 
 import numba
@@ -258,3 +259,17 @@ def sort_chunks(m):
     loops streaming its input use (independent of the number of threads)."""
     n_chunks = max(1, min(64, m // 16384))
     return n_chunks, (m + n_chunks - 1) // n_chunks
+
+
+def finufft_threads() -> int:
+    """Threads to give FINUFFT by default: numba's thread count, capped by OpenMP's limit.
+
+    FINUFFT runs on OpenMP, whose limit is ``OMP_NUM_THREADS`` when it is set (Snakemake sets it
+    to a job's ``threads``); asking for more prints "nthreads=..., more than the ... physically
+    cores available" on every call. Explicit ``nthreads`` arguments are passed on unchanged.
+    """
+    threads = numba.get_num_threads()
+    omp = os.environ.get("OMP_NUM_THREADS", "").split(",")[0].strip()
+    if omp.isdigit() and int(omp) > 0:
+        threads = min(threads, int(omp))
+    return max(1, threads)

@@ -32,7 +32,7 @@ from .aline import pixel_depths
 from .beam import beam_scan
 from .gaussian_beam import MAX_WAIST
 
-__all__ = ["REACH_EPS", "beam_reach", "image", "image_regions", "scan_lines"]
+__all__ = ["REACH_EPS", "beam_reach", "image", "image_regions", "scan_kernel", "scan_lines"]
 
 #: Relative double-pass weight below which a scatterer is outside the beam's reach: below
 #: float64 rounding (2^-53 = 1.1e-16), so the halo changes nothing beyond rounding.
@@ -211,6 +211,55 @@ def _prepare(source, waist, x, y, chunk, method, tol, wrap, focus, rayleigh_rang
     empty = np.zeros(0)
     kernel((empty, empty, empty) + ((empty,) if ys is not None else ()), xs[:1], _first(ys))
     return src, w0, xs, ys, c, meta, kernel, optics
+
+
+def scan_kernel(
+    source: xr.DataArray,
+    *,
+    waist: float,
+    x: object,
+    y: object | None = None,
+    method: str = "direct",
+    tol: float | None = None,
+    wrap: bool = False,
+    focus: float | None = None,
+    rayleigh_range: float | None = None,
+    z_bounds: tuple[float, float] | None = None,
+) -> tuple[Callable, float, np.ndarray, np.ndarray | None, dict]:
+    """The checked imaging kernel of :func:`image`, for callers that pick the scatterers.
+
+    Parameters
+    ----------
+    source, waist, x, y, method, tol, wrap, focus, rayleigh_range
+        As in :func:`image` (checked here, before any work).
+    z_bounds : (float, float), optional
+        Depth range (µm) of the scatterers, for the reach of a focused beam with ``wrap``;
+        default ``[0, H)``.
+
+    Returns
+    -------
+    tuple
+        ``(kernel, reach, xs, ys, meta)``: ``kernel((z, x, a[, y]), lines_x, lines_y)`` the
+        field ``(N, Lx[, Ly])`` of lines from those scatterers (:func:`speckle.beam_scan`),
+        ``reach`` the lateral distance (µm) beyond which a scatterer adds nothing
+        (:func:`beam_reach` of the widest beam), the checked line positions, and the attrs
+        :func:`image` records (with ``n_pixels``, ``depth_range`` and ``k0``).
+
+    Examples
+    --------
+    >>> import numpy as np, speckle
+    >>> kernel, reach, xs, ys, meta = scan_kernel(speckle.spectrum(8, 64.0, k0_dk=4),
+    ...                                           waist=4.0, x=[0.0])
+    >>> kernel((np.array([10.0]), np.array([0.0]), np.array([1.0 + 0j])), xs, ys).shape
+    (8, 1)
+    """
+    src, w0, xs, ys, _, meta, kernel, optics = _prepare(
+        source, waist, x, y, 1, method, tol, bool(wrap), focus, rayleigh_range
+    )
+    lo, hi = (0.0, src["depth_range"]) if z_bounds is None else z_bounds
+    reach = beam_reach(w0, widening=_widening(optics, w0, src["k0"], float(lo), float(hi)))
+    meta = {k: v for k, v in meta.items() if k != "chunk"}
+    return kernel, reach, xs, ys, meta
 
 
 def _first(ys: np.ndarray | None) -> np.ndarray | None:

@@ -1,6 +1,21 @@
 """The pipeline's package: everything between a config file and the package.
 
-Config checks (every section, at workflow load), config adapters (a config section -> the
-keyword arguments of a public function), the runner of workflow scripts and the figure style.
-Workflow scripts import only public names from here and from the top level.
+``checks`` refuses a config the schema lets through (every section, in one place, when the
+workflow loads); ``adapters`` turns config sections into the keyword arguments and objects of
+public functions; ``runner`` runs a workflow script with all its output in the rule's log;
+``outputs`` writes a job's figure. Workflow scripts import only public names from here, from
+the top level and from the figure modules. Names load on first use (SPEC 1, ``lazy_loader``);
+they stay out of the top level (``speckle.run`` would say nothing there).
 """
+
+from .._lazy import attach, functions_of
+
+__getattr__, __dir__, __all__ = attach(
+    __name__,
+    {
+        "adapters": [*functions_of(__name__, "adapters"), "scene_kwargs", "spectrum_kwargs"],
+        "checks": functions_of(__name__, "checks"),
+        "outputs": functions_of(__name__, "outputs"),
+        "runner": functions_of(__name__, "runner"),
+    },
+)

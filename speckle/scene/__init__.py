@@ -3,7 +3,8 @@
 ``scatterers`` draws random scatterers for independent A-lines; ``shared`` builds one 2-D/3-D
 scene that overlapping A-lines see; ``regions`` and ``layers`` describe the sample's structure
 and per-region properties; ``deformation`` moves scatterers (uniform strain, translation, any
-displacement field); ``mechanics`` computes such fields with finite elements (scikit-fem).
+displacement field); ``mechanics`` computes such fields with finite elements (scikit-fem);
+``motion`` moves scatterers in time (Brownian, ballistic, flow, bulk motion).
 Names load on first use (SPEC 1, ``lazy_loader``).
 """
 
@@ -14,6 +15,14 @@ __getattr__, __dir__, __all__ = attach(
     {
         "deformation": ["deformable_scene", "displace", "translate", "uniaxial_strain"],
         "layers": ["layers", "region_values"],
+        "motion": [
+            "ballistic_motion",
+            "brownian_motion",
+            "bulk_motion",
+            "flow_motion",
+            "moving_mask",
+            "poiseuille_velocity",
+        ],
         "mechanics": [
             "compress",
             "displacement_at",

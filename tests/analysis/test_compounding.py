@@ -14,6 +14,7 @@ import xarray as xr
 import speckle
 from speckle.analysis import compounding as cp
 from speckle.imaging.truth import intensity_spectrum, speckle_free_image, speckle_free_lines
+from speckle.studies import looks as looks_study
 
 N = 128
 H = N * 8.0
@@ -286,10 +287,10 @@ def test_spatial_and_angular_looks_register_a_point():
         }
     )
     x = speckle.scan_lines(64, p)
-    looks = cp.angular_looks(sc, src, [-3.0, 0.0, 3.0], waist=16.0, x=x, method="direct")
+    looks = looks_study.angular_looks(sc, src, [-3.0, 0.0, 3.0], waist=16.0, x=x, method="direct")
     peaks = [np.unravel_index(np.argmax(np.abs(lk)), lk.shape) for lk in looks.values]
     assert all(pk == (25, 32) for pk in peaks), peaks
-    sp = cp.spatial_looks(sc, src, [0.0, 8.0], waist=16.0, x=x)
+    sp = looks_study.spatial_looks(sc, src, [0.0, 8.0], waist=16.0, x=x)
     assert np.argmax(np.abs(sp.values[1, 25])) == 31
 
 

@@ -99,7 +99,8 @@ def test_wls_fit_coherence_equals_the_window_definition():
     ``wx`` lines (``b`` = the pixel's fitted slope), is evaluated for every pixel at once by
     Horner's rule in single precision: it equals the per-window sum to 1e-5 (the threshold is
     0.5), and is NaN exactly where the window leaves the image."""
-    from speckle.analysis.strain import _box, _fit_coherence  # private: the wls quality core
+    # private: the wls quality core
+    from speckle.analysis._strain_methods import _box, _fit_coherence
 
     rng = np.random.default_rng(4)
     n, m, wz, wx = 80, 6, 16, 3
@@ -126,7 +127,8 @@ def test_unit_weight_slope_is_the_least_squares_slope():
     """The tracking method's strain fit (unit weights, known window moments): the slope of a
     line exactly; equal to the general weighted fit with weights 1 on noisy data; NaN exactly
     where the window leaves the image or holds a NaN displacement."""
-    from speckle.analysis.strain import _pooled_slope  # private: the closed-form LS core
+    # private: the closed-form LS core
+    from speckle.analysis._strain_methods import _pooled_slope
 
     rng = np.random.default_rng(8)
     n, m, wz = 200, 5, 64

@@ -14,7 +14,9 @@ from speckle.analysis._kernels import (  # private: the kernels' atan2 and taps,
     LAGRANGE_TAPS,
     atan2_array,
 )
-from speckle.analysis.strain import _box  # private: box_sums' caller, tested here
+
+# private: box_sums' caller, tested here
+from speckle.analysis._strain_methods import _box
 from speckle.scene import deformation as D
 
 N, PIXEL, R = 256, 8.0, 10.0
@@ -145,7 +147,8 @@ def test_resampling_within_its_lagrange_bound(shape, path):
     pixels to float32 rounding). The error is below the bound of each A-line's own spectrum,
     ``sum_n |F_n| max_t |e(omega_n, t)|`` with ``omega_n = 2 pi n / (F N)`` per sample (every
     frequency's worst error of the 8-point polynomial added in phase), and of its order."""
-    from speckle.analysis.strain import _resampled  # private: the alignment's resampling
+    # private: the alignment's resampling
+    from speckle.analysis._strain_methods import _resampled
 
     a1, a2 = pair(1e-3, lines=6, shape=shape)
     q = np.arange(N, dtype=float)[:, None]

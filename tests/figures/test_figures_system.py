@@ -10,8 +10,8 @@ from snakemake.exceptions import WorkflowError
 from snakemake.utils import validate
 
 import speckle
-from speckle.figures import _config  # private: the pipeline's config adapter (rules, scripts)
 from speckle.figures import system as fs
+from speckle.pipeline import adapters
 
 ROOT = Path(__file__).resolve().parents[2]
 SCHEMA = str(ROOT / "workflow/schemas/config.schema.yaml")
@@ -33,12 +33,12 @@ def config():
 
 def test_source_by_datasheet_resolves_to_model_parameters():
     old = config()["source"]
-    assert _config.resolve_source(old) == old
-    src = _config.resolve_source({"datasheet": SHEET})
-    system = _config.system_from_config(SHEET)
+    assert adapters.resolve_source(old) == old
+    src = adapters.resolve_source({"datasheet": SHEET})
+    system = adapters.system_from_config(SHEET)
     assert src["n_pixels"] == 256 and src["shape"] == "gaussian"
     assert src["pixel_size"] == pytest.approx(system.pixel_size, rel=1e-15)
-    spec = _config.source_spectrum(src)
+    spec = adapters.source_spectrum(src)
     assert spec.attrs["depth_range"] == pytest.approx(system.depth_range, rel=1e-14)
     assert spec.attrs["k0"] == pytest.approx(system.k0, rel=1e-13)
     assert spec.attrs["fwhm"] == pytest.approx(system.fwhm_k, rel=1e-13)
@@ -52,7 +52,7 @@ def test_schema_accepts_either_source_form():
     layered = config()  # a --configfile naming a datasheet over the default model keys
     layered["source"]["datasheet"] = {k: v for k, v in SHEET.items() if v is not None}
     validate(copy.deepcopy(layered), SCHEMA)
-    assert _config.resolve_source(layered["source"])["n_pixels"] == 256  # the datasheet wins
+    assert adapters.resolve_source(layered["source"])["n_pixels"] == 256  # the datasheet wins
     missing = config()
     del missing["source"]["pixel_size"]
     with pytest.raises(WorkflowError):
@@ -76,7 +76,7 @@ def test_ci_config_validates():
 
 
 def test_rolloff_dataset():
-    system = _config.system_from_config(SHEET)
+    system = adapters.system_from_config(SHEET)
     ds = fs.rolloff_dataset(system, 10, "cubic")
     assert set(ds.data_vars) == {"measured_db", "measured_exact_db", "analytic_db", "camera_db"}
     assert ds.depth.attrs["units"] == "um" and ds.analytic_db.attrs["units"] == "dB"
@@ -88,7 +88,7 @@ def test_rolloff_dataset():
 
 
 def test_psf_dataset_widths_order():
-    system = _config.system_from_config(SHEET)
+    system = adapters.system_from_config(SHEET)
     ds = fs.psf_dataset(system, [0.2, 0.6], {2: 20.0})
     w = ds.width
     assert np.all(w.sel(variant="compensated") < w.sel(variant="linearised"))
@@ -100,7 +100,7 @@ def test_psf_dataset_widths_order():
 
 
 def test_artefact_bscan_mirror_and_seed():
-    system = _config.system_from_config(SHEET)
+    system = adapters.system_from_config(SHEET)
     kw = dict(
         surface=-50.0, tilt=5.0, interfaces=[{"depth": 0.0, "amplitude": 1.0},
                                              {"depth": 100.0, "amplitude": 0.5}],

@@ -116,3 +116,18 @@ def test_auto_picks_a_fast_method_on_a_large_scan_and_direct_on_a_tiny_one():
     tiny = beam_problem(z[:3], x[:3], np.ones(3), lines=[0.0], waist=2.0, n_pixels=16,
                         depth_range=128.0, k0=3.9, tol=1e-6)  # fmt: skip
     assert choose_beam_method(*tiny) == "direct"
+
+
+def test_finufft_threads_respect_openmp_limit(monkeypatch):
+    """FINUFFT gets no more threads than OpenMP allows (``OMP_NUM_THREADS``, which Snakemake
+    sets to a job's threads): asking for more prints a warning on every call."""
+    import numba
+
+    # private: the thread-count rule is an implementation detail of the NUFFT paths
+    from speckle.imaging._kernels import finufft_threads
+
+    monkeypatch.setenv("OMP_NUM_THREADS", "1")
+    assert finufft_threads() == 1
+    for unset in ("", "0", "x"):
+        monkeypatch.setenv("OMP_NUM_THREADS", unset)
+        assert finufft_threads() == numba.get_num_threads()

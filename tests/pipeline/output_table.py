@@ -1,6 +1,6 @@
 """Summary table of every NetCDF output of the CI pipeline, to hold numbers still across a refactor.
 
-Each variable and coordinate of each ``results/**/*.nc`` file is summarised by its shape, dtype,
+Each variable and coordinate of each ``results_ci/**/*.nc`` file is summarised by its shape, dtype,
 NaN count, sum, sum of absolute values, sum of squares and a few samples of the flattened array
 (complex values as real and imaginary parts). Timings are excluded: they are measurements of the
 machine, not results of the model (variables in seconds or per second, or whose name says
@@ -11,7 +11,7 @@ same CPU and numerical libraries, :func:`machine`), to :data:`RTOL_OTHER` elsewh
 Regenerate the table only where a change of numbers is intended and explained in the commit::
 
     snakemake --cores 2 --configfile workflow/config/ci.yaml
-    python tests/pipeline/output_table.py results tests/pipeline/ci_outputs.json
+    python tests/pipeline/output_table.py results_ci tests/pipeline/ci_outputs.json
 """
 
 from __future__ import annotations

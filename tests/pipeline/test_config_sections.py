@@ -3,7 +3,7 @@ when the workflow loads.
 
 Each bad config is a small override layered over the CI config with ``--configfile``;
 ``snakemake -n`` must stop with the key path in its output and no job planned. The same
-overrides go through :func:`speckle.figures.config_check.check_config` directly (fast), and the
+overrides go through :func:`speckle.pipeline.checks.check_config` directly (fast), and the
 schema's enums are compared with the package's method tables.
 """
 
@@ -17,8 +17,8 @@ import yaml
 
 import speckle.imaging.beam
 import speckle.system.spectrometer
-from speckle.figures.config_check import check_config, tol_floor
 from speckle.imaging.nufft import NUFFT_TOL_FLOOR
+from speckle.pipeline.checks import check_config, tol_floor
 
 SCHEMA = "workflow/schemas/config.schema.yaml"
 #: a small measured image the ROI cases refer to (written into the repository copy)
@@ -146,7 +146,7 @@ def test_bad_section_stops_before_any_job(repo, case, config_runs):
     name = f"bad21_{abs(hash(case))}.yaml"
     (repo / name).write_text(yaml.safe_dump(override))
     config_runs.assert_refused(config_runs.dry_run(repo, name), key)
-    assert not (repo / "results").exists()
+    assert not (repo / "results").exists() and not (repo / "results_ci").exists()
 
 
 @pytest.mark.parametrize("case", [c for c in BAD if "enum" not in c])

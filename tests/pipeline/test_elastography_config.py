@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from speckle.figures.config_check import check_config
+from speckle.pipeline.checks import check_config
 
 BAD = {
     "elastography.window": {"elastography": {"window": [1, 4]}},
@@ -75,4 +75,4 @@ def test_snakemake_dry_run_refuses_before_any_job(tmp_path, repo_root, key):
     assert "Job stats" not in out
     parts = key.split(" ")[0].replace("[", ".").replace("]", "").split(".")
     assert all(p in out for p in parts), out[-3000:]
-    assert not Path(repo / "results").exists()
+    assert not Path(repo / "results").exists() and not Path(repo / "results_ci").exists()

@@ -11,9 +11,9 @@ import pytest
 import yaml
 from workflow_run import CI_CONFIG, IGNORE, snakemake
 
-from speckle.analysis.failure import mean_and_se
 from speckle.figures.elastography import FAILURE_SWEEPS
 from speckle.io import open_dataset
+from speckle.studies.failure import mean_and_se
 
 pytestmark = [pytest.mark.pipeline, pytest.mark.slow]
 TARGET = "elastography/failure_maps.nc"

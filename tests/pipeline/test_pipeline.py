@@ -21,7 +21,7 @@ from pathlib import Path
 import pytest
 import yaml
 from output_table import compare, load_table, summarise, tolerance
-from workflow_run import CI_CONFIG, IGNORE, snakemake
+from workflow_run import CI_CONFIG, CI_RESULTS, IGNORE, snakemake
 
 import speckle
 from speckle.io import open_dataset
@@ -79,7 +79,7 @@ def built(run) -> Path:
     """The copy, once the static figures exist (other rules may have failed: see below)."""
     repo, proc = run
     for fig in ("fig1", "fig2", "fig5"):
-        assert (repo / "results" / fig / f"{fig}.nc").is_file(), proc.stdout
+        assert (repo / CI_RESULTS / fig / f"{fig}.nc").is_file(), proc.stdout
     return repo
 
 
@@ -105,12 +105,12 @@ def test_outputs_match_the_checked_in_table(run):
     """
     repo, _ = run
     table, written_on = load_table()
-    problems = compare(summarise(repo / "results"), table, tolerance(written_on))
+    problems = compare(summarise(repo / CI_RESULTS), table, tolerance(written_on))
     assert not problems, "\n".join(problems[:40])
 
 
 def test_outputs_exist_and_open(built):
-    results = built / "results"
+    results = built / CI_RESULTS
     for fig in ("fig1", "fig2", "fig5"):
         assert (results / fig / f"{fig}.png").stat().st_size > 0
         assert (results / fig / f"{fig}.nc").is_file()
@@ -269,15 +269,29 @@ def test_bad_scan_row_fails_schema_validation(built):
 
 
 def test_ci_runs_the_readme_commands(repo_root):
-    """.ci/run runs exactly the README's quick-start test command and the reduced pipeline."""
+    """.ci/run runs every README quick-start command: the test tiers exactly, the pipeline
+    and report commands on the reduced config (``--configfile`` appended), in the README's
+    order (the report after the pipeline, in the fresh environment)."""
     readme = (repo_root / "README.md").read_text()
     block = re.search(r"## Quick start.*?```bash\n(.*?)```", readme, re.S)
     assert block, "README has no quick-start bash block"
     commands = [line.split("#")[0].strip() for line in block.group(1).splitlines()]
-    test_cmd = next(c for c in commands if "pytest" in c)
+    commands = [c for c in commands if c]
+    assert sum("pytest" in c for c in commands) == 2, commands  # the two tiers
+    assert any("--report" in c for c in commands), commands
     ci = (repo_root / ".ci" / "run").read_text()
-    assert test_cmd in [line.strip() for line in ci.splitlines()]
-    assert f"--configfile {CI_CONFIG}" in ci
+    lines = [line.strip() for line in ci.splitlines()]
+    where = []
+    for cmd in commands:
+        if "pytest" in cmd:
+            found = [i for i, line in enumerate(lines) if line == cmd]
+        else:
+            found = [i for i, line in enumerate(lines)
+                     if line.startswith(f"{cmd} --configfile {CI_CONFIG}")]  # fmt: skip
+        assert found, f".ci/run does not run the README's {cmd!r}"
+        where.append(found[0])
+    snake = [w for c, w in zip(commands, where, strict=True) if "snakemake" in c]
+    assert snake == sorted(snake), "the report must follow the pipeline run"
     assert ci.splitlines()[0].startswith("#!") and "set -euo pipefail" in ci
 
 

@@ -11,7 +11,7 @@ import jsonschema
 import pytest
 import yaml
 
-from speckle.figures.config_check import check_twin
+from speckle.pipeline.checks import check_twin
 
 
 @pytest.fixture(scope="module")

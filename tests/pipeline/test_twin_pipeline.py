@@ -24,10 +24,11 @@ pytestmark = [pytest.mark.pipeline, pytest.mark.slow]
 
 CI_CONFIG = "workflow/config/ci.yaml"
 IGNORE = shutil.ignore_patterns(
-    ".git", ".snakemake", "results", "__pycache__", ".pytest_cache", ".hypothesis",
+    ".git", ".snakemake", "results*", "__pycache__", ".pytest_cache", ".hypothesis",
     "*.egg-info", ".benchmarks", "report.html", ".ruff_cache",
 )  # fmt: skip
-TARGETS = ["results/twin/" + f for f in ("fit.nc", "compare.png", "failure.png")]
+RESULTS = "results_ci"  # the CI config's results folder
+TARGETS = [f"{RESULTS}/twin/" + f for f in ("fit.nc", "compare.png", "failure.png")]
 
 
 def snakemake(repo: Path, *args: str) -> subprocess.CompletedProcess:
@@ -49,20 +50,20 @@ def test_twin_target_on_the_shipped_image(repo):
     proc = snakemake(repo, "--cores", "1", "--configfile", CI_CONFIG, "--", *TARGETS)
     assert proc.returncode == 0, proc.stdout[-4000:]
     ci = yaml.safe_load((repo / CI_CONFIG).read_text())["twin"]
-    fit = open_dataset(repo / "results/twin/fit.nc")
+    fit = open_dataset(repo / RESULTS / "twin/fit.nc")
     for k in ("spectrum_width", "waist", "snr_db", "attenuation", "inverse_density"):
         assert np.isfinite(float(fit[k])) and float(fit[f"{k}_se"]) > 0, k
     assert fit.waist.attrs["units"] == "um" and fit.attrs["kind"] == "log"
-    cmp_ = open_dataset(repo / "results/twin/compare.nc")
+    cmp_ = open_dataset(repo / RESULTS / "twin/compare.nc")
     assert list(cmp_.source.values) == ["measured", "twin"]
     assert cmp_.sizes["lag"] == ci["max_lag"] + 1
     depth = ci["region"]["depth"]
     assert cmp_.measured_image.shape == (depth[1] - depth[0], ci["region"]["x"][1])
-    failure = open_dataset(repo / "results/twin/failure.nc")
+    failure = open_dataset(repo / RESULTS / "twin/failure.nc")
     assert list(failure.method.values) == ci["failure"]["methods"]
     assert np.allclose(failure.strain, ci["failure"]["strains"])
-    assert (repo / "results/twin/failure.png").stat().st_size > 0
-    assert "waist =" in (repo / "results/logs/twin.log").read_text()
+    assert (repo / RESULTS / "twin/failure.png").stat().st_size > 0
+    assert "waist =" in (repo / RESULTS / "logs/twin.log").read_text()
 
 
 @pytest.mark.parametrize(

@@ -1,4 +1,4 @@
-"""Pipeline scripts: ``main(snakemake)`` + ``speckle._workflow.run(main)``, everything in the log.
+"""Pipeline scripts: ``main(snakemake)`` + ``speckle.pipeline.runner.run(main)``, all logged.
 
 Fast checks without Snakemake (through Snakemake: ``tests/pipeline/test_scaleout.py``): every
 script in ``workflow/scripts`` has the shape that makes it safe to re-import in spawned Dask
@@ -20,8 +20,7 @@ import pytest
 SCRIPT = """
 import logging, subprocess, sys, warnings
 from types import SimpleNamespace
-# private: the scripts' own runner (speckle._workflow is the workflow's, not users', API)
-from speckle._workflow import run
+from speckle.pipeline.runner import run
 
 snakemake = SimpleNamespace(log=[{log!r}], rule="demo")
 
@@ -64,7 +63,7 @@ def test_reimport_as_mp_main_does_nothing(tmp_path):
     """What a spawned worker does: run the script as ``__mp_main__`` without ``snakemake``."""
     path = tmp_path / "script.py"
     path.write_text(
-        "from speckle._workflow import run\n\n"
+        "from speckle.pipeline.runner import run\n\n"
         "def main(snakemake):\n    raise AssertionError('main ran')\n\nrun(main)\n"
     )
     runpy.run_path(str(path), run_name="__mp_main__")

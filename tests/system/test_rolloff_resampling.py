@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from speckle.figures import _config  # private: the datasheet config adapter the rule uses
 from speckle.figures import system as fs
+from speckle.pipeline import adapters
 from speckle.system import spectrometer as sp
 
 #: the pipeline's default system (config.yaml) and the CI camera
@@ -47,7 +47,7 @@ def test_gain_means_are_the_kernel_transforms():
 @pytest.mark.parametrize("camera_pixels", [512, 1024])
 @pytest.mark.parametrize("resample", ["linear", "cubic", "exact"])
 def test_measured_rolloff_matches_analytic(resample, camera_pixels):
-    system = _config.system_from_config({**SHEET, "camera_pixels": camera_pixels})
+    system = adapters.system_from_config({**SHEET, "camera_pixels": camera_pixels})
     ds = fs.rolloff_dataset(system, 24, resample)
     first = ds.depth <= 0.9 * system.imaging_depth
     dev = np.abs(ds.measured_db - ds.analytic_db).where(first, drop=True)
@@ -58,7 +58,7 @@ def test_measured_rolloff_matches_analytic(resample, camera_pixels):
 
 
 def test_response_arguments_are_checked():
-    system = _config.system_from_config({**SHEET, "camera_pixels": 256})
+    system = adapters.system_from_config({**SHEET, "camera_pixels": 256})
     with pytest.raises(ValueError, match="method"):
         sp.resampling_response(system, [10.0], "none")
     with pytest.raises(ValueError, match="z must be finite"):

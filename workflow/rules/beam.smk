@@ -4,7 +4,7 @@
 
 BEAM_CODE = package_code(
     "speckle.figures.beam",
-    "speckle.figures._config",
+    "speckle.pipeline.adapters",
     "speckle.io",
     "speckle.provenance",
 )

@@ -1,7 +1,7 @@
 # Helpers shared by all rule files.
 import os
 
-from speckle.figures._config import resolve_source
+from speckle.pipeline.adapters import resolve_source
 from speckle.provenance import config_hash, module_sources
 
 RESULTS = config.get("results", "results")

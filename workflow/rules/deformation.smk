@@ -10,7 +10,7 @@
 rule fig6a:
     input:
         code=package_code(
-            "speckle.figures.deformation", "speckle.figures._config", "speckle.io"
+            "speckle.figures.deformation", "speckle.pipeline.adapters", "speckle.io"
         ),
     output:
         data=f"{RESULTS}/fig6/correlation_maps.nc",
@@ -33,7 +33,7 @@ rule fig6a:
 rule fig6b:
     input:
         code=package_code(
-            "speckle.figures.deformation", "speckle.figures._config", "speckle.io"
+            "speckle.figures.deformation", "speckle.pipeline.adapters", "speckle.io"
         ),
     output:
         data=f"{RESULTS}/fig6/correlation_vs_strain.nc",
@@ -57,7 +57,7 @@ rule fig6b:
 rule fig6c:
     input:
         code=package_code(
-            "speckle.figures.deformation", "speckle.figures._config", "speckle.io"
+            "speckle.figures.deformation", "speckle.pipeline.adapters", "speckle.io"
         ),
     output:
         data=f"{RESULTS}/fig6/non_monotonic.nc",

@@ -4,7 +4,7 @@
 import pandas as pd
 from snakemake.utils import Paramspace
 
-from speckle.figures.config_check import check_scan_table
+from speckle.pipeline.checks import check_scan_table
 
 SCAN_TABLE = pd.read_csv(config["scan"]["table"], sep="\t")
 validate(SCAN_TABLE, "../schemas/scan.schema.yaml")

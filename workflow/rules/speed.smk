@@ -14,9 +14,9 @@ SPEED_TARGETS = [
 rule speed_accuracy:
     input:
         code=package_code(
-            "speckle.imaging.speed",
+            "speckle.studies.speed",
             "speckle.figures.speed",
-            "speckle.figures._config",
+            "speckle.pipeline.adapters",
             "speckle.io",
             "speckle.provenance",
         ),
@@ -43,9 +43,9 @@ rule speed_accuracy:
 rule failure_map:
     input:
         code=package_code(
-            "speckle.imaging.speed",
+            "speckle.studies.speed",
             "speckle.figures.speed",
-            "speckle.figures._config",
+            "speckle.pipeline.adapters",
             "speckle.io",
             "speckle.provenance",
         ),

@@ -17,8 +17,8 @@ rule fig3:
     input:
         code=package_code(
             "speckle.figures.histograms",
-            "speckle.figures._config",
-            "speckle.figures._style",
+            "speckle.pipeline.adapters",
+            "speckle.pipeline.outputs",
             "speckle.io",
             "speckle.provenance",
         ),
@@ -47,8 +47,8 @@ rule fig4:
         **({"measured": MEASURED} if MEASURED and os.path.isfile(MEASURED) else {}),
         code=package_code(
             "speckle.figures.histograms",
-            "speckle.figures._config",
-            "speckle.figures._style",
+            "speckle.pipeline.adapters",
+            "speckle.pipeline.outputs",
             "speckle.analysis.measured",
             "speckle.io",
             "speckle.provenance",

@@ -1,9 +1,9 @@
 """Correlation vs strain under the beam (thin): speckle.figures.beam, NetCDF + PNG."""
 
-from speckle._workflow import run
 from speckle.figures import beam
-from speckle.figures._style import save
 from speckle.io import to_netcdf
+from speckle.pipeline.outputs import save
+from speckle.pipeline.runner import run
 
 
 def main(snakemake) -> None:

@@ -7,10 +7,10 @@ import time
 
 import dask
 
-from speckle._workflow import run
 from speckle.figures import beam
-from speckle.figures._style import save
 from speckle.io import open_dataset, stream_to_netcdf
+from speckle.pipeline.outputs import save
+from speckle.pipeline.runner import run
 
 
 def main(snakemake) -> None:

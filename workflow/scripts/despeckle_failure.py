@@ -1,9 +1,9 @@
 """results/despeckle/failure: each family against density, SNR and feature size (thin)."""
 
-from speckle._workflow import run
 from speckle.figures import despeckle
-from speckle.figures._style import save
 from speckle.io import to_netcdf
+from speckle.pipeline.outputs import save
+from speckle.pipeline.runner import run
 from speckle.provenance import provenance_attrs
 
 

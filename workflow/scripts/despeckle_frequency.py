@@ -1,8 +1,8 @@
 """results/despeckle/frequency_compounding.nc: split spectrum vs its theory (thin)."""
 
-from speckle._workflow import run
 from speckle.figures import despeckle
 from speckle.io import to_netcdf
+from speckle.pipeline.runner import run
 from speckle.provenance import provenance_attrs
 
 

@@ -1,9 +1,9 @@
 """Elastography phantom (thin): compute with speckle.figures.elastography, write NetCDF and PNG."""
 
-from speckle._workflow import run
 from speckle.figures import elastography
-from speckle.figures._style import save
 from speckle.io import to_netcdf
+from speckle.pipeline.outputs import save
+from speckle.pipeline.runner import run
 
 
 def main(snakemake) -> None:

@@ -1,9 +1,9 @@
 """Large elastography sequence (thin): simulate and process lazily on the config's Dask
 scheduler with speckle.figures.elastography, streaming the NetCDF; draw the PNG from it."""
 
-from speckle._workflow import run
 from speckle.figures import elastography
-from speckle.figures._style import save
+from speckle.pipeline.outputs import save
+from speckle.pipeline.runner import run
 from speckle.sweep import dask_scheduler
 
 

@@ -1,9 +1,9 @@
 """Fig. 2: 10x10-pixel speckle fragments for several densities (thin)."""
 
-from speckle._workflow import run
 from speckle.figures import static
-from speckle.figures._style import save
 from speckle.io import to_netcdf
+from speckle.pipeline.outputs import save
+from speckle.pipeline.runner import run
 from speckle.provenance import provenance_attrs
 
 

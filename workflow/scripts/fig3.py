@@ -1,9 +1,10 @@
 """Fig. 3: amplitude histograms for a density sweep with one Rayleigh fit (thin)."""
 
-from speckle._workflow import run
-from speckle.figures import _config, histograms
-from speckle.figures._style import save
+from speckle.figures import histograms
 from speckle.io import to_netcdf
+from speckle.pipeline import adapters
+from speckle.pipeline.outputs import save
+from speckle.pipeline.runner import run
 from speckle.provenance import provenance_attrs
 
 
@@ -14,12 +15,12 @@ def main(snakemake) -> None:
         n_alines=fig3["n_alines"],
         k0_dk=source["k0_dk"],
         seed=seed,
-        **_config.source_options(source),
+        **adapters.source_options(source),
         normalise=fig3["normalise"],
         bins=fig3["bins"],
         amplitude_max=fig3["amplitude_max"],
         method=fig3["method"],
-        dask=_config.dask_options(snakemake.config["dask"], snakemake.threads),
+        dask=adapters.dask_options(snakemake.config["dask"], snakemake.threads),
         progress=True,
     )
     ds.attrs.update(provenance_attrs(config={"fig3": fig3, "source": source}, seed=seed))

@@ -2,11 +2,12 @@
 
 import logging
 
-from speckle._workflow import run
 from speckle.analysis.measured import load_measured
-from speckle.figures import _config, histograms
-from speckle.figures._style import save
+from speckle.figures import histograms
 from speckle.io import to_netcdf
+from speckle.pipeline import adapters
+from speckle.pipeline.outputs import save
+from speckle.pipeline.runner import run
 from speckle.provenance import provenance_attrs
 
 
@@ -17,7 +18,7 @@ def main(snakemake) -> None:
         n_alines=fig4["n_alines"],
         k0_dk=source["k0_dk"],
         seed=seed,
-        **_config.source_options(source),
+        **adapters.source_options(source),
         method=fig4["method"],
         floor=fig4["floor"],
         bins=fig4["bins"],

@@ -1,9 +1,9 @@
 """Fig. 5: the same fragment for several k0/delta_k with amplitude histograms (thin)."""
 
-from speckle._workflow import run
 from speckle.figures import static
-from speckle.figures._style import save
 from speckle.io import to_netcdf
+from speckle.pipeline.outputs import save
+from speckle.pipeline.runner import run
 from speckle.provenance import provenance_attrs
 
 

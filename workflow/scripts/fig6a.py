@@ -1,9 +1,9 @@
 """Fig. 6a (thin): compute with speckle.figures.deformation, write NetCDF and PNG."""
 
-from speckle._workflow import run
 from speckle.figures import deformation
-from speckle.figures._style import save
 from speckle.io import to_netcdf
+from speckle.pipeline.outputs import save
+from speckle.pipeline.runner import run
 
 
 def main(snakemake) -> None:

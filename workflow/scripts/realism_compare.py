@@ -2,14 +2,14 @@
 
 import logging
 
-from speckle._workflow import run
 from speckle.analysis.image_files import load_image
 from speckle.analysis.measured import load_measured
-from speckle.analysis.twin import fit_system
 from speckle.figures import realism
-from speckle.figures._style import save
 from speckle.io import to_netcdf
+from speckle.pipeline.outputs import save
+from speckle.pipeline.runner import run
 from speckle.provenance import provenance_attrs
+from speckle.studies.twin import fit_system
 
 STEP_STATS = ("score", "ks_distance", "skewness", "excess_kurtosis")
 
@@ -28,7 +28,7 @@ def main(snakemake) -> None:
         roi = load_measured(path, scale=scale, roi=meas_cfg["roi"])
         if meas_cfg.get("air_rows"):
             air = load_measured(path, scale=scale, roi={"depth": meas_cfg["air_rows"]})
-        # the effect parameters: one use of the twin's fit (speckle.analysis.twin)
+        # the effect parameters: one use of the twin's fit (speckle.studies.twin)
         image = load_image(
             path, kind=scale, pixel_size=cfg["pixel_size"], pitch=1.0, dims=("depth", "x")
         )

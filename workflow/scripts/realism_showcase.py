@@ -1,9 +1,9 @@
 """results/realism/showcase: a layered phantom, pure model beside the system effects (thin)."""
 
-from speckle._workflow import run
 from speckle.figures import realism
-from speckle.figures._style import save
 from speckle.io import to_netcdf
+from speckle.pipeline.outputs import save
+from speckle.pipeline.runner import run
 from speckle.provenance import provenance_attrs
 
 

@@ -1,9 +1,9 @@
 """Stack the decorrelation-scan rows into one dataset and draw it (thin)."""
 
-from speckle._workflow import run
-from speckle.figures._style import save
 from speckle.figures.deformation import plot_scan, scan_combine
 from speckle.io import open_dataset, to_netcdf
+from speckle.pipeline.outputs import save
+from speckle.pipeline.runner import run
 
 
 def main(snakemake) -> None:

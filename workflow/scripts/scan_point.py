@@ -1,8 +1,8 @@
 """One row of the decorrelation scan (thin): speckle.figures.deformation.scan_point_data."""
 
-from speckle._workflow import run
 from speckle.figures.deformation import scan_point_data
 from speckle.io import to_netcdf
+from speckle.pipeline.runner import run
 
 
 def main(snakemake) -> None:

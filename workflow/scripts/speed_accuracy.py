@@ -1,12 +1,12 @@
 """Speed-versus-accuracy chart of the A-scan and scanned-beam synthesis methods (thin: config ->
 package -> files)."""
 
-from speckle._workflow import run
-from speckle.figures._style import save
 from speckle.figures.speed import plot_speed_accuracy
-from speckle.imaging.speed import beam_speed_accuracy, speed_accuracy
 from speckle.io import to_netcdf
+from speckle.pipeline.outputs import save
+from speckle.pipeline.runner import run
 from speckle.provenance import provenance_attrs
+from speckle.studies.speed import beam_speed_accuracy, speed_accuracy
 
 
 def main(snakemake) -> None:

@@ -1,12 +1,12 @@
 """Failure map of the synthesis methods (thin: config -> package -> files)."""
 
-from speckle._workflow import run
-from speckle.figures._config import dask_options
-from speckle.figures._style import save
 from speckle.figures.speed import plot_failure_map
-from speckle.imaging.speed import failure_map
 from speckle.io import to_netcdf
+from speckle.pipeline.adapters import dask_options
+from speckle.pipeline.outputs import save
+from speckle.pipeline.runner import run
 from speckle.provenance import provenance_attrs
+from speckle.studies.speed import failure_map
 
 
 def main(snakemake) -> None:

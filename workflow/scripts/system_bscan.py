@@ -1,9 +1,9 @@
 """Layered B-scan with DC, autocorrelation and mirror artefacts, raw and processed (thin)."""
 
-from speckle._workflow import run
 from speckle.figures import system as fs
-from speckle.figures._style import save
 from speckle.io import to_netcdf
+from speckle.pipeline.outputs import save
+from speckle.pipeline.runner import run
 from speckle.provenance import provenance_attrs
 
 

@@ -1,9 +1,9 @@
 """results/twin/: fit the system to a measured image, compare, predict failure maps (thin)."""
 
-from speckle._workflow import run
 from speckle.figures import twin
-from speckle.figures._style import save
 from speckle.io import to_netcdf
+from speckle.pipeline.outputs import save
+from speckle.pipeline.runner import run
 from speckle.provenance import provenance_attrs
 
 

@@ -12,15 +12,15 @@ import yaml
 
 from speckle.analysis import autocorrelation as ac
 from speckle.analysis import measured as ms
-from speckle.analysis.realism import (
+from speckle.figures import realism as fig
+from speckle.io import open_dataset
+from speckle.studies.realism import (
     EFFECTS,
     fit_parameters,
     image_statistics,
     realism_study,
     simulate,
 )
-from speckle.figures import realism as fig
-from speckle.io import open_dataset
 
 KW = {
     "pixel_size": 5.75,

@@ -2,7 +2,7 @@
 
 Each case of issue 13 is a small override layered over the CI config with ``--configfile``;
 ``snakemake -n`` must fail with the key path in its output and no job planned or run. The same
-checks are exercised directly on :func:`speckle.figures.config_check.check_config` (fast), and
+checks are exercised directly on :func:`speckle.pipeline.checks.check_config` (fast), and
 the schema's method enum is compared with the package's method registry.
 """
 
@@ -14,7 +14,7 @@ import pytest
 import yaml
 
 import speckle
-from speckle.figures.config_check import check_config, check_scan_table
+from speckle.pipeline.checks import check_config, check_scan_table
 
 SCHEMA = "workflow/schemas/config.schema.yaml"
 #: key path expected in the error, override (merged over the CI config).

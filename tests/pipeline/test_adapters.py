@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 
 import speckle
-from speckle.figures import _config  # private: the pipeline's config adapter (rules, scripts)
+from speckle.pipeline import adapters
 
 SOURCE = {"n_pixels": 64, "pixel_size": 8.0, "k0_dk": 10, "shape": "gaussian", "fwhm_fraction": 0.4}
 
 
 def test_spectrum_kwargs_are_the_model_parameters():
-    kw = _config.spectrum_kwargs(SOURCE)
+    kw = adapters.spectrum_kwargs(SOURCE)
     assert kw == {
         "n_pixels": 64,
         "depth_range": 512.0,
@@ -21,10 +21,10 @@ def test_spectrum_kwargs_are_the_model_parameters():
         "fwhm_fraction": 0.4,
     }
     # a rectangular spectrum takes no FWHM; overrides replace the section's values
-    rect = _config.spectrum_kwargs(SOURCE, shape="rectangular", k0_dk=3.0, n_pixels=32)
+    rect = adapters.spectrum_kwargs(SOURCE, shape="rectangular", k0_dk=3.0, n_pixels=32)
     assert rect == {"n_pixels": 32, "depth_range": 256.0, "k0_dk": 3.0, "shape": "rectangular"}
-    assert _config.scene_kwargs(SOURCE, n_pixels=32) == {"n_pixels": 32, "depth_range": 256.0}
-    spec = _config.source_spectrum(SOURCE)
+    assert adapters.scene_kwargs(SOURCE, n_pixels=32) == {"n_pixels": 32, "depth_range": 256.0}
+    spec = adapters.source_spectrum(SOURCE)
     ref = speckle.spectrum(64, 512.0, k0_dk=10, shape="gaussian", fwhm_fraction=0.4)
     np.testing.assert_array_equal(spec.values, ref.values)
     assert spec.attrs == ref.attrs
@@ -41,11 +41,11 @@ def test_spectrum_kwargs_are_the_model_parameters():
 )
 def test_bad_or_missing_source_values_are_named(change, name):
     with pytest.raises(ValueError, match=name):
-        _config.spectrum_kwargs({**SOURCE, **change})
+        adapters.spectrum_kwargs({**SOURCE, **change})
 
 
 def test_random_bscan_is_the_bscan_of_the_seeded_scene():
-    ds, src = _config.random_bscan(SOURCE, 2.0, n_alines=3, seed=5, normalise="density")
+    ds, src = adapters.random_bscan(SOURCE, 2.0, n_alines=3, seed=5, normalise="density")
     scene = speckle.random_scatterers(3, 2.0, n_pixels=64, depth_range=512.0, seed=5)
     ref = speckle.bscan(scene, src, normalise="density")
     np.testing.assert_array_equal(ds.field.values, ref.field.values)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import speckle
-from speckle.analysis.failure import (
+from speckle.studies.failure import (
     mean_and_se,
     predicted_tracking_quantization,
     predicted_vector_floor,

@@ -7,7 +7,7 @@ import copy
 import pytest
 import yaml
 
-from speckle.figures.despeckle import check_despeckle_config
+from speckle.pipeline.checks import check_despeckle
 
 
 @pytest.fixture(scope="module")
@@ -16,7 +16,7 @@ def section(repo_root):
 
 
 def test_default_section_passes(section):
-    check_despeckle_config(section)
+    check_despeckle(section)
 
 
 @pytest.mark.parametrize(
@@ -43,5 +43,5 @@ def test_bad_values_are_named(section, path, value, message):
         node = node[key]
     node[path[-1]] = value
     with pytest.raises(ValueError, match=message) as err:
-        check_despeckle_config(cfg)
+        check_despeckle(cfg)
     assert "despeckle." in str(err.value)

@@ -1,4 +1,4 @@
-"""Speed/accuracy chart and failure map datasets (speckle.imaging.speed) and their figures."""
+"""Speed/accuracy chart and failure map datasets (speckle.studies.speed) and their figures."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ from workflow_run import CI_CONFIG, IGNORE, snakemake
 from speckle.figures.speed import pareto_front, plot_failure_map, plot_speed_accuracy
 from speckle.imaging.beam import BEAM_METHODS
 from speckle.imaging.beam_nufft import BEAM_AUTO_CANDIDATES
-from speckle.imaging.speed import (
+from speckle.studies.speed import (
     FAILURE_CASES,
     beam_speed_accuracy,
     failure_map,

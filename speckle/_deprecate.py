@@ -1,0 +1,70 @@
+"""Old names that moved keep working for one release, with a ``FutureWarning`` (as xrft does).
+
+A module whose names moved keeps only a shim: ``__getattr__ = moved(__name__, new_module,
+names)``. Each old name resolves to the new module's object on use and warns, naming the new
+spelling; ``tests/test_layout.py`` lists the shim modules (``SHIMS``), the only modules allowed
+to import against the flow. A module that keeps code of its own and lost some names to a later
+layer passes the new module's name instead: it is imported only when an old name is used.
+"""
+
+from __future__ import annotations
+
+import importlib
+import types
+import warnings
+from collections.abc import Callable, Iterable, Mapping
+
+__all__ = ["moved"]
+
+
+def moved(
+    old: str,
+    new: types.ModuleType | str,
+    names: Iterable[str],
+    renamed: Mapping[str, str] | None = None,
+) -> Callable[[str], object]:
+    """A module ``__getattr__`` resolving the moved ``names`` of ``old`` in ``new``, warning.
+
+    Parameters
+    ----------
+    old : str
+        The old module's ``__name__``.
+    new : module or str
+        The module the names now live in, or its name: imported when an old name is first
+        used (for a name that moved to a later layer, which the old module may not import).
+    names : iterable of str
+        Names kept under the same spelling.
+    renamed : mapping, optional
+        Old name -> new name, for names that were renamed while moving.
+
+    Returns
+    -------
+    callable
+        The ``__getattr__`` of the old module: ``FutureWarning`` naming ``new.<name>``, then
+        the object; ``AttributeError`` for any other name.
+
+    Examples
+    --------
+    >>> import math, warnings
+    >>> getattr_ = moved("old.place", math, ["pi"])
+    >>> with warnings.catch_warnings(record=True) as seen:
+    ...     warnings.simplefilter("always")
+    ...     value = getattr_("pi")
+    >>> value == math.pi, str(seen[0].message)
+    (True, 'old.place.pi moved to math.pi; the old name will be removed in the next release')
+    """
+    table = {**{n: n for n in names}, **dict(renamed or {})}
+
+    def __getattr__(name: str) -> object:
+        if name not in table:
+            raise AttributeError(f"module {old!r} has no attribute {name!r}")
+        module = importlib.import_module(new) if isinstance(new, str) else new
+        target = f"{module.__name__}.{table[name]}"
+        warnings.warn(
+            f"{old}.{name} moved to {target}; the old name will be removed in the next release",
+            FutureWarning,
+            stacklevel=2,
+        )
+        return getattr(module, table[name])
+
+    return __getattr__
