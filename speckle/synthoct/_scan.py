@@ -62,16 +62,19 @@ def beam_pairs(x, y, line_x, line_y, radius, tol):
     """``(j, line, w)``: scatterer index, line index and double-pass weight ``W_ij`` of every
     pair with ``W_ij >= tol``, ordered by line, then by scatterer index."""
     n_lines = line_x.size
-    pitch = float(line_x[1] - line_x[0]) if n_lines > 1 else 1.0
     reach = radius * math.sqrt(math.log(1.0 / tol))
-    offsets = math.ceil(2 * reach / pitch) + 1 if n_lines > 1 else 1
-    first = np.ceil((x - reach - line_x[0]) / pitch).astype(np.int64) if n_lines > 1 else 0
-    lines = np.zeros((x.size, 1), np.int64) + first[:, None] + np.arange(offsets)  # (M, K)
-    inside = (lines >= 0) & (lines < n_lines)
-    np.clip(lines, 0, n_lines - 1, out=lines)
-    d2 = (x[:, None] - line_x[lines]) ** 2 + ((y - line_y) ** 2)[:, None]
-    w = np.exp(d2 * (-1.0 / radius**2))
-    keep = (inside & (w >= tol)).ravel()  # scatterer-major: j, then line
+    if n_lines > 1:
+        pitch = float(line_x[1] - line_x[0])
+        offsets = math.ceil(2 * reach / pitch) + 1
+        first = np.ceil((x - reach - line_x[0]) / pitch).astype(np.int64)
+    else:  # one line: every scatterer's only candidate
+        pitch, offsets, first = 1.0, 1, np.zeros(x.size, np.int64)
+    lines = first[:, None] + np.arange(offsets)  # (M, K)
+    # x_j - X_{first + o} = s_j - o p with s_j = x_j - X_first (no gather of line positions)
+    s = x - (line_x[0] + first * pitch)
+    d = s[:, None] - pitch * np.arange(offsets)
+    w = np.exp((d * d + ((y - line_y) ** 2)[:, None]) * (-1.0 / radius**2))
+    keep = ((lines >= 0) & (lines < n_lines) & (w >= tol)).ravel()  # scatterer-major
     j = np.repeat(np.arange(x.size), offsets)[keep]
     line, w = lines.ravel()[keep], w.ravel()[keep]
     # stable sort by line (radix sort of small integers): within a line, by scatterer

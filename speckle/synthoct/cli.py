@@ -6,6 +6,10 @@ imports numpy, finufft and Pillow only (no xarray, scipy, numba or dask: checked
 ``tests/synthoct/test_cli.py`` with ``python -X importtime``), parses the phantom with numpy's C
 reader and compiles nothing. Also ``python -m speckle.synthoct``.
 
+Batch mode: more ``SCATTERERS OUTPUT`` pairs after the first scan more phantoms in the same
+process (same configuration), in order; the first refused phantom stops the command (the scans
+before it are written).
+
 Exit status 0 on success; 2 on a refused input (the message names the file and the line or
 key), 1 on an unexpected failure.
 """
@@ -32,6 +36,10 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("config", help="scanner configuration (INI, [Parameters] section)")
     parser.add_argument("scatterers", help="phantom: X Y Z (µm) Energy (%%) per line")
     parser.add_argument("output", help="output PNG (8-bit grayscale, written atomically)")
+    parser.add_argument(
+        "more", nargs="*", metavar="SCATTERERS OUTPUT",
+        help="batch mode: further phantom/PNG pairs, scanned in the same process",
+    )  # fmt: skip
     parser.add_argument("--threads", type=int, default=None, help="FINUFFT threads")
     return parser
 
@@ -42,11 +50,17 @@ def main(argv: list[str] | None = None) -> int:
     if args.threads is not None and args.threads < 1:
         print(f"{PROG}: error: --threads must be >= 1, got {args.threads}", file=sys.stderr)
         return 2
+    if len(args.more) % 2:
+        print(f"{PROG}: error: batch mode takes SCATTERERS OUTPUT pairs; "
+              f"{args.more[-1]!r} has no output", file=sys.stderr)  # fmt: skip
+        return 2
+    jobs = [(args.scatterers, args.output), *zip(args.more[::2], args.more[1::2], strict=True)]
     try:
         config = read_scanner_config(args.config)
-        table = read_phantom_table(args.scatterers, n_scatterers=config.n_scatterers)
-        levels = _scan.scan_levels(table, config, nthreads=args.threads)
-        write_png(levels, args.output)
+        for scatterers, output in jobs:
+            table = read_phantom_table(scatterers, n_scatterers=config.n_scatterers)
+            levels = _scan.scan_levels(table, config, nthreads=args.threads)
+            write_png(levels, output)
     except (ValueError, TypeError, OSError) as err:
         print(f"{PROG}: error: {err}", file=sys.stderr)
         return 2

@@ -370,13 +370,13 @@ def read_phantom_table(path: str | os.PathLike, *, n_scatterers: int | None = No
     (2, 4)
     """
     raw = Path(path).read_bytes()
+    if not raw.strip():
+        raise ValueError(f"{path}: no scatterers (the file is empty)")
     try:
         table = np.loadtxt(io.BytesIO(raw), dtype=np.float64, ndmin=2, comments=None)
     except ValueError:
         _diagnose(path, raw.decode("utf-8", errors="replace"))
         raise  # pragma: no cover  (the diagnosis always finds the line loadtxt refused)
-    if table.size == 0:
-        table = table.reshape(0, 4)
     if table.shape[1] != 4 or not np.all(np.isfinite(table)):
         _diagnose(path, raw.decode("utf-8", errors="replace"))
     energy = table[:, 3]

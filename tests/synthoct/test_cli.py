@@ -102,3 +102,22 @@ def test_command_missing_file_and_usage(tmp_path):
     assert r.returncode == 2 and "none.ini" in r.stderr
     r = _run(tmp_path / "only-one-argument.ini")
     assert r.returncode == 2 and "usage: speckle-scan" in r.stderr
+
+
+def test_batch_mode(tmp_path):
+    """Several SCATTERERS OUTPUT pairs in one process: each scan equals its single call."""
+    cfg = ScannerConfig(n_scatterers=300, n_pixels=32, n_lines=16, x_max=96.0)
+    speckle.write_scanner_config(cfg, tmp_path / "c.ini")
+    rng = np.random.default_rng(4)
+    for k in range(2):
+        t = np.column_stack([rng.uniform(-48, 48, 300), rng.uniform(-10, 10, 300),
+                             rng.uniform(0, 192, 300), np.full(300, 1.0 + k)])  # fmt: skip
+        speckle.write_phantom(t, tmp_path / f"p{k}.txt")
+    r = _run(tmp_path / "c.ini", tmp_path / "p0.txt", tmp_path / "o0.png",
+             tmp_path / "p1.txt", tmp_path / "o1.png")  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    for k in range(2):
+        single = speckle.synthoct_scan(tmp_path / f"p{k}.txt", cfg)
+        np.testing.assert_array_equal(read_png(tmp_path / f"o{k}.png"), single.values)
+    r = _run(tmp_path / "c.ini", tmp_path / "p0.txt", tmp_path / "o0.png", tmp_path / "p1.txt")
+    assert r.returncode == 2 and "has no output" in r.stderr

@@ -180,6 +180,7 @@ GOOD = "0 0 10 1\n1 0 20 1\n"
         (GOOD + "1 2 3 100.5\n", "line 3: energy 100.5 % outside 0..100"),
         ("0 0 10 -1e-3\n" + GOOD, "line 1: energy -0.001 % outside 0..100"),
         ("X Y Z Energy\n" + GOOD, "line 1: 'X' is not a number"),
+        ("\n \n", "no scatterers"),
     ],
 )
 def test_bad_phantom_is_refused_naming_the_line(tmp_path, text, match):

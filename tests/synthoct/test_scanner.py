@@ -177,3 +177,17 @@ def test_several_bscans_stack_along_y():
     f3 = _scan.scan_fields(table, cfg3)
     f1 = _scan.scan_fields(shifted, cfg)
     np.testing.assert_allclose(f3[2], f1[0], atol=1e-9 * np.abs(f1).max())
+
+
+@pytest.mark.parametrize(("n_pixels", "n_lines"), [(33, 1), (31, 24), (64, 1)])
+def test_fast_path_odd_pixels_and_one_line(n_pixels, n_lines):
+    """Odd N (spectral index from -(N//2)) and a single A-line: same exact agreement."""
+    rng = np.random.default_rng(3)
+    m, h = 200, 4.0 * n_pixels
+    table = np.column_stack([rng.uniform(-30, 30, m), rng.uniform(-5, 5, m),
+                             rng.uniform(0, h, m), rng.uniform(0, 50, m)])  # fmt: skip
+    kw = dict(n_pixels=n_pixels, depth_range=h, k0=4.8, line_x=np.arange(n_lines) * 5.0 - 10,
+              line_y=0.5, radius=5.0)  # fmt: skip
+    ref = _scan.direct_field(table, **kw)
+    fast = _scan.bscan_field(table, tol=1e-12, eps=1e-12, **kw)
+    assert np.linalg.norm(fast - ref) / np.linalg.norm(ref) <= 2e-12
