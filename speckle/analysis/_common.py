@@ -73,8 +73,16 @@ def matched(x: xr.DataArray, y: xr.DataArray) -> tuple[xr.DataArray, xr.DataArra
     """Broadcast two images after checking they cover the same pixels (else ``ValueError``).
 
     Both must have ``depth`` and ``aline`` dims; every dim they share must have the same size
-    and the same coordinate values. Nothing is aligned, padded or cut silently.
+    and the same coordinate values. Nothing is aligned, padded or cut silently. A ``time`` dim
+    (an image series, :mod:`speckle.imaging.timeseries`) in one input only is refused: it
+    would broadcast one image against every frame.
     """
+    timed = [n for n, f in (("reference", x), ("deformed", y)) if "time" in f.dims]
+    if len(timed) == 1:
+        raise ValueError(
+            f"a 'time' dim in {timed[0]} only: give both as series on the same times, or "
+            "select one frame of the series (.isel(time=i))"
+        )
     for name, f in (("reference", x), ("deformed", y)):
         missing = [d for d in ("depth", "aline") if d not in f.dims]
         if missing:

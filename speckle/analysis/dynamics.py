@@ -60,6 +60,7 @@ from .dynamics_theory import (
     ocds_expected,
     siegert_g2,
     speckle_variance_expected,
+    ssada_expected,
 )
 
 __all__ = [
@@ -90,6 +91,7 @@ _THEORY = (
     ocds_expected,
     siegert_g2,
     speckle_variance_expected,
+    ssada_expected,
 )
 
 

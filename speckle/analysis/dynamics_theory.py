@@ -30,14 +30,18 @@ The expected time variance over ``N`` frames (``ddof = 0``) of a quantity with v
 :func:`speckle_variance_expected` (``c_m = |g1_m|^2`` in units of ``<I>^2``),
 :func:`liv_expected` (``(10/ln 10)^2 Li2(|g1_m|^2)``). :func:`ocds_expected` is the slope of
 the least-squares line through ``Li2(|g1|^2)/Li2(1)`` (linear in the data, so the expected
-slope of the estimate is the slope of the expected correlation).
+slope of the estimate is the slope of the expected correlation). For SSADA's amplitude ratio,
+``u = I1/(I1 + I2)`` of the bivariate exponential has the density ``(1 - m)/(1 - 4 m u (1 -
+u))^(3/2)`` (``m = |g1|^2``; integrate ``S exp(-aS) I0(bS)`` over ``S = I1 + I2``), so
+``E[2 sqrt(I1 I2)/(I1 + I2)] = (E(m) - (1 - m) K(m))/m`` (complete elliptic integrals,
+parameter ``m``; ``pi/4`` at ``m = 0``, 1 at ``m = 1``): :func:`ssada_expected`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import xarray as xr
-from scipy.special import spence
+from scipy.special import ellipe, ellipk, spence
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
 from ._common import delay_selection
@@ -53,6 +57,8 @@ __all__ = [
     "ocds_expected",
     "siegert_g2",
     "speckle_variance_expected",
+    "ssada_expected",
+    "ssada_ratio",
 ]
 
 #: ``(10/ln 10)^2``: the variance of ``10 log10 I`` per unit variance of ``ln I`` (dB^2).
@@ -366,3 +372,47 @@ def ocds_expected(g1: object, lags: object, *, delays: tuple[float, float]) -> f
     sel = delay_selection(t, delays)
     rho = log_intensity_correlation(g[sel])
     return -float(np.polyfit(t[sel], rho, 1)[0])
+
+
+def ssada_ratio(g1: object) -> np.ndarray:
+    """``E[2 A1 A2/(A1^2 + A2^2)]`` of two developed speckle amplitudes of field correlation
+    ``g1``: ``(E(m) - (1 - m) K(m))/m``, ``m = |g1|^2`` (``pi/4`` at 0, 1 at ``|g1| = 1``).
+
+    Examples
+    --------
+    >>> round(float(ssada_ratio(0.0)), 6)
+    0.785398
+    """
+    m = np.minimum(np.abs(np.asarray(g1, dtype=complex)) ** 2, 1.0)
+    small = m < 1e-8
+    mm = np.where(small, 0.5, m)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = (ellipe(mm) - (1 - mm) * ellipk(mm)) / mm
+    r = np.where(m >= 1.0, 1.0, r)
+    return np.where(small, np.pi / 4 * (1 + m / 8), r)
+
+
+def ssada_expected(g1_bands: object) -> float:
+    """Expected SSADA decorrelation of developed speckle from each sub-band's ``|g1|``.
+
+    ``D = 1 - mean_b E[2 A_b(t) A_b(t+dt)/(A_b(t)^2 + A_b(t+dt)^2)]``, the expectation
+    :func:`ssada_ratio` of each band at the frame interval ``dt`` (module docstring): 0 for a
+    static scene, ``1 - pi/4`` for independent frames.
+
+    Parameters
+    ----------
+    g1_bands : array_like
+        ``|g1(dt)|`` of each sub-band (the band-limited spectrum's g1, e.g.
+        :func:`g1_brownian` with ``spectrum`` times the band's window).
+
+    Examples
+    --------
+    >>> round(ssada_expected([0.0, 0.0]), 6)  # 1 - pi/4
+    0.214602
+    >>> ssada_expected([1.0])
+    0.0
+    """
+    g = np.abs(np.atleast_1d(np.asarray(g1_bands, dtype=complex)))
+    if g.ndim != 1 or g.size == 0 or np.any(g > 1 + 1e-12):
+        raise ValueError("g1_bands must be a non-empty 1-D sequence of |g1| <= 1, one per band")
+    return float(1.0 - np.mean(ssada_ratio(g)))

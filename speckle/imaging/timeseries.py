@@ -11,15 +11,21 @@ image here is the project's beam imaging (:func:`speckle.beam_scan` through the 
   imaged at its own time: the scene must hold ``n_frames x n_lines`` times, line ``i`` of
   frame ``f`` at time index ``f*n_lines + i`` (:func:`raster_times` builds them), and the
   output's ``time`` is each frame's first line time with a coordinate ``line_time`` (s) over
-  ``(time, x)``.
+  ``(time, x)``. The moved scene then holds positions at every line time (``n_frames x
+  n_lines x scatterers`` per axis, refused above :data:`speckle._validate.MAX_BYTES` by the
+  motion functions): raster timing suits windows of a few hundred lines and frames; long
+  series use snapshots.
 
 Results are Datasets with ``field`` (complex, Dask) and ``intensity`` over ``(time, depth,
 ...)``, ``time`` in s, streamed as the strain sequences are: one task per frame (and chunk of
 lines) or per chunk of times, so memory holds the scene and one task's field at a time
 (:func:`speckle.io.stream_to_netcdf` writes them frame by frame). The numbers do not depend on
-the scheduler or the chunking: each task images fixed inputs with a deterministic method
-(tested bit for bit for ``"direct"``). Independent-line scenes (dims ``aline, scatterer``)
-are imaged by :func:`speckle.bscan`, one frame per time.
+the scheduler: each task images fixed inputs with a deterministic method. M-mode and raster
+series image each A-line from the same scatterers whatever the chunking, so they are
+identical bit for bit under any chunking and scheduler (tested: synchronous, threads,
+processes, streamed to NetCDF); snapshot series are :func:`speckle.image` per time (the same
+under any chunking to rounding). Independent-line scenes (dims ``aline, scatterer``) are
+imaged by :func:`speckle.bscan`, one frame per time.
 """
 
 from __future__ import annotations

@@ -83,7 +83,8 @@ MAX_STEP_FRACTION = 0.5
 #: Speed distributions of :func:`ballistic_motion`.
 BALLISTIC_DISTRIBUTIONS = ("gaussian", "constant")
 _AXES = ("z", "x", "y")
-#: bytes per scatterer per time per axis held while moving (positions, increments, a copy)
+#: bytes per scatterer per time per axis held while moving: the moved positions of every axis
+#: (kept) plus one axis's increments in flight, counted as 3 arrays of float64 to be safe
 _BYTES = 3 * 8
 
 
@@ -240,16 +241,25 @@ def _moved(
     """The scene with ``time`` on its positions: position + displacement where ``mask``."""
     out = {}
     has_time = "time" in scene.dims
-    for a, d in displacement.items():
+    everyone = bool(mask.all())
+    for a, make in displacement.items():  # in order: the generator's draws follow the axes
         v = scene[a]
         base = v.transpose("time", ...).values if has_time else v.values[None]
         dims = ("time", *(v.dims if not has_time else [x for x in v.dims if x != "time"]))
-        pos = base + np.where(mask[None], d, 0.0)
+        d = make() if callable(make) else make  # a fresh (time, ...) array, updated in place
+        pos = d if everyone else np.where(mask[None], d, 0.0)
+        if pos.shape == np.broadcast_shapes(pos.shape, base.shape):
+            pos += base  # in place: one (time, ...) array per axis, memory T x M per axis
+        else:
+            pos = pos + base  # a displacement broadcast over the scatterers (one velocity)
         if wrap:
             win = scene_extent(scene, a)
             if win is not None:
-                pos = win[0] + np.mod(pos - win[0], win[1] - win[0])
+                pos -= win[0]
+                np.mod(pos, win[1] - win[0], out=pos)
+                pos += win[0]
         out[a] = (dims, pos, v.attrs)
+        del d
     res = scene.assign(out)
     if not has_time:
         res = res.assign_coords(time=coord("time", times, "time of the positions"))
@@ -341,13 +351,15 @@ def brownian_motion(
     else:
         step = np.sqrt(2 * d * np.concatenate([[0.0], dts]))
     rng = np.random.default_rng(np.random.SeedSequence(sd))
-    disp = {}
-    for a in axes:
-        shape = mask.shape
-        draws = rng.standard_normal((t.size, *shape))
-        inc = draws * step if np.ndim(step) == 0 else draws * step.reshape(-1, *[1] * len(shape))
+    scale = step if np.ndim(step) == 0 else step.reshape(-1, *[1] * mask.ndim)
+
+    def increments() -> np.ndarray:  # drawn when its axis is moved (z, then x, then y)
+        inc = rng.standard_normal((t.size, *mask.shape))
+        inc *= scale
         inc[0] = 0.0
-        disp[a] = np.cumsum(inc, axis=0)
+        return np.cumsum(inc, axis=0, out=inc)
+
+    disp = dict.fromkeys(axes, increments)
     model = {"name": "brownian", "diffusion": d, "seed": sd, "fraction": float(fraction)}
     model["diffusion_units"] = units_of("diffusion")
     return _moved(scene, t, disp, mask, wrap=False, model=model)

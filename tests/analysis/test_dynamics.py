@@ -153,6 +153,24 @@ def test_ocds_of_a_brownian_region(brownian):
     assert abs(oc - oc_exp) < 3 * oc_se, (oc, oc_exp, oc_se)
 
 
+def test_ssada_of_a_brownian_region(brownian):
+    """SSADA against 1 - mean_b (E(m_b) - (1 - m_b) K(m_b))/m_b, m_b = |g1_b(dt)|^2 of each
+    sub-band's spectrum S W_b (frequency_looks is exact: imaging with S W_b)."""
+    from speckle.analysis.compounding import subband_windows
+
+    src, f, d, dt, k0 = brownian
+    windows = subband_windows(N, 4, window="hann", overlap=0.5)
+    bands = [
+        th.g1_brownian(dt, diffusion=d, k0=k0, spectrum=src.copy(data=src.values * w))
+        for w in windows
+    ]
+    expect = th.ssada_expected(bands)
+    est, se = _blocked(lambda x: dy.ssada(x, n_bands=4).values, f, "aline")
+    _report("SSADA of a Brownian region (4 Hann bands)", est, expect, se)
+    assert abs(est - expect) < 3 * se, (est, expect, se)
+    assert 0 < expect < 1 - np.pi / 4
+
+
 # ------------------------------------------------------------------------------------------
 # Ballistic motion and axial flow (independent lines)
 # ------------------------------------------------------------------------------------------
@@ -177,6 +195,54 @@ def test_ballistic_gaussian_decay():
     # Gaussian in tau, not exponential: log g1 is quadratic in the lag
     lg = -np.log(th.g1_ballistic(np.arange(1, 6) * dt, speed=s, k0=k0, ndim=1))
     np.testing.assert_allclose(lg / lg[0], np.arange(1, 6) ** 2, rtol=1e-12)
+
+
+def test_ballistic_constant_speed_oscillates():
+    """Speed s along +-z (independent lines, one axis): g1 = cos(q s tau), band-averaged."""
+    k0 = speckle.spectrum(N, H, k0_dk=10).attrs["k0"]
+    s = 1.0
+    dt = 0.5 / (2 * k0 * s)  # q s dt = 0.5 rad
+    src, f = _lines_series(
+        lambda sc, t: mo.ballistic_motion(sc, t, speed=s, seed=4, distribution="constant"),
+        density=32.0,
+        n_lines=128,
+        frames=6,
+        dt=dt,
+    )
+    lags = np.arange(6) * dt
+    re, se = _blocked(lambda x: dy.g1(x).values.real, f, "aline")
+    theory = th.g1_ballistic(lags, speed=s, k0=k0, ndim=1, distribution="constant", spectrum=src)
+    np.testing.assert_allclose(
+        th.g1_ballistic(lags, speed=s, k0=k0, ndim=1, distribution="constant"),
+        np.cos(2 * k0 * s * lags),
+        atol=1e-12,
+    )
+    for i in range(1, 6):
+        _report(f"ballistic constant-speed Re g1, lag {i}", re[i], theory[i], se[i])
+        assert abs(re[i] - theory[i]) < 3 * se[i], (i, re[i], theory[i], se[i])
+    assert theory[5] < -0.7  # cos(2.5): the correlation changes sign
+
+
+def test_static_and_moving_fractions_mix():
+    """A moving fraction f of equal-amplitude scatterers: g1 = (1 - f) + f g1_moving."""
+    src0 = speckle.spectrum(N, H, k0_dk=10)
+    k0 = src0.attrs["k0"]
+    d, frac = 0.05, 0.4
+    dt = 0.5 / (4 * k0**2 * d)
+    src, f = _lines_series(
+        lambda sc, t: mo.brownian_motion(sc, t, diffusion=d, seed=6, fraction=frac),
+        density=32.0,
+        n_lines=128,
+        frames=5,
+        dt=dt,
+    )
+    res = dy.g1(f, blocks=K)
+    moving = th.g1_brownian(np.arange(5) * dt, diffusion=d, k0=k0, spectrum=src)
+    expect = (1 - frac) + frac * moving
+    for i in range(1, 5):
+        g, se = abs(res.g1.values[i]), res.g1_se.values[i]
+        _report(f"static + moving fraction 0.4 |g1|, lag {i}", g, expect[i], se)
+        assert abs(g - expect[i]) < 3 * se, (i, g, expect[i], se)
 
 
 @pytest.fixture(scope="module")
@@ -268,6 +334,75 @@ def test_transverse_flow_decorrelates_through_the_beam(shared):
         assert abs(g[i] - expect[i]) < 3 * se[i], (lag, g[i], expect[i], se[i])
 
 
+def test_flow_through_the_imaging_plane():
+    """3-D scene, flow along y through the B-scan plane: the same exp(-(v tau)^2/w0^2)."""
+    regs = make_regions(background(density=0.1))
+    sc = speckle.shared_scene(
+        regs, z_range=(0.0, 128.0), x_range=(0.0, 100.0), y_range=(0.0, 80.0), seed=1, tile=32.0
+    )
+    src = speckle.spectrum(32, 128.0, k0_dk=10)
+    v, dt, w0 = 1000.0, 3e-3, 6.0
+    moved = mo.flow_motion(sc, np.arange(3) * dt, velocity=[0.0, 0.0, v])
+    x = speckle.scan_lines(32, PITCH, start=18.0)
+    f = ts.bscan_series(moved, src, waist=w0, x=x, y=40.0, method="nufft", tol=1e-9, wrap=True)
+    res = dy.g1(f.field, lags=[1, 2], blocks=K, block_dim="depth")
+    expect = th.g1_transverse_flow(np.array([1, 2]) * dt, velocity=v, waist=w0)
+    for i in range(2):
+        g, se = abs(res.g1.values[i]), res.g1_se.values[i]
+        _report(f"through-plane flow |g1|, lag {i + 1}", g, expect[i], se)
+        assert abs(g - expect[i]) < 3 * se, (i, g, expect[i], se)
+
+
+def test_ballistic_in_a_shared_scene_under_the_beam(shared):
+    """2-D Gaussian ballistic motion: axial exp(-q^2 sigma^2 tau^2/2) x lateral factor."""
+    k0 = speckle.spectrum(NS, HS, k0_dk=10).attrs["k0"]
+    s = 1.0  # rms speed over 2 axes: sigma = s/sqrt(2)
+    dt = 0.4 * np.sqrt(2) / (2 * k0 * s)  # q sigma dt = 0.4
+    moved = mo.ballistic_motion(shared, np.arange(4) * dt, speed=s, seed=9, wrap=True)
+    g, se, src = _beam_g1(moved, k0_dk=10, waist=6.0, lags=[1, 2, 3])
+    expect = th.g1_ballistic(np.arange(1, 4) * dt, speed=s, k0=k0, ndim=2, waist=6.0, spectrum=src)
+    for i in range(3):
+        _report(f"ballistic 2-D under the beam |g1|, lag {i + 1}", g[i], expect[i], se[i])
+        assert abs(g[i] - expect[i]) < 3 * se[i], (i, g[i], expect[i], se[i])
+
+
+def test_liv_and_ocds_of_a_brownian_layer_in_static_tissue():
+    """A Brownian layer (region 1) in static tissue under the beam: LIV and OCDS of its interior
+    rows against their expected values from g1.
+
+    Interior rows are >= 15 pixels from the layer's edges: the static intensity leaking in
+    through the rectangular band's PSF tails is ~ 1/(2 pi^2 m) < 0.4 % there (0.1 dB^2 of LIV
+    at most, below 0.3 SE); blocks of depth rows are independent (module docstring).
+    """
+    from speckle.scene.regions import layer
+
+    regs = make_regions(background(density=1.0), layer(40.0, 216.0, density=1.0))
+    sc = speckle.shared_scene(regs, z_range=(0.0, HS), x_range=(0.0, 300.0), seed=8)
+    src = speckle.spectrum(NS, HS, k0_dk=10)
+    k0, d, w0 = src.attrs["k0"], 0.05, 6.0
+    dt = 0.3 / (4 * k0**2 * d)
+    n = 8
+    moved = mo.brownian_motion(sc, np.arange(n) * dt, diffusion=d, seed=3, regions=[1])
+    x = speckle.scan_lines(96, PITCH, start=54.0)
+    f = ts.bscan_series(moved, src, waist=w0, x=x, method="finufft", tol=1e-11, wrap=True)
+    intensity = f.intensity.transpose("time", "depth", "x").load()
+    rows = np.arange(NS)[
+        (np.arange(NS) * 4.0 >= 40.0 + 60.0) & (np.arange(NS) * 4.0 < 216.0 - 60.0)
+    ]
+    inner = intensity.isel(depth=rows)
+    g1t = th.g1_brownian(
+        np.arange(n) * dt, diffusion=d, k0=k0, spectrum=src, waist=w0, lateral_axes=1
+    )
+    lv, lv_se = _blocked(lambda x: dy.liv(x).values, inner, "depth", k=len(rows))
+    _report("LIV of a Brownian layer under the beam (dB^2)", lv, th.liv_expected(g1t), lv_se)
+    assert abs(lv - th.liv_expected(g1t)) < 3 * lv_se
+    delays = (dt, 4 * dt)
+    oc, oc_se = _blocked(lambda x: dy.ocds(x, delays=delays).values, inner, "depth", k=len(rows))
+    oc_exp = th.ocds_expected(g1t, np.arange(n) * dt, delays=delays)
+    _report("OCDS of a Brownian layer under the beam (1/s)", oc, oc_exp, oc_se)
+    assert abs(oc - oc_exp) < 3 * oc_se
+
+
 def test_tsukuba_wavelength_and_resolution_dependence(shared):
     """Diffusion decorrelates with k0 (wavelength), not with the waist; transverse flow with
     the waist (resolution), not with k0 (Fujimura et al. 2025)."""
@@ -342,6 +477,19 @@ def test_no_answer_is_nan_with_a_reason():
         assert np.isnan(float(dy.liv(abs(z) ** 2)))
     with pytest.warns(RuntimeWarning, match="undefined"):
         assert np.isnan(float(dy.doppler_phase(z)))
+
+
+def test_a_time_dim_in_one_input_only_is_refused():
+    img = xr.DataArray(
+        np.exp(1j * np.arange(64.0)).reshape(8, 8),
+        dims=("depth", "aline"),
+        coords={"depth": np.arange(8.0), "aline": np.arange(8.0)},
+    )
+    series = xr.concat([img, img], "time").assign_coords(time=[0.0, 1.0])
+    with pytest.raises(ValueError, match="'time' dim in deformed only"):
+        speckle.correlation_map(img, series, window=4)
+    both = speckle.correlation_map(series, series, window=4)  # same times: fine
+    assert both.sizes["time"] == 2
 
 
 @pytest.mark.parametrize(
