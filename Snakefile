@@ -40,6 +40,7 @@ include: "workflow/rules/beam.smk"
 include: "workflow/rules/despeckle.smk"
 include: "workflow/rules/twin.smk"
 include: "workflow/rules/synthoct.smk"
+include: "workflow/rules/dynamics.smk"
 
 
 rule all:
@@ -56,4 +57,5 @@ rule all:
         + BEAM_TARGETS
         + DESPECKLE_TARGETS
         + TWIN_TARGETS
-        + SYNTHOCT_TARGETS,
+        + SYNTHOCT_TARGETS
+        + DYNAMICS_TARGETS,

@@ -43,6 +43,7 @@ from ..imaging.scan import beam_reach
 from ..scene.shared import MAX_TILES
 from ..synthoct.files import ScannerConfig
 from .adapters import system_from_config
+from .dynamics_checks import check_dynamics_config
 
 __all__ = [
     "check_config",
@@ -188,6 +189,14 @@ def check_config(config: Mapping, schema: Mapping | None = None) -> None:
         check_twin(config["twin"])
     if "synthoct" in config:
         check_synthoct(config["synthoct"])
+    if "dynamics" in config:
+        dyn = config["dynamics"]
+        check_dynamics_config(dyn)
+        for part in (None, "g1", "failure", "calibration"):
+            own = (dyn[part].get("geometry") or {}) if part else {}
+            geo = {**dyn["geometry"], **own}
+            key = f"dynamics.{part + '.' if part and 'tol' in own else ''}geometry.tol"
+            _tol(geo.get("method", "finufft"), geo.get("tol"), key, int(geo["n_pixels"]), False)
 
 
 def _elastography(el: Mapping) -> None:

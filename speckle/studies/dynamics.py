@@ -16,16 +16,19 @@ here, and their expectations (derived in ``docs/explanation/dynamics_failure.md`
 * **speckle variance** (``speckle_variance``): the temporal variance of the intensity over the
   ``N`` frames (``1/N``), over the expected intensity squared ``(I_s + I_n)^2``:
   ``E = (N-1)/N (1 - <mu_ij>)`` (``Cov(I_i, I_j) = mu_ij <I>^2``, Siegert);
-* **decorrelation** (``decorrelation``): one minus the amplitude correlation of adjacent frames,
-  ``1 - sum A_t A_t+1 / sum (A_t^2 + A_t+1^2)/2`` (sums over the pairs and the pixels of a
-  window, the full-band form of SSADA): ``E = 1 - (pi/4) 2F1(-1/2, -1/2; 1; mu_1)``;
+* **decorrelation** (``decorrelation``): the amplitude decorrelation of adjacent frames,
+  ``1 - mean of A_t A_t+1 / ((A_t^2 + A_t+1^2)/2)`` per pixel (SSADA of one band,
+  :func:`speckle.analysis.dynamics.ssada_array`):
+  ``E = 1 - (E(mu_1) - (1 - mu_1) K(mu_1))/mu_1`` (complete elliptic integrals,
+  :func:`speckle.analysis.dynamics_theory.ssada_expected`); split into sub-bands it is
+  the same for transverse flow;
 * **logarithmic intensity variance** (``liv``, the Tsukuba group's LIV): the temporal variance
   of ``10 log10 I`` (``1/N``): ``E = (10/ln 10)^2 (N-1)/N (pi^2/6 - <Li2(mu_ij)>)``, since
   ``Cov(ln I_i, ln I_j) = Li2(mu_ij)`` for correlated speckle (Laguerre expansion of the
   bivariate exponential law).
 
 The **static-tissue floor** of a contrast is its value for ``g1 = 1`` (static scatterers, the
-frames differ by their noise only): ``(N-1)/N (1 - s^2)``, ``1 - (pi/4) 2F1(.., s^2)`` and
+frames differ by their noise only): ``(N-1)/N (1 - s^2)``, ``ssada_expected([s])`` and
 ``(10/ln 10)^2 (N-1)/N (pi^2/6 - Li2(s^2))``, zero without noise. The **noise floor** is its
 value where the frames are uncorrelated (``rho = 0``: noise alone, or flow fast enough to
 decorrelate completely): ``(N-1)/N``, ``1 - pi/4`` and ``(10/ln 10)^2 (N-1)/N pi^2/6``. A
@@ -46,13 +49,33 @@ from collections.abc import Sequence
 
 import numpy as np
 import xarray as xr
-from scipy import special
+from scipy.optimize import brentq
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
+from ..analysis.dynamics import (
+    g1,
+    liv,
+    liv_array,
+    ocds,
+    speckle_variance,
+    speckle_variance_array,
+    ssada,
+    ssada_array,
+)
+from ..analysis.dynamics_theory import (
+    g1_brownian,
+    g1_transverse_flow,
+    liv_expected,
+    speckle_variance_expected,
+    ssada_expected,
+)
 from ..conventions import attrs, coord, units_of
+from ..imaging.aline import pixel_depths
 from ..imaging.scan import beam_reach, image
+from ..imaging.timeseries import bscan_series
 from ..imaging.truth import speckle_free_image
-from ..scene.regions import background, cell_density, make_regions
+from ..scene.motion import brownian_motion, flow_motion, poiseuille_velocity
+from ..scene.regions import background, cell_density, circle, layer, make_regions, region_label
 from ..scene.shared import shared_scene
 from ..system.noise import add_noise
 from ..system.source import spectrum
@@ -65,49 +88,15 @@ __all__ = [
     "decorrelation_calibration",
     "expected_contrast",
     "flow_failure",
-    "transverse_flow_g1",
+    "g1_curves",
+    "phantom_series",
     "velocity_range",
 ]
 
 #: Flow contrasts of the failure maps.
 FLOW_CONTRASTS = ("speckle_variance", "decorrelation", "liv")
-#: ``(10/ln 10)^2``: dB^2 per (natural log)^2.
-_DB2 = (10.0 / math.log(10.0)) ** 2
 #: Status codes of the failure maps.
 BELOW_FLOOR, MEASURABLE, SATURATED = 0, 1, 2
-
-
-def transverse_flow_g1(velocity: object, lag: object, *, waist: float) -> np.ndarray:
-    """``|g1|`` of transverse flow through the Gaussian beam: ``exp(-(v tau)^2/w0^2)``.
-
-    The double-pass beam weight ``exp(-2 r^2/w0^2)`` of scatterers displaced by ``d = v tau``
-    overlaps itself by ``exp(-d^2/w0^2)`` (uniform scatterers, independent phases).
-
-    Parameters
-    ----------
-    velocity : array_like
-        Lateral velocity ``v`` in µm/s.
-    lag : array_like
-        Time lag ``tau`` in s (>= 0), broadcast against ``velocity``.
-    waist : float
-        Beam waist ``w0`` in µm (> 0).
-
-    Returns
-    -------
-    numpy.ndarray
-        ``|g1|`` (dimensionless).
-
-    Examples
-    --------
-    >>> float(transverse_flow_g1(1000.0, 0.008, waist=8.0))  # d = w0
-    0.36787944117144233
-    """
-    v = as_finite_array(velocity, "velocity")
-    t = as_finite_array(lag, "lag")
-    if np.any(t < 0):
-        raise ValueError("lag must be >= 0 s")
-    w0 = check_real(waist, "waist", low=0, low_inclusive=False)
-    return np.exp(-((v * t / w0) ** 2))
 
 
 def _signal_fraction(snr_db: float) -> float:
@@ -126,11 +115,17 @@ def _snr(snr_db: object) -> float:
 def expected_contrast(contrast: str, g1: object, *, snr_db: float = math.inf) -> float:
     """Expected flow contrast of ``N`` frames of developed speckle with receiver noise.
 
+    The frames' total fields correlate as ``rho_m = s |g1(m interval)|`` (``s = SNR/(1 + SNR)``,
+    white noise independent between frames); the speckle variance and LIV follow from
+    :func:`speckle.analysis.dynamics_theory.speckle_variance_expected` and
+    :func:`~speckle.analysis.dynamics_theory.liv_expected` (``ddof = 0``) of ``rho``, the
+    decorrelation from :func:`~speckle.analysis.dynamics_theory.ssada_expected` of ``rho_1``.
+
     Parameters
     ----------
     contrast : {"speckle_variance", "decorrelation", "liv"}
-        The contrast (module docstring: normalised intensity variance, adjacent-frame
-        amplitude decorrelation, log-intensity variance in dB^2).
+        The contrast (module docstring: intensity variance over ``(I_s + I_n)^2``,
+        adjacent-frame amplitude decorrelation, log-intensity variance in dB^2).
     g1 : array_like
         ``|g1|`` of the motion at frame lags ``1 ... N-1`` (``N - 1 >= 1`` values in [0, 1]).
     snr_db : float
@@ -150,18 +145,12 @@ def expected_contrast(contrast: str, g1: object, *, snr_db: float = math.inf) ->
     g = np.atleast_1d(as_finite_array(g1, "g1"))
     if g.ndim != 1 or g.size < 1 or np.any((g < 0) | (g > 1)):
         raise ValueError("g1 must hold |g1| in [0, 1] at frame lags 1 ... N-1 (N >= 2 frames)")
-    s = _signal_fraction(snr_db)
-    n = g.size + 1
-    mu = (s * g) ** 2  # mu at lag m = 1 ... N-1
+    rho = np.r_[1.0, _signal_fraction(snr_db) * g]
     if contrast == "decorrelation":
-        return float(1.0 - math.pi / 4.0 * special.hyp2f1(-0.5, -0.5, 1.0, mu[0]))
-    pairs = n - np.arange(1, n)  # pairs of frames at lag m
+        return ssada_expected([rho[1]])
     if contrast == "speckle_variance":
-        cov, var = mu, 1.0
-    else:
-        cov, var = _DB2 * special.spence(1.0 - mu), _DB2 * math.pi**2 / 6.0  # Li2(mu)
-    mean_cov = float(np.sum(pairs * cov) / np.sum(pairs))
-    return (n - 1) / n * (var - mean_cov)
+        return speckle_variance_expected(rho, ddof=0)
+    return liv_expected(rho, ddof=0)
 
 
 def contrast_floors(contrast: str, *, n_frames: int, snr_db: float) -> tuple[float, float]:
@@ -238,7 +227,7 @@ def velocity_range(
     >>> lo, hi = velocity_range("decorrelation", n_frames=4, interval=1e-3, snr_db=40.0,
     ...                         waist=8.0, low=0.05, high=0.2)
     >>> round(lo), round(hi)
-    (2762, 9127)
+    (1611, 7921)
     """
     n = check_int(n_frames, "n_frames", low=2)
     dt = check_real(interval, "interval", low=0, low_inclusive=False)
@@ -254,8 +243,6 @@ def velocity_range(
     def solve(level: float) -> float:
         if not static < level < noise:
             return math.nan
-        from scipy.optimize import brentq
-
         hi = 1.0
         while value(hi) < level:
             hi *= 2.0
@@ -272,18 +259,16 @@ def velocity_range(
 # --- estimators on frame stacks ----------------------------------------------------------------
 
 
-def _blocks(values: np.ndarray, window: tuple[int, int]) -> np.ndarray:
-    """Sum over non-overlapping ``window`` blocks of the last two axes (the rest dropped)."""
-    wz, wx = window
-    nz, nx = values.shape[-2] // wz, values.shape[-1] // wx
-    v = values[..., : nz * wz, : nx * wx]
-    return v.reshape(*v.shape[:-2], nz, wz, nx, wx).sum(axis=(-3, -1))
-
-
 def contrast_estimates(
     contrast: str, field: object, *, window: tuple[int, int], intensity: float | None = None
 ) -> tuple[float, np.ndarray]:
     """A flow contrast of a stack of frames: its region value and its window values.
+
+    The estimators are those of :mod:`speckle.analysis.dynamics`:
+    :func:`~speckle.analysis.dynamics.speckle_variance_array` (over ``intensity^2``),
+    :func:`~speckle.analysis.dynamics.ssada_array` of one band (the full-band amplitude
+    decorrelation of adjacent frames) and :func:`~speckle.analysis.dynamics.liv_array`, all
+    with ``ddof = 0``.
 
     Parameters
     ----------
@@ -292,40 +277,46 @@ def contrast_estimates(
     field : array_like of complex, shape (frame, depth, x)
         The complex frames of one region (>= 2 frames).
     window : (int, int)
-        Window (pixels x lines) of one contrast value, >= 1 each and within the frames.
+        Boxcar (pixels x lines) of one contrast value, >= 1 each and within the frames.
     intensity : float, optional
         Expected intensity ``I_s + I_n`` normalising the speckle variance (required there).
 
     Returns
     -------
     (float, numpy.ndarray)
-        The contrast of the whole region (pixel mean; for ``decorrelation`` the ratio of the
-        region's sums, whose bias is O(1/pixels)) and its values on non-overlapping windows.
+        The contrast's mean over the region's pixels, and its boxcar values at every pixel
+        (their spread is that of one window's value).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f = np.ones((3, 4, 4), complex)
+    >>> contrast_estimates("decorrelation", f, window=(2, 2))[0]
+    0.0
     """
     check_choice(contrast, "contrast", FLOW_CONTRASTS)
     a = np.asarray(field)
     if not np.iscomplexobj(a) or a.ndim != 3 or a.shape[0] < 2:
         raise ValueError("field must be complex frames (frame, depth, x) with >= 2 frames")
-    wz = check_int(window[0], "window[0]", low=1, high=a.shape[1])
-    wx = check_int(window[1], "window[1]", low=1, high=a.shape[2])
-    inten = np.abs(a) ** 2
+    if not isinstance(window, Sequence) or len(window) != 2:
+        raise ValueError(f"window must be (pixels, lines), got {window!r}")
+    w = (
+        check_int(window[0], "window[0]", low=1, high=a.shape[1]),
+        check_int(window[1], "window[1]", low=1, high=a.shape[2]),
+    )
     if contrast == "decorrelation":
-        amp = np.sqrt(inten)
-        num = np.sum(amp[1:] * amp[:-1], axis=0)
-        den = np.sum(0.5 * (inten[1:] + inten[:-1]), axis=0)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            windows = 1.0 - _blocks(num, (wz, wx)) / _blocks(den, (wz, wx))
-            return float(1.0 - num.sum() / den.sum()), windows.ravel()
-    if contrast == "speckle_variance":
-        if intensity is None:
-            raise ValueError("intensity (the expected I_s + I_n, > 0) is required")
-        ref = check_real(intensity, "intensity", low=0, low_inclusive=False)
-        per_pixel = inten.var(axis=0) / ref**2
-    else:
-        with np.errstate(divide="ignore"):
-            per_pixel = (10.0 * np.log10(inten)).var(axis=0)
-    windows = _blocks(per_pixel, (wz, wx)) / (wz * wx)
-    return float(per_pixel.mean()), windows.ravel()
+        amp = np.abs(a)[None]
+        return float(ssada_array(amp)), ssada_array(amp, window=w).ravel()
+    inten = np.abs(a) ** 2
+    if contrast == "liv":
+        return float(liv_array(inten)), liv_array(inten, window=w).ravel()
+    if intensity is None:
+        raise ValueError("intensity (the expected I_s + I_n, > 0) is required")
+    ref = check_real(intensity, "intensity", low=0, low_inclusive=False) ** 2
+    return (
+        float(speckle_variance_array(inten)) / ref,
+        speckle_variance_array(inten, window=w).ravel() / ref,
+    )
 
 
 # --- simulation --------------------------------------------------------------------------------
@@ -559,7 +550,7 @@ def flow_failure(
             hi = floors_t[1, c, k] - zz * nsd[c, k]
             for j, dt in enumerate(dts):
                 for i, v in enumerate(vel):
-                    g1 = transverse_flow_g1(v, lags * dt, waist=g["waist"])
+                    g1 = g1_transverse_flow(lags * dt, velocity=v, waist=g["waist"])
                     theory[c, i, k, j] = expected_contrast(name, g1, snr_db=float(snr))
                 v_low[c, k, j], v_high[c, k, j] = velocity_range(
                     name,
@@ -631,8 +622,8 @@ def _meta(g: dict, nf: int, window: tuple, nr: int, sd: int) -> dict:
         "repeats": nr,
         "seed": sd,
         "motion": "transverse flow along +x (uniform), frames translated by v t interval",
-        "contrasts": "speckle_variance: var_t(I)/<I>^2 (1/N); decorrelation: 1 - sum A_t "
-        "A_t+1 / sum (A_t^2 + A_t+1^2)/2; liv: var_t(10 log10 I) in dB^2 (1/N)",
+        "contrasts": "speckle_variance: var_t(I)/<I>^2 (1/N); decorrelation: ssada of one "
+        "band, 1 - mean A_t A_t+1 / ((A_t^2 + A_t+1^2)/2); liv: var_t(10 log10 I) in dB^2 (1/N)",
     }
 
 
@@ -669,7 +660,7 @@ def decorrelation_calibration(
     -------
     xarray.Dataset
         Over ``velocity``: ``decorrelation`` (mean over repeats of the region value),
-        ``decorrelation_se`` and ``theory`` ``1 - (pi/4) 2F1(-1/2, -1/2; 1; s^2 g1^2)`` with
+        ``decorrelation_se`` and ``theory`` (``ssada_expected`` of ``s g1``) with
         ``g1 = exp(-(v interval)^2/w0^2)``; attrs: the geometry, ``interval``, ``snr_db``.
 
     Examples
@@ -679,7 +670,7 @@ def decorrelation_calibration(
     >>> ds = decorrelation_calibration(geo, velocities=[0.0, 8000.0], interval=1e-3,
     ...                                snr_db=40.0, n_frames=2, repeats=2, seed=0)
     >>> round(float(ds.theory[1]), 3)
-    0.188
+    0.201
     """
     g = _check_geometry(geometry)
     vel = _positive_sorted(velocities, "velocities")
@@ -704,7 +695,7 @@ def decorrelation_calibration(
     m, se = mean_and_se(out)
     theory = [
         expected_contrast(
-            "decorrelation", transverse_flow_g1(v, [dt], waist=g["waist"]), snr_db=snr
+            "decorrelation", g1_transverse_flow([dt], velocity=v, waist=g["waist"]), snr_db=snr
         )
         for v in vel
     ]
@@ -720,4 +711,289 @@ def decorrelation_calibration(
     meta.pop("window")
     return ds.assign_attrs(
         meta | {"interval": dt, "interval_units": units_of("time"), "snr_db": snr}
+    )
+
+
+# --- the pipeline's phantom and g1 curves ------------------------------------------------------
+
+
+def _series(ph: dict, moved: xr.Dataset, kw: dict, snr_db: float, seed: int) -> xr.Dataset:
+    """Snapshot B-scans of a moved scene with receiver noise (one stream per frame and line)."""
+    out = bscan_series(moved, ph["source"], waist=ph["waist"], x=ph["lines"], **kw).compute()
+    if math.isinf(snr_db):
+        return out
+    return add_noise(out, snr_db, seed=seed, signal_intensity=ph["signal"])
+
+
+def g1_curves(
+    geometry: dict,
+    *,
+    diffusion: float,
+    velocity: float,
+    interval: float,
+    n_frames: int,
+    blocks: int,
+    snr_db: float,
+    seed: int,
+) -> xr.Dataset:
+    """Measured ``|g1|`` against lag of Brownian motion and transverse flow, with theory.
+
+    Each model moves a homogeneous 2-D shared scene (:func:`speckle.scene.motion.brownian_motion`,
+    :func:`~speckle.scene.motion.flow_motion` along ``+x``) over ``n_frames`` times
+    ``interval`` s apart, images it as repeated B-scans
+    (:func:`speckle.imaging.timeseries.bscan_series`) with receiver noise, and measures the
+    pooled ``|g1|`` over the analysed rows (:func:`speckle.analysis.dynamics.g1`, standard
+    error from ``blocks`` blocks of lines). Theory: ``s g1`` for lags > 0 (``s = SNR/(1 +
+    SNR)``, noise uncorrelated between frames) with
+    :func:`~speckle.analysis.dynamics_theory.g1_brownian` (the sampled band and the lateral
+    steps through the beam) and :func:`~speckle.analysis.dynamics_theory.g1_transverse_flow`.
+
+    Parameters
+    ----------
+    geometry : dict
+        As in :func:`flow_failure`.
+    diffusion : float
+        ``D`` in µm^2/s (>= 0).
+    velocity : float
+        Transverse flow velocity in µm/s (>= 0).
+    interval : float
+        Time between frames in s (> 0).
+    n_frames : int
+        Frames (>= 2): lags ``0 ... n_frames - 1``.
+    blocks : int
+        Blocks of lines for the standard error (>= 2).
+    snr_db : float
+        Receiver SNR in dB (``inf``: no noise).
+    seed : int
+        Root seed (scene, motion and noise streams spawned from it).
+
+    Returns
+    -------
+    xarray.Dataset
+        Over ``(model, lag)``, ``model`` = ``brownian``, ``transverse_flow`` and ``lag`` in s:
+        ``g1`` (measured ``|g1|``), ``g1_se``, ``g1_theory``; over ``model``: ``diffusion``
+        (µm^2/s, NaN for flow) and ``velocity`` (µm/s, NaN for Brownian); attrs ``k0``
+        (rad/µm, in the medium), ``refractive_index``, ``waist`` (µm), ``snr_db``.
+
+    Examples
+    --------
+    >>> geo = dict(n_pixels=16, n_lines=8, pixel_size=4.0, k0_dk=10.0, waist=8.0,
+    ...            density=4.0, margin=2)
+    >>> ds = g1_curves(geo, diffusion=0.5, velocity=1000.0, interval=1e-3, n_frames=3,
+    ...                blocks=2, snr_db=30.0, seed=0)
+    >>> ds.g1.dims, ds.lag.attrs["units"]
+    (('model', 'lag'), 's')
+    """
+    g = _check_geometry(geometry)
+    d = check_real(diffusion, "diffusion", low=0)
+    v = check_real(velocity, "velocity", low=0)
+    dt = check_real(interval, "interval", low=0, low_inclusive=False)
+    nf = check_int(n_frames, "n_frames", low=2)
+    nb = check_int(blocks, "blocks", low=2, high=int(g["n_lines"]))
+    snr = _snr(snr_db)
+    sd = check_int(seed, "seed", low=0)
+    kw = _kw(g)
+    rows = _rows(g)
+    times = np.arange(nf) * dt
+    seeds = np.random.SeedSequence(sd).generate_state(4)
+    ph = _phantom(g, int(seeds[0]), v * dt * (nf - 1))
+    ph["signal"] = _signal_intensity(ph, g, kw)
+    k0 = float(ph["source"].attrs["k0"])
+    s = _signal_fraction(snr)
+    moved = {
+        "brownian": brownian_motion(ph["scene"], times, diffusion=d, seed=int(seeds[1])),
+        "transverse_flow": flow_motion(ph["scene"], times, velocity=[0.0, v]),
+    }
+    theory = {
+        "brownian": g1_brownian(
+            times, diffusion=d, k0=k0, spectrum=ph["source"], waist=g["waist"], lateral_axes=1
+        ),
+        "transverse_flow": g1_transverse_flow(times, velocity=v, waist=g["waist"]),
+    }
+    parts = []
+    for name, sc in moved.items():
+        series = _series(ph, sc, kw, snr, int(seeds[2]))
+        meas = g1(series.field.isel(depth=rows), blocks=nb)
+        th = np.where(np.arange(nf) == 0, 1.0, s * theory[name])
+        parts.append(
+            xr.Dataset(
+                {
+                    "g1": np.abs(meas.g1).assign_attrs(attrs("correlation", "measured |g1|")),
+                    "g1_se": meas.g1_se,
+                    "g1_theory": ("lag", th, attrs("correlation", "|g1| theory (with noise)")),
+                }
+            )
+        )
+    ds = xr.concat(parts, dim="model", coords="minimal", compat="override")
+    ds = ds.assign_coords(model=("model", list(moved)))
+    ds["diffusion"] = ("model", [d, np.nan], attrs("diffusion", "diffusion coefficient D"))
+    ds["velocity"] = ("model", [np.nan, v], attrs("velocity", "transverse flow velocity"))
+    meta = _meta(g, nf, (1, 1), 1, sd)
+    for key in ("window", "repeats", "motion", "contrasts"):
+        meta.pop(key)
+    return ds.assign_attrs(
+        meta
+        | {
+            "k0": k0,
+            "refractive_index": 1.0,
+            "interval": dt,
+            "interval_units": units_of("time"),
+            "snr_db": snr,
+            "blocks": nb,
+            "signal_fraction": s,
+        }
+    )
+
+
+def phantom_series(
+    geometry: dict,
+    phantom: dict,
+    *,
+    snr_db: float,
+    seed: int,
+) -> xr.Dataset:
+    """A phantom imaged as an angiography protocol and as a dynamic-OCT series, with contrasts.
+
+    Static layer 1 (``z < interface``) holding a disc of Brownian "cells", static layer 2 below
+    holding a vessel (a band of half-width ``radius`` about ``depth``) with Poiseuille flow
+    along ``+x``. The angiography protocol images ``angiography.frames`` snapshot B-scans
+    ``angiography.interval`` s apart and computes speckle variance (over the mean intensity
+    squared of each pixel's series pooled in the window), SSADA and LIV; the dOCT series images
+    ``doct.frames`` B-scans ``doct.interval`` s apart and computes LIV and OCDS (delays
+    ``doct.delays``). Receiver noise at ``snr_db`` over the mean signal intensity.
+
+    Parameters
+    ----------
+    geometry : dict
+        As in :func:`flow_failure` (``n_lines`` lines of pitch ``pixel_size``).
+    phantom : dict
+        ``interface`` (µm), ``backscatter`` (two layers), ``cells`` (``centre`` (z, x) µm,
+        ``radius`` µm, ``diffusion`` µm^2/s, ``fraction`` moving), ``vessel`` (``depth``,
+        ``radius`` µm, ``peak_velocity`` µm/s), ``angiography`` and ``doct`` (``frames``,
+        ``interval`` s; dOCT ``delays`` (s, s)), ``window`` (pixels, lines), ``n_bands``
+        (SSADA sub-bands).
+    snr_db : float
+        Receiver SNR in dB.
+    seed : int
+        Root seed.
+
+    Returns
+    -------
+    xarray.Dataset
+        The contrast images over ``(depth, x)``: ``labels``, ``structure`` (dB re the mean
+        signal), ``speckle_variance``, ``ssada``, ``liv`` (angiography), ``liv_doct``,
+        ``ocds`` (dOCT), and over ``region`` each contrast's mean (``<name>_region``).
+    """
+    g = _check_geometry(geometry)
+    sd = check_int(seed, "seed", low=0)
+    snr = _snr(snr_db)
+    kw = _kw(g)
+    n, p = int(g["n_pixels"]), float(g["pixel_size"])
+    pitch = float(g.get("pitch", p))
+    w0 = float(g["waist"])
+    src = spectrum(n, n * p, k0_dk=float(g["k0_dk"]))
+    lines = np.arange(int(g["n_lines"])) * pitch
+    rho = cell_density(float(g["density"]), p, pitch)
+    cells, vessel = phantom["cells"], phantom["vessel"]
+    b1, b2 = (float(b) for b in phantom["backscatter"])
+    regions = make_regions(
+        layer(0.0, float(phantom["interface"]), density=rho, backscatter=b1),
+        layer(float(phantom["interface"]), n * p, density=rho, backscatter=b2),
+        circle(*cells["centre"], cells["radius"], density=rho, backscatter=b1),
+        layer(
+            float(vessel["depth"]) - float(vessel["radius"]),
+            float(vessel["depth"]) + float(vessel["radius"]),
+            density=rho,
+            backscatter=b2,
+        ),
+    )
+    seeds = np.random.SeedSequence(sd).generate_state(6)
+    reach = beam_reach(w0)
+    scene = shared_scene(
+        regions,
+        z_range=(0.0, n * p),
+        x_range=(lines[0] - reach, lines[-1] + reach + pitch),
+        seed=int(seeds[0]),
+        tile=float(g.get("tile", 64.0)),
+    )
+    ph = {"scene": scene, "source": src, "lines": lines, "waist": w0}
+    truth = speckle_free_image(scene, src, waist=w0, x=lines, **kw)
+    ph["signal"] = float(truth.values.mean())
+    vel = poiseuille_velocity(
+        scene,
+        peak_velocity=float(vessel["peak_velocity"]),
+        radius=float(vessel["radius"]),
+        centre=(float(vessel["depth"]), 0.0),
+        direction=(0.0, 1.0),
+    )
+
+    def move(times: np.ndarray, key: int) -> xr.Dataset:
+        moved = brownian_motion(
+            scene,
+            times,
+            diffusion=float(cells["diffusion"]),
+            seed=int(seeds[key]),
+            regions=[2],
+            fraction=float(cells.get("fraction", 1.0)),
+        )
+        return flow_motion(moved, times, velocity=vel, regions=[3])
+
+    an, dc = phantom["angiography"], phantom["doct"]
+    window = tuple(int(w) for w in phantom["window"])
+    t_an = np.arange(int(an["frames"])) * float(an["interval"])
+    t_dc = np.arange(int(dc["frames"])) * float(dc["interval"])
+    angio = _series(ph, move(t_an, 1), kw, snr, int(seeds[3]))
+    doct = _series(ph, move(t_dc, 2), kw, snr, int(seeds[4]))
+    mean_i = angio.intensity.mean("time")
+    sv = speckle_variance(angio, window=window) / (
+        mean_i.rolling(depth=window[0], x=window[1], center=True, min_periods=1).mean() ** 2
+    )
+    labels = _labels(regions, src, lines)
+    out = xr.Dataset(
+        {
+            "labels": labels,
+            "structure": (10 * np.log10(mean_i / ph["signal"])).assign_attrs(
+                attrs("dimensionless", "mean intensity, dB re the mean signal")
+            ),
+            "speckle_variance": sv.assign_attrs(
+                attrs("dimensionless", "speckle variance over the local mean intensity squared")
+            ),
+            "ssada": ssada(angio, n_bands=int(phantom.get("n_bands", 4)), window=window),
+            "liv": liv(angio, window=window),
+            "liv_doct": liv(doct, window=window),
+            "ocds": ocds(doct, delays=tuple(float(t) for t in dc["delays"]), window=window),
+        }
+    )
+    out.attrs.update(
+        _meta(g, int(an["frames"]), window, 1, sd)
+        | {
+            "angiography_interval": float(an["interval"]),
+            "doct_frames": int(dc["frames"]),
+            "doct_interval": float(dc["interval"]),
+            "interval_units": units_of("time"),
+            "snr_db": snr,
+            "region_names": "layer 1, layer 2, cells (Brownian), vessel (Poiseuille flow)",
+        }
+    )
+    for key in ("motion", "contrasts", "repeats"):
+        out.attrs.pop(key)
+    names = ("speckle_variance", "ssada", "liv", "liv_doct", "ocds")
+    region = coord("region", np.arange(4))
+    for name in names:
+        means = [float(out[name].where(labels == r).mean()) for r in range(4)]
+        out[f"{name}_region"] = ("region", means, {**out[name].attrs})
+    out = out.assign_coords(region=region)
+    return out
+
+
+def _labels(regions: xr.Dataset, src: xr.DataArray, lines: np.ndarray) -> xr.DataArray:
+    """Region label of every pixel centre (depth, x)."""
+    depth = pixel_depths(int(src.attrs["n_pixels"]), float(src.attrs["depth_range"]))
+    zz, xx = np.meshgrid(depth, lines, indexing="ij")
+    lab = np.asarray(region_label(regions, zz, xx))
+    return xr.DataArray(
+        lab.astype(np.int32),
+        dims=("depth", "x"),
+        coords={"depth": coord("depth", depth), "x": coord("x", lines)},
+        attrs=attrs("label", "region label (0, 1 layers, 2 cells, 3 vessel)"),
     )

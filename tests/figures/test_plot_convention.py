@@ -13,6 +13,7 @@ MODULES = [
     "beam",
     "deformation",
     "despeckle",
+    "dynamics",
     "elastography",
     "histograms",
     "realism",

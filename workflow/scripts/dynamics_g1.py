@@ -1,0 +1,19 @@
+"""results/dynamics/g1: measured |g1| against lag for each motion model, with theory (thin)."""
+
+from speckle.figures import dynamics
+from speckle.io import to_netcdf
+from speckle.pipeline.outputs import save
+from speckle.pipeline.runner import run
+from speckle.provenance import provenance_attrs
+
+
+def main(snakemake) -> None:
+    cfg, seed = snakemake.params.dynamics, snakemake.params.seed
+    ds = dynamics.g1_data(cfg, seed)
+    ds.attrs.update(provenance_attrs(config={"dynamics": cfg}, seed=seed))
+    to_netcdf(ds, snakemake.output.data)
+    save(dynamics.plot_g1(ds), snakemake.output.figure)
+    print(f"wrote {snakemake.output.data} and {snakemake.output.figure}")
+
+
+run(main)
