@@ -219,6 +219,12 @@ class Fixtures:
         )
 
     @functools.cached_property
+    def series(self):
+        """A complex series (time, depth, aline) of 6 x 8 x 4 pixels (Gaussian speckle)."""
+        rng = np.random.default_rng(0)
+        return rng.normal(size=(6, 8, 4)) + 1j * rng.normal(size=(6, 8, 4))
+
+    @functools.cached_property
     def tmp(self):
         import tempfile
 
@@ -1244,6 +1250,76 @@ ENTRIES: dict[str, Entry] = {
     "expected_contrast": E(
         lambda: dict(contrast="liv", g1=[1.0, 0.5], snr_db=20.0), contrast="choice", g1="real_array"
     ),
+    "g1_array": E(
+        lambda: dict(field=F.series, lags=[1, 2]),
+        field="complex_image",
+        lags="real_array",
+        window="none",
+        why="window: tests/analysis/test_dynamics*",
+    ),
+    "g2_array": E(
+        lambda: dict(intensity=np.abs(F.series) ** 2, lags=[1, 2]),
+        lags="real_array",
+        window="none",
+        why="window: tests/analysis/test_dynamics*",
+    ),
+    "liv_array": E(
+        lambda: dict(intensity=np.abs(F.series) ** 2),
+        ddof="count0",
+        window="none",
+        why="window: tests/analysis/test_dynamics*",
+    ),
+    "speckle_variance_array": E(
+        lambda: dict(intensity=np.abs(F.series) ** 2),
+        ddof="count0",
+        window="none",
+        why="window: tests/analysis/test_dynamics*",
+    ),
+    "doppler_phase_array": E(
+        lambda: dict(field=F.series),
+        field="complex_image",
+        lag="count",
+        window="none",
+        why="window: tests/analysis/test_dynamics*",
+    ),
+    "ssada_array": E(
+        lambda: dict(amplitudes=np.abs(F.series)[None]),
+        amplitudes="image",
+        window="none",
+        why="window: tests/analysis/test_dynamics*",
+    ),
+    "ocds_array": E(
+        lambda: dict(
+            intensity=np.abs(F.series) ** 2, lags=[1, 2], interval=1e-3, delays=(1e-3, 2e-3)
+        ),
+        lags="real_array",
+        delays="none",
+        window="none",
+        why="delays, window: a pair, tests",
+    ),
+    "brownian_motion": E(
+        lambda: dict(scene=F.scene, times=[0.0, 1e-3], diffusion=1.0, seed=1),
+        times="real_array",
+        diffusion="nonnegative",
+        regions="none",
+        fraction="probability",
+        why="regions: labels, tests/scene",
+    ),
+    "moving_mask": E(
+        lambda: dict(scene=F.scene),
+        regions="none",
+        fraction="probability",
+        why="regions: labels, tests/scene",
+    ),
+    "velocity_range": E(
+        lambda: dict(
+            contrast="liv", n_frames=4, interval=1e-3, snr_db=20.0, waist=6.0, low=0.1, high=0.9
+        ),
+        contrast="choice",
+        n_frames="size",
+        low="real",
+        high="real",
+    ),
     # --- io ----------------------------------------------------------------------------------
     "to_netcdf": E(
         lambda: dict(ds=F.img, path=F.tmp / "out.nc"),
@@ -1270,25 +1346,18 @@ PENDING: dict[str, str] = {
     "ScannerConfig": "speckle.synthoct.files",
     "ballistic_motion": "speckle.scene.motion",
     "baseline_phantom": "speckle.synthoct.files",
-    "brownian_motion": "speckle.scene.motion",
     "bscan_series": "speckle.imaging.timeseries",
     "bulk_motion": "speckle.scene.motion",
     "contrast_estimates": "speckle.studies.dynamics",
     "decorrelation_calibration": "speckle.studies.dynamics",
     "doppler_phase": "speckle.analysis.dynamics",
-    "doppler_phase_array": "speckle.analysis.dynamics",
     "flow_failure": "speckle.studies.dynamics",
     "flow_motion": "speckle.scene.motion",
     "g1": "speckle.analysis.dynamics",
-    "g1_array": "speckle.analysis.dynamics",
     "g2": "speckle.analysis.dynamics",
-    "g2_array": "speckle.analysis.dynamics",
     "liv": "speckle.analysis.dynamics",
-    "liv_array": "speckle.analysis.dynamics",
     "mmode": "speckle.imaging.timeseries",
-    "moving_mask": "speckle.scene.motion",
     "ocds": "speckle.analysis.dynamics",
-    "ocds_array": "speckle.analysis.dynamics",
     "poiseuille_velocity": "speckle.scene.motion",
     "read_metrics_report": "speckle.synthoct.metrics",
     "read_phantom": "speckle.synthoct.files",
@@ -1296,13 +1365,10 @@ PENDING: dict[str, str] = {
     "read_scanner_config": "speckle.synthoct.files",
     "scan_kernel": "speckle.imaging.scan",
     "speckle_variance": "speckle.analysis.dynamics",
-    "speckle_variance_array": "speckle.analysis.dynamics",
     "ssada": "speckle.analysis.dynamics",
-    "ssada_array": "speckle.analysis.dynamics",
     "synthoct_maps": "speckle.synthoct.maps",
     "synthoct_metrics": "speckle.synthoct.metrics",
     "synthoct_scan": "speckle.synthoct.scanner",
-    "velocity_range": "speckle.studies.dynamics",
     "write_phantom": "speckle.synthoct.files",
     "write_scan": "speckle.synthoct.files",
     "write_scanner_config": "speckle.synthoct.files",
@@ -1310,6 +1376,13 @@ PENDING: dict[str, str] = {
 
 #: (function, parameter, bad value) -> why the call's answer is the right one.
 ANSWERS: dict[tuple[str, str, str], str] = {
+    ("velocity_range", "snr_db", "inf"): "no noise: the noise floor is the static one",
+    **{
+        (n, "intensity", "complex"): "a complex field is taken as its intensity |A|^2 "
+        "(speckle.analysis.dynamics._series)"
+        for n in ("g2_array", "liv_array", "ocds_array", "speckle_variance_array")
+    },
+    ("ssada_array", "amplitudes", "complex"): "complex sub-band fields: |A| is used",
     ("interpolate_windows", "values", "nan"): "a NaN window (no answer) spreads only to the "
     "pixels whose interpolation uses it (docstring)",
     ("interpolate_windows", "depth", "empty"): "no pixel asked: an empty grid",

@@ -312,7 +312,10 @@ def ssada_array(amplitudes: object, *, window: object = None) -> np.ndarray:
     >>> float(ssada_array(np.ones((2, 3, 4))))
     0.0
     """
-    a = np.abs(np.asarray(amplitudes))
+    a = np.asarray(amplitudes)
+    if a.dtype.kind not in "fciu":
+        raise TypeError(f"amplitudes must be numbers (complex: |A| is used), got dtype {a.dtype}")
+    a = np.abs(a)
     if a.ndim < 2 or a.shape[1] < 2:
         raise ValueError(
             f"amplitudes must be (band, time, ...) with at least 2 frames, got {a.shape}"
