@@ -225,6 +225,19 @@ class Fixtures:
         return rng.normal(size=(6, 8, 4)) + 1j * rng.normal(size=(6, 8, 4))
 
     @functools.cached_property
+    def series_da(self):
+        """:attr:`series` as a DataArray (time, depth, aline) with coordinates."""
+        return xr.DataArray(
+            self.series,
+            dims=("time", "depth", "aline"),
+            coords={
+                "time": np.arange(6) * 1e-3,
+                "depth": np.arange(8) * 8.0,
+                "aline": np.arange(4) * 8.0,
+            },
+        )
+
+    @functools.cached_property
     def tmp(self):
         import tempfile
 
@@ -1320,6 +1333,66 @@ ENTRIES: dict[str, Entry] = {
         low="real",
         high="real",
     ),
+    "g1": E(
+        lambda: dict(images=F.series_da, lags=[1, 2]),
+        images="dataset",
+        lags="real_array",
+        blocks="count",
+        block_dim="dims",
+        window="none",
+        stride="count",
+        why="window: tests/analysis/test_dynamics*",
+    ),
+    "g2": E(
+        lambda: dict(images=F.series_da, lags=[1, 2]),
+        images="dataset",
+        lags="real_array",
+        window="none",
+        stride="count",
+        why="window: tests/analysis/test_dynamics*",
+    ),
+    "liv": E(
+        lambda: dict(images=F.series_da),
+        images="dataset",
+        ddof="count0",
+        window="none",
+        stride="count",
+        why="window: tests/analysis/test_dynamics*",
+    ),
+    "speckle_variance": E(
+        lambda: dict(images=F.series_da),
+        images="dataset",
+        ddof="count0",
+        window="none",
+        stride="count",
+        why="window: tests/analysis/test_dynamics*",
+    ),
+    "doppler_phase": E(
+        lambda: dict(images=F.series_da),
+        images="dataset",
+        lag="count",
+        window="none",
+        stride="count",
+        why="window: tests/analysis/test_dynamics*",
+    ),
+    "ssada": E(
+        lambda: dict(images=F.series_da, n_bands=2),
+        images="dataset",
+        n_bands="count",
+        band_window="choice",
+        overlap="probability",
+        window="none",
+        stride="count",
+        why="window: tests/analysis/test_dynamics*",
+    ),
+    "ocds": E(
+        lambda: dict(images=F.series_da, delays=(1e-3, 2e-3)),
+        images="dataset",
+        delays="none",
+        window="none",
+        stride="count",
+        why="delays, window: pairs, tests",
+    ),
     # --- io ----------------------------------------------------------------------------------
     "to_netcdf": E(
         lambda: dict(ds=F.img, path=F.tmp / "out.nc"),
@@ -1350,22 +1423,15 @@ PENDING: dict[str, str] = {
     "bulk_motion": "speckle.scene.motion",
     "contrast_estimates": "speckle.studies.dynamics",
     "decorrelation_calibration": "speckle.studies.dynamics",
-    "doppler_phase": "speckle.analysis.dynamics",
     "flow_failure": "speckle.studies.dynamics",
     "flow_motion": "speckle.scene.motion",
-    "g1": "speckle.analysis.dynamics",
-    "g2": "speckle.analysis.dynamics",
-    "liv": "speckle.analysis.dynamics",
     "mmode": "speckle.imaging.timeseries",
-    "ocds": "speckle.analysis.dynamics",
     "poiseuille_velocity": "speckle.scene.motion",
     "read_metrics_report": "speckle.synthoct.metrics",
     "read_phantom": "speckle.synthoct.files",
     "read_scan": "speckle.synthoct.files",
     "read_scanner_config": "speckle.synthoct.files",
     "scan_kernel": "speckle.imaging.scan",
-    "speckle_variance": "speckle.analysis.dynamics",
-    "ssada": "speckle.analysis.dynamics",
     "synthoct_maps": "speckle.synthoct.maps",
     "synthoct_metrics": "speckle.synthoct.metrics",
     "synthoct_scan": "speckle.synthoct.scanner",
