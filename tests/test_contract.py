@@ -238,6 +238,18 @@ class Fixtures:
         )
 
     @functools.cached_property
+    def sc_config(self):
+        return speckle.ScannerConfig(n_pixels=16, n_lines=8, x_max=96.0, n_scatterers=50)
+
+    @functools.cached_property
+    def sc_phantom(self):
+        return speckle.baseline_phantom("uniform", 1, config=self.sc_config)
+
+    @functools.cached_property
+    def sc_scan(self):
+        return speckle.synthoct_scan(self.sc_phantom, self.sc_config)
+
+    @functools.cached_property
     def tmp(self):
         import tempfile
 
@@ -361,7 +373,8 @@ KINDS = {
     "complex_image2": _array(real=False, partner=True),
     "dataset": _dataset,
     "mapping": lambda v: [("string", "x"), ("list", [1, 2])],
-    "path": lambda v: [("missing", "/no/such/file.npy"), ("number", 3)],
+    # a float: an int path is a file descriptor to open() (and closing it closed pytest's)
+    "path": lambda v: [("missing", "/no/such/file.npy"), ("number", 3.5)],
     "dims": lambda v: [("unknown", "no_such_dim"), ("number", 1)],
     "none": lambda v: [],
 }
@@ -1393,6 +1406,43 @@ ENTRIES: dict[str, Entry] = {
         stride="count",
         why="delays, window: pairs, tests",
     ),
+    # --- synthoct (merged from scanner/metrics) ------------------------------------------
+    "baseline_phantom": E(
+        lambda: dict(kind="uniform", seed=1, config=F.sc_config),
+        seed="none",
+        config="none",
+        why="seed: an int or 'A'/'B'; config: a ScannerConfig (tests/synthoct)",
+    ),
+    "synthoct_scan": E(
+        lambda: dict(phantom=F.sc_phantom, config=F.sc_config),
+        phantom="dataset",
+        config="none",
+        field="flag",
+        shadowing="choice",
+        noise="nonnegative",
+        tol="positive",
+        eps="positive",
+        nthreads="count",
+        why="config: a ScannerConfig",
+    ),
+    "read_scan": E(
+        lambda: dict(path=REPO / "speckle/data/synthoct/Scan_Exp1_Uniform_A.png"),
+        path="path",
+        config="none",
+        why="config: a ScannerConfig",
+    ),
+    "read_metrics_report": E(
+        lambda: dict(path=REPO / "speckle/data/synthoct/Final_Metrics_Report.csv"), path="path"
+    ),
+    "synthoct_maps": E(
+        lambda: dict(scan=F.sc_scan, window=4),
+        scan="image",
+        variant="choice",
+        images="flag",
+        pixel_size="positive_length",
+        window="count",
+        dynamic_range="positive",
+    ),
     # --- io ----------------------------------------------------------------------------------
     "to_netcdf": E(
         lambda: dict(ds=F.img, path=F.tmp / "out.nc"),
@@ -1418,7 +1468,6 @@ PENDING: dict[str, str] = {
     "phantom_series": "speckle.studies.dynamics",
     "ScannerConfig": "speckle.synthoct.files",
     "ballistic_motion": "speckle.scene.motion",
-    "baseline_phantom": "speckle.synthoct.files",
     "bscan_series": "speckle.imaging.timeseries",
     "bulk_motion": "speckle.scene.motion",
     "contrast_estimates": "speckle.studies.dynamics",
@@ -1427,14 +1476,10 @@ PENDING: dict[str, str] = {
     "flow_motion": "speckle.scene.motion",
     "mmode": "speckle.imaging.timeseries",
     "poiseuille_velocity": "speckle.scene.motion",
-    "read_metrics_report": "speckle.synthoct.metrics",
     "read_phantom": "speckle.synthoct.files",
-    "read_scan": "speckle.synthoct.files",
     "read_scanner_config": "speckle.synthoct.files",
     "scan_kernel": "speckle.imaging.scan",
-    "synthoct_maps": "speckle.synthoct.maps",
     "synthoct_metrics": "speckle.synthoct.metrics",
-    "synthoct_scan": "speckle.synthoct.scanner",
     "write_phantom": "speckle.synthoct.files",
     "write_scan": "speckle.synthoct.files",
     "write_scanner_config": "speckle.synthoct.files",
@@ -1554,6 +1599,10 @@ def _check_case(name: str, param: str, label: str, bad) -> str | None:
             if peak > HUGE_PEAK:
                 return f"refused after allocating {peak / 2**20:.0f} MiB"
         return None
+    except FileNotFoundError as err:
+        if label == "missing" and str(bad) in str(err):
+            return None  # a missing file: FileNotFoundError naming it is the right refusal
+        return f"raised FileNotFoundError: {err}"[:300]
     except Exception as err:
         return f"raised {type(err).__name__} (not ValueError/TypeError): {err}"[:300]
     finally:
