@@ -380,3 +380,14 @@ def test_lazy_frame_stacks_check_shape_options_at_the_call(opts, name):
     lazy = xr.DataArray(da.from_array(f, chunks=(1, 64, 8)), dims=("frame", "depth", "aline"))
     with pytest.raises(ValueError, match=name):
         speckle.accumulate_strain(lazy, k0=1.0, pixel_size=8.0, **opts)  # was at .compute()
+
+
+def test_metrics_report_refuses_a_file_descriptor():
+    """An int path was opened as a file descriptor and closed (it closed pytest's own)."""
+    import os
+    import tempfile
+
+    with tempfile.TemporaryFile() as f:
+        with pytest.raises(TypeError, match="path must be a file path"):
+            speckle.read_metrics_report(f.fileno())
+        os.fstat(f.fileno())  # still open
