@@ -250,6 +250,15 @@ class Fixtures:
         return speckle.synthoct_scan(self.sc_phantom, self.sc_config)
 
     @functools.cached_property
+    def sc_files(self):
+        """The scanner's INI, a phantom table and a scan PNG, written once."""
+        ini, txt, png = self.tmp / "c.ini", self.tmp / "p.txt", self.tmp / "s.png"
+        speckle.write_scanner_config(self.sc_config, ini)
+        speckle.write_phantom(self.sc_phantom, txt, config=self.sc_config)
+        speckle.write_scan(self.sc_scan, png)
+        return ini, txt, png
+
+    @functools.cached_property
     def tmp(self):
         import tempfile
 
@@ -1443,6 +1452,48 @@ ENTRIES: dict[str, Entry] = {
         window="count",
         dynamic_range="positive",
     ),
+    "ScannerConfig": E(
+        lambda: dict(n_pixels=16, n_lines=8, x_max=96.0, n_scatterers=50),
+        n_pixels="size",
+        pixel_size="positive_length",
+        wavelength="positive_length",
+        n_lines="size",
+        x_max="positive_length",
+        n_bscans="count",
+        y_max="nonnegative",
+        beam_radius="positive_length",
+        n_scatterers="size",
+        scan_filename="none",
+        scatterers_filename="none",
+        why="file names: free text",
+    ),
+    "write_scanner_config": E(
+        lambda: dict(config=F.sc_config, path=F.tmp / "w.ini"),
+        config="none",
+        path="none",
+        why="config: a ScannerConfig",
+    ),
+    "read_scanner_config": E(lambda: dict(path=F.sc_files[0]), path="path"),
+    "write_phantom": E(
+        lambda: dict(phantom=F.sc_phantom, path=F.tmp / "w.txt", config=F.sc_config),
+        phantom="dataset",
+        path="none",
+        config="none",
+        energy_scale="positive",
+        why="config: a ScannerConfig",
+    ),
+    "read_phantom": E(
+        lambda: dict(path=F.sc_files[1], config=F.sc_config),
+        path="path",
+        config="none",
+        why="config: a ScannerConfig",
+    ),
+    "write_scan": E(
+        lambda: dict(scan=F.sc_scan, path=F.tmp / "w.png"),
+        scan="image",
+        path="none",
+        why="path: any writable file",
+    ),
     # --- io ----------------------------------------------------------------------------------
     "to_netcdf": E(
         lambda: dict(ds=F.img, path=F.tmp / "out.nc"),
@@ -1466,7 +1517,6 @@ ENTRIES: dict[str, Entry] = {
 PENDING: dict[str, str] = {
     "g1_curves": "speckle.studies.dynamics",
     "phantom_series": "speckle.studies.dynamics",
-    "ScannerConfig": "speckle.synthoct.files",
     "ballistic_motion": "speckle.scene.motion",
     "bscan_series": "speckle.imaging.timeseries",
     "bulk_motion": "speckle.scene.motion",
@@ -1476,13 +1526,8 @@ PENDING: dict[str, str] = {
     "flow_motion": "speckle.scene.motion",
     "mmode": "speckle.imaging.timeseries",
     "poiseuille_velocity": "speckle.scene.motion",
-    "read_phantom": "speckle.synthoct.files",
-    "read_scanner_config": "speckle.synthoct.files",
     "scan_kernel": "speckle.imaging.scan",
     "synthoct_metrics": "speckle.synthoct.metrics",
-    "write_phantom": "speckle.synthoct.files",
-    "write_scan": "speckle.synthoct.files",
-    "write_scanner_config": "speckle.synthoct.files",
 }
 
 #: (function, parameter, bad value) -> why the call's answer is the right one.
