@@ -18,6 +18,9 @@ Every scheduler's file must hold the same numbers, bit for bit (asserted). Print
 time per frame, its ratio to the single B-scan, the ratio to the synchronous run, and the peak
 memory traced in this process (``tracemalloc``: the scene, the graph and what the local
 schedulers compute here; the workers of ``processes`` and of the cluster hold their own).
+FINUFFT runs on one thread per task (``NUMBA_NUM_THREADS=1``): its multi-threaded spreading
+sums in an order that changes from call to call (the threads scheduler then differed from the
+synchronous one in the last bits), and the parallelism compared here is Dask's.
 The machine may be shared: compare ratios, not seconds.
 """
 
@@ -29,6 +32,11 @@ import tempfile
 import time
 import tracemalloc
 from pathlib import Path
+
+# one thread inside FINUFFT (it takes numba's thread count): its multi-threaded spreading sums
+# in an order that varies, and the parallelism under test is Dask's; set before numba loads
+# (worker processes inherit it)
+os.environ["NUMBA_NUM_THREADS"] = "1"
 
 import numpy as np
 from _common import cpu_model

@@ -186,12 +186,17 @@ def plot_phantom(ds: xr.Dataset) -> Figure:
             im = ax.imshow(values, extent=extent, cmap=cmap, vmin=-0.5, vmax=3.5, aspect="equal")
             bar = fig.colorbar(im, ax=ax, shrink=0.8, ticks=range(4))
             bar.ax.set_yticklabels(["layer 1", "layer 2", "cells", "vessel"])
-        else:
-            kw = {} if name == "structure" else {"vmin": 0.0}
-            if name != "structure":
-                kw["vmax"] = float(np.nanpercentile(values, 99))
-            im = ax.imshow(values, extent=extent, cmap=cmap, aspect="equal", **kw)
+        elif name == "structure":
+            im = ax.imshow(values, extent=extent, cmap=cmap, aspect="equal")
             fig.colorbar(im, ax=ax, shrink=0.8, label=unit)
+        else:
+            # the two LIV panels share one scale and one colorbar (one quantity)
+            same = ("liv", "liv_doct") if name.startswith("liv") else (name,)
+            top = max(float(np.nanpercentile(ds[n].values, 99)) for n in same)
+            im = ax.imshow(values, extent=extent, cmap=cmap, aspect="equal", vmin=0.0, vmax=top)
+            if name != "liv":
+                shared = [axes.flat[k - 1], ax] if name == "liv_doct" else ax
+                fig.colorbar(im, ax=shared, shrink=0.8, label=unit)
         ax.set_title(title)
         ax.set_xlabel("x (µm)")
         ax.set_ylabel("depth (µm)")
@@ -211,7 +216,7 @@ def plot_phantom(ds: xr.Dataset) -> Figure:
     ax.set_xticks(idx, ["SV", "SSADA", "LIV", "LIV dOCT", "OCDS"], rotation=30)
     ax.set_ylabel("region mean / static layers' mean")
     ax.set_title("contrast of each moving region")
-    ax.legend(loc="upper left", frameon=False)
+    ax.legend(loc="center left", bbox_to_anchor=(1.0, 0.5), frameon=False)
     return fig
 
 
@@ -275,9 +280,10 @@ def plot_failure(ds: xr.Dataset) -> Figure:
         vhi = float(sel.v_high.isel(snr_db=ks, interval=ji))
         if math.isfinite(vlo) and math.isfinite(vhi):
             ax.axvspan(vlo / 1000, vhi / 1000, color=STATUS[1][0], alpha=0.2, lw=0)
-        ax.set_xscale(
-            "symlog", linthresh=max(_mm(vel[vel > 0]).min(), 1e-6) if np.any(vel > 0) else 1
-        )
+        positive = _mm(vel[vel > 0])
+        if positive.size:
+            ax.set_xscale("symlog", linthresh=float(positive.min()))
+        ax.set_xlim(0.0, float(_mm(vel).max()) * 1.3 if vel.max() > 0 else 1.0)
         ax.set_xlabel("velocity (mm/s)")
         ax.set_ylabel(unit)
         ax.set_title(f"{words}, {dt_ms:g} ms between frames")

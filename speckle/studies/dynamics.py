@@ -884,6 +884,19 @@ def phantom_series(
         The contrast images over ``(depth, x)``: ``labels``, ``structure`` (dB re the mean
         signal), ``speckle_variance``, ``ssada``, ``liv`` (angiography), ``liv_doct``,
         ``ocds`` (dOCT), and over ``region`` each contrast's mean (``<name>_region``).
+
+    Examples
+    --------
+    >>> geo = dict(n_pixels=16, n_lines=8, pixel_size=4.0, k0_dk=10.0, waist=8.0,
+    ...            density=4.0, method="direct")
+    >>> ph = dict(interface=24.0, backscatter=[1.0, 2.0],
+    ...           cells=dict(centre=[12.0, 16.0], radius=6.0, diffusion=0.5),
+    ...           vessel=dict(depth=44.0, radius=8.0, peak_velocity=2000.0),
+    ...           angiography=dict(frames=3, interval=2e-3),
+    ...           doct=dict(frames=4, interval=4e-3, delays=[4e-3, 8e-3]),
+    ...           window=[3, 3], n_bands=2)
+    >>> phantom_series(geo, ph, snr_db=30.0, seed=1).ssada.dims
+    ('depth', 'x')
     """
     g = _check_geometry(geometry)
     sd = check_int(seed, "seed", low=0)
