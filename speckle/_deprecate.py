@@ -20,7 +20,7 @@ __all__ = ["moved"]
 def moved(
     old: str,
     new: types.ModuleType | str,
-    names: Iterable[str],
+    names: Iterable[str] | None = None,
     renamed: Mapping[str, str] | None = None,
 ) -> Callable[[str], object]:
     """A module ``__getattr__`` resolving the moved ``names`` of ``old`` in ``new``, warning.
@@ -32,8 +32,9 @@ def moved(
     new : module or str
         The module the names now live in, or its name: imported when an old name is first
         used (for a name that moved to a later layer, which the old module may not import).
-    names : iterable of str
-        Names kept under the same spelling.
+    names : iterable of str, optional
+        Names kept under the same spelling; default the new module's ``__all__`` (read when
+        an attribute of the old module is first asked for).
     renamed : mapping, optional
         Old name -> new name, for names that were renamed while moving.
 
@@ -53,12 +54,16 @@ def moved(
     >>> value == math.pi, str(seen[0].message)
     (True, 'old.place.pi moved to math.pi; the old name will be removed in the next release')
     """
-    table = {**{n: n for n in names}, **dict(renamed or {})}
+
+    listed = None if names is None else {**{n: n for n in names}, **dict(renamed or {})}
 
     def __getattr__(name: str) -> object:
+        if (listed is not None and name not in listed) or name.startswith("__"):
+            raise AttributeError(f"module {old!r} has no attribute {name!r}")  # nothing imported
+        module = importlib.import_module(new) if isinstance(new, str) else new
+        table = listed or {**{n: n for n in module.__all__}, **dict(renamed or {})}
         if name not in table:
             raise AttributeError(f"module {old!r} has no attribute {name!r}")
-        module = importlib.import_module(new) if isinstance(new, str) else new
         target = f"{module.__name__}.{table[name]}"
         warnings.warn(
             f"{old}.{name} moved to {target}; the old name will be removed in the next release",

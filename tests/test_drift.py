@@ -54,10 +54,13 @@ def test_design_lists_every_module(module):
         m.group(1)
         for m in re.finditer(r"^\|\s*`([\w.]+)`\s*\|", DESIGN.read_text(), flags=re.MULTILINE)
     }
+    parts = module.split(".")
+    room = (
+        f"speckle.{parts[1]}" if len(parts) > 1 and (PACKAGE / parts[1]).is_dir() else "top level"
+    )
     assert module in rows, (
         f"docs/explanation/design.md has no row for {module}: add the row "
-        f"'| `{module}` | <the kind of code it holds> |' to the table of its room "
-        f"('{'.'.join(module.split('.')[:2])}')"
+        f"'| `{module}` | <the kind of code it holds> |' to the table of its room ({room})"
     )
 
 

@@ -248,10 +248,11 @@ PRIVATE_IMPORT = re.compile(
 )
 
 
-def _private_imports(path: Path):
+def _private_imports(path: Path, *, explained_ok: bool = True):
     """(line number, line) of imports of private speckle modules or names, unless explained.
 
-    An explained import carries a ``# private: <why>`` comment on its line or the line above.
+    An explained import carries a ``# private: <why>`` comment on its line or the line above
+    (accepted only with ``explained_ok``).
     """
     lines = path.read_text().splitlines()
     for i, line in enumerate(lines):
@@ -261,7 +262,7 @@ def _private_imports(path: Path):
         module = match.group(2) or match.group(4)
         names = [n.strip().split(" as ")[0] for n in (match.group(3) or "").strip("()").split(",")]
         private = any(_is_private(p) for p in module.split(".")) or any(map(_is_private, names))
-        explained = "# private:" in line or (i and "# private:" in lines[i - 1])
+        explained = explained_ok and ("# private:" in line or (i and "# private:" in lines[i - 1]))
         if private and not explained:
             yield i + 1, line.strip()
 
@@ -290,24 +291,12 @@ WORKFLOW = TESTS.parent / "workflow"
 WORKFLOW_FILES = sorted(
     [TESTS.parent / "Snakefile", *WORKFLOW.glob("rules/*.smk"), *WORKFLOW.glob("scripts/*.py")]
 )
-IMPORT_LINE = re.compile(
-    r"^\s*(?:from\s+(speckle[\w.]*)\s+import\s+([^#]+)|import\s+(speckle[\w.]*))"
-)
 
 
 @pytest.mark.parametrize("path", WORKFLOW_FILES, ids=lambda p: str(p.relative_to(TESTS.parent)))
 def test_workflow_uses_public_names_only(path):
     """The Snakefile, rule files and scripts import only public speckle modules and names."""
-    lines = path.read_text().splitlines()
-    found = []
-    for i, line in enumerate(lines):
-        match = IMPORT_LINE.match(line)
-        if not match:
-            continue
-        module = match.group(1) or match.group(3)
-        names = [n.strip().split(" as ")[0] for n in (match.group(2) or "").strip("() ").split(",")]
-        if any(_is_private(p) for p in module.split(".")) or any(map(_is_private, names)):
-            found.append((i + 1, line.strip()))
+    found = list(_private_imports(path, explained_ok=False))
     assert not found, f"private speckle names imported by the workflow: {found}"
 
 

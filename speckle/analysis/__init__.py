@@ -13,9 +13,10 @@ Doppler, speckle variance, SSADA, LIV, OCDS) and ``dynamics_theory`` their expec
 Names load on first use (SPEC 1, ``lazy_loader``).
 """
 
+from .._deprecate import moved
 from .._lazy import attach, functions_of
 
-__getattr__, __dir__, __all__ = attach(
+_lazy_getattr, __dir__, __all__ = attach(
     __name__,
     {
         "compounding": functions_of(__name__, "compounding"),
@@ -51,3 +52,24 @@ __getattr__, __dir__, __all__ = attach(
         "tracking": ["TRACK_METHODS", *functions_of(__name__, "tracking")],
     },
 )
+#: Names that moved to :mod:`speckle.studies` (issue 32): they warn for a release.
+_moved = moved(
+    __name__,
+    "speckle.studies",
+    [
+        "SystemFit",
+        "angular_looks",
+        "fit_system",
+        "polarization_looks",
+        "spatial_looks",
+        "temporal_looks",
+    ],
+)
+
+
+def __getattr__(name: str):
+    """Lazy public names; the twin's old names warn (``FutureWarning``) and resolve."""
+    try:
+        return _lazy_getattr(name)
+    except AttributeError:
+        return _moved(name)

@@ -6,14 +6,4 @@ name is used.
 
 from .._deprecate import moved
 
-__getattr__ = moved(
-    __name__,
-    "speckle.studies.failure",
-    [
-        "mean_and_se",
-        "method_options",
-        "predicted_tracking_quantization",
-        "predicted_vector_floor",
-        "strain_scores",
-    ],
-)
+__getattr__ = moved(__name__, "speckle.studies.failure")

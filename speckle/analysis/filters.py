@@ -41,9 +41,9 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 import scipy.ndimage as ndi
-import xarray as xr
 
 from .._validate import as_finite_array, check_bool, check_choice, check_int, check_real
+from .._wrap import preprocess_and_wrap
 
 __all__ = ["DOMAINS", "FILTERS", "despeckle", "filter_available", "frost", "kuan", "lee"]
 
@@ -278,6 +278,9 @@ def check_filter(name: str, params: Mapping | None = None, domain: str = "linear
     return {k: allowed[k](v, k) for k, v in params.items()}
 
 
+@preprocess_and_wrap(
+    arrays=["intensity"], wrap_like="intensity", attrs_from={"filter": "name", "domain": "domain"}
+)
 def despeckle(
     intensity: object, name: str, params: Mapping | None = None, *, domain: str = "linear"
 ) -> object:
@@ -313,23 +316,15 @@ def despeckle(
             "filter 'bm3d' needs the optional package: pip install bm3d "
             "(licence: non-commercial use only)"
         )
-    a = as_finite_array(
-        intensity.values if isinstance(intensity, xr.DataArray) else intensity, "intensity"
-    )
+    a = as_finite_array(intensity, "intensity")
     if a.ndim != 2 or min(a.shape) < 2:
         raise ValueError(f"intensity must be a 2-D image of at least 2 x 2 pixels, got {a.shape}")
     if np.any(a < 0):
         raise ValueError("intensity must be non-negative")
     log = domain == "log"
     if a.max() == 0:  # no signal: every filter keeps an all-zero image (no log of it exists)
-        out = np.zeros_like(a)
-        if isinstance(intensity, xr.DataArray):
-            return intensity.copy(data=out).assign_attrs(filter=name, domain=domain)
-        return out
+        return np.zeros_like(a)
     floor = a.max() * 1e-10  # 100 dB below the maximum
     data = 10 * np.log10(np.maximum(a, floor)) if log else a
     out = FILTERS[name][0](data, log=log, **p)
-    out = 10 ** (out / 10) if log else np.maximum(out, 0.0)
-    if isinstance(intensity, xr.DataArray):
-        return intensity.copy(data=out).assign_attrs(filter=name, domain=domain)
-    return out
+    return 10 ** (out / 10) if log else np.maximum(out, 0.0)  # labelled like intensity

@@ -6,15 +6,4 @@ name is used.
 
 from .._deprecate import moved
 
-__getattr__ = moved(
-    __name__,
-    "speckle.studies.realism",
-    [
-        "EFFECTS",
-        "NEEDED_INCREASE",
-        "effect_parameters",
-        "fit_parameters",
-        "image_statistics",
-        "realism_study",
-    ],
-)
+__getattr__ = moved(__name__, "speckle.studies.realism")

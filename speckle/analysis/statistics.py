@@ -48,6 +48,7 @@ import xarray as xr
 from scipy import stats
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
+from .._wrap import preprocess_and_wrap
 from ..conventions import attrs, inverse_units, labelled, units_of
 from ..scene.scatterers import AMPLITUDE_MODELS, COUNT_MODELS, amplitude_kurtosis
 from ..system.source import check_weights
@@ -328,6 +329,7 @@ def contrast_standard_error(
     return c, float(np.sqrt(var_c2) / (2.0 * c))
 
 
+@preprocess_and_wrap(arrays=["spectrum"])
 def spectrum_moments(n_pixels: int, spectrum: object | None = None) -> tuple[float, float]:
     """``(mu2, mu4)``: ``sum S_n^2`` and ``sum_s (S*S)_s^2`` (squared autoconvolution).
 
@@ -337,10 +339,17 @@ def spectrum_moments(n_pixels: int, spectrum: object | None = None) -> tuple[flo
     if spectrum is None:
         s = np.ones(n)
     else:
-        s = check_weights(spectrum.values if isinstance(spectrum, xr.DataArray) else spectrum, n)
+        s = check_weights(spectrum, n)
     return float(np.sum(s**2)), float(np.sum(np.convolve(s, s) ** 2))
 
 
+@preprocess_and_wrap(
+    arrays=["density", "spectrum"],
+    wrap_like="density",
+    name="contrast_theory",
+    quantity="contrast",
+    long_name="speckle contrast (theory)",
+)
 def contrast_theory(
     density: object,
     n_pixels: int,
@@ -372,9 +381,7 @@ def contrast_theory(
     n = check_int(n_pixels, "n_pixels", low=2)
     check_choice(amplitude, "amplitude", AMPLITUDE_MODELS)
     check_choice(count, "count", COUNT_MODELS)
-    rho = as_finite_array(
-        density.values if isinstance(density, xr.DataArray) else density, "density"
-    )
+    rho = as_finite_array(density, "density")
     if np.any(rho <= 0):
         raise ValueError("density must be > 0 scatterers per pixel")
     mu2, mu4 = spectrum_moments(n, spectrum)
@@ -389,11 +396,4 @@ def contrast_theory(
         c2 = 1.0 + (kappa * mu4 / mu2**2 - 2.0) / m
     else:
         c2 = 1.0 + kappa * mu4 / (rho * n * mu2**2)
-    c = np.sqrt(c2)
-    if isinstance(density, xr.DataArray):
-        return (
-            density.copy(data=c)
-            .rename("contrast_theory")
-            .assign_attrs(attrs("contrast", "speckle contrast (theory)"))
-        )
-    return float(c) if np.ndim(c) == 0 else c
+    return np.sqrt(c2)  # labelled like density (preprocess_and_wrap)

@@ -6,13 +6,4 @@ name is used.
 
 from .._deprecate import moved
 
-__getattr__ = moved(
-    __name__,
-    "speckle.studies.twin",
-    [
-        "SPECTRUM_SHAPES",
-        "SystemFit",
-        "fit_system",
-        "rectangular_weights",
-    ],
-)
+__getattr__ = moved(__name__, "speckle.studies.twin")

@@ -6,15 +6,4 @@ imported only when an old name is used.
 
 from .._deprecate import moved
 
-__getattr__ = moved(
-    __name__,
-    "speckle.studies.speed",
-    [
-        "FAILURE_CASES",
-        "beam_speed_accuracy",
-        "failure_map",
-        "random_beam_scene",
-        "random_scene",
-        "speed_accuracy",
-    ],
-)
+__getattr__ = moved(__name__, "speckle.studies.speed")

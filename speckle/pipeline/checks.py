@@ -684,9 +684,12 @@ def _check_radii(geo: Mapping, radii) -> None:
             )
 
 
-def _check_spec(spec: Mapping, n: int, path: str, depth: float = 1.0) -> None:
-    """A failure method's parameters as the job takes them (``depth``: the phantom's depth
-    extent in µm, which bounds the temporal method's Brownian steps)."""
+def _check_spec(spec: Mapping, geo: Mapping, path: str) -> None:
+    """One failure-map method of the despeckle section, on the failure phantom ``geo``: a
+    temporal method's frames are drawn on a scene of the phantom's extent (depth
+    ``n_pixels x pixel_size``, width ``n_lines x pixel_size``, µm), whose bound on the step
+    between frames is the scene layer's (:data:`speckle.scene.motion.MAX_STEP_FRACTION`)."""
+    n = int(geo["n_pixels"])
     fam = spec["family"]
     if fam == "frequency":
         _key(
@@ -701,7 +704,15 @@ def _check_spec(spec: Mapping, n: int, path: str, depth: float = 1.0) -> None:
         _key(
             path,
             lambda: cp.brownian_frames(
-                xr.Dataset({"z": ("scatterer", [0.0, depth])}),
+                xr.Dataset(
+                    {"z": ("scatterer", [0.0]), "x": ("scatterer", [0.0])},
+                    attrs={
+                        "z_min": 0.0,
+                        "z_max": n * float(geo["pixel_size"]),
+                        "x_min": 0.0,
+                        "x_max": int(geo["n_lines"]) * float(geo["pixel_size"]),
+                    },
+                ),
                 spec["frames"],
                 diffusion=spec["diffusion"],
                 interval=spec["interval"],
@@ -752,8 +763,7 @@ def check_despeckle(cfg: Mapping) -> None:
         for p in parameter_grid(params):
             _key(f"filters.{name}", lambda name=name, p=p: dsp.check_filter(name, p))
     for name, spec in cfg["failure"]["methods"].items():
-        depth = int(fgeo["n_pixels"]) * float(fgeo["pixel_size"])
-        _check_spec(spec, int(fgeo["n_pixels"]), f"failure.methods.{name}", depth)
+        _check_spec(spec, fgeo, f"failure.methods.{name}")
     fc = cfg["frequency_compounding"]
     for nl in fc["looks"]:
         _key("frequency_compounding.looks", lambda nl=nl: cp.subband_windows(fc["n_pixels"], nl))

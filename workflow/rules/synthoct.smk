@@ -36,7 +36,7 @@ if SYNTHOCT["scanner"]:
 
     rule synthoct_phantom:
         input:
-            code=package_code("speckle.synthoct.files", "speckle._workflow"),
+            code=package_code("speckle.synthoct.files", "speckle.pipeline.runner"),
         output:
             config=f"{RESULTS}/synthoct/phantoms/Configuration_{{phantom}}.ini",
             phantom=f"{RESULTS}/synthoct/phantoms/Scatterers_{{phantom}}.txt",
@@ -61,9 +61,9 @@ if SYNTHOCT["scanner"]:
         conda:
             "../envs/speckle.yaml"
         shell:
-            # speckle-scan (= python -m speckle.synthoct): the official argument order, one
-            # process per phantom as the challenge's orchestrator runs the exe
-            "python -m speckle.synthoct {input.config} {input.phantom} {output} > {log} 2>&1"
+            # the installed command, in the official argument order, one process per phantom
+            # as the challenge's orchestrator runs the exe
+            "speckle-scan {input.config} {input.phantom} {output} > {log} 2>&1"
 
 
 rule synthoct_self_consistency:
