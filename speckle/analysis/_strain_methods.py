@@ -25,6 +25,20 @@ METHODS = ("vector", "wls", "tracking", "correlation")
 DISPLACEMENT_METHODS = ("phase", "tracking")
 DEFAULT_METHOD = "vector"
 #: Default window (depth, aline) in pixels of each method.
+#: Tracking quality ``1 - registration error`` below which a tracked window has no answer
+#: (tracking and correlation methods): ``1 - sqrt(1 - rho^2)`` = 0.1 is a normalised peak
+#: correlation ``rho`` = 0.44. Measured (issue 36; 256 x 32 pixels, Gaussian spectrum, R = 10):
+#: unrelated scenes give at most 0.042 (99 % below 0.034); 2 % strain at least 0.13 (1st
+#: percentile), 1 % 0.37; at 4 % strain (0.02, as unrelated) the tracked strain is wrong.
+#: Narrower windows have a higher null (single A-line windows: 56 % of unrelated pixels pass
+#: 0.1): raise ``min_quality`` with them.
+TRACK_MIN_QUALITY = 0.1
+#: Local amplitude correlation (the correlation method's quality) below which it has no answer:
+#: unrelated scenes reach it by chance. Measured (issue 36; 256 x 32 pixels, R = 10, windows
+#: 32 x 8): unrelated scenes give correlations up to 0.26 (99 % below 0.17; 31 % of the pixels
+#: answered a median strain of 0.048 without this bound, 0.09 % with it); 3 % strain has median
+#: 0.37 (its median estimate moves from 0.0275 to 0.0268), 2 % 0.64 (unchanged).
+CORRELATION_MIN_QUALITY = 0.25
 DEFAULT_WINDOWS = {
     "vector": (32, 4),
     "wls": (32, 4),
@@ -41,10 +55,22 @@ OPTIONS = {
         "align": "auto",
     },
     "wls": {"lag": None, "max_bias": DEFAULT_MAX_BIAS, "min_quality": 0.5, "align": "auto"},
-    "tracking": {"track_window": 32, "step": 8, "upsample": 20, "oversample": 2},
+    "tracking": {
+        "track_window": 32,
+        "step": 8,
+        "upsample": 20,
+        "oversample": 2,
+        "min_quality": TRACK_MIN_QUALITY,
+    },
     # the correlation method tracks only to compensate: a smooth displacement, so coarser steps
     # do (step 16: same rms error as 8 on the benchmark pair, half the registrations)
-    "correlation": {"track_window": 32, "step": 16, "upsample": 20, "oversample": 2},
+    "correlation": {
+        "track_window": 32,
+        "step": 16,
+        "upsample": 20,
+        "oversample": 2,
+        "min_quality": CORRELATION_MIN_QUALITY,
+    },
 }
 #: Tracking that aligns the pair for the phase methods (``align``): window (depth, aline)
 #: pixels, step (depth, aline) pixels; the displacement field is smooth, so coarse steps do.
@@ -394,6 +420,17 @@ def _tracked(a1, a2, window, step, upsample, oversample, lateral=True, outside="
     return out[0], out[1], tr
 
 
+def _check_shape_options(opts: dict, n: int) -> None:
+    """Options whose range depends on the image's ``n`` depth pixels (``lag``,
+    ``track_window``, ``step``), checked as the methods will (:func:`_lag`,
+    :func:`_track_options`) but up front: a lazy frame stack would meet them at ``compute``."""
+    if opts.get("lag") is not None:
+        check_int(opts["lag"], "lag", low=1, high=n - 2)
+    if "track_window" in opts:
+        tw = check_int(opts["track_window"], "track_window", low=4, high=n)
+        check_int(opts["step"], "step", low=1, high=tw)
+
+
 def _track_options(a1, wx, opts):
     tw = check_int(opts["track_window"], "track_window", low=4, high=a1.shape[0])
     step = check_int(opts["step"], "step", low=1, high=tw)
@@ -411,6 +448,7 @@ def _track_options(a1, wx, opts):
 def _tracking(a1, a2, k0, p, wz, wx, opts):
     kw = _track_options(a1, wx, opts)
     uz, quality, _ = _tracked(a1, a2, **kw)
+    uz = np.where(quality >= opts["min_quality"], uz, np.nan)  # no answer below the threshold
     strain = -_pooled_slope(uz, None, wz, 1)
     return strain, quality, {"track_window": kw["window"][0]}
 
@@ -551,7 +589,7 @@ def _correlation(a1, a2, k0, p, wz, wx, opts):
     r = correlation_array(np.abs(a1), np.abs(comp), (wz, wx))
     ts, tv = (x[::-1] for x in correlation_theory(_measured_spectrum(a1, k0, p)))
     strain = np.interp(r, tv, ts, left=np.nan, right=0.0)
-    strain = np.where(covered & np.isfinite(r), strain, np.nan)
+    strain = np.where(covered & np.isfinite(r) & (r >= opts["min_quality"]), strain, np.nan)
     return strain, r, {"theory_min_correlation": float(tv[0])}
 
 

@@ -271,6 +271,8 @@ def frequency_looks(img: xr.Dataset | xr.DataArray, windows: object) -> xr.DataA
         raise ValueError(
             f"windows must have shape (looks, {n}) for an image of {n} depth pixels, got {w.shape}"
         )
+    if np.any(w < 0):
+        raise ValueError("windows must be non-negative spectral weights (subband_windows)")
     idx = np.arange(n) - n // 2  # spectral index n of sample position 0 ... N-1
     wrapped = np.zeros_like(w)
     wrapped[:, idx % n] = w  # window on the FFT's bin order
@@ -369,7 +371,10 @@ def brownian_g1(tau: object, diffusion: float, k0: float) -> np.ndarray:
     ``tau`` in s (>= 0), ``diffusion`` ``D`` in µm^2/s (>= 0); the one implementation is
     :func:`speckle.analysis.dynamics_theory.g1_brownian`.
     """
-    return g1_brownian(tau, diffusion=diffusion, k0=k0)
+    t = as_finite_array(tau, "tau")  # named as here (g1_brownian calls it lag)
+    if np.any(t < 0):
+        raise ValueError("tau must be >= 0 (s)")
+    return g1_brownian(t, diffusion=diffusion, k0=k0)
 
 
 def brownian_frames(

@@ -43,7 +43,7 @@ import scipy.fft as sfft
 import xarray as xr
 from scipy import ndimage, special
 
-from .._validate import as_finite_array, check_choice, check_int, check_real
+from .._validate import as_finite_array, check_bool, check_choice, check_int, check_real
 from ..conventions import attrs, coord
 from ..system.source import index_shift_phase, spectral_index
 from ._common import field_of, grid_spacing, matched, parse_window, same_grid
@@ -325,6 +325,14 @@ def pearson(
     return r.assign_attrs(attrs("correlation", f"{kind} correlation coefficient", kind=kind))
 
 
+def _numeric(v: object, name: str) -> np.ndarray:
+    """``v`` as a numeric (real or complex) array; NaN allowed (it blanks its windows)."""
+    a = np.asarray(v)
+    if a.dtype.kind not in "fciu":
+        raise TypeError(f"{name} must be a numeric array, got dtype {a.dtype}")
+    return a
+
+
 def correlation_array(
     x: np.ndarray,
     y: np.ndarray,
@@ -352,7 +360,15 @@ def correlation_array(
         Coefficient at each window centre (pixel ``c`` holds the window starting at
         ``c - w//2``); NaN where the window does not fit or holds a NaN pixel of either array.
     """
-    wz, wx = window
+    x, y = (_numeric(v, n) for v, n in ((x, "x"), (y, "y")))
+    if x.shape != y.shape:
+        raise ValueError(f"x and y must have the same shape, got {x.shape} and {y.shape}")
+    if isinstance(window, str | bytes) or np.ndim(window) != 1 or len(window) != 2:
+        raise TypeError(f"window must be a pair (depth, aline) of pixel counts, got {window!r}")
+    wz, wx = (check_int(w, f"window[{i}]", low=1) for i, w in enumerate(window))
+    modulus = check_bool(modulus, "modulus")
+    if x.ndim < 2 or min(x.shape[axes[0]], x.shape[axes[1]]) < 1:
+        raise ValueError(f"x and y must hold a 2-D image along axes {axes}, got shape {x.shape}")
     size = [1] * x.ndim
     size[axes[0]], size[axes[1]] = wz, wx
     xv, yv = x, y

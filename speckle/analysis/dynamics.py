@@ -45,7 +45,7 @@ import numpy as np
 import scipy.ndimage as ndi
 import xarray as xr
 
-from .._validate import check_int, check_real
+from .._validate import check_choice, check_int, check_real
 from ..conventions import attrs, coord, spacing
 from ._common import delay_selection, parse_window
 from .compounding import frequency_looks, subband_windows
@@ -312,7 +312,10 @@ def ssada_array(amplitudes: object, *, window: object = None) -> np.ndarray:
     >>> float(ssada_array(np.ones((2, 3, 4))))
     0.0
     """
-    a = np.abs(np.asarray(amplitudes))
+    a = np.asarray(amplitudes)
+    if a.dtype.kind not in "fciu":
+        raise TypeError(f"amplitudes must be numbers (complex: |A| is used), got dtype {a.dtype}")
+    a = np.abs(a)
     if a.ndim < 2 or a.shape[1] < 2:
         raise ValueError(
             f"amplitudes must be (band, time, ...) with at least 2 frames, got {a.shape}"
@@ -397,7 +400,10 @@ def _timed(images: object, what: str, *, complex_: bool, uniform: bool, stride: 
             raise ValueError(f"{what} needs a 'field' variable (complex), got {list(images)}")
         images = images[name]
     if not isinstance(images, xr.DataArray):
-        raise TypeError(f"{what} takes an xarray DataArray or Dataset with a 'time' dim")
+        raise TypeError(
+            f"images must be an xarray DataArray or Dataset with a 'time' dim ({what}), got "
+            f"{type(images).__name__}"
+        )
     if "time" not in images.dims:
         raise ValueError(
             f"{what} needs images with a 'time' dim (s), got dims {images.dims}: image a moved "
@@ -706,6 +712,8 @@ def ssada(
     da, _ = _timed(images, "ssada", complex_=True, uniform=False, stride=stride)
     if "depth" not in da.dims:
         raise ValueError("ssada needs a 'depth' dim (the A-line, to split its spectrum)")
+    n_bands = check_int(n_bands, "n_bands", low=1)
+    check_choice(band_window, "band_window", ("rectangular", "gaussian", "hann"))
     w = subband_windows(da.sizes["depth"], n_bands, window=band_window, overlap=overlap)
     looks = frequency_looks(da, w)  # (look, time, ...)
     v = ssada_array(np.abs(looks.transpose("look", *da.dims).values), window=window)

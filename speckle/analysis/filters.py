@@ -42,7 +42,7 @@ from collections.abc import Callable, Mapping
 import numpy as np
 import scipy.ndimage as ndi
 
-from .._validate import check_choice, check_int, check_real
+from .._validate import as_finite_array, check_bool, check_choice, check_int, check_real
 from .._wrap import preprocess_and_wrap
 
 __all__ = ["DOMAINS", "FILTERS", "despeckle", "filter_available", "frost", "kuan", "lee"]
@@ -58,6 +58,22 @@ def _odd(value: object, name: str) -> int:
     if v % 2 == 0:
         raise ValueError(f"{name} must be an odd integer in [3, 31], got {v}")
     return v
+
+
+def _image(img: object, log: object) -> tuple[np.ndarray, bool]:
+    """The checked image of the local-statistics filters (2-D, real, finite; non-negative
+    intensities unless ``log``) and ``log`` as a bool (the front door's checks)."""
+    log = check_bool(log, "log")
+    a = as_finite_array(img, "img")
+    if a.ndim != 2 or min(a.shape) < 2:
+        raise ValueError(f"img must be a 2-D image of at least 2 x 2 pixels, got shape {a.shape}")
+    if not log and np.any(a < 0):
+        raise ValueError("img must hold non-negative intensities (or pass log=True for dB data)")
+    return a, log
+
+
+def _looks(value: object) -> float:
+    return check_real(value, "looks", low=0, high=1000, low_inclusive=False)
 
 
 def _local(img: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
@@ -77,16 +93,23 @@ def _noise_ratio(img: np.ndarray, m: np.ndarray, v: np.ndarray, looks: float, lo
 
 
 def lee(img: np.ndarray, *, size: int = 7, looks: float = 1.0, log: bool = False) -> np.ndarray:
-    """Lee filter: ``m + k (I - m)``, ``k = max(0, 1 - C_u^2/C_I^2)`` (see module docstring)."""
-    a = np.asarray(img, dtype=float)
+    """Lee filter: ``m + k (I - m)``, ``k = max(0, 1 - C_u^2/C_I^2)`` (see module docstring).
+
+    ``size``: odd window side in [3, 31] pixels; ``looks`` in (0, 1000]; ``img`` 2-D, finite,
+    non-negative unless ``log`` (the checks of :func:`despeckle`).
+    """
+    a, log = _image(img, log)
+    size, looks = _odd(size, "size"), _looks(looks)
     m, v = _local(a, size)
     k = np.clip(1.0 - _noise_ratio(a, m, v, looks, log), 0.0, 1.0)
     return m + k * (a - m)
 
 
 def kuan(img: np.ndarray, *, size: int = 7, looks: float = 1.0, log: bool = False) -> np.ndarray:
-    """Kuan filter: ``k = max(0, (1 - C_u^2/C_I^2)/(1 + C_u^2))`` (linear data)."""
-    a = np.asarray(img, dtype=float)
+    """Kuan filter: ``k = max(0, (1 - C_u^2/C_I^2)/(1 + C_u^2))`` (linear data); parameters
+    and checks as :func:`lee`."""
+    a, log = _image(img, log)
+    size, looks = _odd(size, "size"), _looks(looks)
     m, v = _local(a, size)
     cu2 = (LOG_SPECKLE_STD_DB**2 if log else 1.0) / looks
     denom = 1.0 if log else 1.0 + cu2
@@ -95,8 +118,13 @@ def kuan(img: np.ndarray, *, size: int = 7, looks: float = 1.0, log: bool = Fals
 
 
 def frost(img: np.ndarray, *, size: int = 7, damping: float = 2.0, log: bool = False) -> np.ndarray:
-    """Frost filter: weights ``exp(-damping C_I^2 |r|)`` over a ``size`` x ``size`` window."""
-    a = np.asarray(img, dtype=float)
+    """Frost filter: weights ``exp(-damping C_I^2 |r|)`` over a ``size`` x ``size`` window.
+
+    ``size``: odd in [3, 31]; ``damping`` in (0, 100]; ``img`` as :func:`lee`.
+    """
+    a, log = _image(img, log)
+    size = _odd(size, "size")
+    damping = check_real(damping, "damping", low=0, high=100, low_inclusive=False)
     m, v = _local(a, size)
     tiny = np.finfo(float).tiny
     ci2 = v / (LOG_SPECKLE_STD_DB**2) if log else v / np.maximum(m * m, tiny)
@@ -117,6 +145,8 @@ def _unit(a: np.ndarray) -> tuple[np.ndarray, float, float]:
 
 def _skimage(func: Callable[[np.ndarray], np.ndarray]) -> Callable[[np.ndarray], np.ndarray]:
     def run(a: np.ndarray) -> np.ndarray:
+        if np.ptp(a) == 0:
+            return a.copy()  # a constant image is every filter's fixed point
         u, lo, span = _unit(a)
         return lo + span * func(u)
 
@@ -286,14 +316,15 @@ def despeckle(
             "filter 'bm3d' needs the optional package: pip install bm3d "
             "(licence: non-commercial use only)"
         )
-    a = np.asarray(intensity)
-    if a.ndim != 2:
-        raise ValueError(f"intensity must be a 2-D image, got shape {a.shape}")
-    a = a.astype(float)
-    if not np.all(np.isfinite(a)) or np.any(a < 0):
-        raise ValueError("intensity must be finite and non-negative")
+    a = as_finite_array(intensity, "intensity")
+    if a.ndim != 2 or min(a.shape) < 2:
+        raise ValueError(f"intensity must be a 2-D image of at least 2 x 2 pixels, got {a.shape}")
+    if np.any(a < 0):
+        raise ValueError("intensity must be non-negative")
     log = domain == "log"
-    floor = a.max() * 1e-10 if a.max() > 0 else 1.0  # 100 dB below the maximum
+    if a.max() == 0:  # no signal: every filter keeps an all-zero image (no log of it exists)
+        return np.zeros_like(a)
+    floor = a.max() * 1e-10  # 100 dB below the maximum
     data = 10 * np.log10(np.maximum(a, floor)) if log else a
     out = FILTERS[name][0](data, log=log, **p)
     return 10 ** (out / 10) if log else np.maximum(out, 0.0)  # labelled like intensity

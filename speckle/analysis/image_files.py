@@ -145,13 +145,20 @@ def _read(path: Path, fmt: str, variable: str | None) -> np.ndarray | xr.DataArr
 
 def _axis_coord(da: xr.DataArray, dim: str, step: float | None, name: str) -> float:
     """The step of ``dim`` in µm: from ``step`` or from a µm coordinate in the file."""
-    if step is not None:
-        return check_real(step, name, low=0, low_inclusive=False)
+    given = None if step is None else check_real(step, name, low=0, low_inclusive=False)
     c = da.coords.get(dim)
     if c is not None and c.attrs.get("units") in ("um", "µm", "micrometre", "micrometer"):
         v = np.asarray(c.values, dtype=float)
         if v.size >= 2 and np.allclose(np.diff(v), v[1] - v[0], rtol=1e-9) and v[1] > v[0]:
-            return float(v[1] - v[0])
+            own = float(v[1] - v[0])
+            if given is not None and not np.isclose(given, own, rtol=1e-9, atol=0):
+                raise ValueError(
+                    f"{name} = {given:g} µm contradicts the file's {dim!r} coordinate (step "
+                    f"{own:g} µm); omit {name} to use the file's, or correct the file"
+                )
+            return own
+    if given is not None:
+        return given
     what = "axial pixel size" if dim == "depth" else "lateral A-line pitch"
     raise ValueError(
         f"{name} missing: the file gives no {dim!r} coordinate in um; pass {name}= the {what} "
@@ -235,7 +242,20 @@ def load_image(
         raise ValueError(
             f"path suffix {p.suffix!r} not readable; use one of {sorted(set(_SUFFIXES))}"
         )
-    raw = _read(p, fmt, variable)
+    try:
+        raw = _read(p, fmt, variable)
+    except Exception as exc:  # a truncated or corrupt file: name it, whatever the reader said
+        if isinstance(exc, ValueError | TypeError) and p.name in str(exc):
+            raise  # our own message (variable, compound arrays), naming the file already
+        raise ValueError(
+            f"path {str(p)!r} could not be read as a {fmt} image (truncated or corrupt?): "
+            f"{type(exc).__name__}: {exc}"
+        ) from exc
+    if np.size(raw) == 0:
+        raise ValueError(
+            f"image in {p.name} must have at least 2 x 2 pixels; it holds none (empty, or a "
+            f"{fmt} file the reader found no image in)"
+        )
     if isinstance(raw, xr.DataArray) and dims is None:
         if not set(raw.dims) <= set(IMAGE_DIMS) or not {"depth", "x"} <= set(raw.dims):
             raise ValueError(
@@ -267,6 +287,10 @@ def load_image(
     order = ("frame", "depth", "x") if "frame" in da.dims else ("depth", "x")
     data = np.asarray(da.transpose(*order).values)
     stored = data.dtype
+    if data.shape[-2] < 2 or data.shape[-1] < 2 or data.size == 0:
+        raise ValueError(
+            f"image in {p.name} must have at least 2 x 2 pixels, got {data.shape} {order}"
+        )
     _check_kind(data, kind)
     if not np.all(np.isfinite(data)):
         raise ValueError(f"image in {p.name} has NaN or infinite values; crop or fill them")

@@ -22,7 +22,7 @@ import numpy as np
 import scipy.optimize as opt
 import scipy.special as sp
 
-from .._validate import check_int, check_real
+from .._validate import as_finite_array, check_int, check_memory, check_real
 
 __all__ = [
     "EDGE_10_90",
@@ -42,11 +42,14 @@ __all__ = [
 EDGE_10_90 = 2 * float(sp.ndtri(0.9))
 
 
-def _masked(img: object, mask: object) -> np.ndarray:
-    a = np.asarray(img, dtype=float)
-    m = np.asarray(mask, dtype=bool)
+def _masked(img: object, mask: object, name: str = "intensity", mask_name: str = "mask"):
+    """The pixels of image ``img`` (real, finite; complex refused) selected by ``mask``."""
+    a = as_finite_array(img, name)
+    m = np.asarray(mask)
+    if m.dtype != bool:
+        raise TypeError(f"{mask_name} must be a boolean array, got dtype {m.dtype}")
     if m.shape != a.shape:
-        raise ValueError(f"mask shape {m.shape} differs from the image's {a.shape}")
+        raise ValueError(f"{mask_name} shape {m.shape} differs from {name}'s {a.shape}")
     if m.sum() < 2:
         raise ValueError("mask must select at least 2 pixels")
     return a[m]
@@ -72,8 +75,8 @@ def to_db(intensity: object, reference: float) -> np.ndarray:
 
 def cnr(image_db: object, mask_a: object, mask_b: object) -> float:
     """Contrast-to-noise ratio ``|m_a - m_b|/sqrt(v_a + v_b)`` of two regions of a dB image."""
-    a = _masked(image_db, mask_a)
-    b = _masked(image_db, mask_b)
+    a = _masked(image_db, mask_a, "image_db", "mask_a")
+    b = _masked(image_db, mask_b, "image_db", "mask_b")
     return float(abs(a.mean() - b.mean()) / np.sqrt(a.var() + b.var()))
 
 
@@ -81,22 +84,46 @@ def _window(db: np.ndarray, top: float, span: float) -> np.ndarray:
     return np.clip(db, top - span, top)
 
 
+def _db_pair(image_db, truth_db, db_top, db_range, min_side: int = 1):
+    """Both dB images checked (real, finite, same 2-D shape) and clipped to the window."""
+    top = check_real(db_top, "db_top")
+    span = check_real(db_range, "db_range", low=0, low_inclusive=False)
+    i = as_finite_array(image_db, "image_db")
+    t = as_finite_array(truth_db, "truth_db")
+    if i.shape != t.shape:
+        raise ValueError(f"image_db shape {i.shape} differs from truth_db's {t.shape}")
+    if i.ndim != 2 or min(i.shape) < min_side:
+        raise ValueError(
+            f"image_db and truth_db must be 2-D images of at least {min_side} x {min_side} "
+            f"pixels, got shape {i.shape}"
+        )
+    return _window(i, top, span), _window(t, top, span), span
+
+
 def psnr_db(image_db: object, truth_db: object, *, db_top: float = 10.0, db_range: float = 40.0):
-    """PSNR (dB) of a dB image against the truth's, both clipped to ``[top - range, top]``."""
+    """PSNR (dB) of a dB image against the truth's, both clipped to ``[top - range, top]``.
+
+    ``db_range`` > 0 (dB) is the displayed window and the PSNR's data range; infinite when the
+    clipped images are equal.
+    """
     from skimage.metrics import peak_signal_noise_ratio
 
-    t = _window(np.asarray(truth_db, float), db_top, db_range)
-    i = _window(np.asarray(image_db, float), db_top, db_range)
-    return float(peak_signal_noise_ratio(t, i, data_range=db_range))
+    i, t, span = _db_pair(image_db, truth_db, db_top, db_range)
+    with np.errstate(divide="ignore"):
+        return float(peak_signal_noise_ratio(t, i, data_range=span))
 
 
 def ssim_db(image_db: object, truth_db: object, *, db_top: float = 10.0, db_range: float = 40.0):
-    """SSIM of a dB image against the truth's, both clipped to ``[top - range, top]``."""
+    """SSIM of a dB image against the truth's, both clipped to ``[top - range, top]``.
+
+    The SSIM window is skimage's 7 x 7, or the largest odd size that fits an image smaller
+    than that (at least 3 x 3 pixels).
+    """
     from skimage.metrics import structural_similarity
 
-    t = _window(np.asarray(truth_db, float), db_top, db_range)
-    i = _window(np.asarray(image_db, float), db_top, db_range)
-    return float(structural_similarity(t, i, data_range=db_range))
+    i, t, span = _db_pair(image_db, truth_db, db_top, db_range, min_side=3)
+    side = min(7, min(i.shape))
+    return float(structural_similarity(t, i, data_range=span, win_size=side - (1 - side % 2)))
 
 
 def bandlimited(field: object, factor: int, axis: int = -1) -> np.ndarray:
@@ -107,9 +134,14 @@ def bandlimited(field: object, factor: int, axis: int = -1) -> np.ndarray:
     zero-padding them (keeping each at its own frequency ``n``) evaluates it at
     ``q = m/factor``, ``m = 0 ... factor N - 1``.
     """
-    f = np.moveaxis(np.asarray(field, dtype=np.complex128), axis, -1)
+    f = np.moveaxis(as_finite_array(field, "field", dtype=np.complex128), axis, -1)
     k = check_int(factor, "factor", low=1)
     n = f.shape[-1]
+    if n < 1:
+        raise ValueError(
+            f"field must hold at least 1 sample along axis {axis}, got shape {f.shape}"
+        )
+    check_memory(16.0 * k * f.size, "factor", "the interpolated field")
     g = np.fft.ifft(f, axis=-1)
     idx = np.arange(n) - n // 2
     big = np.zeros((*f.shape[:-1], k * n), dtype=np.complex128)
@@ -131,13 +163,20 @@ def peak_fwhm(profile: object, spacing: float = 1.0, *, background: float = 0.0)
     """FWHM of the highest peak of a profile (linear interpolation of the half-level crossings).
 
     The half level is ``background + (max - background)/2``; ``spacing`` is the sample step
-    (µm or pixels). NaN when a crossing lies outside the profile.
+    (µm or pixels). NaN when a crossing lies outside the profile. ``background`` must lie
+    below the maximum (``ValueError`` otherwise: there is no peak).
     """
-    y = np.asarray(profile, dtype=float)
+    y = as_finite_array(profile, "profile")
     if y.ndim != 1 or y.size < 3:
-        raise ValueError("profile must be 1-D with at least 3 samples")
+        raise ValueError(f"profile must be 1-D with at least 3 samples, got shape {y.shape}")
     dx = check_real(spacing, "spacing", low=0, low_inclusive=False)
+    background = check_real(background, "background")
     i = int(np.argmax(y))
+    if y[i] <= background:
+        raise ValueError(
+            f"background = {background:g} must be below the profile's maximum {y[i]:g} (no peak "
+            "rises above it)"
+        )
     level = background + (y[i] - background) / 2
     x = np.arange(y.size) * dx
     return _crossing(x, y, level, i, 1) - _crossing(x, y, level, i, -1)
@@ -147,11 +186,12 @@ def edge_width(profile: object, spacing: float = 1.0) -> float:
     """10-90 % width of a step edge: ``EDGE_10_90 * sigma`` of a fitted error-function step.
 
     ``profile`` is the edge profile averaged along the edge (``a + b Phi((x - x0)/sigma)``
-    is fitted by least squares, starting at the steepest point). NaN if the fit fails.
+    is fitted by least squares, starting at the steepest point). NaN, with a warning, where
+    there is no edge: a flat profile, a fit that fails or leaves the width undetermined.
     """
-    y = np.asarray(profile, dtype=float)
+    y = as_finite_array(profile, "profile")
     if y.ndim != 1 or y.size < 5:
-        raise ValueError("profile must be 1-D with at least 5 samples")
+        raise ValueError(f"profile must be 1-D with at least 5 samples, got shape {y.shape}")
     dx = check_real(spacing, "spacing", low=0, low_inclusive=False)
     x = np.arange(y.size) * dx
 
@@ -165,12 +205,22 @@ def edge_width(profile: object, spacing: float = 1.0) -> float:
 
     lo, hi = y[: y.size // 4].mean(), y[-(y.size // 4) :].mean()
     x0 = x[int(np.argmax(np.abs(np.gradient(y))))]
+    if np.ptp(y) == 0:
+        warnings.warn("edge_width: the profile is flat (no edge); returning NaN", stacklevel=2)
+        return np.nan
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", opt.OptimizeWarning)  # no covariance: not used
+        warnings.simplefilter("ignore", opt.OptimizeWarning)  # checked below
         try:
-            p, _ = opt.curve_fit(model, x, y, p0=[lo, hi - lo, x0, dx], jac=jac, maxfev=5000)
+            p, cov = opt.curve_fit(model, x, y, p0=[lo, hi - lo, x0, dx], jac=jac, maxfev=5000)
         except RuntimeError:
-            return np.nan
+            p, cov = None, None
+    if p is None or not np.isfinite(cov[3, 3]):
+        warnings.warn(
+            "edge_width: the step fit failed or left its width undetermined (no edge); "
+            "returning NaN",
+            stacklevel=2,
+        )
+        return np.nan
     return float(EDGE_10_90 * abs(p[3]))
 
 

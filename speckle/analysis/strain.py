@@ -40,6 +40,8 @@ Methods (``method=``)
     stepped by ``step`` pixels in depth and side by side in aline, interpolated to every pixel,
     then a least-squares gradient over the window (unit weights: closed form from two running
     sums). Serves supra-pixel displacements; its noise floor is set by the registration error.
+    Quality: ``1 - registration error``; NaN below ``min_quality`` (:data:`TRACK_MIN_QUALITY`,
+    0.1: unrelated images stay below it).
 ``"correlation"``
     Correlation stability: the deformed image is compensated with the tracked displacement
     (:func:`speckle.compensate`, no carrier; tracked every 16 px by default, the displacement
@@ -48,7 +50,8 @@ Methods (``method=``)
     the spectrum measured from the reference image (computed by
     :func:`speckle.analysis.expected_gamma`: the same integrals, one NUFFT for every strain)
     is inverted: returns the strain *magnitude*. Quality = the local correlation; NaN where it
-    is below the theory's range.
+    is below the theory's range or below ``min_quality`` (:data:`CORRELATION_MIN_QUALITY`,
+    0.25: unrelated images reach lower correlations by chance).
 
 Alignment (``align=``, vector and wls)
 -------------------------------------
@@ -80,12 +83,15 @@ from ._strain_methods import (
     _METHOD_FUNCS,
     ALIGN_TRACKING,
     AUTO_ALIGN_PIXELS,
+    CORRELATION_MIN_QUALITY,
     DEFAULT_METHOD,
     DEFAULT_WINDOWS,
     DISPLACEMENT_METHODS,
     METHODS,
+    TRACK_MIN_QUALITY,
     _as_images,
     _auto_aligned,
+    _check_shape_options,
     _check_window,
     _lag,
     _options,
@@ -99,10 +105,12 @@ from .phase import DEFAULT_MAX_BIAS
 __all__ = [
     "ALIGN_TRACKING",
     "AUTO_ALIGN_PIXELS",
+    "CORRELATION_MIN_QUALITY",
     "DEFAULT_METHOD",
     "DEFAULT_WINDOWS",
     "DISPLACEMENT_METHODS",
     "METHODS",
+    "TRACK_MIN_QUALITY",
     "accumulate_strain",
     "estimate_displacement",
     "estimate_strain",
@@ -183,9 +191,10 @@ def estimate_strain(
         Also return the quality map (correlation or phase coherence, 0-1).
     **options
         Method options (:data:`OPTIONS`): ``lag`` (pixels; default from the image's
-        autocorrelation), ``max_bias``, ``min_quality`` (NaN below it), ``align`` (True, False
-        or "auto", default), ``wrap_check`` (vector: multi-lag unwrapping); ``track_window``,
-        ``step``, ``upsample``, ``oversample`` (tracking, correlation).
+        autocorrelation), ``max_bias``, ``min_quality`` (NaN below it; every method),
+        ``align`` (True, False or "auto", default), ``wrap_check`` (vector: multi-lag
+        unwrapping); ``track_window``, ``step``, ``upsample``, ``oversample`` (tracking,
+        correlation).
 
     Returns
     -------
@@ -364,7 +373,8 @@ def estimate_displacement(
     _, wx = _check_window(window, (2, 1), a1.shape)
     if method == "tracking":
         opts = _options("tracking", options)
-        uz = _tracked(a1, a2, **_track_options(a1, wx, opts))[0] * p
+        uz, quality, _ = _tracked(a1, a2, **_track_options(a1, wx, opts))
+        uz = np.where(quality >= opts["min_quality"], uz, np.nan) * p  # no answer below it
     else:
         allowed = {"lag": None, "max_bias": DEFAULT_MAX_BIAS}
         unknown = set(options) - set(allowed)
@@ -558,7 +568,9 @@ def accumulate_strain(
         relative to frame 0 on frame 0's pixels) and ``position`` (pixel ``y_{i+1}`` of each
         frame-0 pixel in frame ``i+1``). The input's depth and aline coordinates are kept
         (else depth = pixel index times ``pixel_size``). The numbers do not depend on the
-        scheduler or the number of workers.
+        scheduler or the number of workers. Read the variables by key
+        (``result["cumulative"]``): ``result.cumulative`` is xarray's
+        :meth:`xarray.Dataset.cumulative` method, not the variable.
 
     Raises
     ------
@@ -572,7 +584,8 @@ def accumulate_strain(
     check_choice(method, "method", METHODS)
     n_frames, n, m = data.shape
     wz, wx = _check_window(window, DEFAULT_WINDOWS[method], (n, m))
-    _options(method, options)  # unknown or malformed options: refused before any work
+    opts = _options(method, options)  # unknown or malformed options: refused before any work
+    _check_shape_options(opts, n)  # and those bounded by the image, before a lazy graph
     _check_finite_frames(data)
     if path is not None and not isinstance(path, (str, bytes)) and not hasattr(path, "__fspath__"):
         raise TypeError(f"path must be a file path, got {type(path).__name__}")

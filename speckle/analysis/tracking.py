@@ -31,7 +31,14 @@ import scipy.fft as sfft
 import xarray as xr
 from skimage.registration import phase_cross_correlation
 
-from .._validate import check_choice, check_int, check_real
+from .._validate import (
+    as_finite_array,
+    check_bool,
+    check_choice,
+    check_int,
+    check_memory,
+    check_real,
+)
 from ..conventions import attrs, coord
 from ._common import field_of, grid_spacing, matched, parse_window
 from ._kernels import refine_shifts, window_moments
@@ -164,6 +171,13 @@ def _window_power(x: np.ndarray, count, size, step) -> np.ndarray:
     return np.maximum(s2 - s1 * s1 / (size[0] * size[1]), 0.0)
 
 
+def _check_upsample(up: int, nf: int, mx: int) -> None:
+    """The refinement tables' memory (``ceil(1.5 up)`` offsets x the depth frequencies ``nf``
+    and lateral ``mx``, complex and its real/imaginary copies) within the bound."""
+    region = float(np.ceil(1.5 * up))
+    check_memory(32.0 * region * (nf + mx), "upsample", "the sub-pixel refinement tables")
+
+
 def _table(f: np.ndarray, size: int, up: int) -> np.ndarray:
     """``exp(2i pi f (u - centre)/(up size))`` for the ``ceil(1.5 up)`` offsets ``u`` of the
     refinement region (centre ``region//2``): the factor shared by every window."""
@@ -249,6 +263,7 @@ def track_array(
     stz, stx = parse_window(step, "step", low=1)
     up = check_int(upsample, "upsample", low=1)
     ov = check_int(oversample, "oversample", low=1)
+    _check_upsample(up, wz * ov, wx)
     a, b, bad = _zero_bad(a, b)
     if method == "reference":  # today's path: per-sample trigonometric interpolation
         fine = np.arange(0, a.shape[0], 1 / ov)
@@ -330,6 +345,7 @@ def track_axial(
     stz, stx = parse_window(step, "step", low=1)
     up = check_int(upsample, "upsample", low=1)
     ov = check_int(oversample, "oversample", low=1)
+    _check_upsample(up, wz * ov, 1)
     if not isinstance(keep_samples, (bool, np.bool_)):
         raise TypeError(f"keep_samples must be True or False, got {keep_samples!r}")
     a, b, bad = _zero_bad(a, b)
@@ -608,11 +624,30 @@ def interpolate_windows(
         Shape ``(len(depth), len(aline))``.
     """
     check_choice(outside, "outside", ("linear", "nearest", "nan"))
-    v = np.asarray(values, float)
-    out = _interp_axis(v, np.asarray(centre_depth, float), np.asarray(depth, float), 0, outside)
+    v = np.asarray(values)
+    if v.dtype.kind not in "fiu":
+        raise TypeError(f"values must be real numbers (NaN allowed), got dtype {v.dtype}")
+    cz, cx = (
+        _axis(c, n) for c, n in ((centre_depth, "centre_depth"), (centre_aline, "centre_aline"))
+    )
+    z, x = as_finite_array(depth, "depth"), as_finite_array(aline, "aline")
+    if v.shape != (cz.size, cx.size):
+        raise ValueError(
+            f"values must have shape (centre_depth, centre_aline) = {(cz.size, cx.size)}, got "
+            f"{v.shape}"
+        )
+    out = _interp_axis(v.astype(float), cz, z, 0, outside)
     if v.shape[1] == 1:
-        return np.repeat(out, len(aline), axis=1)
-    return _interp_axis(out, np.asarray(centre_aline, float), np.asarray(aline, float), 1, outside)
+        return np.repeat(out, len(x), axis=1)
+    return _interp_axis(out, cx, x, 1, outside)
+
+
+def _axis(c: object, name: str) -> np.ndarray:
+    """Window centres: a finite, increasing 1-D array of at least one value."""
+    a = as_finite_array(c, name)
+    if a.ndim != 1 or a.size < 1 or np.any(np.diff(a) <= 0):
+        raise ValueError(f"{name} must be an increasing 1-D array of window centres, got {a}")
+    return a
 
 
 def _interp_axis(v: np.ndarray, xp: np.ndarray, x: np.ndarray, axis: int, outside: str):
@@ -654,6 +689,14 @@ def interpolate_displacement(
         ``uz`` (and ``ux``) over ``(depth, aline)``.
     """
     out = {}
+    if not isinstance(tracked, xr.Dataset) or "uz" not in tracked:
+        raise TypeError(
+            f"tracked must be the Dataset of speckle.track (variable 'uz'), got "
+            f"{type(tracked).__name__}"
+        )
+    if min(tracked["uz"].shape) < 1:
+        raise ValueError(f"tracked holds no window (sizes {dict(tracked.sizes)})")
+    axial_only = check_bool(axial_only, "axial_only")
     names = ("uz",) if axial_only else ("uz", "ux")
     for name in names:
         vals = tracked[name].transpose("depth", "aline").values

@@ -3,7 +3,8 @@
 Builders turn the pipeline's ``dynamics`` config section into the studies of
 :mod:`speckle.studies.dynamics` (``*_data(cfg, seed)``); ``plot_*`` draw them. Every target's
 geometry is ``dynamics.geometry`` with the target's own ``geometry`` keys over it.
-:func:`speckle.pipeline.checks.check_dynamics` refuses at load what the jobs would refuse.
+:func:`speckle.pipeline.dynamics_checks.check_dynamics_config` refuses at load what the jobs
+would refuse (the key named).
 """
 
 from __future__ import annotations
@@ -37,7 +38,7 @@ __all__ = [
     "plot_failure",
     "plot_g1",
     "plot_phantom",
-    "section_geometry",
+    "target_geometry",
 ]
 
 #: Words for the contrasts and their units (figure labels).
@@ -55,9 +56,9 @@ STATUS = (
 )
 
 
-def section_geometry(cfg: Mapping, part: str | None = None) -> dict:
-    """The ``geometry`` of the ``dynamics`` section, updated by ``part``'s own (``g1``,
-    ``failure``, ``calibration``), as keyword values."""
+def target_geometry(cfg: Mapping, part: str | None = None) -> dict:
+    """A target's geometry: ``dynamics.geometry`` with the target's own ``geometry`` keys
+    (``part``: ``"g1"``, ``"failure"``, ``"calibration"``; None: the phantom's) over it."""
     geo = dict(cfg["geometry"])
     if part is not None:
         geo.update(cfg[part].get("geometry") or {})
@@ -69,7 +70,7 @@ def g1_data(cfg: Mapping, seed: int) -> xr.Dataset:
     """``results/dynamics/g1.nc``: :func:`speckle.studies.dynamics.g1_curves` of the config."""
     g = cfg["g1"]
     return g1_curves(
-        section_geometry(cfg, "g1"),
+        target_geometry(cfg, "g1"),
         diffusion=g["diffusion"],
         velocity=g["velocity"],
         interval=g["interval"],
@@ -82,14 +83,14 @@ def g1_data(cfg: Mapping, seed: int) -> xr.Dataset:
 
 def phantom_data(cfg: Mapping, seed: int) -> xr.Dataset:
     """``results/dynamics/phantom.nc``: the phantom's angiography and dOCT contrasts."""
-    return phantom_series(section_geometry(cfg), cfg["phantom"], snr_db=cfg["snr_db"], seed=seed)
+    return phantom_series(target_geometry(cfg), cfg["phantom"], snr_db=cfg["snr_db"], seed=seed)
 
 
 def failure_data(cfg: Mapping, seed: int) -> xr.Dataset:
     """``results/dynamics/failure.nc``: :func:`speckle.studies.dynamics.flow_failure`."""
     f = cfg["failure"]
     return flow_failure(
-        section_geometry(cfg, "failure"),
+        target_geometry(cfg, "failure"),
         velocities=f["velocities"],
         snr_db=f["snr_db"],
         intervals=f["intervals"],
@@ -105,7 +106,7 @@ def calibration_data(cfg: Mapping, seed: int) -> xr.Dataset:
     """``results/dynamics/calibration.nc``: the decorrelation against velocity, its theory on
     a fine velocity grid (``theory_curve`` over ``velocity_fine``) and the two floors."""
     c = cfg["calibration"]
-    geo = section_geometry(cfg, "calibration")
+    geo = target_geometry(cfg, "calibration")
     ds = decorrelation_calibration(
         geo,
         velocities=c["velocities"],

@@ -438,12 +438,15 @@ def _estimate(method: str, scene: BeamScene, beam: Beam, tol: float, setup: _Set
                                fine_grid_size(n, w), w, precision, row)  # fmt: skip
         if sum(parts.values()) > memory_limit():
             return math.inf, math.inf
+        # the buckets grow with the beam's widest reach (a short Rayleigh range): their
+        # memory is written and read, a time the per-row model below does not see
+        reach_cost = 0.0 if row else BUCKET_NS_PER_BYTE * parts["buckets"]
     if method == "nufft":
         w = kernel_width(0.5 * tol)
         nf = fine_grid_size(n, w)
         if uses_row_path(beam, setup.grid, 0.5 * tol):
             return tol, _row_cost(setup, beam, m, nf, w, 0.5 * tol, per_cell=17.0, per_slot=0.36)
-        return tol, 8e5 + setup.n_rows * 40.0 * nf + m * 60.0 + slots * 1.2 * w
+        return tol, 8e5 + setup.n_rows * 40.0 * nf + m * 60.0 + slots * 1.2 * w + reach_cost
     if method == "nufft32":
         # float32 conversions cost per scatterer, narrower stores save per weight written
         # (measured: 10 % slower than "nufft" in 2-D at w0 = 2 pitches, 1.5x faster in 3-D;
@@ -461,9 +464,16 @@ def _estimate(method: str, scene: BeamScene, beam: Beam, tol: float, setup: _Set
         if uses_row_path(beam, setup.grid, 0.25 * tol):
             cost = _row_cost(setup, beam, m, nf, w, 0.25 * tol, per_cell=12.0, per_slot=0.28)
         else:
-            cost = 8e5 + setup.n_rows * 30.0 * nf + m * 130.0 + slots * 0.75 * w
+            cost = 8e5 + setup.n_rows * 30.0 * nf + m * 130.0 + slots * 0.75 * w + reach_cost
         return 0.5 * tol + rounding, cost
     raise ValueError(f"no error/cost model for beam method {method!r}")
+
+
+#: Time (ns) per byte of the general path's buckets (:func:`_peak_bytes`), measured (issue 36:
+#: 2000 scatterers, 64 lines, focus 10 µm, Rayleigh range 1 to 0.01 µm: 2.7 ns/byte as the
+#: buckets grew from 56 to 553 MiB, 0.22 to 1.56 s). Without it ``auto`` took ``nufft`` at any
+#: Rayleigh range, up to memory the machine did not have, where ``direct`` computed the image.
+BUCKET_NS_PER_BYTE = 2.5
 
 
 def _estimator(scene: BeamScene, beam: Beam, tol: float):

@@ -12,10 +12,11 @@ from collections.abc import Callable
 import numpy as np
 import xarray as xr
 
-from .._validate import check_choice
+from .._validate import check_choice, check_int, check_real
 from ..conventions import attrs, coord, depth_range_of, units_of
 from ..provenance import provenance_attrs
 from ..scene.scatterers import AMPLITUDE_MODELS
+from ..system.source import check_weights
 from ._rules import check_tol
 from .aline import METHODS, ascan, pixel_depths
 
@@ -35,8 +36,14 @@ def expected_intensity(
     ``2*k0*H`` is a multiple of ``2*pi`` (so that the mean field vanishes), and accurate to
     ``O(1/(k0 H))`` otherwise. ``spectrum=None`` means rectangular (``sum S^2 = N``).
     """
-    s2 = float(n_pixels) if spectrum is None else float(np.sum(np.asarray(spectrum) ** 2))
-    return density * n_pixels * mean_square_amplitude * s2
+    rho = check_real(density, "density", low=0.0)
+    n = check_int(n_pixels, "n_pixels", low=1)
+    a2 = check_real(mean_square_amplitude, "mean_square_amplitude", low=0.0)
+    if spectrum is None:
+        s2 = float(n)
+    else:
+        s2 = float(np.sum(check_weights(spectrum, n) ** 2))
+    return rho * n * a2 * s2
 
 
 def map_lines(

@@ -12,7 +12,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._validate import as_finite_array, check_int, check_real
+from .._validate import as_finite_array, broadcast, check_int, check_real
 from ..system.source import check_weights
 from ._rules import check_carrier_phase, check_tol
 
@@ -66,11 +66,16 @@ def beam_weight(
     arrays broadcast. Returns complex128.
     """
     w0 = check_real(waist, "waist", low=0, high=MAX_WAIST, low_inclusive=False)
-    r2 = np.asarray(dx, dtype=float) ** 2 + np.asarray(dy, dtype=float) ** 2
+    dxa, dya, za = (as_finite_array(v, n) for v, n in ((dx, "dx"), (dy, "dy"), (z, "z")))
+    broadcast(dx=dxa, dy=dya, z=za)  # mismatched shapes refused by name
+    r2 = dxa**2 + dya**2
     if focus is None:
-        return np.exp(-2.0 * r2 / w0**2) + 0j * np.asarray(z, dtype=float)
+        if rayleigh_range is not None:
+            raise ValueError("rayleigh_range needs a focus (focus=None: no focused beam)")
+        return np.exp(-2.0 * r2 / w0**2) + 0j * za
+    f = check_real(focus, "focus")
     zr = check_real(rayleigh_range, "rayleigh_range", low=0, low_inclusive=False)
-    g = Beam(w0, float(focus), zr).gamma(z)
+    g = Beam(w0, f, zr).gamma(za)
     return g**2 * np.exp(-2.0 * g * r2 / w0**2)
 
 

@@ -50,7 +50,9 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ._rules import NUFFT_TOL_FLOOR, choose, estimate_table, psf_slots, resolve_tol
+from .._validate import check_int, check_memory, check_real
+from ..system.source import check_weights
+from ._rules import NUFFT_TOL_FLOOR, check_tol, choose, estimate_table, psf_slots, resolve_tol
 from .nufft import FLOAT64_SHARE, fine_grid_size, float32_error_estimate, kernel_width
 from .psf import psf_error_estimate
 
@@ -102,9 +104,19 @@ def _estimator(
     tol: float | None,
     float64_error: float,
 ) -> tuple[float, Callable[[str], tuple[float, float]]]:
-    """``(tol, estimate)``: the resolved tol and ``estimate(method) -> (error, cost_ns)``."""
-    tolv = resolve_tol(tol)
-    s = np.ones(n_pixels) if spectrum is None else np.asarray(spectrum, dtype=float)
+    """``(tol, estimate)``: the resolved tol and ``estimate(method) -> (error, cost_ns)``.
+
+    The arguments are checked first (counts, the spectrum's ``n_pixels`` finite weights, tol
+    in (0, 1), ``float64_error`` >= 0 or inf), naming the bad one.
+    """
+    n_lines = check_int(n_lines, "n_lines", low=1)
+    n_scatterers = check_int(n_scatterers, "n_scatterers", low=0)
+    n_pixels = check_int(n_pixels, "n_pixels", low=1)
+    check_memory(8.0 * n_pixels, "n_pixels", "the spectrum's weights")
+    if float64_error != math.inf:  # inf: depths beyond float64 (no fast method admissible)
+        float64_error = check_real(float64_error, "float64_error", low=0.0)
+    tolv = resolve_tol(check_tol(tol))
+    s = np.ones(n_pixels) if spectrum is None else check_weights(spectrum, n_pixels)
 
     def estimate(name):
         return _estimate(name, n_lines, n_scatterers, n_pixels, s, tolv, float64_error)

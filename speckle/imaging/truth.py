@@ -31,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .._validate import check_real
+from .._validate import as_finite_array, check_int, check_real
 from ..conventions import attrs, coord, depth_range_of, units_of
 from ..provenance import provenance_attrs
 from ..system.source import check_weights, spectrum
@@ -89,9 +89,9 @@ def speckle_free_lines(
     numpy.ndarray
         Float64, shape ``(..., n_pixels)``: the speckle-free intensity (no normalisation).
     """
-    n = int(n_pixels)
+    n = check_int(n_pixels, "n_pixels", low=1)
     s = np.ones(n) if spectrum is None else check_weights(spectrum, n)
-    a2 = np.abs(np.asarray(amplitude)) ** 2
+    a2 = np.abs(as_finite_array(amplitude, "amplitude", dtype=complex)) ** 2
     out = ascan(
         z,
         a2,

@@ -43,12 +43,12 @@ from ..imaging.scan import beam_reach
 from ..scene.shared import MAX_TILES
 from ..synthoct.files import ScannerConfig
 from .adapters import system_from_config
-from .dynamics_checks import check_dynamics
+from .dynamics_checks import check_dynamics_config
 
 __all__ = [
     "check_config",
     "check_despeckle",
-    "check_dynamics",
+    "check_dynamics_config",
     "check_scan_table",
     "check_sections",
     "check_synthoct",
@@ -192,7 +192,7 @@ def check_config(config: Mapping, schema: Mapping | None = None) -> None:
         check_synthoct(config["synthoct"])
     if "dynamics" in config:
         dyn = config["dynamics"]
-        check_dynamics(dyn)
+        check_dynamics_config(dyn)
         for part in (None, "g1", "failure", "calibration"):
             own = (dyn[part].get("geometry") or {}) if part else {}
             geo = {**dyn["geometry"], **own}
@@ -238,6 +238,31 @@ def _elastography(el: Mapping) -> None:
     if "n_alines" in fc:
         densest = max([float(el["density"]), *(float(v) for v in fc.get("density", []))])
         _memory(figure_bytes(2, flines, fn, densest), "elastography.failure.n_alines")
+    # the sequences: the in-memory one holds its frames (twice) and four float64 result stacks,
+    # its scene populated for the total strain 1 - (1 - s)^(frames - 1) (below 1: the scene
+    # must exist); the large one builds the FE field on its lines, holds each frame's images,
+    # and its figure reads back the result's four stacks
+    if "sequence" in el:
+        sq = el["sequence"]
+        frames = int(sq["n_frames"])
+        total = 1.0 - (1.0 - float(sq["strain"])) ** (frames - 1)
+        if not total < 1.0:
+            raise ValueError(
+                f"config key elastography.sequence.n_frames = {frames}: the total strain "
+                f"1 - (1 - strain)^(n_frames - 1) reaches {total:g}, and a scene compressed by "
+                "1 has no depth; use fewer frames or a smaller strain"
+            )
+        scat = SCATTERER_BYTES * lines * max(1.0, float(el["density"]) * n) / (1.0 - total)
+        _memory(scat + 64.0 * frames * n * lines, "elastography.sequence.n_frames")
+    if "sequence_large" in el:
+        from ..scene.mechanics import fem_bytes
+
+        sl = el["sequence_large"]
+        slines = int(sl.get("n_alines", el.get("inclusion", {}).get("n_alines", lines)))
+        fe = fem_bytes((n + 1) * (slines + 1))  # a node per pixel corner (mesh = pixel)
+        _memory(fe + figure_bytes(4, slines, n, float(el["density"])),
+                "elastography.sequence_large.n_alines")  # fmt: skip
+        _memory(32.0 * int(sl["n_frames"]) * n * slines, "elastography.sequence_large.n_frames")
     for i, w in enumerate(el.get("speed", {}).get("windows", [])):
         if not 2 <= int(w) <= n:
             raise ValueError(
@@ -270,7 +295,19 @@ def _image_shape(cfg: Mapping) -> tuple[int, int]:
         )
     dims = cfg.get("dims")
     if str(path).endswith(".npy") and dims is not None:
-        shape = np.load(path, mmap_mode="r").shape
+        arr = np.load(path, mmap_mode="r")
+        shape = arr.shape
+        kind = cfg["kind"]
+        if (kind == "complex") != (arr.dtype.kind == "c"):
+            raise ValueError(
+                f"config key twin.kind = {kind!r} cannot describe {path} (dtype {arr.dtype}): "
+                "'complex' needs complex values, the other kinds real ones"
+            )
+        if kind in ("amplitude", "intensity") and arr.size and float(np.min(arr)) < 0:
+            raise ValueError(
+                f"config key twin.kind = {kind!r} cannot describe {path}: it holds negative "
+                "values (log-compressed data are kind 'log')"
+            )
         names = ["x" if d == "aline" else d for d in dims]
         if len(names) != len(shape):
             raise ValueError(
@@ -327,6 +364,18 @@ def check_twin(cfg: Mapping) -> None:
             f"config key twin.noise_rows = {rows} must hold 2 or more rows inside the image "
             f"(0..{nz})"
         )
+    lo, hi = region.get("depth") or [None, None]
+    lo, hi = (0 if lo is None else lo), (nz if hi is None else hi)
+    if rows is not None and rows[0] < hi and rows[1] > lo:
+        raise ValueError(
+            f"config key twin.noise_rows = {rows} overlap twin.region.depth = [{lo}, {hi}]: "
+            "signal-free rows must lie outside the fitted speckle"
+        )
+    if rows is not None and cfg.get("snr_db") is not None:
+        raise ValueError(
+            "config keys twin.noise_rows and twin.snr_db: give one, not both (the rows measure "
+            "the SNR that snr_db states)"
+        )
     fc = cfg["failure"]
     window = fc.get("window")
     if window is not None and (window[0] > fc["shape"][0] or window[1] > fc["shape"][1]):
@@ -334,6 +383,17 @@ def check_twin(cfg: Mapping) -> None:
             f"config key twin.failure.window = {window} does not fit in twin.failure.shape = "
             f"{fc['shape']}"
         )
+    if window is None:
+        from ..analysis.strain import DEFAULT_WINDOWS
+
+        for m in fc["methods"]:
+            wz, wx = DEFAULT_WINDOWS[m]
+            if wz > fc["shape"][0] or wx > fc["shape"][1]:
+                raise ValueError(
+                    f"config key twin.failure.shape = {fc['shape']} is smaller than method "
+                    f"{m!r}'s default window ({wz}, {wx}) (twin.failure.window is null); "
+                    "enlarge the shape or set twin.failure.window"
+                )
 
 
 def check_scan_table(rows: Sequence[Mapping], n_pixels: int) -> None:
@@ -610,6 +670,21 @@ def _check_geometry(geo: Mapping, path: str) -> None:
         )
 
 
+def _check_radii(geo: Mapping, radii) -> None:
+    """The failure sweep's inclusion radii (pixels) keep the inclusion inside layer 2 and the
+    lines of the failure phantom."""
+    n, nl, lr = int(geo["n_pixels"]), int(geo["n_lines"]), int(geo["layer_row"])
+    row, line = geo["inclusion"]["row"], geo["inclusion"]["line"]
+    room = min(row - lr, n - row, line + 1, nl - line)
+    for i, r in enumerate(radii):
+        if r >= room:
+            raise ValueError(
+                f"config key despeckle.failure.feature_radius[{i}] = {r} does not fit in the "
+                f"failure phantom: the inclusion at (row {row}, line {line}) must stay inside "
+                f"layer 2 (rows {lr}..{n}) and lines 0..{nl}; need radius < {room}"
+            )
+
+
 def _check_spec(spec: Mapping, geo: Mapping, path: str) -> None:
     """One failure-map method of the despeckle section, on the failure phantom ``geo``: a
     temporal method's frames are drawn on a scene of the phantom's extent (depth
@@ -657,8 +732,10 @@ def check_despeckle(cfg: Mapping) -> None:
     """
     geo = cfg["phantom"]
     _check_geometry(geo, "phantom")
+    _tol(geo["method"], geo.get("tol"), "despeckle.phantom.tol", int(geo["n_pixels"]), False)
     fgeo = {**geo, **cfg["failure"]["phantom"]}
     _check_geometry(fgeo, "failure.phantom")
+    _check_radii(fgeo, cfg["failure"]["feature_radius"])
     n = int(geo["n_pixels"])
     fr = cfg["physical"]["frequency"]
     for nl in fr["looks"]:

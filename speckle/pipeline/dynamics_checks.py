@@ -1,8 +1,6 @@
-"""The ``dynamics`` section's checks, run when the workflow loads (``ValueError`` naming the
-key): windows inside the images, axes in order, each frame's step within the scene layer's bound
-(:data:`speckle.scene.motion.MAX_STEP_FRACTION`), the phantom's regions inside their layers, the
-dOCT delays, and the memory each target would hold. :func:`speckle.pipeline.checks.check_config`
-calls :func:`check_dynamics`."""
+"""Load-time checks of the ``dynamics`` config section (moved from the figure module: figures
+only draw). :func:`check_dynamics_config` is called by :func:`speckle.pipeline.checks.check_config`.
+"""
 
 from __future__ import annotations
 
@@ -13,29 +11,30 @@ from collections.abc import Mapping
 import numpy as np
 
 from .._validate import MAX_BYTES
-from ..figures.dynamics import section_geometry
+from ..figures.dynamics import target_geometry
 from ..imaging.scan import beam_reach
 from ..scene.motion import MAX_STEP_FRACTION
 
-__all__ = ["check_dynamics"]
+__all__ = ["check_dynamics_config"]
 
 
-def _dyn_fail(key: str, message: str) -> None:
+# --------------------------------------------------------------------------- config checks
+def _fail(key: str, message: str) -> None:
     raise ValueError(f"config key dynamics.{key} {message}")
 
 
-def _dyn_check_geo(geo: Mapping, key: str) -> None:
+def _check_geo(geo: Mapping, key: str) -> None:
     n, m = int(geo["n_pixels"]), int(geo.get("margin", 4))
     if 2 * m >= n - 1:
-        _dyn_fail(f"{key}.margin", f"= {m} leaves fewer than 2 rows of {key}.n_pixels = {n}")
+        _fail(f"{key}.margin", f"= {m} leaves fewer than 2 rows of {key}.n_pixels = {n}")
 
 
-def _dyn_increasing(values, key: str) -> None:
+def _increasing(values, key: str) -> None:
     if any(b <= a for a, b in itertools.pairwise(values)):
-        _dyn_fail(key, f"= {list(values)} must increase strictly (times and axes in order)")
+        _fail(key, f"= {list(values)} must increase strictly (times and axes in order)")
 
 
-def _dyn_extent(geo: Mapping, shift: float = 0.0) -> tuple[float, float]:
+def _extent(geo: Mapping, shift: float = 0.0) -> tuple[float, float]:
     """Depth and lateral extent (µm) of a target's scene."""
     p = float(geo["pixel_size"])
     pitch = float(geo.get("pitch", p))
@@ -43,9 +42,9 @@ def _dyn_extent(geo: Mapping, shift: float = 0.0) -> tuple[float, float]:
     return int(geo["n_pixels"]) * p, span + shift
 
 
-def _dyn_step(step: float, extent: float, key: str, what: str) -> None:
+def _step(step: float, extent: float, key: str, what: str) -> None:
     if step > MAX_STEP_FRACTION * extent:
-        _dyn_fail(
+        _fail(
             key,
             f"moves scatterers by {step:g} µm between frames ({what}), beyond "
             f"{MAX_STEP_FRACTION:g} of the scene's {extent:g} µm extent "
@@ -53,11 +52,11 @@ def _dyn_step(step: float, extent: float, key: str, what: str) -> None:
         )
 
 
-def _dyn_memory(geo: Mapping, width: float, key: str, what: str) -> None:
+def _memory(geo: Mapping, width: float, key: str, what: str) -> None:
     """The scene a target draws (``width`` µm wide, to hold the flow) within MAX_BYTES."""
-    nbytes = _dyn_scene_bytes(geo, width)
+    nbytes = _scene_bytes(geo, width)
     if nbytes > MAX_BYTES:
-        _dyn_fail(
+        _fail(
             key,
             f": {what} needs a scene {width:.3g} µm wide whose scatterers would hold "
             f"~{nbytes / 2**30:.3g} GiB, above the {MAX_BYTES / 2**30:.3g} GiB limit "
@@ -65,13 +64,13 @@ def _dyn_memory(geo: Mapping, width: float, key: str, what: str) -> None:
         )
 
 
-def _dyn_scene_bytes(geo: Mapping, width: float) -> float:
+def _scene_bytes(geo: Mapping, width: float) -> float:
     cell = float(geo["pixel_size"]) * float(geo.get("pitch", geo["pixel_size"]))
     count = float(geo["density"]) / cell * int(geo["n_pixels"]) * float(geo["pixel_size"]) * width
     return 80.0 * 4 * count  # speckle.scene.shared.SCATTERER_BYTES
 
 
-def check_dynamics(cfg: Mapping) -> None:
+def check_dynamics_config(cfg: Mapping) -> None:
     """What the schema cannot say about the ``dynamics`` section (``ValueError`` naming it).
 
     Geometry: margins leave rows (``tol`` against the method's floor is checked by
@@ -82,43 +81,41 @@ def check_dynamics(cfg: Mapping) -> None:
     layer 2; the dOCT delay range holding at least two lags of the series; blocks of lines for
     the standard errors; the scenes within the memory limit.
     """
-    base = section_geometry(cfg)
-    _dyn_check_geo(base, "geometry")
+    base = target_geometry(cfg)
+    _check_geo(base, "geometry")
     # phantom
     ph = cfg["phantom"]
-    depth, _ = _dyn_extent(base)
+    depth, _ = _extent(base)
     width = int(base["n_lines"]) * float(base.get("pitch", base["pixel_size"]))
     iface = float(ph["interface"])
     if not 0 < iface < depth:
-        _dyn_fail(
-            "phantom.interface", f"= {iface:g} must lie inside the image depth (0, {depth:g}) µm"
-        )
+        _fail("phantom.interface", f"= {iface:g} must lie inside the image depth (0, {depth:g}) µm")
     cz, cx = (float(v) for v in ph["cells"]["centre"])
     r = float(ph["cells"]["radius"])
     if cz - r < 0 or cz + r > iface or cx - r < 0 or cx + r > width:
-        _dyn_fail(
+        _fail(
             "phantom.cells",
             f"(centre {[cz, cx]}, radius {r:g} µm) must lie inside layer 1 (depth 0 to "
             f"interface {iface:g} µm) and the image width (0 to {width:g} µm)",
         )
     vz, vr = float(ph["vessel"]["depth"]), float(ph["vessel"]["radius"])
     if vz - vr < iface or vz + vr > depth:
-        _dyn_fail(
+        _fail(
             "phantom.vessel",
             f"(depth {vz:g} ± radius {vr:g} µm) must lie inside layer 2 (interface {iface:g} "
             f"to {depth:g} µm)",
         )
-    _, ext_x = _dyn_extent(base)
+    _, ext_x = _extent(base)
     n_rows = int(base["n_pixels"])
     for part in ("angiography", "doct"):
         dt = float(ph[part]["interval"])
-        _dyn_step(
+        _step(
             float(ph["vessel"]["peak_velocity"]) * dt,
             ext_x,
             "phantom.vessel.peak_velocity",
             f"{part} interval {dt:g} s",
         )
-        _dyn_step(
+        _step(
             math.sqrt(2 * float(ph["cells"]["diffusion"]) * dt),
             min(depth, ext_x),
             "phantom.cells.diffusion",
@@ -126,7 +123,7 @@ def check_dynamics(cfg: Mapping) -> None:
         )
     wz, wx = (int(w) for w in ph["window"])
     if wz > n_rows or wx > int(base["n_lines"]):
-        _dyn_fail(
+        _fail(
             "phantom.window",
             f"= {[wz, wx]} does not fit in the image ({n_rows} x {base['n_lines']})",
         )
@@ -135,56 +132,54 @@ def check_dynamics(cfg: Mapping) -> None:
     d0, d1 = (float(t) for t in dc["delays"])
     inside = int(np.sum((lags >= d0 * (1 - 1e-9)) & (lags <= d1 * (1 + 1e-9))))
     if d1 <= d0 or inside < 2:
-        _dyn_fail(
+        _fail(
             "phantom.doct.delays",
             f"= {[d0, d1]} s must hold at least two lags of the dOCT series (multiples of "
             f"doct.interval = {dc['interval']:g} s up to {lags[-1]:g} s); it holds {inside}",
         )
     if int(ph.get("n_bands", 4)) > n_rows:
-        _dyn_fail("phantom.n_bands", f"= {ph['n_bands']} exceeds the {n_rows} spectral samples")
+        _fail("phantom.n_bands", f"= {ph['n_bands']} exceeds the {n_rows} spectral samples")
     # g1
     g = cfg["g1"]
-    geo = section_geometry(cfg, "g1")
-    _dyn_check_geo(geo, "g1.geometry")
-    gd, gx = _dyn_extent(
-        geo, float(g["velocity"]) * float(g["interval"]) * (int(g["n_frames"]) - 1)
-    )
-    _dyn_step(float(g["velocity"]) * float(g["interval"]), gx, "g1.velocity", "flow")
-    _dyn_step(
+    geo = target_geometry(cfg, "g1")
+    _check_geo(geo, "g1.geometry")
+    gd, gx = _extent(geo, float(g["velocity"]) * float(g["interval"]) * (int(g["n_frames"]) - 1))
+    _step(float(g["velocity"]) * float(g["interval"]), gx, "g1.velocity", "flow")
+    _step(
         math.sqrt(2 * float(g["diffusion"]) * float(g["interval"])),
         min(gd, gx),
         "g1.diffusion",
         "rms Brownian step",
     )
-    _dyn_memory(geo, gx, "g1.velocity", "the flow over the series")
+    _memory(geo, gx, "g1.velocity", "the flow over the series")
     if int(g["blocks"]) > int(geo["n_lines"]) // 2:
-        _dyn_fail(
+        _fail(
             "g1.blocks",
             f"= {g['blocks']}: need at least 2 lines per block (n_lines = {geo['n_lines']})",
         )
     # failure and calibration
     f = cfg["failure"]
-    geo = section_geometry(cfg, "failure")
-    _dyn_check_geo(geo, "failure.geometry")
+    geo = target_geometry(cfg, "failure")
+    _check_geo(geo, "failure.geometry")
     for key in ("velocities", "snr_db", "intervals"):
-        _dyn_increasing(list(f[key]), f"failure.{key}")
+        _increasing(list(f[key]), f"failure.{key}")
     rows = int(geo["n_pixels"]) - 2 * int(geo.get("margin", 4))
     fz, fx = (int(w) for w in f["window"])
     if fz > rows or fx > int(geo["n_lines"]):
-        _dyn_fail(
+        _fail(
             "failure.window",
             f"= {[fz, fx]} does not fit in the analysed rows ({rows}) x lines ({geo['n_lines']})",
         )
     shift = max(f["velocities"]) * max(f["intervals"]) * (int(f["n_frames"]) - 1)
-    _dyn_memory(
+    _memory(
         geo,
-        _dyn_extent(geo, shift)[1],
+        _extent(geo, shift)[1],
         "failure.velocities",
         "the fastest flow over the longest interval",
     )
     c = cfg["calibration"]
-    geo = section_geometry(cfg, "calibration")
-    _dyn_check_geo(geo, "calibration.geometry")
-    _dyn_increasing(list(c["velocities"]), "calibration.velocities")
+    geo = target_geometry(cfg, "calibration")
+    _check_geo(geo, "calibration.geometry")
+    _increasing(list(c["velocities"]), "calibration.velocities")
     shift = max(c["velocities"]) * float(c["interval"]) * (int(c["n_frames"]) - 1)
-    _dyn_memory(geo, _dyn_extent(geo, shift)[1], "calibration.velocities", "the fastest flow")
+    _memory(geo, _extent(geo, shift)[1], "calibration.velocities", "the fastest flow")

@@ -236,7 +236,10 @@ def _field_values(
         if "aline" in da.dims:
             pts["aline"] = xr.DataArray(np.broadcast_to(aline_pos, z.shape).ravel(), dims="points")
         if pts:
-            vals = da.interp(pts, method="linear", kwargs={"fill_value": None})
+            # linear extrapolation beyond the coordinates: scipy's interp1d spells it
+            # "extrapolate" (one interpolated dim), interpn None (several)
+            fill = "extrapolate" if len(pts) == 1 else None
+            vals = da.interp(pts, method="linear", kwargs={"fill_value": fill})
             vals = np.broadcast_to(vals.values.reshape(z.shape), z.shape)
         else:
             vals = np.full(z.shape, float(da.values))
@@ -425,7 +428,10 @@ def _shared_field_values(displacement: Displacement, pos: list[np.ndarray]) -> l
         _check_component(da, var, tuple(where), tuple(where))
         pts = {d: xr.DataArray(where[d], dims="points") for d in da.dims}
         if pts:
-            vals = da.interp(pts, method="linear", kwargs={"fill_value": None}).values
+            # linear extrapolation beyond the coordinates: scipy's interp1d spells it
+            # "extrapolate" (one interpolated dim), interpn None (several)
+            fill = "extrapolate" if len(pts) == 1 else None
+            vals = da.interp(pts, method="linear", kwargs={"fill_value": fill}).values
         else:
             vals = np.full(shape, float(da.values))
         out.append(_at_scatterers(vals, var))

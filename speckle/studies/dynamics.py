@@ -51,7 +51,7 @@ import numpy as np
 import xarray as xr
 from scipy.optimize import brentq
 
-from .._validate import as_finite_array, check_choice, check_int, check_real
+from .._validate import as_finite_array, check_choice, check_int, check_memory, check_real
 from ..analysis.dynamics import (
     liv_array,
     speckle_variance_array,
@@ -212,6 +212,7 @@ def velocity_range(
     (1611, 7921)
     """
     n = check_int(n_frames, "n_frames", low=2)
+    check_memory(64.0 * n, "n_frames", "the expected contrast at every lag")
     dt = check_real(interval, "interval", low=0, low_inclusive=False)
     w0 = check_real(waist, "waist", low=0, low_inclusive=False)
     lo_level = check_real(low, "low")

@@ -344,6 +344,8 @@ def read_metrics_report(path: str | os.PathLike) -> xr.Dataset:
     >>> report.sizes["experiment"], round(float(report.SSIM[1, 3]), 4)
     (3, 0.911)
     """
+    if not isinstance(path, str | os.PathLike):  # an int would be a file descriptor to close
+        raise TypeError(f"path must be a file path (str or os.PathLike), got {type(path).__name__}")
     import csv
 
     with open(path, newline="") as f:

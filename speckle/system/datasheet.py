@@ -72,6 +72,26 @@ class System:
     fill_factor: float = 1.0  #: camera pixel width as a fraction of the pixel pitch
     label: str = field(default="", compare=False)  #: free text (e.g. "illustrative")
 
+    def __post_init__(self) -> None:
+        """Each field's type and range (the cross-field rules are :func:`datasheet`'s)."""
+        for name in ("wavelength", "bandwidth", "wavelength_min", "wavelength_max"):
+            check_real(getattr(self, name), name, low=0, low_inclusive=False)
+        if not self.wavelength_min < self.wavelength_max:
+            raise ValueError(
+                f"wavelength_min ({self.wavelength_min:g} µm) must be below wavelength_max "
+                f"({self.wavelength_max:g} µm)"
+            )
+        m = check_int(self.camera_pixels, "camera_pixels", low=2)
+        check_memory(64.0 * m, "camera_pixels", "the system's spectral arrays")
+        check_real(self.refractive_index, "refractive_index", low=0, low_inclusive=False)
+        for name in ("beam_waist", "aline_pitch"):
+            if getattr(self, name) is not None:
+                check_real(getattr(self, name), name, low=0, low_inclusive=False)
+        check_real(self.spectral_resolution, "spectral_resolution", low=0)
+        check_real(self.fill_factor, "fill_factor", low=0, high=1, low_inclusive=False)
+        if not isinstance(self.label, str):
+            raise TypeError(f"label must be a string, got {type(self.label).__name__}")
+
     # --- camera -------------------------------------------------------------------------
     @property
     def sampling_interval(self) -> float:

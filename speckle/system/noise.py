@@ -52,9 +52,14 @@ def _weights(kind: str, spectrum: xr.DataArray | None, n: int) -> np.ndarray:
         return np.ones(n)
     if spectrum is None:
         raise ValueError(f"kind={kind!r} needs the source spectrum (speckle.spectrum)")
-    s = np.asarray(spectrum, dtype=float)
+    s = as_finite_array(spectrum, "spectrum")
     if s.shape != (n,):
         raise ValueError(f"spectrum must hold n_pixels={n} weights, got shape {s.shape}")
+    if np.any(s < 0) or not np.any(s > 0):
+        raise ValueError(
+            f"spectrum must hold non-negative source weights, not all zero, for kind={kind!r} "
+            f"(the noise follows S or S^2); got min {s.min():g}, max {s.max():g}"
+        )
     return s if kind == "shot" else s**2
 
 
@@ -172,7 +177,9 @@ def add_noise(
     return out.assign_attrs(snr_db=snr, noise_intensity=sigma2, noise_kind=kind, noise_seed=sd)
 
 
-def add_complex_noise(field: object, snr_db: float, *, seed: int) -> np.ndarray:
+def add_complex_noise(
+    field: object, snr_db: float, *, seed: int, signal_intensity: float | None = None
+) -> np.ndarray:
     """:func:`add_noise` (white receiver noise) for a plain complex array ``(depth, aline)``.
 
     Parameters
@@ -183,6 +190,9 @@ def add_complex_noise(field: object, snr_db: float, *, seed: int) -> np.ndarray:
         Mean image intensity over noise power, in dB; ``inf`` returns a copy of ``field``.
     seed : int
         Non-negative seed (same seed, same noise; each A-line has its own stream).
+    signal_intensity : float, optional
+        The signal intensity the SNR refers to (> 0), instead of ``mean(|field|^2)``: needed
+        for an all-zero field (no signal to refer to).
 
     Returns
     -------
@@ -190,11 +200,15 @@ def add_complex_noise(field: object, snr_db: float, *, seed: int) -> np.ndarray:
         ``field + n``, ``n ~ CN(0, sigma^2)``, ``sigma^2 = mean(|field|^2) / 10^(snr_db/10)``.
     """
     a = np.asarray(field)
+    if a.dtype.kind in "US" or a.dtype == object:
+        raise TypeError(f"field must be a complex image, got dtype {a.dtype}")
     if not np.iscomplexobj(a):
         raise TypeError("field must be a complex image (e.g. the 'field' of speckle.bscan)")
     if a.ndim != 2:
         raise ValueError(f"field must be 2-D (depth, aline), got shape {a.shape}")
     if isinstance(snr_db, int | float | np.floating) and np.isposinf(snr_db):
         return a.astype(np.complex128, copy=True)
+    if min(a.shape) < 1:
+        raise ValueError(f"field must hold at least one pixel, got shape {a.shape}")
     image = xr.Dataset({"field": (("depth", "aline"), a.astype(np.complex128))})
-    return add_noise(image, snr_db, seed=seed).field.values
+    return add_noise(image, snr_db, seed=seed, signal_intensity=signal_intensity).field.values

@@ -88,6 +88,14 @@ def _grid(z_max: float, step: float) -> np.ndarray:
     return np.linspace(0.0, max(z_max, step), max(n, 2))
 
 
+def _span_grid(lo: float, hi: float, step: float) -> np.ndarray:
+    """Nodes from ``lo`` to exactly ``hi`` (``lo + linspace`` can end a float step short of
+    ``hi``, which the interpolator then refuses as outside the grid)."""
+    g = lo + _grid(hi - lo, step)
+    g[-1] = max(g[-1], hi)
+    return g
+
+
 def _factor(grid: np.ndarray, s2: float, ell: float, k0: float) -> np.ndarray:
     """``L`` with ``L L^T = Cov(phi(grid))`` (eigen-decomposition, tiny negatives clipped)."""
     dz = phase_structure(grid, s2, ell, k0)
@@ -184,7 +192,7 @@ def shared_phase_screen(
         return np.zeros(0)
     gz = _grid(float(zz.max()), min(ell / 8, ell / 8 if step is None else step))
     lateral = [xx] if yy is None else [xx, yy]
-    grids = [float(v.min()) + _grid(float(v.max()) - float(v.min()), lx / 8) for v in lateral]
+    grids = [_span_grid(float(v.min()), float(v.max()), lx / 8) for v in lateral]
     shape = (gz.size, *(g.size for g in grids))
     check_memory(3 * 8.0 * math.prod(shape), "lateral_correlation_length", "the phase screen")
     lz = _factor(gz, s2, ell, k)

@@ -71,6 +71,11 @@ def depolarize(
         :func:`speckle.bscan` to get both channels.
     """
     check_scene(scene)
+    if "channel" in scene.amplitude.dims:
+        raise ValueError(
+            "scene is already depolarized (its amplitude has a 'channel' dim, co and cross): "
+            "depolarize the original scene once, with the total depolarization"
+        )
     sd = check_int(seed, "seed", low=0)
     by_region = isinstance(depolarization, xr.Dataset) and "region" in depolarization.dims
     if labels is not None or by_region:

@@ -46,6 +46,7 @@ from .._validate import (
     as_finite_array,
     check_bool,
     check_choice,
+    check_int,
     check_memory,
     check_real,
 )
@@ -268,8 +269,15 @@ def interferogram_bytes(
     (:data:`CHUNK_ELEMENTS` complex phase factors, twice with a pixel response), the Chebyshev
     coefficients of ``"finufft"`` with a varying response (up to 256 terms per scatterer, the
     values and the coefficients), and the pair sources of the autocorrelation of finite pixels
-    (``M (M - 1)/2`` pairs of one line: two indices, a depth and a product).
+    (``M (M - 1)/2`` pairs of one line: two indices, a depth and a product). The arguments
+    are checked as :func:`interferogram` takes them (``ValueError``/``TypeError`` naming one).
     """
+    lines = check_int(lines, "lines", low=1)
+    scatterers = check_int(scatterers, "scatterers", low=0)
+    pixels = check_int(pixels, "pixels", low=1)
+    check_choice(method, "method", ("direct", "finufft"))
+    finite_pixels = check_bool(finite_pixels, "finite_pixels")
+    autocorrelation = check_bool(autocorrelation, "autocorrelation")
     out = 3 * 16.0 * lines * pixels
     work = 2 * 16.0 * CHUNK_ELEMENTS
     if method == "finufft" and finite_pixels:

@@ -26,6 +26,38 @@ from .system_fit import SystemFit
 __all__ = ["fit_system"]
 
 
+#: Share of the region's pixels at the stored dtype's limits above which the fit warns.
+MAX_CLIPPED = 0.01
+
+
+def _warn_clipped(reg: xr.DataArray) -> None:
+    """Warn when the region holds clipped pixels (``load_image``'s ``clip_low``/``clip_high``:
+    the integer dtype's limits): their statistics are not those of speckle."""
+    lo, hi = reg.attrs.get("clip_low"), reg.attrs.get("clip_high")
+    if lo is None or hi is None:
+        return
+    v = reg.values
+    share = float(np.mean((v <= lo) | (v >= hi)))
+    if share > MAX_CLIPPED:
+        warnings.warn(
+            f"{share:.1%} of the region's pixels sit at the stored dtype's limits "
+            f"({lo}, {hi}): clipped data bias every statistic of the fit (waist, spectrum, "
+            "SNR); choose a region without saturation",
+            UserWarning,
+            stacklevel=3,
+        )
+
+
+def _outside_region(rows: Sequence[int], depth: Sequence | None, nz: int) -> None:
+    """Noise rows must not overlap the fitted region's rows (they would be signal)."""
+    lo, hi = (0, nz) if depth is None else (depth[0] or 0, nz if depth[1] is None else depth[1])
+    if rows[0] < hi and rows[1] > lo:
+        raise ValueError(
+            f"noise_rows = {list(rows)} overlap the region's rows [{lo}, {hi}): signal-free "
+            "rows must lie outside the fitted speckle"
+        )
+
+
 def fit_system(
     image: xr.DataArray,
     *,
@@ -66,7 +98,7 @@ def fit_system(
         contiguous rows); the rows used and how they were chosen are in the attributes
         ``noise_rows`` and ``noise_rows_source``. None found: a warning, SNR not fitted.
     snr_db : float, optional
-        A known SNR (dB) when there are no signal-free rows.
+        A known SNR (dB) when there are no signal-free rows (not with ``noise_rows``).
     n_pixels : int
         Spectral components of the model A-scan used in the theory and the twin (>= 16).
     max_lag : int
@@ -137,6 +169,10 @@ def fit_system(
             )
     elif noise_rows is None:
         noise_source = "none (snr_db given)"
+    if noise_rows is not None and snr_db is not None:
+        raise ValueError(
+            "give noise_rows or snr_db, not both: noise_rows measure the SNR that snr_db states"
+        )
     if noise_rows is not None:
         if isinstance(noise_rows, str) or len(noise_rows) != 2:
             raise ValueError(f"noise_rows must be [start, stop], got {noise_rows!r}")
@@ -145,9 +181,11 @@ def fit_system(
         if noise.sizes["depth"] < 2:
             raise ValueError(f"noise_rows = {list(noise_rows)} must hold at least 2 rows")
         _check_values(noise, "noise_rows", kind)
+        _outside_region(noise_rows, (region or {}).get("depth"), img.sizes["depth"])
         snr_db = None
     elif snr_db is not None:
         snr_db = check_real(snr_db, "snr_db")
+    _warn_clipped(reg)
     data = _data(reg, noise, n_med)
     if kind in ("amplitude", "intensity"):
         c = float(np.std(data.signal) / np.mean(data.signal))
@@ -164,6 +202,13 @@ def fit_system(
     # every pair of the region (of every frame); the jackknife deletes a block of A-lines from
     # every frame at once, so frames of one sample (correlated speckle) do not shrink the SE
     whole = _estimate(data, _column_groups(nx, nf, [np.arange(nx)]), **kw)
+    if noise is not None and not np.isfinite(whole["snr_db"]):
+        warnings.warn(
+            f"noise_rows {list(noise_rows)} are as bright as the region (not signal-free): the "
+            "SNR and the noise floor have no answer (NaN)",
+            UserWarning,
+            stacklevel=2,
+        )
     jack = [
         _estimate(data, _column_groups(nx, nf, blocks[:i] + blocks[i + 1 :]), **kw)
         for i in range(nb)
