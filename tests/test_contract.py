@@ -1452,6 +1452,25 @@ ENTRIES: dict[str, Entry] = {
         window="count",
         dynamic_range="positive",
     ),
+    # --- the inverse problem (merged from phantom) ----------------------------------------
+    "fit_phantom": E(
+        lambda: dict(
+            scan=REPO / "speckle/data/synthoct/Scan_Exp1_Uniform_A.png",
+            config=speckle.ScannerConfig(),
+        ),
+        scan="path",
+        config="none",
+        max_layers="count",
+        blocks="count",
+        why="config: a ScannerConfig or an INI path (tests/studies/test_phantom.py)",
+    ),
+    "PhantomFit": E(
+        lambda: dict(layers=xr.Dataset(), config=speckle.ScannerConfig()),
+        layers="none",
+        config="none",
+        why="a record built by fit_phantom",
+        record="fit_phantom",
+    ),
     "ScannerConfig": E(
         lambda: dict(n_pixels=16, n_lines=8, x_max=96.0, n_scatterers=50),
         n_pixels="size",
