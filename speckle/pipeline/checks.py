@@ -37,13 +37,12 @@ from ..analysis import filters as dsp
 from ..analysis.image_files import load_image
 from ..analysis.measured import measured_shape, roi_slices
 from ..figures.despeckle import parameter_grid
-from ..figures.synthoct import published_scan
 from ..imaging.nufft import NUFFT_TOL_FLOOR, float32_error_estimate
 from ..imaging.scan import beam_reach
 from ..scene.shared import MAX_TILES
-from ..synthoct.files import ScannerConfig
 from .adapters import system_from_config
 from .dynamics_checks import check_dynamics_config
+from .synthoct_checks import check_synthoct
 
 __all__ = [
     "check_config",
@@ -51,7 +50,6 @@ __all__ = [
     "check_dynamics_config",
     "check_scan_table",
     "check_sections",
-    "check_synthoct",
     "check_twin",
     "figure_bytes",
     "tol_floor",
@@ -772,32 +770,4 @@ def check_despeckle(cfg: Mapping) -> None:
             raise ValueError(
                 f"config key despeckle.frequency_compounding.looks: {nl} equal sub-bands need "
                 f"n_pixels ({fc['n_pixels']}) to be a multiple of it"
-            )
-
-
-# --- the synthoct section ----------------------------------------------------------------
-
-
-def check_synthoct(cfg: Mapping) -> None:
-    """What the schema cannot say about the ``synthoct`` section (``ValueError`` naming it).
-
-    The batch's images fit in the published reference scan (256 x 512), hold the contrast
-    window (at least 21 pixels a side); its boundaries lie inside the phantom's depth.
-    """
-    b = cfg["batch"]
-    reference = published_scan(b["reference"])
-    limit = dict(zip(("n_pixels", "n_lines"), reference.shape, strict=True))
-    for key, most in limit.items():
-        if not 21 <= int(b[key]) <= most:
-            raise ValueError(
-                f"config key synthoct.batch.{key} = {b[key]!r} must lie in 21..{most} (the "
-                f"contrast window + 1 up to the reference scan's size)"
-            )
-    depth = int(b["n_pixels"]) * ScannerConfig().pixel_size
-    for end in ("start", "stop"):
-        z = float(b["boundary"][end])
-        if not 0.0 < z < depth:
-            raise ValueError(
-                f"config key synthoct.batch.boundary.{end} = {z!r} must lie inside the phantom "
-                f"(0 < boundary < n_pixels x 6 = {depth:g} µm)"
             )

@@ -22,7 +22,7 @@ from workflow_run import CI_CONFIG, IGNORE, snakemake
 
 import speckle
 from speckle.io import open_dataset
-from speckle.pipeline.checks import check_synthoct
+from speckle.pipeline.synthoct_checks import check_synthoct
 
 TOLERANCE = {"SSIM": 0.01, "MS-SSIM": 0.01, "VIF": 0.01, "PSNR": 0.1}
 
