@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 import yaml
 from scipy import stats
-from workflow_run import CI_CONFIG, IGNORE, snakemake
+from workflow_run import CI_CONFIG, CI_RESULTS, IGNORE, snakemake
 
 from speckle.io import open_dataset
 
@@ -41,10 +41,10 @@ def repo(tmp_path_factory, repo_root) -> Path:
 
 @pytest.fixture(scope="module")
 def results(repo) -> Path:
-    targets = [f"results/dynamics/{t}" for t in TARGETS]
+    targets = [f"{CI_RESULTS}/dynamics/{t}" for t in TARGETS]
     proc = snakemake(repo, "--cores", "1", *targets, "--configfile", CI_CONFIG, check=False)
     assert proc.returncode == 0, proc.stdout[-5000:]
-    return repo / "results" / "dynamics"
+    return repo / CI_RESULTS / "dynamics"
 
 
 def test_every_output_is_written(results):

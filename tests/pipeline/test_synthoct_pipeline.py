@@ -18,7 +18,7 @@ import jsonschema
 import numpy as np
 import pytest
 import yaml
-from workflow_run import CI_CONFIG, IGNORE, snakemake
+from workflow_run import CI_CONFIG, CI_RESULTS, IGNORE, snakemake
 
 import speckle
 from speckle.io import open_dataset
@@ -83,14 +83,15 @@ def test_bad_section_stops_before_any_job(repo):
 @pytest.fixture(scope="module")
 def results(repo) -> Path:
     cfg = yaml.safe_load((repo / CI_CONFIG).read_text())
-    targets = ["results/synthoct/self_consistency.nc", "results/synthoct/self_consistency.csv",
-               "results/synthoct/self_consistency.png"]  # fmt: skip
+    out = f"{CI_RESULTS}/synthoct"
+    targets = [f"{out}/self_consistency.nc", f"{out}/self_consistency.csv",
+               f"{out}/self_consistency.png"]  # fmt: skip
     full = yaml.safe_load((repo / "workflow/config/config.yaml").read_text())
     if full["synthoct"]["scanner"] or cfg.get("synthoct", {}).get("scanner"):
-        targets += ["results/synthoct/batch.nc", "results/synthoct/batch.png"]
+        targets += [f"{out}/batch.nc", f"{out}/batch.png"]
     proc = snakemake(repo, "--cores", "2", "--configfile", CI_CONFIG, "--", *targets, check=False)
     assert proc.returncode == 0, proc.stdout[-5000:]
-    return repo / "results" / "synthoct"
+    return repo / CI_RESULTS / "synthoct"
 
 
 @pytest.mark.pipeline
