@@ -14,9 +14,11 @@ def package_code(*modules):
 
     Snakemake tracks a rule's own script but not installed package code; list the package
     modules the script imports, e.g. package_code("speckle.figures.static"): their sources and
-    every package module they import become inputs.
+    every package module they import become inputs. Every script runs through the pipeline's
+    runner and saves through its outputs module, so those two are always inputs.
     """
-    return [os.path.relpath(p) for p in module_sources(*modules)]
+    every = ("speckle.pipeline.runner", "speckle.pipeline.outputs")
+    return [os.path.relpath(p) for p in module_sources(*modules, *every)]
 
 
 def section(*names):
