@@ -98,14 +98,20 @@ def _public(module: str) -> list[str]:
     return list(importlib.import_module(module).__all__)
 
 
-def _figure_modules() -> list[str]:
-    import speckle.figures
-
-    return sorted(
-        f"speckle.figures.{m.name}"
-        for m in pkgutil.iter_modules(speckle.figures.__path__)
+def _modules_of(package: str) -> list[str]:
+    """The public modules of ``package`` that define names (``__all__`` of their own), not
+    the shims that keep an old path working (their names warn and live elsewhere)."""
+    pkg = importlib.import_module(package)
+    names = (
+        f"{package}.{m.name}"
+        for m in pkgutil.iter_modules(pkg.__path__)
         if not m.name.startswith("_")
     )
+    return sorted(n for n in names if "__all__" in vars(importlib.import_module(n)))
+
+
+def _figure_modules() -> list[str]:
+    return _modules_of("speckle.figures")
 
 
 def api_topics() -> dict[str, tuple[str, str, dict[str, list[str]]]]:
@@ -115,6 +121,11 @@ def api_topics() -> dict[str, tuple[str, str, dict[str, list[str]]]]:
         "system": ("System", "The OCT system: source, datasheet, spectrometer chain, effects."),
         "imaging": ("Imaging", "Eq. 4 and its fast methods, B-scans, the scanned beam, scans."),
         "analysis": ("Analysis", "Statistics, correlation, tracking, strain, measured images."),
+        "studies": (
+            "Studies",
+            "Experiments on methods and systems: the scanner's twin, realism, failure maps, "
+            "speckle suppression, speckle in time, the SynthOCT inverse problem.",
+        ),
         "synthoct": (
             "SynthOCT",
             "The open drop-in for the SynthOCT 2026 challenge's virtual scanner: its files, "
@@ -130,6 +141,12 @@ def api_topics() -> dict[str, tuple[str, str, dict[str, list[str]]]]:
         "One module per figure family: ``<name>_data(...) -> Dataset`` builds a figure's "
         "dataset from a config section, ``plot_<name>(ds) -> Figure`` draws it.",
         {m: _public(m) for m in _figure_modules()},
+    )
+    topics["pipeline"] = (
+        "Pipeline",
+        "Between a config file and the package: the load-time checks of every config section, "
+        "the config adapters, the scripts' runner and the saving of figures.",
+        {m: _public(m) for m in _modules_of("speckle.pipeline")},
     )
     topics["io"] = (
         "I/O and infrastructure",
@@ -181,14 +198,16 @@ def required_names() -> set[str]:
     import speckle
 
     required = set()
-    owners = {g: set(_public(f"speckle.{g}")) for g in ("scene", "system", "imaging", "analysis")}
+    groups = ("scene", "system", "imaging", "analysis", "studies", "synthoct")
+    owners = {g: set(_public(f"speckle.{g}")) for g in groups}
     owners["io"] = set(_public("speckle.io"))
     for name in speckle.__all__:
         if name == "__version__":
             continue
         where = [g for g, names in owners.items() if name in names]
         required.add(f"speckle.{where[0]}.{name}" if where else f"speckle.{name}")
-    for module in (*(f"speckle.{g}" for g in owners), *_figure_modules()):
+    pipeline = _modules_of("speckle.pipeline")
+    for module in (*(f"speckle.{g}" for g in owners), *_figure_modules(), *pipeline):
         required |= {f"{module}.{n}" for n in _public(module)}
     return required
 

@@ -217,6 +217,7 @@ def read_scanner_config(path: str | os.PathLike) -> ScannerConfig:
     Returns
     -------
     ScannerConfig
+        The scanner's parameters (lengths in µm), as the file states them.
 
     Raises
     ------
