@@ -7,6 +7,7 @@ range, always naming the parameter and the allowed range, before any work starts
 from __future__ import annotations
 
 import numbers
+import os
 from collections.abc import Iterable
 
 import numpy as np
@@ -19,7 +20,9 @@ __all__ = [
     "check_choice",
     "check_int",
     "check_memory",
+    "check_path",
     "check_real",
+    "check_size",
 ]
 
 #: Largest allocation (bytes) a single call may plan; larger requests are refused up front.
@@ -183,3 +186,41 @@ def check_memory(nbytes: float, name: str, what: str, limit: float | None = None
             f"{cap / 2**30:.3g} GiB limit (speckle._validate.MAX_BYTES); reduce {name} or "
             "process the work in parts"
         )
+
+
+def check_size(
+    value: object, name: str, *, low: int = 1, bytes_per: float = 8.0, what: str | None = None
+) -> int:
+    """:func:`check_int` (``value >= low``) of a size that allocates ``bytes_per`` bytes per
+    unit, and :func:`check_memory` of that allocation: a huge size is refused by name before
+    any array is made.
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not an integer.
+    ValueError
+        If ``value < low`` or ``bytes_per * value`` exceeds :data:`MAX_BYTES`.
+    """
+    n = check_int(value, name, low=low)
+    check_memory(bytes_per * n, name, what or f"{n} values of {bytes_per:g} bytes")
+    return n
+
+
+def check_path(path: object, name: str = "path") -> object:
+    """Return ``path`` after checking it names a file: a ``str``, ``bytes``, ``os.PathLike`` or
+    a resource with ``open`` (``importlib.resources.files(...) / name``).
+
+    A number is refused: an ``int`` would be taken by ``open`` as a file descriptor (and
+    closed).
+
+    Raises
+    ------
+    TypeError
+        Naming ``name`` when ``path`` is none of these.
+    """
+    if isinstance(path, str | bytes | os.PathLike) or (
+        hasattr(path, "open") and not isinstance(path, numbers.Number)
+    ):
+        return path
+    raise TypeError(f"{name} must be a file path (str or os.PathLike), got {type(path).__name__}")

@@ -35,7 +35,7 @@ import numpy as np
 import xarray as xr
 
 from ._atomic import atomic_path
-from ._validate import check_bool, check_int
+from ._validate import check_bool, check_int, check_path
 
 __all__ = [
     "ENGINE",
@@ -169,6 +169,7 @@ def open_dataset(path: str | os.PathLike, *, load: bool = True) -> xr.Dataset:
         Load into memory and close the file (default); ``False`` keeps it lazy.
     """
     check_bool(load, "load")
+    check_path(path)
     if not Path(path).is_file():
         raise FileNotFoundError(f"path {str(path)!r} is not a file")
     try:
@@ -192,8 +193,10 @@ def stream_to_netcdf(
     Each Dask chunk is computed and written as it comes, so memory holds the chunks in flight,
     not the dataset. Runs on the active Dask scheduler: the local threads scheduler by default,
     or a ``dask.distributed`` cluster when a ``distributed.Client`` is active (then the
-    file lock is distributed too). The file is written to a temporary name in the same
-    directory and renamed when complete, so a crash never leaves a partial ``path``.
+    file lock is distributed too). The local ``"processes"`` scheduler is refused
+    (``ValueError``): the file lock cannot be shared between processes. The file is written
+    to a temporary name in the same directory and renamed when complete, so a crash never
+    leaves a partial ``path``.
 
     Parameters
     ----------
@@ -215,6 +218,14 @@ def stream_to_netcdf(
         raise TypeError(f"ds must be an xarray Dataset, got {type(ds).__name__}")
     check_bool(progress, "progress")
     complevel = check_int(complevel, "complevel", low=0, high=9)
+    check_path(path)
+    if _on_processes():
+        raise ValueError(
+            "stream_to_netcdf cannot run on Dask's 'processes' scheduler: the netCDF file lock "
+            "cannot be shared between processes. Use the 'threads' or 'synchronous' scheduler "
+            "(dask.config.set(scheduler='threads')), or a distributed.Client, whose workers "
+            "may be processes (its lock is distributed)"
+        )
     ds = _prepared(ds, path)
     encoding = {}
     for name, var in ds.data_vars.items():
@@ -237,6 +248,14 @@ def stream_to_netcdf(
                 dask.compute(job)
         else:
             dask.compute(job)
+
+
+def _on_processes() -> bool:
+    """Whether the active Dask scheduler is the local multiprocessing one."""
+    import dask.base
+    import dask.multiprocessing
+
+    return dask.base.get_scheduler() is dask.multiprocessing.get
 
 
 def _stderr():

@@ -51,3 +51,42 @@ def test_labels_read_from_a_file_can_grow(tmp_path):
     back = open_dataset(tmp_path / "both.nc")
     assert back.spectrum.values.tolist() == ["gaussian", "rectangular"]
     assert back.v.sel(spectrum="rectangular").item() == 2.0
+
+
+def test_stream_to_netcdf_refuses_the_processes_scheduler_and_runs_on_threads(tmp_path):
+    """The netCDF file lock cannot be pickled to other processes: refused before any file is
+    made, naming the way out; threads and synchronous write the same numbers."""
+    import dask
+    import pytest
+
+    from speckle.io import stream_to_netcdf
+
+    src = speckle.spectrum(16, 128.0, k0_dk=3)
+    sc = speckle.random_scatterers(4, 2.0, n_pixels=16, depth_range=128.0, seed=1)
+    ds = speckle.bscan(sc, src).chunk({"aline": 2})
+    with dask.config.set(scheduler="processes"):
+        with pytest.raises(ValueError, match=r"'processes' scheduler.*threads"):
+            stream_to_netcdf(ds, tmp_path / "p.nc", progress=False)
+    assert not list(tmp_path.iterdir())  # nothing written, not even a temporary file
+    for scheduler in ("threads", "synchronous"):
+        with dask.config.set(scheduler=scheduler):
+            stream_to_netcdf(ds, tmp_path / f"{scheduler}.nc", progress=False)
+        back = open_dataset(tmp_path / f"{scheduler}.nc")
+        np.testing.assert_array_equal(back.field.values, ds.field.values)
+
+
+def test_empty_dataset_round_trips(tmp_path):
+    """Zero-length dims are valid netCDF: an empty selection is written and read back as is
+    (the contract's documented answer for an empty ``ds``)."""
+    from speckle.io import stream_to_netcdf
+
+    src = speckle.spectrum(16, 128.0, k0_dk=3)
+    sc = speckle.random_scatterers(4, 2.0, n_pixels=16, depth_range=128.0, seed=1)
+    ds = speckle.bscan(sc, src)
+    empty = ds.isel(depth=slice(0, 0), aline=slice(0, 0))
+    to_netcdf(empty, tmp_path / "e.nc")
+    stream_to_netcdf(empty, tmp_path / "s.nc", progress=False)
+    for name in ("e.nc", "s.nc"):
+        back = open_dataset(tmp_path / name)
+        assert dict(back.sizes) == {"depth": 0, "aline": 0}
+        xr.testing.assert_equal(back, empty)

@@ -57,8 +57,9 @@ def check_carrier_phase(z: np.ndarray, k0: float) -> None:
 
 
 def resolve_tol(tol: float | None) -> float:
-    """The tolerance an approximate method works to: ``tol``, or :data:`DEFAULT_TOL`."""
-    return DEFAULT_TOL if tol is None else float(tol)
+    """The tolerance an approximate method works to: ``tol`` (checked by :func:`check_tol`),
+    or :data:`DEFAULT_TOL`."""
+    return DEFAULT_TOL if tol is None else check_tol(tol)
 
 
 def refuse_below_floor(tol: float, method: str) -> float:

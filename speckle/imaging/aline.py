@@ -15,7 +15,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_finite_array, check_choice, check_int, check_memory, check_real
+from .._validate import (
+    as_finite_array,
+    check_choice,
+    check_int,
+    check_memory,
+    check_real,
+    check_size,
+)
 from ..scene.scatterers import random_scatterers
 from ..system.source import check_weights
 from ._rules import check_carrier_phase, check_tol
@@ -30,7 +37,7 @@ METHODS = ASCAN_METHODS
 
 def pixel_depths(n_pixels: int, depth_range: float) -> np.ndarray:
     """Pixel-centre depths ``q*H/N`` in µm, ``q = 0 ... N-1``, for ``depth_range`` ``H`` (µm)."""
-    n = check_int(n_pixels, "n_pixels", low=2)
+    n = check_size(n_pixels, "n_pixels", low=2)
     h = check_real(depth_range, "depth_range", low=0, low_inclusive=False)
     return np.arange(n) * (h / n)
 
@@ -99,7 +106,7 @@ def ascan(
     >>> np.round(np.abs(a), 12).tolist()
     [0.0, 8.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
     """
-    n = check_int(n_pixels, "n_pixels", low=2)
+    n = check_size(n_pixels, "n_pixels", low=2, bytes_per=64.0)
     h = check_real(depth_range, "depth_range", low=0, low_inclusive=False)
     k0v = check_real(k0, "k0", low=0)
     check_choice(method, "method", METHODS)
@@ -175,8 +182,13 @@ def stream_ascans(
         complex128 (n_alines, n_pixels), or (len(lines), n_pixels) with ``lines``.
     """
     nl_total = check_int(n_alines, "n_alines", low=1)
+    n = check_int(n_pixels, "n_pixels", low=2)
+    check_real(density, "density", low=0)
     step = check_int(chunk_lines, "chunk_lines", low=1)
     if lines is None:
+        check_memory(
+            16.0 * nl_total * n, "n_alines or n_pixels", f"{nl_total} A-lines x {n} pixels"
+        )
         wanted = np.arange(nl_total)
     else:
         wanted = np.asarray(lines)
@@ -184,7 +196,8 @@ def stream_ascans(
             raise TypeError("lines must be a 1-D sequence of integer A-line indices")
         if wanted.size and (wanted.min() < 0 or wanted.max() >= nl_total):
             raise ValueError(f"lines must lie in [0, {nl_total - 1}]")
-    out = np.empty((wanted.size, n_pixels), dtype=np.complex128)
+        check_memory(16.0 * wanted.size * n, "n_pixels", f"{wanted.size} lines x {n} pixels")
+    out = np.empty((wanted.size, n), dtype=np.complex128)
     order = np.argsort(wanted, kind="stable")
     sorted_lines = wanted[order]
     # consecutive runs of requested lines, each drawn in chunks of at most `step` lines

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .._validate import as_finite_array, check_int, check_real
+from .._validate import as_finite_array, check_int, check_real, check_size
 from ..conventions import attrs as labels
 from ..conventions import coord
 
@@ -42,7 +42,7 @@ def shared_scatterers(
     nl = check_int(n_lines, "n_lines", low=1)
     p = check_real(pitch, "pitch", low=0, low_inclusive=False)
     rho = check_real(density, "density", low=0, low_inclusive=False)
-    n = check_int(n_pixels, "n_pixels", low=2)
+    n = check_size(n_pixels, "n_pixels", low=2, bytes_per=64.0)
     h = check_real(depth_range, "depth_range", low=0, low_inclusive=False)
     w0 = check_real(waist, "waist", low=0, low_inclusive=False)
     sd = check_int(seed, "seed", low=0)

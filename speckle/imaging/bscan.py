@@ -16,7 +16,8 @@ from .._validate import check_choice, check_int, check_real
 from ..conventions import attrs, coord, depth_range_of, units_of
 from ..provenance import provenance_attrs
 from ..scene.scatterers import AMPLITUDE_MODELS
-from ..system.source import check_weights
+from ..scene.shared import check_not_empty
+from ..system.source import check_source, check_weights
 from ._rules import check_tol
 from .aline import METHODS, ascan, pixel_depths
 
@@ -124,11 +125,9 @@ def bscan(
     check_choice(normalise, "normalise", NORMALISATIONS)
     if not isinstance(scene, xr.Dataset) or not {"z", "amplitude"} <= set(scene.data_vars):
         raise TypeError("scene must be an xarray.Dataset with variables 'z' and 'amplitude'")
-    if not isinstance(source, xr.DataArray) or "n_pixels" not in source.attrs:
-        raise TypeError("source must be a DataArray from speckle.system.source.spectrum")
-    n = int(source.attrs["n_pixels"])
-    h = depth_range_of(source, "source")
-    k0 = float(source.attrs["k0"])
+    check_not_empty(scene)
+    src = check_source(source)
+    n, h, k0 = src["n_pixels"], src["depth_range"], src["k0"]
     check_choice(method, "method", METHODS)
     check_tol(tol)
     for var in ("z", "amplitude"):

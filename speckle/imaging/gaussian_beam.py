@@ -12,7 +12,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._validate import as_finite_array, broadcast, check_int, check_real
+from .._validate import as_finite_array, broadcast, check_real, check_size
 from ..system.source import check_weights
 from ._rules import check_carrier_phase, check_tol
 
@@ -113,7 +113,7 @@ def beam_problem(
         On invalid input, naming the parameter.
     """
     zr = rayleigh_range
-    n = check_int(n_pixels, "n_pixels", low=2)
+    n = check_size(n_pixels, "n_pixels", low=2, bytes_per=64.0)
     h = check_real(depth_range, "depth_range", low=0, low_inclusive=False)
     k0v = check_real(k0, "k0", low=0)
     w0 = check_real(waist, "waist", low=0, high=MAX_WAIST, low_inclusive=False)

@@ -23,10 +23,11 @@ import dask.array as da
 import numpy as np
 import xarray as xr
 
-from .._validate import as_finite_array, check_int, check_real
-from ..conventions import attrs, coord, depth_range_of, spacing, units_of
+from .._validate import as_finite_array, check_bool, check_int, check_real, check_size
+from ..conventions import attrs, coord, spacing, units_of
 from ..provenance import provenance_attrs
 from ..scene.shared import check_scene, scene_window, shared_scene
+from ..system.source import check_source
 from ._rules import check_tol
 from .aline import pixel_depths
 from .beam import beam_scan
@@ -67,7 +68,7 @@ def _widening(optics: dict, waist: float, k0: float, z_lo: float, z_hi: float) -
 
 def scan_lines(n_lines: int, pitch: float, start: float = 0.0) -> np.ndarray:
     """Lateral positions ``start + i*pitch`` (µm) of ``n_lines`` A-lines, ``i = 0 ... n-1``."""
-    n = check_int(n_lines, "n_lines", low=1)
+    n = check_size(n_lines, "n_lines", low=1)
     p = check_real(pitch, "pitch", low=0, low_inclusive=False)
     return check_real(start, "start") + p * np.arange(n)
 
@@ -82,14 +83,7 @@ def _lines(values: object, name: str) -> np.ndarray:
 
 
 def _source(source: object) -> dict:
-    if not isinstance(source, xr.DataArray) or "n_pixels" not in source.attrs:
-        raise TypeError("source must be a DataArray from speckle.spectrum")
-    return {
-        "n_pixels": int(source.attrs["n_pixels"]),
-        "depth_range": depth_range_of(source, "source"),
-        "k0": float(source.attrs["k0"]),
-        "spectrum": np.asarray(source.values, dtype=float),
-    }
+    return check_source(source)
 
 
 def _lines_field(
@@ -254,7 +248,7 @@ def scan_kernel(
     (8, 1)
     """
     src, w0, xs, ys, _, meta, kernel, optics = _prepare(
-        source, waist, x, y, 1, method, tol, bool(wrap), focus, rayleigh_range
+        source, waist, x, y, 1, method, tol, check_bool(wrap, "wrap"), focus, rayleigh_range
     )
     lo, hi = (0.0, src["depth_range"]) if z_bounds is None else z_bounds
     reach = beam_reach(w0, widening=_widening(optics, w0, src["k0"], float(lo), float(hi)))

@@ -35,7 +35,7 @@ import dask.array as da
 import numpy as np
 import xarray as xr
 
-from .._validate import check_int, check_real
+from .._validate import check_int, check_memory, check_real
 from ..conventions import attrs, coord, units_of
 from ..provenance import provenance_attrs
 from ..scene.motion import check_times
@@ -83,6 +83,7 @@ def raster_times(
     """
     nf = check_int(n_frames, "n_frames", low=1)
     nl = check_int(n_lines, "n_lines", low=1)
+    check_memory(24.0 * nf * nl, "n_frames x n_lines", f"{nf} x {nl} line times")
     rate = check_real(line_rate, "line_rate", low=0, low_inclusive=False)
     scan = nl / rate
     fi = scan if frame_interval is None else check_real(frame_interval, "frame_interval", low=0)

@@ -31,10 +31,11 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .._validate import as_finite_array, check_int, check_real
-from ..conventions import attrs, coord, depth_range_of, units_of
+from .._validate import as_finite_array, check_int, check_real, check_size
+from ..conventions import attrs, coord, units_of
 from ..provenance import provenance_attrs
-from ..system.source import check_weights, spectrum
+from ..scene.shared import check_not_empty
+from ..system.source import check_source, check_weights, spectrum
 from ._rules import check_tol
 from .aline import METHODS, ascan, pixel_depths
 from .bscan import map_lines
@@ -57,8 +58,8 @@ def intensity_spectrum(weights: object) -> np.ndarray:
         ``R_l`` for ``l = -N ... N-1`` (``R_(-N) = 0``): the spectrum whose Eq. 4 A-scan on
         ``2N`` half pixels is ``|P|^2`` (see the module docstring). Non-negative.
     """
-    s = np.asarray(weights, dtype=float)
-    s = check_weights(s, s.size)
+    s = as_finite_array(weights, "weights")
+    s = check_weights(s, s.size, "weights")
     r = np.correlate(s, s, mode="full")  # lags -(N-1) ... N-1
     return np.concatenate([[0.0], np.clip(r, 0.0, None)])  # tiny negative rounding -> 0
 
@@ -89,7 +90,7 @@ def speckle_free_lines(
     numpy.ndarray
         Float64, shape ``(..., n_pixels)``: the speckle-free intensity (no normalisation).
     """
-    n = check_int(n_pixels, "n_pixels", low=1)
+    n = check_size(n_pixels, "n_pixels", low=1, bytes_per=64.0)
     s = np.ones(n) if spectrum is None else check_weights(spectrum, n)
     a2 = np.abs(as_finite_array(amplitude, "amplitude", dtype=complex)) ** 2
     out = ascan(
@@ -145,13 +146,13 @@ def speckle_free_image(
         On a scene or source of the wrong kind, a shared scene without ``waist``/``x`` (or a
         line scene with them), and the errors of the imaging functions.
     """
-    if not isinstance(source, xr.DataArray) or "n_pixels" not in source.attrs:
-        raise TypeError("source must be a DataArray from speckle.spectrum")
+    src = check_source(source)
+    check_int(chunk, "chunk", low=1)
     if not isinstance(scene, xr.Dataset) or not {"z", "amplitude"} <= set(scene.data_vars):
         raise TypeError("scene must be an xarray.Dataset with variables 'z' and 'amplitude'")
-    n = int(source.attrs["n_pixels"])
-    h = depth_range_of(source, "source")
-    r = intensity_spectrum(source.values)
+    check_not_empty(scene)
+    n, h = src["n_pixels"], src["depth_range"]
+    r = intensity_spectrum(src["spectrum"])
     shared = "x" in scene.data_vars
     if shared:
         if waist is None or x is None:

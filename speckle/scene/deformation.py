@@ -29,10 +29,10 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import xarray as xr
 
-from .._validate import as_finite_array, check_bool, check_real
+from .._validate import as_finite_array, check_bool, check_int, check_real
 from ..conventions import attrs, coord, depth_range_of, spacing
 from .scatterers import line_generator, random_scatterers
-from .shared import check_scene, is_shared
+from .shared import check_not_empty, check_scene, is_shared
 
 __all__ = [
     "LATERAL_STREAM",
@@ -117,6 +117,7 @@ def deformable_scene(
         attrs ``imaged_first``/``imaged_count`` (the A-lines that are imaged), ``max_strain``,
         ``poisson_ratio``.
     """
+    n_alines = check_int(n_alines, "n_alines", low=1)
     s = check_strain(strain)
     nu = check_real(poisson_ratio, "poisson_ratio", low=0.0, high=0.5)
     zmax = required_depth(depth_range, s)
@@ -268,6 +269,7 @@ def check_line_scene(scene: object, name: str = "scene") -> None:
         )
     if set(scene.z.dims) != {"aline", "scatterer"}:
         raise ValueError(f"{name} z must have dims (aline, scatterer), got {scene.z.dims}")
+    check_not_empty(scene, name)
     depth_range_of(scene, name)
 
 
@@ -537,6 +539,11 @@ def uniaxial_strain(
     nu = check_real(poisson_ratio, "poisson_ratio", low=0.0, high=0.5)
     if is_shared(scene):
         return _uniaxial_shared(scene, s, nu, x_centre, y_centre)
+    if y_centre is not None:
+        check_real(y_centre, "y_centre")
+        raise ValueError(
+            "y_centre is for 3-D shared scenes; independent A-lines have no y (leave it None)"
+        )
     h = depth_range_of(scene, "scene")
     need = required_depth(h, s)
     have = float(scene.attrs.get("z_max", h))

@@ -25,7 +25,7 @@ import numbers
 import numpy as np
 import xarray as xr
 
-from .._validate import as_finite_array
+from .._validate import as_finite_array, check_real
 from ..conventions import attrs, labelled, units_of
 
 __all__ = [
@@ -183,10 +183,19 @@ def region_values(
         raise TypeError("properties must be a Dataset with dim 'region' (labels as coordinate)")
     if properties.sizes["region"] == 0:
         raise ValueError("properties hold no region: give at least one region")
-    if name not in properties:
-        raise ValueError(f"properties lack {name!r}; they hold {list(properties.data_vars)}")
+    if not isinstance(name, str) or name not in properties:
+        raise ValueError(
+            f"name={name!r} is not a variable of properties; they hold {list(properties.data_vars)}"
+        )
     if not isinstance(labels, xr.DataArray) or not np.issubdtype(labels.dtype, np.integer):
         raise TypeError("labels must be an integer DataArray (a label image)")
+    if labels.size == 0:
+        raise ValueError(f"labels is empty (sizes {dict(labels.sizes)}): no pixel to map")
+    if outside is not None:
+        try:
+            outside = float(check_property(name, check_real(outside, "outside")))
+        except ValueError as err:
+            raise ValueError(f"outside: {err}") from None
     table = np.asarray(properties["region"].values)
     values = check_property(name, properties[name].values)
     order = np.argsort(table)
@@ -196,7 +205,7 @@ def region_values(
     vals = values[order][pos]
     if outside is not None:
         none = (labels.values == -1) & ~found
-        vals = np.where(none, float(check_property(name, outside)), vals)
+        vals = np.where(none, outside, vals)
         found = found | none
     if not np.all(found):
         missing = np.unique(labels.values[~found])

@@ -589,6 +589,10 @@ def displacement_at(result: xr.Dataset, z: object, x: object) -> tuple[np.ndarra
         raise TypeError("result must be the xarray.Dataset returned by speckle.compress")
     zz, xx = broadcast(z=as_finite_array(z, "z"), x=as_finite_array(x, "x"))
     zn, xn = result["node_depth"].values, result["node_x"].values
+    if zn.size < 2 or xn.size < 2:
+        raise ValueError(
+            f"result holds {zn.size} x {xn.size} nodes; a displacement field needs >= 2 x 2"
+        )
     pts = np.stack([zz.ravel(), xx.ravel()], axis=-1)
     for k, (axis, name) in enumerate(((zn, "z"), (xn, "x"))):
         margin = 1e-9 * (axis[-1] - axis[0])

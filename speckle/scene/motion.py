@@ -64,6 +64,7 @@ from .._validate import (
     check_real,
 )
 from ..conventions import coord, units_of
+from .shared import check_not_empty
 
 __all__ = [
     "BALLISTIC_DISTRIBUTIONS",
@@ -122,6 +123,7 @@ def _axes(scene: xr.Dataset) -> list[str]:
             "scene must be a scatterer Dataset with a position variable 'z' (a shared scene from "
             "speckle.shared_scene or independent lines from speckle.random_scatterers)"
         )
+    check_not_empty(scene)
     return [a for a in _AXES if a in scene.data_vars]
 
 

@@ -47,6 +47,7 @@ from .scatterers import draw_amplitudes
 __all__ = [
     "AXES",
     "MAX_TILES",
+    "check_not_empty",
     "check_scene",
     "from_lines",
     "is_shared",
@@ -229,6 +230,16 @@ def is_shared(scene: object) -> bool:
     )
 
 
+def check_not_empty(scene: xr.Dataset, name: str = "scene") -> None:
+    """Refuse a scatterer Dataset with nothing to image: a shared scene without scatterers or an
+    independent-line field without A-lines (``ValueError`` naming ``name``). A line field with
+    A-lines but no scatterers (zero density) is a valid, empty medium."""
+    dim = "scatterer" if is_shared(scene) else "aline"
+    if scene.sizes.get(dim, 1) == 0:
+        what = "scatterers" if dim == "scatterer" else "A-lines"
+        raise ValueError(f"{name} holds no {what} (dim {dim!r} has size 0): nothing to act on")
+
+
 def check_scene(scene: object) -> int:
     """Check a shared scene and return its dimension (2 or 3).
 
@@ -279,6 +290,7 @@ def from_lines(scene: xr.Dataset) -> xr.Dataset:
     """
     if not isinstance(scene, xr.Dataset) or set(scene.z.dims) != {"aline", "scatterer"}:
         raise TypeError("scene must be an independent-line field with dims (aline, scatterer)")
+    check_not_empty(scene)
     z = scene.z.transpose("aline", "scatterer").values
     a = scene.amplitude.transpose("aline", "scatterer").values
     x = np.broadcast_to(scene.aline.values[:, None], z.shape)

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from .._validate import check_int, check_real
+from .._validate import check_int, check_real, check_size
 from ..conventions import units_of
 from ..imaging.scan import beam_reach
 from ..imaging.truth import speckle_free_image
@@ -17,6 +17,7 @@ from ..system.source import spectrum
 
 __all__ = [
     "analysed_rows",
+    "check_frames",
     "check_geometry",
     "homogeneous_phantom",
     "run_attrs",
@@ -39,6 +40,15 @@ def check_geometry(geometry: object) -> dict:
     if 2 * m >= int(g["n_pixels"]) - 1:
         raise ValueError("geometry.margin leaves fewer than 2 rows (need 2 margin < n_pixels - 1)")
     return g
+
+
+def check_frames(n_frames: object, geometry: dict) -> int:
+    """``n_frames`` (>= 2) of a checked ``geometry``, refused by name when the frames' images
+    and moved scenes (~64 bytes per pixel, line and scatterer per pixel) pass the memory
+    bound."""
+    per = 64.0 * int(geometry["n_pixels"]) * int(geometry["n_lines"])
+    per *= max(1.0, float(geometry["density"]))
+    return check_size(n_frames, "n_frames", low=2, bytes_per=per, what="the frames")
 
 
 def scan_options(geometry: dict) -> dict:

@@ -45,6 +45,7 @@ velocity with its theory.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Sequence
 
 import numpy as np
@@ -68,6 +69,7 @@ from ..imaging.scan import image
 from ..system.noise import add_noise
 from ._flow import (
     analysed_rows,
+    check_frames,
     check_geometry,
     homogeneous_phantom,
     run_attrs,
@@ -159,6 +161,7 @@ def contrast_floors(contrast: str, *, n_frames: int, snr_db: float) -> tuple[flo
     (0.0, 0.75)
     """
     n = check_int(n_frames, "n_frames", low=2)
+    check_memory(64.0 * n, "n_frames", "the expected contrast at every lag")
     static = expected_contrast(contrast, np.ones(n - 1), snr_db=snr_db)
     noise = expected_contrast(contrast, np.zeros(n - 1), snr_db=snr_db)
     return static, noise
@@ -200,8 +203,9 @@ def velocity_range(
     Returns
     -------
     (float, float)
-        ``(v_low, v_high)`` in µm/s; NaN where a level lies outside the floors (``v_low`` NaN:
-        flow is never told from static tissue; ``v_high`` NaN: the contrast never comes that
+        ``(v_low, v_high)`` in µm/s; NaN (with a ``RuntimeWarning`` saying why) where a level
+        lies outside the floors (``v_low`` NaN: flow is never told from static tissue, and
+        ``v_high`` is NaN with it; ``v_high`` NaN: the contrast never comes that
         close to the noise floor, or the range is empty).
 
     Examples
@@ -234,8 +238,21 @@ def velocity_range(
         return brentq(lambda u: value(u) - level, 0.0, hi, xtol=1e-12) * w0 / dt
 
     v_lo, v_hi = solve(lo_level), solve(hi_level)
+    reasons = []
+    for name, level, v in (("low", lo_level, v_lo), ("high", hi_level, v_hi)):
+        if math.isnan(v):
+            reasons.append(
+                f"{name}={level:g} lies outside the floors ({static:.4g}, {noise:.4g}) of "
+                f"{contrast} (static tissue, noise)"
+            )
+    if math.isnan(v_lo) and math.isfinite(v_hi):
+        reasons.append("v_high is NaN with v_low (no measurable range starts)")
+    if math.isfinite(v_lo) and math.isfinite(v_hi) and v_lo >= v_hi:
+        reasons.append(f"the range is empty (v_low {v_lo:.4g} >= v_high {v_hi:.4g} µm/s)")
     if not (math.isfinite(v_lo) and math.isfinite(v_hi) and v_lo < v_hi):
         v_hi = math.nan
+    if reasons:
+        warnings.warn(f"velocity_range is NaN: {'; '.join(reasons)}", RuntimeWarning, stacklevel=2)
     return v_lo, v_hi
 
 
@@ -281,6 +298,9 @@ def contrast_estimates(
     a = np.asarray(field)
     if not np.iscomplexobj(a) or a.ndim != 3 or a.shape[0] < 2:
         raise ValueError("field must be complex frames (frame, depth, x) with >= 2 frames")
+    a = as_finite_array(a, "field", dtype=complex)
+    if intensity is not None:  # checked whatever the contrast (only speckle_variance uses it)
+        intensity = check_real(intensity, "intensity", low=0, low_inclusive=False)
     if not isinstance(window, Sequence) or len(window) != 2:
         raise ValueError(f"window must be (pixels, lines), got {window!r}")
     w = (
@@ -414,7 +434,7 @@ def flow_failure(
     dts = _positive_sorted(intervals, "intervals")
     if dts[0] <= 0:
         raise ValueError("intervals must be > 0 s")
-    nf = check_int(n_frames, "n_frames", low=2)
+    nf = check_frames(n_frames, g)
     nr = check_int(repeats, "repeats", low=2)
     sd = check_int(seed, "seed", low=0)
     zz = check_real(z, "z", low=0, low_inclusive=False)
@@ -485,15 +505,17 @@ def flow_failure(
                 for i, v in enumerate(vel):
                     g1 = g1_transverse_flow(lags * dt, velocity=v, waist=g["waist"])
                     theory[c, i, k, j] = expected_contrast(name, g1, snr_db=float(snr))
-                v_low[c, k, j], v_high[c, k, j] = velocity_range(
-                    name,
-                    n_frames=nf,
-                    interval=float(dt),
-                    snr_db=float(snr),
-                    waist=g["waist"],
-                    low=lo,
-                    high=hi,
-                )
+                with warnings.catch_warnings():  # a NaN range is a result of the map
+                    warnings.simplefilter("ignore", RuntimeWarning)
+                    v_low[c, k, j], v_high[c, k, j] = velocity_range(
+                        name,
+                        n_frames=nf,
+                        interval=float(dt),
+                        snr_db=float(snr),
+                        waist=g["waist"],
+                        low=lo,
+                        high=hi,
+                    )
     lo_band = (sm + zz * ssd)[:, None, :, None]
     hi_band = (nm - zz * nsd)[:, None, :, None]
     status = np.where(m <= lo_band, BELOW_FLOOR, np.where(m >= hi_band, SATURATED, MEASURABLE))
@@ -581,7 +603,7 @@ def decorrelation_calibration(
     vel = _positive_sorted(velocities, "velocities")
     dt = check_real(interval, "interval", low=0, low_inclusive=False)
     snr = snr_value(snr_db)
-    nf = check_int(n_frames, "n_frames", low=2)
+    nf = check_frames(n_frames, g)
     nr = check_int(repeats, "repeats", low=2)
     sd = check_int(seed, "seed", low=0)
     rows, kw = analysed_rows(g), scan_options(g)

@@ -33,6 +33,7 @@ from ..system.noise import add_noise
 from ..system.source import spectrum
 from ._flow import (
     analysed_rows,
+    check_frames,
     check_geometry,
     homogeneous_phantom,
     run_attrs,
@@ -43,6 +44,9 @@ from ._flow import (
 )
 
 __all__ = ["g1_curves", "phantom_series"]
+
+#: The keys :func:`phantom_series` needs in ``phantom`` (``n_bands`` is optional).
+PHANTOM_KEYS = ("interface", "backscatter", "cells", "vessel", "angiography", "doct", "window")
 
 
 # --- the pipeline's phantom and g1 curves ------------------------------------------------------
@@ -119,7 +123,7 @@ def g1_curves(
     d = check_real(diffusion, "diffusion", low=0)
     v = check_real(velocity, "velocity", low=0)
     dt = check_real(interval, "interval", low=0, low_inclusive=False)
-    nf = check_int(n_frames, "n_frames", low=2)
+    nf = check_frames(n_frames, g)
     nb = check_int(blocks, "blocks", low=2, high=int(g["n_lines"]))
     snr = snr_value(snr_db)
     sd = check_int(seed, "seed", low=0)
@@ -229,6 +233,11 @@ def phantom_series(
     ('depth', 'x')
     """
     g = check_geometry(geometry)
+    if not isinstance(phantom, dict):
+        raise TypeError(f"phantom must be a dict of {PHANTOM_KEYS}, got {type(phantom).__name__}")
+    missing = [k for k in PHANTOM_KEYS if k not in phantom]
+    if missing:
+        raise ValueError(f"phantom lacks {missing} (it needs {PHANTOM_KEYS})")
     sd = check_int(seed, "seed", low=0)
     snr = snr_value(snr_db)
     kw = scan_options(g)

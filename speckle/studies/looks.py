@@ -24,12 +24,14 @@ import numpy as np
 import scipy.ndimage as ndi
 import xarray as xr
 
-from .._validate import as_finite_array
+from .._validate import as_finite_array, check_int, check_memory
 from ..analysis._common import label_looks
 from ..analysis.compounding import brownian_frames
-from ..conventions import coord, depth_range_of
+from ..conventions import coord
 from ..imaging.scan import image
+from ..scene.shared import check_scene
 from ..system.polarization import depolarize
+from ..system.source import check_source
 
 __all__ = ["angular_looks", "polarization_looks", "spatial_looks", "temporal_looks"]
 
@@ -42,6 +44,16 @@ def _moved_field(scene: xr.Dataset, source: xr.DataArray, kw: dict) -> np.ndarra
     """Complex field of a shared scene whose scatterers moved (sorted by ``x`` again first)."""
     order = np.argsort(scene.x.values, kind="stable")
     return image(scene.isel(scatterer=order), source, **kw).field.values
+
+
+def _inputs(scene: object, source: object, x: object) -> tuple[np.ndarray, dict]:
+    """The checked lines ``x`` (µm) and source of a look function (a shared scene only)."""
+    check_scene(scene)
+    src = check_source(source)
+    xs = as_finite_array(x, "x")  # spacing is checked by the imaging (speckle.image)
+    if xs.ndim != 1 or xs.size == 0:
+        raise ValueError("x must be a non-empty 1-D array of line positions in µm")
+    return xs, src
 
 
 def _stacked_looks(
@@ -76,12 +88,11 @@ def angular_looks(
     xarray.DataArray
         Complex looks ``(look, depth, x)``; coordinate ``angle`` (degrees) along ``look``.
     """
+    xs, src = _inputs(scene, source, x)
     ang = as_finite_array(angles, "angles")
     if ang.ndim != 1 or ang.size == 0 or np.any(np.abs(ang) >= 90):
         raise ValueError("angles must be a non-empty 1-D list of degrees in (-90, 90)")
-    n = int(source.attrs["n_pixels"])
-    h = depth_range_of(source, "source")
-    xs = np.asarray(x, dtype=float)
+    n, h = src["n_pixels"], src["depth_range"]
     p = h / n
     pitch = xs[1] - xs[0] if xs.size > 1 else p
     zc, xc = (n - 1) / 2 * p, (xs[0] + xs[-1]) / 2
@@ -126,10 +137,10 @@ def spatial_looks(
     xarray.DataArray
         Complex looks ``(look, depth, x)``; coordinate ``offset`` (µm) along ``look``.
     """
+    xs, _ = _inputs(scene, source, x)
     off = as_finite_array(offsets, "offsets")
     if off.ndim != 1 or off.size == 0:
         raise ValueError("offsets must be a non-empty 1-D list of lateral offsets in µm")
-    xs = np.asarray(x, dtype=float)
     out = [
         image(scene, source, **_image_kw(waist, xs + d, method, tol, chunk)).field.values
         for d in off
@@ -155,8 +166,9 @@ def polarization_looks(
     Intensity-averaged they give the polarization-insensitive image, contrast
     ``sqrt((1 + P^2)/2)``, ``P = |1 - 2 f|`` (dense scene).
     """
+    xs, _ = _inputs(scene, source, x)
     dep = depolarize(scene, depolarization, seed=seed)
-    f = image(dep, source, **_image_kw(waist, np.asarray(x, float), method, tol, chunk)).field
+    f = image(dep, source, **_image_kw(waist, xs, method, tol, chunk)).field
     looks = f.rename(channel="look").transpose("look", "depth", "x")
     looks = looks.assign_coords(channel=("look", looks.look.values)).drop_vars("look")
     return label_looks(looks, "polarization", depolarization=float(depolarization))
@@ -177,8 +189,11 @@ def temporal_looks(
     chunk: int = 64,
 ) -> xr.DataArray:
     """Frames of a shared scene in Brownian motion (:func:`brownian_frames`) as looks."""
-    frames = brownian_frames(scene, n_frames, diffusion=diffusion, interval=interval, seed=seed)
-    xs = np.asarray(x, dtype=float)
+    xs, _ = _inputs(scene, source, x)
+    nf = check_int(n_frames, "n_frames", low=1)
+    # the frames hold z, x and the amplitude (complex) of every scatterer: 32 bytes each
+    check_memory(32.0 * nf * scene.sizes["scatterer"], "n_frames", f"{nf} frames of the scene")
+    frames = brownian_frames(scene, nf, diffusion=diffusion, interval=interval, seed=seed)
     kw = _image_kw(waist, xs, method, tol, chunk)
     out = [
         _moved_field(frames.isel(frame=i).drop_vars("time"), source, kw)

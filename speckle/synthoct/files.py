@@ -41,6 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from .._atomic import atomic_path
+from .._validate import check_memory, check_path
 
 __all__ = [
     "BASELINE_KINDS",
@@ -171,6 +172,13 @@ class ScannerConfig:
             if value < 0:
                 raise ValueError(f"{field} ({keys[field]!r}) must be >= 0 µm, got {value}")
             object.__setattr__(self, field, value)
+        # the scan's field (complex128 per pixel, line and B-scan) and the phantom's table
+        check_memory(
+            16.0 * self.n_pixels * self.n_lines * self.n_bscans,
+            "n_pixels x n_lines x n_bscans",
+            "the scan's complex field",
+        )
+        check_memory(32.0 * self.n_scatterers, "n_scatterers", "the phantom's table")
 
     @property
     def depth_range(self) -> float:
@@ -233,6 +241,7 @@ def read_scanner_config(path: str | os.PathLike) -> ScannerConfig:
     >>> read_scanner_config(p).n_lines
     512
     """
+    check_path(path)
     parser = configparser.ConfigParser(interpolation=None)
     try:
         with open(path, encoding="utf-8-sig") as f:
@@ -370,6 +379,7 @@ def read_phantom_table(path: str | os.PathLike, *, n_scatterers: int | None = No
     >>> read_phantom_table(p).shape
     (2, 4)
     """
+    check_path(path)
     raw = Path(path).read_bytes()
     if not raw.strip():
         raise ValueError(f"{path}: no scatterers (the file is empty)")
@@ -452,6 +462,7 @@ def read_phantom(path: str | os.PathLike, *, config: ScannerConfig | None = None
     >>> read_phantom(p).amplitude.real.values.tolist()
     [0.1, 0.2]
     """
+    check_path(path)
     if config is not None and not isinstance(config, ScannerConfig):
         raise TypeError(f"config must be a ScannerConfig or None, got {type(config).__name__}")
     n = None if config is None else config.n_scatterers
@@ -521,7 +532,9 @@ def write_phantom(
     >>> p.read_text()
     '0.0000e+00 0.0000e+00 1.2500e+01 1.0000e+00\\n'
     """
-    if not (isinstance(energy_scale, (int, float)) and 0 < energy_scale < math.inf):
+    if isinstance(energy_scale, bool) or not (
+        isinstance(energy_scale, (int, float)) and 0 < energy_scale < math.inf
+    ):
         raise ValueError(f"energy_scale must be a positive finite number, got {energy_scale!r}")
     table = phantom_table(phantom, float(energy_scale))
     bad = np.flatnonzero(~np.all(np.isfinite(table), axis=1))
@@ -652,6 +665,8 @@ def write_png(levels: np.ndarray, path: str | os.PathLike) -> None:
         raise TypeError(f"scan must be a uint8 array, got {getattr(levels, 'dtype', levels)!r}")
     if levels.ndim != 2:
         raise ValueError(f"scan must be 2-D (depth, x), got shape {levels.shape}")
+    if levels.size == 0:
+        raise ValueError(f"scan is empty (shape {levels.shape}): a PNG needs >= 1 pixel")
     with atomic_path(path) as tmp:
         Image.fromarray(np.ascontiguousarray(levels), mode="L").save(tmp, format="PNG")
 
@@ -707,6 +722,7 @@ def read_scan(path: str | os.PathLike, *, config: ScannerConfig | None = None):
     >>> scan.dims, float(scan.x[0]), float(scan.depth[1])
     (('depth', 'x'), -1536.0, 6.0)
     """
+    check_path(path)
     return scan_array(read_png(path), config, str(path))
 
 

@@ -253,6 +253,11 @@ def synthoct_maps(
     if not isinstance(images, bool | np.bool_):
         raise TypeError(f"images must be True or False, got {images!r}")
     grey, da = scan_grey(scan)
+    if min(grey.shape) < 3:
+        raise ValueError(
+            f"scan must be at least 3 x 3 pixels (a window >= 2 needs window + 1 pixels a "
+            f"side); got {grey.shape}"
+        )
     official = variant == "official"
     window = check_int(window, "window", low=2, high=min(grey.shape) - 1)
     if dynamic_range is None:

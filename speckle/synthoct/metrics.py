@@ -43,7 +43,7 @@ import warnings
 import numpy as np
 import xarray as xr
 
-from .._validate import check_choice
+from .._validate import check_choice, check_path
 from ..conventions import attrs, coord
 from .maps import MAP_NAMES, VARIANTS, scan_grey, synthoct_maps
 
@@ -344,8 +344,7 @@ def read_metrics_report(path: str | os.PathLike) -> xr.Dataset:
     >>> report.sizes["experiment"], round(float(report.SSIM[1, 3]), 4)
     (3, 0.911)
     """
-    if not isinstance(path, str | os.PathLike):  # an int would be a file descriptor to close
-        raise TypeError(f"path must be a file path (str or os.PathLike), got {type(path).__name__}")
+    check_path(path)  # an int would be a file descriptor to close
     import csv
 
     with open(path, newline="") as f:

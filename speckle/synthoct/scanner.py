@@ -32,6 +32,7 @@ import os
 
 import numpy as np
 
+from .._validate import check_bool, check_int
 from . import _scan
 from .files import (
     ScannerConfig,
@@ -137,6 +138,11 @@ def synthoct_scan(
     (('depth', 'x'), (64, 32), 255)
     """
     cfg = _config(config)
+    field = check_bool(field, "field")
+    if seed is not None:
+        seed = check_int(seed, "seed", low=0)
+    if nthreads is not None:
+        nthreads = check_int(nthreads, "nthreads", low=1)
     if shadowing not in SHADOWING:
         raise ValueError(f"shadowing must be one of {SHADOWING}, got {shadowing!r}")
     for name, value in (("tol", tol), ("eps", eps)):

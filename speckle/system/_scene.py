@@ -6,12 +6,14 @@ import numpy as np
 import xarray as xr
 
 from ..scene.layers import region_values, sample_map
+from ..scene.shared import check_not_empty
 
 
 def check_scene(scene: object) -> xr.Dataset:
     """A scatterer field with variables ``z`` (µm) and ``amplitude`` (``TypeError`` otherwise)."""
     if not isinstance(scene, xr.Dataset) or not {"z", "amplitude"} <= set(scene.data_vars):
         raise TypeError("scene must be an xarray.Dataset with variables 'z' and 'amplitude'")
+    check_not_empty(scene)
     return scene
 
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from .._validate import as_finite_array
 from ..conventions import attrs, spacing, units_of
 from ..scene.layers import property_integral, region_values, sample_map
 from ._scene import check_scene, lateral_positions, scale_amplitudes
@@ -36,7 +37,7 @@ def optical_depth(z: object, attenuation: float | xr.Dataset) -> np.ndarray:
     attenuation : float or xarray.Dataset
         ``mu_t`` in 1/µm (>= 0), or layers from :func:`speckle.layers` with ``attenuation``.
     """
-    return property_integral(z, attenuation, "attenuation")
+    return property_integral(as_finite_array(z, "z"), attenuation, "attenuation")
 
 
 def attenuate(scene: xr.Dataset, attenuation: float | xr.Dataset) -> xr.Dataset:

@@ -57,6 +57,8 @@ def add_floor(
     """
     _intensity(intensity)
     b = check_real(floor, "floor", low=0)
+    if mean_intensity is None and intensity.size == 0:
+        raise ValueError("intensity is empty: its sample mean is undefined; give mean_intensity")
     mean = (
         float(intensity.mean())
         if mean_intensity is None
@@ -107,6 +109,7 @@ def log_expand(data: xr.DataArray, gain: float, offset: float) -> xr.DataArray:
     """
     if not isinstance(data, xr.DataArray):
         raise TypeError("data must be an xarray.DataArray")
+    as_finite_array(data.values, "data")  # real and finite (complex, NaN, inf refused)
     g = check_real(gain, "gain", low=0, low_inclusive=False)
     c = check_real(offset, "offset")
     return np.exp((data - c) / g).assign_attrs(

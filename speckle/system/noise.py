@@ -144,6 +144,10 @@ def add_noise(
     lateral = "aline" if "aline" in field.dims else "x"
     if "depth" not in field.dims or lateral not in field.dims:
         raise ValueError(f"field must have dims 'depth' and 'aline' (or 'x'), got {field.dims}")
+    if field.size == 0:
+        raise ValueError(f"image holds no pixel (field sizes {dict(field.sizes)})")
+    if spectrum is not None:  # checked for every kind (white noise does not use it)
+        _weights("shot", spectrum, field.sizes["depth"])
     ref = (
         float((abs(field) ** 2).mean())
         if signal_intensity is None

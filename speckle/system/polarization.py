@@ -115,6 +115,18 @@ def degree_of_polarization(image: xr.Dataset, dims: object = None) -> xr.DataArr
     """
     if not isinstance(image, xr.Dataset) or "channel" not in image.field.dims:
         raise TypeError("image must be a Dataset with a complex 'field' and dim 'channel'")
+    if set(CHANNELS) - set(np.asarray(image.channel.values).tolist()):
+        raise ValueError(
+            f"image must hold the channels {CHANNELS} (speckle.depolarize), got "
+            f"{image.channel.values.tolist()}"
+        )
+    others = [d for d in image.field.dims if d != "channel"]
+    if image.field.size == 0:
+        raise ValueError(f"image holds no pixel (sizes {dict(image.field.sizes)})")
+    if dims is not None:
+        names = [dims] if isinstance(dims, str) else dims
+        if not isinstance(names, list | tuple) or any(d not in others for d in names):
+            raise ValueError(f"dims must be None or dims of the image among {others}, got {dims!r}")
     co, x = image.field.sel(channel="co"), image.field.sel(channel="cross")
     s0 = (abs(co) ** 2 + abs(x) ** 2).mean(dims)
     s1 = (abs(co) ** 2 - abs(x) ** 2).mean(dims)

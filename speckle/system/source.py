@@ -19,8 +19,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .._validate import as_finite_array, check_choice, check_int, check_real
-from ..conventions import attrs, coord, units_of
+from .._validate import as_finite_array, check_choice, check_int, check_real, check_size
+from ..conventions import attrs, coord, depth_range_of, units_of
 
 __all__ = [
     "SPECTRUM_SHAPES",
@@ -74,7 +74,7 @@ def delta_k(n_pixels: int, depth_range: float) -> float:
 
 def spectral_index(n_pixels: int) -> np.ndarray:
     """Spectral indices ``n = -(N//2) ... N-1-(N//2)`` (low to high wavenumber)."""
-    n = check_int(n_pixels, "n_pixels", low=2)
+    n = check_size(n_pixels, "n_pixels", low=2)
     return np.arange(n) - n // 2
 
 
@@ -143,9 +143,10 @@ def spectrum(
         On a missing or ambiguous ``k0`` specification, out-of-range values or a wrong
         ``weights`` length.
     """
-    n = check_int(n_pixels, "n_pixels", low=2)
+    n = check_size(n_pixels, "n_pixels", low=2, bytes_per=64.0)
     h = check_real(depth_range, "depth_range", low=0, low_inclusive=False)
     check_choice(shape, "shape", SPECTRUM_SHAPES)
+    check_real(refractive_index, "refractive_index", low=0, low_inclusive=False)
     given = [
         name
         for name, v in (("k0", k0), ("k0_dk", k0_dk), ("wavelength", wavelength))
@@ -208,15 +209,43 @@ def spectrum(
     )
 
 
-def check_weights(weights: object, n_pixels: int) -> np.ndarray:
-    """Validate a user spectrum: ``n_pixels`` finite, non-negative weights, not all zero."""
-    s = as_finite_array(weights, "spectrum")
+def check_weights(weights: object, n_pixels: int, name: str = "spectrum") -> np.ndarray:
+    """Validate a user spectrum: ``n_pixels`` finite, non-negative weights, not all zero
+    (errors name ``name``)."""
+    s = as_finite_array(weights, name)
     if s.ndim != 1 or s.size != n_pixels:
         raise ValueError(
-            f"spectrum must hold exactly n_pixels={n_pixels} weights (1-D), got shape {s.shape}"
+            f"{name} must hold exactly n_pixels={n_pixels} weights (1-D), got shape {s.shape}"
         )
     if np.any(s < 0):
-        raise ValueError("spectrum weights must be non-negative")
+        raise ValueError(f"{name} must hold non-negative weights")
     if not np.any(s > 0):
-        raise ValueError("spectrum weights must not all be zero")
+        raise ValueError(f"{name} must hold weights that are not all zero")
     return s
+
+
+def check_source(source: object, name: str = "source") -> dict:
+    """Check a source spectrum made by :func:`spectrum` and return its parts.
+
+    Returns
+    -------
+    dict
+        ``n_pixels``, ``depth_range`` (µm), ``k0`` (rad/µm) and ``spectrum`` (the checked
+        weights, one per pixel).
+
+    Raises
+    ------
+    TypeError, ValueError
+        Naming ``name``: not a DataArray with the attributes of :func:`spectrum`, or weights
+        that are not ``n_pixels`` finite, non-negative values, not all zero (e.g. an empty
+        selection of a source).
+    """
+    if not isinstance(source, xr.DataArray) or not {"n_pixels", "k0"} <= set(source.attrs):
+        raise TypeError(f"{name} must be a DataArray from speckle.spectrum")
+    n = check_int(source.attrs["n_pixels"], f"{name} attribute n_pixels", low=1)
+    return {
+        "n_pixels": n,
+        "depth_range": depth_range_of(source, name),
+        "k0": check_real(source.attrs["k0"], f"{name} attribute k0"),
+        "spectrum": check_weights(source.values, n, name),
+    }

@@ -521,6 +521,8 @@ def process(
     fwhm = check_real(window_fwhm_fraction, "window_fwhm_fraction", low=0, low_inclusive=False)
     comp = check_dispersion(dispersion)
     g = as_finite_array(grid, "grid")
+    if g.ndim != 1 or g.size < 2:
+        raise ValueError(f"grid must be a 1-D linear-k grid of >= 2 wavenumbers, got {g.shape}")
     kc = check_real(k0, "k0", low=0)
     y = _camera_signal(signal)
     if background is not None:

@@ -99,11 +99,17 @@ def test_transverse_flow_g1_and_velocity_range_invert():
     assert (lo2, hi2) == pytest.approx((lo, hi), rel=1e-9)
     # a level below the static floor: never told from static tissue
     static, _ = contrast_floors("liv", n_frames=4, snr_db=20.0)
-    assert math.isnan(
-        velocity_range(
+    with pytest.warns(RuntimeWarning, match="low=.* lies outside the floors"):
+        lo3, hi3 = velocity_range(
             "liv", n_frames=4, interval=1e-3, snr_db=20.0, waist=8.0, low=static / 2, high=20.0
-        )[0]
-    )
+        )
+    assert math.isnan(lo3) and math.isnan(hi3)
+    # levels in the wrong order: an empty range, NaN v_high with its reason
+    with pytest.warns(RuntimeWarning, match="range is empty"):
+        lo4, hi4 = velocity_range(
+            "liv", n_frames=4, interval=1e-3, snr_db=20.0, waist=8.0, low=20.0, high=5.0
+        )
+    assert lo4 == pytest.approx(hi) and math.isnan(hi4)
 
 
 def test_simulated_floors_match_their_derived_values():

@@ -43,6 +43,11 @@ def _as_image(image: object) -> xr.DataArray:
         raise ValueError(
             f"image must have dims (depth, x) (and optionally frame), got {image.dims}"
         )
+    if np.iscomplexobj(image):
+        raise TypeError(
+            f"image must hold real {kind} values (speckle.load_image), got a complex array: "
+            "pass abs(field) ** 2 with kind='intensity'"
+        )
     return image.transpose(*(("frame",) if "frame" in image.dims else ()), "depth", "x")
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import optimize
 
-from ..._validate import check_int, check_real
+from ..._validate import check_real, check_size
 from ...analysis import autocorrelation as ac
 from ...analysis.sparse import depth_intensity_psf
 
@@ -33,7 +33,7 @@ def rectangular_weights(width_fraction: float, n_pixels: int) -> np.ndarray:
     change continuously with the width (1 fills the pixel band).
     """
     f = check_real(width_fraction, "width_fraction", low=0, low_inclusive=False, high=1.0)
-    n = check_int(n_pixels, "n_pixels", low=8)
+    n = check_size(n_pixels, "n_pixels", low=8, bytes_per=64.0)
     off = (np.arange(n) - n // 2) / n
     lo, hi = np.maximum(off - 0.5 / n, -f / 2), np.minimum(off + 0.5 / n, f / 2)
     return np.sqrt(np.clip((hi - lo) * n, 0.0, 1.0))  # S^2 is the covered fraction

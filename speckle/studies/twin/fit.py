@@ -8,7 +8,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import xarray as xr
 
-from ..._validate import check_int, check_real
+from ..._validate import check_int, check_real, check_size
 from ...conventions import attrs
 from ._estimates import _estimate, _jackknife
 from ._focus import _fit_focus, _focus_test, _refit_focus, _row_mean_covariance
@@ -135,7 +135,7 @@ def fit_system(
     kind = img.attrs["kind"]
     n_med = check_real(refractive_index, "refractive_index", low=1.0)
     k0v = None if k0 is None else check_real(k0, "k0", low=0, low_inclusive=False)
-    npx = check_int(n_pixels, "n_pixels", low=16)
+    npx = check_size(n_pixels, "n_pixels", low=16, bytes_per=64.0)
     ml = check_int(max_lag, "max_lag", low=2)
     nb = check_int(n_blocks, "n_blocks", low=4)
     nbands = check_int(n_bands, "n_bands", low=0)
