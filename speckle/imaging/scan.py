@@ -16,6 +16,7 @@ file (on the local threads scheduler or a ``dask.distributed`` cluster).
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable
 
 import dask
@@ -354,6 +355,7 @@ def image(
     zs = scene.z.values
     z_lo, z_hi = (0.0, src["depth_range"]) if not wrap else (float(zs.min()), float(zs.max()))
     reach = beam_reach(w0, widening=_widening(optics, w0, src["k0"], z_lo, z_hi))
+    _warn_outside(scene, xs, reach)
     order = np.argsort(scene.x.values, kind="stable")
     sc = scene.isel(scatterer=order)
 
@@ -371,6 +373,22 @@ def image(
     field = _blocks(make_task, xs, ys, c, src["n_pixels"])
     meta.update({f"scene_{k}": v for k, v in scene.attrs.items()})
     return _dataset(field, xs, ys, src, meta)
+
+
+def _warn_outside(scene: xr.Dataset, xs: np.ndarray, reach: float) -> None:
+    """Warn when lines see none of the scene's x window (their image is empty space)."""
+    if not {"x_min", "x_max"} <= set(scene.attrs):
+        return
+    lo, hi = float(scene.attrs["x_min"]), float(scene.attrs["x_max"])
+    blind = (xs + reach < lo) | (xs - reach >= hi)
+    if blind.any():
+        warnings.warn(
+            f"{int(blind.sum())} of {xs.size} lines (x from {xs[blind].min():g} µm) lie farther "
+            f"than the beam reach {reach:.3g} µm from the scene's x window [{lo:g}, {hi:g}) µm: "
+            "they image empty space (zeros); draw the scene over the lines plus the reach",
+            UserWarning,
+            stacklevel=3,
+        )
 
 
 def image_regions(

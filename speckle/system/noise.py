@@ -147,7 +147,7 @@ def add_noise(
     if field.size == 0:
         raise ValueError(f"image holds no pixel (field sizes {dict(field.sizes)})")
     if spectrum is not None:  # checked for every kind (white noise does not use it)
-        _weights("shot", spectrum, field.sizes["depth"])
+        _weights("shot" if kind == "white" else kind, spectrum, field.sizes["depth"])
     ref = (
         float((abs(field) ** 2).mean())
         if signal_intensity is None

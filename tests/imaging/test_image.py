@@ -55,6 +55,22 @@ def test_wrap_keeps_or_drops_the_tissue_below_the_image():
         assert _rel(ds.field.values, ref.T) < 1e-13
 
 
+def test_lines_beyond_the_scene_window_warn_that_they_image_empty_space():
+    """Lines farther than the beam reach from the scene's x window see no scatterer: their
+    image is zeros (right) and a warning says why; lines within reach do not warn."""
+    scene = _scene(x_range=(0.0, 100.0))
+    reach = scan.beam_reach(6.0)
+    far = np.array([100.0 + reach + 1.0, 100.0 + reach + 5.0])
+    with pytest.warns(UserWarning, match="2 of 2 lines .* image empty space"):
+        ds = speckle.image(scene, SRC, waist=6.0, x=far)
+    assert np.all(ds.field.values == 0)
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        speckle.image(scene, SRC, waist=6.0, x=np.array([100.0 + reach - 1.0]))
+
+
 def test_one_line_on_the_scatterers_is_an_ascan():
     scene = _scene().isel(scatterer=slice(0, 40))
     scene = scene.assign(x=("scatterer", np.full(40, 12.5)))
