@@ -5,6 +5,7 @@ lag for each motion model beside its theory. Lengths in µm, times in s, velocit
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import xarray as xr
@@ -332,6 +333,14 @@ def phantom_series(
         out.attrs.pop(key)
     names = ("speckle_variance", "ssada", "liv", "liv_doct", "ocds")
     region = coord("region", np.arange(4))
+    empty = [r for r in range(4) if not bool((labels == r).any())]
+    if empty:
+        warnings.warn(
+            f"phantom_series: region(s) {empty} ({out.attrs['region_names']}) hold no pixel of "
+            "the image: their <contrast>_region means are NaN (move them inside the image)",
+            RuntimeWarning,
+            stacklevel=2,
+        )
     for name in names:
         means = [float(out[name].where(labels == r).mean()) for r in range(4)]
         out[f"{name}_region"] = ("region", means, {**out[name].attrs})

@@ -183,3 +183,28 @@ def test_bad_input_is_refused_before_work(kwargs, message):
         expected_contrast("variance", [0.5])
     with pytest.raises(ValueError, match="g1"):
         expected_contrast("liv", [1.5])
+
+
+def test_phantom_series_says_why_a_region_mean_is_nan():
+    """A vessel below the image holds no pixel: its region means are NaN, with a warning that
+    names the region; a phantom that is not a dict, or lacks keys, is refused naming it."""
+    from speckle.studies.dynamics_series import phantom_series
+
+    geo = dict(n_pixels=16, n_lines=8, pixel_size=4.0, k0_dk=10.0, waist=8.0, density=4.0)
+    ph = dict(
+        interface=24.0,
+        backscatter=[1.0, 2.0],
+        cells=dict(centre=[12.0, 16.0], radius=6.0, diffusion=0.5),
+        vessel=dict(depth=500.0, radius=8.0, peak_velocity=2000.0),
+        angiography=dict(frames=3, interval=2e-3),
+        doct=dict(frames=3, interval=4e-3, delays=[4e-3, 8e-3]),
+        window=[3, 3],
+        n_bands=2,
+    )
+    with pytest.warns(RuntimeWarning, match=r"region\(s\) \[3\]"):
+        ds = phantom_series(geo, ph, snr_db=30.0, seed=1)
+    assert np.isnan(ds.liv_region.values[3]) and np.all(np.isfinite(ds.liv_region.values[:3]))
+    with pytest.raises(TypeError, match="phantom"):
+        phantom_series(geo, [ph], snr_db=30.0, seed=1)
+    with pytest.raises(ValueError, match=r"phantom lacks .*vessel"):
+        phantom_series(geo, {k: v for k, v in ph.items() if k != "vessel"}, snr_db=30.0, seed=1)
