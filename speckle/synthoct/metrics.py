@@ -168,6 +168,14 @@ def _vif(a: np.ndarray, b: np.ndarray, noise: float = 2.0) -> float:
         sv[sv <= eps] = eps
         num += np.sum(np.log10(1.0 + g**2 * va / (sv + noise)))
         den += np.sum(np.log10(1.0 + va / noise))
+    if den == 0:  # sewar's 0/0: NaN, here with its reason
+        warnings.warn(
+            "VIF is NaN: the reference has no variance at any scale (a constant image carries "
+            "no information to preserve)",
+            RuntimeWarning,
+            stacklevel=4,
+        )
+        return float("nan")
     return float(num / den)
 
 

@@ -140,3 +140,14 @@ def test_physical_variant_differs_where_the_quirks_act():
 def test_bad_input_is_refused(reference, target, kwargs, error, word):
     with pytest.raises(error, match=word):
         speckle.synthoct_metrics(reference, target, **kwargs)
+
+
+def test_vif_of_a_constant_reference_is_nan_and_says_why():
+    """A constant reference has no variance at any scale: VIF is sewar's 0/0, NaN, with a
+    warning giving the reason; the other metrics answer (PSNR of two levels 20 apart)."""
+    a = np.full((40, 40), 100, np.uint8)
+    b = np.full((40, 40), 120, np.uint8)
+    with pytest.warns(RuntimeWarning, match="VIF is NaN: the reference has no variance"):
+        ds = speckle.synthoct_metrics(a, b, lpips=False)
+    assert np.isnan(ds["VIF"].values[0])
+    assert ds["PSNR"].values[0] == pytest.approx(-10 * np.log10((20 / 255) ** 2), rel=1e-6)
