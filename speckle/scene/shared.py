@@ -234,10 +234,14 @@ def check_not_empty(scene: xr.Dataset, name: str = "scene") -> None:
     """Refuse a scatterer Dataset with nothing to image: a shared scene without scatterers or an
     independent-line field without A-lines (``ValueError`` naming ``name``). A line field with
     A-lines but no scatterers (zero density) is a valid, empty medium."""
-    dim = "scatterer" if is_shared(scene) else "aline"
-    if scene.sizes.get(dim, 1) == 0:
-        what = "scatterers" if dim == "scatterer" else "A-lines"
-        raise ValueError(f"{name} holds no {what} (dim {dim!r} has size 0): nothing to act on")
+    if is_shared(scene):
+        dims = ["scatterer"]
+    else:  # the lines' dims: every dim of z but the scatterers (aline, and strain, time, ...)
+        dims = [d for d in (scene.z.dims if "z" in scene else ()) if d != "scatterer"]
+    empty = [d for d in dims if scene.sizes[d] == 0]
+    if empty:
+        what = "scatterers" if empty == ["scatterer"] else "A-lines"
+        raise ValueError(f"{name} holds no {what} (dim {empty[0]!r} has size 0): nothing to act on")
 
 
 def check_scene(scene: object) -> int:
