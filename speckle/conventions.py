@@ -66,6 +66,8 @@ them; docstrings write µm.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import xarray as xr
 
@@ -73,7 +75,9 @@ __all__ = [
     "COORDS",
     "DEPTH_RANGE",
     "QUANTITIES",
+    "RETIRED",
     "attrs",
+    "canonical_dims",
     "coord",
     "depth_range_of",
     "inverse_units",
@@ -154,6 +158,15 @@ QUANTITIES: dict[str, tuple[str, str]] = {
         "intensity relative to the mean speckle intensity",
     ),
     "log_data": ("1 (log-compressed, unknown gain/offset)", "log-compressed measured data"),
+}
+
+
+#: Retired names, old -> (new, kind); kind is ``dim``, ``parameter``, ``function`` or ``attr``.
+#: Each old name keeps working for one release with a ``FutureWarning`` naming the new one
+#: (dims through :func:`canonical_dims`); ``tests/test_names.py`` checks that no module uses
+#: one outside its deprecation shim.
+RETIRED: dict[str, tuple[str, str]] = {
+    "aline": ("x", "dim"),
 }
 
 
@@ -357,3 +370,65 @@ def depth_range_of(
             f"{what} needs attribute 'depth_range' (unambiguous depth H in µm); it has {sorted(a)}"
         )
     return None
+
+
+def canonical_dims(obj: object, what: str = "image") -> object:
+    """``obj`` with retired dim names renamed to their current ones (``aline`` -> ``x``).
+
+    The front door of every function taking a labelled image: an image written before the
+    rename, with dims ``(depth, aline)``, is accepted for one release and renamed to
+    ``(depth, x)`` with a ``FutureWarning``; anything that is not an xarray object passes
+    unchanged.
+
+    Parameters
+    ----------
+    obj : xarray.DataArray, xarray.Dataset or any
+        A labelled image (or anything else, returned as is).
+    what : str
+        Name of ``obj`` used in error messages (e.g. ``"image"``, ``"frames"``).
+
+    Returns
+    -------
+    same type as ``obj``
+        ``obj`` with every retired dim (and its coordinate) renamed.
+
+    Raises
+    ------
+    ValueError
+        If ``obj`` has both a retired dim and its new name (e.g. ``aline`` and ``x``).
+
+    Warns
+    -----
+    FutureWarning
+        Naming the new dim, e.g. ``dim 'aline' is now 'x'``.
+
+    Examples
+    --------
+    >>> import warnings, xarray as xr
+    >>> old = xr.DataArray([[1.0, 2.0]], dims=("depth", "aline"))
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore", FutureWarning)
+    ...     canonical_dims(old).dims
+    ('depth', 'x')
+    """
+    if not isinstance(obj, xr.DataArray | xr.Dataset):
+        return obj
+    renames = {}
+    for old, (new, kind) in RETIRED.items():
+        if kind != "dim" or old not in obj.dims:
+            continue
+        if new in obj.dims or new in obj.coords:
+            raise ValueError(
+                f"{what} has both dims {old!r} (retired) and {new!r}: keep only {new!r}"
+            )
+        renames[old] = new
+    if not renames:
+        return obj
+    for old, new in renames.items():
+        warnings.warn(
+            f"dim {old!r} is now {new!r}: {what} with dim {old!r} is renamed; the old name will "
+            f"be refused in the next release",
+            FutureWarning,
+            stacklevel=3,
+        )
+    return obj.rename(renames)

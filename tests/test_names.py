@@ -138,3 +138,25 @@ def test_a_file_written_before_the_rename_is_refused_clearly():
         depth_range_of(src.drop_attrs(), "source")
     assert depth_range_of(src.drop_attrs(), required=False) is None
     assert depth_range_of(src) == 128.0
+
+
+def test_canonical_dims_renames_the_retired_lateral_dim_with_a_warning():
+    from speckle.conventions import RETIRED, canonical_dims
+
+    assert RETIRED["aline"] == ("x", "dim")
+    old = speckle.__class__  # any non-xarray object passes unchanged
+    assert canonical_dims(old) is old
+    import xarray as xr
+
+    img = xr.DataArray(np.ones((2, 3)), dims=("depth", "aline"), coords={"aline": [0.0, 5.0, 10.0]})
+    with pytest.warns(FutureWarning, match="dim 'aline' is now 'x'"):
+        new = canonical_dims(img)
+    assert new.dims == ("depth", "x")
+    np.testing.assert_array_equal(new.x.values, [0.0, 5.0, 10.0])
+    current = img.rename({"aline": "x"})
+    assert canonical_dims(current) is current  # no copy, no warning
+    with pytest.warns(FutureWarning, match="dim 'aline' is now 'x'"):
+        assert canonical_dims(img.to_dataset(name="a")).sizes["x"] == 3
+    both = img.expand_dims(x=[1.0])
+    with pytest.raises(ValueError, match=r"both dims 'aline'.*and 'x'"):
+        canonical_dims(both)
