@@ -161,12 +161,19 @@ QUANTITIES: dict[str, tuple[str, str]] = {
 }
 
 
-#: Retired names, old -> (new, kind); kind is ``dim``, ``parameter``, ``function`` or ``attr``.
+#: Retired names, old -> (new, kind); kind is ``dim``, ``attr``, ``function``, ``constant``
+#: (public names of the top level and their subpackage) or ``parameter`` (key
+#: ``"<function>.<parameter>"``: the parameter is retired in that function only).
 #: Each old name keeps working for one release with a ``FutureWarning`` naming the new one
 #: (dims through :func:`canonical_dims`); ``tests/test_names.py`` checks that no module uses
 #: one outside its deprecation shim.
 RETIRED: dict[str, tuple[str, str]] = {
     "aline": ("x", "dim"),
+    "METHODS": ("ASCAN_METHODS", "constant"),
+    "image": ("scan_image", "function"),
+    "process": ("process_interferogram", "function"),
+    "compress": ("compress_phantom", "function"),
+    "layers": ("layer_stack", "function"),
 }
 
 

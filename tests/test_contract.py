@@ -155,7 +155,7 @@ class Fixtures:
 
     @functools.cached_property
     def fem(self):
-        return speckle.compress(self.fem_labels, {0: 10.0, 1: 40.0}, 0.3, strain=0.01)
+        return speckle.compress_phantom(self.fem_labels, {0: 10.0, 1: 40.0}, 0.3, strain=0.01)
 
     @functools.cached_property
     def system(self):
@@ -488,7 +488,7 @@ ENTRIES: dict[str, Entry] = {
         displacement="none",
         why="displacement: a callable or a Dataset, checked in tests/scene",
     ),
-    "layers": E(
+    "layer_stack": E(
         lambda: dict(tops=[50.0, 80.0], properties={"backscatter": [2.0, 3.0]}),
         tops="positions",
         properties="none",
@@ -527,7 +527,7 @@ ENTRIES: dict[str, Entry] = {
         why="ranges: pairs checked in tests/scene/test_properties_scene.py",
     ),
     "from_lines": E(lambda: dict(scene=F.scene)),
-    "compress": E(
+    "compress_phantom": E(
         lambda: dict(
             labels=F.fem_labels,
             youngs_modulus={0: 10.0, 1: 40.0},
@@ -737,7 +737,7 @@ ENTRIES: dict[str, Entry] = {
     "interpolation_gain": E(
         lambda: dict(theta=1.0, t=0.3, method="cubic"), theta="real_array", t="real_array"
     ),
-    "process": E(
+    "process_interferogram": E(
         lambda: dict(
             signal=F.camera[0],
             grid=F.camera[2],
@@ -837,7 +837,7 @@ ENTRIES: dict[str, Entry] = {
     ),
     "beam_reach": E(lambda: dict(waist=6.0), eps="probability", widening="positive"),
     "scan_lines": E(lambda: dict(n_lines=4, pitch=2.0), start="real"),
-    "image": E(
+    "scan_image": E(
         lambda: dict(scene=F.shared, source=F.src, waist=4.0, x=speckle.scan_lines(4, 4.0)),
         y="positions",
     ),

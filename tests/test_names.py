@@ -160,3 +160,34 @@ def test_canonical_dims_renames_the_retired_lateral_dim_with_a_warning():
     both = img.expand_dims(x=[1.0])
     with pytest.raises(ValueError, match=r"both dims 'aline'.*and 'x'"):
         canonical_dims(both)
+
+
+RETIRED_PUBLIC = [
+    ("METHODS", "ASCAN_METHODS", "imaging"),
+    ("image", "scan_image", "imaging"),
+    ("process", "process_interferogram", "system"),
+    ("compress", "compress_phantom", "scene"),
+    ("layers", "layer_stack", "scene"),
+]
+
+
+@pytest.mark.parametrize(("old", "new", "package"), RETIRED_PUBLIC)
+def test_a_retired_public_name_warns_naming_the_new_one(old, new, package):
+    from speckle.conventions import RETIRED
+
+    assert RETIRED[old][0] == new
+    sub = importlib.import_module(f"speckle.{package}")
+    assert old not in speckle.__all__ and old not in sub.__all__
+    assert new in speckle.__all__ and new in sub.__all__
+    with pytest.warns(FutureWarning, match=rf"speckle\.{old} is now speckle\.{new}"):
+        assert getattr(speckle, old) is getattr(speckle, new)
+    if old != "layers":  # speckle.scene.layers is the module
+        with pytest.warns(FutureWarning, match=rf"speckle\.{package}\.{old} is now"):
+            assert getattr(sub, old) is getattr(sub, new)
+    module = importlib.import_module(
+        getattr(speckle, new).__module__
+        if callable(getattr(speckle, new))
+        else "speckle.imaging.aline"
+    )
+    with pytest.warns(FutureWarning, match=rf"{old} moved to .*\.{new}"):
+        assert getattr(module, old) is getattr(speckle, new)

@@ -47,7 +47,7 @@ from ..analysis import image_quality as iq
 from ..conventions import attrs, coord
 from ..imaging.aline import ascan
 from ..imaging.bscan import bscan
-from ..imaging.scan import image
+from ..imaging.scan import scan_image
 from ..scene.scatterers import random_scatterers
 from ..studies.looks import angular_looks, polarization_looks, spatial_looks, temporal_looks
 from ..studies.suppression import DB_RANGE, DB_TOP, METRICS, build_phantom, quality
@@ -80,7 +80,7 @@ def _physical_looks(ph: dict, cfg: Mapping, seed: int, snr_db: float) -> dict:
     """Noise-free and noisy looks of every physical family (largest set of each), and the
     time spent processing them: {family: (looks, noisy, process_seconds_per_look_set)}."""
     src, sc, kw = ph["source"], ph["scene"], ph["kw"]
-    single = image(sc, src, **kw).field.values
+    single = scan_image(sc, src, **kw).field.values
     out = {"single": single}
     ref = float(np.mean(np.abs(single) ** 2))
     base = xr.DataArray(single[None], dims=("look", "depth", "x"))
@@ -534,7 +534,7 @@ def _method_image(spec: Mapping, ph: dict, seed: int, snr_db: float, cache: dict
     """Intensity image of one failure-map method spec on phantom ``ph`` (noisy)."""
     src, sc, kw = ph["source"], ph["scene"], ph["kw"]
     if "single" not in cache:
-        cache["single"] = image(sc, src, **kw).field.values
+        cache["single"] = scan_image(sc, src, **kw).field.values
         cache["ref"] = float(np.mean(np.abs(cache["single"]) ** 2))
     ref = cache["ref"]
     fam = spec["family"]

@@ -219,8 +219,8 @@ def artefact_bscan(
         dispersion=dispersion,
     )  # fmt: skip
     grid = sp.grid_wavenumbers(system)
-    raw = sp.process(sig, grid=grid, k0=system.k0)
-    proc = sp.process(
+    raw = sp.process_interferogram(sig, grid=grid, k0=system.k0)
+    proc = sp.process_interferogram(
         sig, grid=grid, k0=system.k0, wavenumber=k, resample="cubic",
         background=reference_power * sp.source_weights(system, k),
         dispersion=dispersion, window=window,

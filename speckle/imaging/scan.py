@@ -1,6 +1,6 @@
 """The labelled scan API: shared scene + Gaussian beam + scan geometry -> lazy image Dataset.
 
-:func:`image` images a shared scene (:mod:`speckle.scene.shared`) held in memory;
+:func:`scan_image` images a shared scene (:mod:`speckle.scene.shared`) held in memory;
 :func:`image_regions` draws the scene tile by tile inside each chunk, so a scene too large for
 memory (a 3-D volume) is never built whole. Both return a Dataset over ``(depth, x[, y])`` in
 µm whose ``field`` is a Dask array, one task per chunk of lines: a chunk's task gets only the
@@ -23,6 +23,7 @@ import dask.array as da
 import numpy as np
 import xarray as xr
 
+from .._deprecate import moved
 from .._validate import as_finite_array, check_int, check_real
 from ..conventions import attrs, coord, depth_range_of, spacing, units_of
 from ..provenance import provenance_attrs
@@ -32,7 +33,10 @@ from .aline import pixel_depths
 from .beam import beam_scan
 from .gaussian_beam import MAX_WAIST
 
-__all__ = ["REACH_EPS", "beam_reach", "image", "image_regions", "scan_kernel", "scan_lines"]
+__all__ = ["REACH_EPS", "beam_reach", "image_regions", "scan_image", "scan_kernel", "scan_lines"]
+
+#: ``image`` (retired, :data:`speckle.conventions.RETIRED`) is now ``scan_image``.
+__getattr__ = moved(__name__, __name__, [], {"image": "scan_image"})
 
 #: Relative double-pass weight below which a scatterer is outside the beam's reach: below
 #: float64 rounding (2^-53 = 1.1e-16), so the halo changes nothing beyond rounding.
@@ -226,12 +230,12 @@ def scan_kernel(
     rayleigh_range: float | None = None,
     z_bounds: tuple[float, float] | None = None,
 ) -> tuple[Callable, float, np.ndarray, np.ndarray | None, dict]:
-    """The checked imaging kernel of :func:`image`, for callers that pick the scatterers.
+    """The checked imaging kernel of :func:`scan_image`, for callers that pick the scatterers.
 
     Parameters
     ----------
     source, waist, x, y, method, tol, wrap, focus, rayleigh_range
-        As in :func:`image` (checked here, before any work).
+        As in :func:`scan_image` (checked here, before any work).
     z_bounds : (float, float), optional
         Depth range (µm) of the scatterers, for the reach of a focused beam with ``wrap``;
         default ``[0, H)``.
@@ -243,7 +247,7 @@ def scan_kernel(
         field ``(N, Lx[, Ly])`` of lines from those scatterers (:func:`speckle.beam_scan`),
         ``reach`` the lateral distance (µm) beyond which a scatterer adds nothing
         (:func:`beam_reach` of the widest beam), the checked line positions, and the attrs
-        :func:`image` records (with ``n_pixels``, ``depth_range`` and ``k0``).
+        :func:`scan_image` records (with ``n_pixels``, ``depth_range`` and ``k0``).
 
     Examples
     --------
@@ -266,7 +270,7 @@ def _first(ys: np.ndarray | None) -> np.ndarray | None:
     return None if ys is None else ys[:1]
 
 
-def image(
+def scan_image(
     scene: xr.Dataset,
     source: xr.DataArray,
     *,
@@ -335,7 +339,7 @@ def image(
     if extra:
         d = extra[0]
         parts = [
-            image(
+            scan_image(
                 scene.isel({d: i}),
                 source,
                 waist=w0,
@@ -394,7 +398,7 @@ def image_regions(
     focus: float | None = None,
     rayleigh_range: float | None = None,
 ) -> xr.Dataset:
-    """Like :func:`image`, drawing the scene of ``regions`` tile by tile inside each chunk.
+    """Like :func:`scan_image`, drawing the scene of ``regions`` tile by tile inside each chunk.
 
     Each chunk's task draws :func:`speckle.scene.shared.shared_scene` over depths ``[0, H)``
     and the lateral window of its lines plus the beam reach, and images it: memory holds one
@@ -408,12 +412,12 @@ def image_regions(
     seed, tile
         As in :func:`speckle.scene.shared.shared_scene`.
     source, waist, x, y, chunk, method, tol, focus, rayleigh_range
-        As in :func:`image` (``wrap`` is ``False``: the scene is drawn over ``[0, H)`` only).
+        As in :func:`scan_image` (``wrap`` is ``False``: the scene is drawn over ``[0, H)`` only).
 
     Returns
     -------
     xarray.Dataset
-        As :func:`image`.
+        As :func:`scan_image`.
     """
     src, w0, xs, ys, c, meta, kernel, optics = _prepare(
         source, waist, x, y, chunk, method, tol, False, focus, rayleigh_range

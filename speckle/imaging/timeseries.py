@@ -2,7 +2,7 @@
 
 The scene comes from :mod:`speckle.scene.motion`: positions with a ``time`` dim (s). Every
 image here is the project's beam imaging (:func:`speckle.beam_scan` through the chunk kernel of
-:func:`speckle.imaging.scan.image`), evaluated on the positions at the right time:
+:func:`speckle.imaging.scan.scan_image`), evaluated on the positions at the right time:
 
 * :func:`mmode` -- repeated A-lines at one lateral position, one per time of the scene (the
   A-line rate is the scene's time step): ``(time, depth)``;
@@ -23,7 +23,7 @@ lines) or per chunk of times, so memory holds the scene and one task's field at 
 the scheduler: each task images fixed inputs with a deterministic method. M-mode and raster
 series image each A-line from the same scatterers whatever the chunking, so they are
 identical bit for bit under any chunking and scheduler (tested: synchronous, threads,
-processes, streamed to NetCDF); snapshot series are :func:`speckle.image` per time (the same
+processes, streamed to NetCDF); snapshot series are :func:`speckle.scan_image` per time (the same
 under any chunking to rounding). Independent-line scenes (dims ``aline, scatterer``) are
 imaged by :func:`speckle.bscan`, one frame per time.
 """
@@ -42,7 +42,7 @@ from ..scene.motion import check_times
 from ..scene.shared import is_shared
 from .aline import pixel_depths
 from .bscan import bscan
-from .scan import image, scan_kernel
+from .scan import scan_image, scan_kernel
 
 __all__ = ["bscan_series", "mmode", "raster_times"]
 
@@ -168,7 +168,7 @@ def mmode(
     time_chunk : int
         A-lines per Dask task (>= 1); the numbers do not depend on it.
     method, tol, wrap, focus, rayleigh_range
-        As in :func:`speckle.imaging.scan.image`.
+        As in :func:`speckle.imaging.scan.scan_image`.
 
     Returns
     -------
@@ -180,7 +180,7 @@ def mmode(
     ------
     ValueError
         A scene without a ``time`` dim (or not shared), ``y`` missing for a 3-D scene or given
-        for a 2-D one, and the checks of :func:`~speckle.imaging.scan.image`.
+        for a 2-D one, and the checks of :func:`~speckle.imaging.scan.scan_image`.
 
     Examples
     --------
@@ -281,7 +281,7 @@ def bscan_series(
     chunk : int
         Lines per Dask task (>= 1); the numbers do not depend on it.
     method, tol, wrap, focus, rayleigh_range
-        As in :func:`speckle.imaging.scan.image`.
+        As in :func:`speckle.imaging.scan.scan_image`.
 
     Returns
     -------
@@ -294,7 +294,7 @@ def bscan_series(
     ------
     ValueError
         A scene without a ``time`` dim, raster times that do not match ``len(x)`` lines at
-        ``line_rate``, and the checks of :func:`~speckle.imaging.scan.image`.
+        ``line_rate``, and the checks of :func:`~speckle.imaging.scan.scan_image`.
 
     Examples
     --------
@@ -328,7 +328,7 @@ def bscan_series(
         )
     y0 = None if y is None else [check_real(y, "y")]
     if line_rate is None:
-        out = image(
+        out = scan_image(
             scene,
             source,
             waist=waist,

@@ -1,8 +1,8 @@
 """Physical compounding looks that image one scene differently: angle, offset, polarization, time.
 
 The looks of :mod:`speckle.analysis.compounding` that form images (they call
-:func:`speckle.image`), moved here from ``analysis`` (issue 32) so that the estimators and theory
-they are measured with import no imaging. Every look function returns a complex ``DataArray``
+:func:`speckle.scan_image`), moved here from ``analysis`` (issue 32) so
+that the estimators and theory they are measured with import no imaging. Every look function returns a complex ``DataArray``
 with a leading dim ``look`` on the pixel grid of the reference image, ready for
 :func:`speckle.compound`.
 
@@ -28,7 +28,7 @@ from .._validate import as_finite_array
 from ..analysis._common import label_looks
 from ..analysis.compounding import brownian_frames
 from ..conventions import coord, depth_range_of
-from ..imaging.scan import image
+from ..imaging.scan import scan_image
 from ..system.polarization import depolarize
 
 __all__ = ["angular_looks", "polarization_looks", "spatial_looks", "temporal_looks"]
@@ -41,7 +41,7 @@ def _image_kw(waist, x, method, tol, chunk) -> dict:
 def _moved_field(scene: xr.Dataset, source: xr.DataArray, kw: dict) -> np.ndarray:
     """Complex field of a shared scene whose scatterers moved (sorted by ``x`` again first)."""
     order = np.argsort(scene.x.values, kind="stable")
-    return image(scene.isel(scatterer=order), source, **kw).field.values
+    return scan_image(scene.isel(scatterer=order), source, **kw).field.values
 
 
 def _stacked_looks(
@@ -131,7 +131,7 @@ def spatial_looks(
         raise ValueError("offsets must be a non-empty 1-D list of lateral offsets in µm")
     xs = np.asarray(x, dtype=float)
     out = [
-        image(scene, source, **_image_kw(waist, xs + d, method, tol, chunk)).field.values
+        scan_image(scene, source, **_image_kw(waist, xs + d, method, tol, chunk)).field.values
         for d in off
     ]
     offset = coord("length", off, "lateral offset of the lines", dims="look")
@@ -156,7 +156,7 @@ def polarization_looks(
     ``sqrt((1 + P^2)/2)``, ``P = |1 - 2 f|`` (dense scene).
     """
     dep = depolarize(scene, depolarization, seed=seed)
-    f = image(dep, source, **_image_kw(waist, np.asarray(x, float), method, tol, chunk)).field
+    f = scan_image(dep, source, **_image_kw(waist, np.asarray(x, float), method, tol, chunk)).field
     looks = f.rename(channel="look").transpose("look", "depth", "x")
     looks = looks.assign_coords(channel=("look", looks.look.values)).drop_vars("look")
     return label_looks(looks, "polarization", depolarization=float(depolarization))

@@ -23,7 +23,7 @@ Camera (:func:`interferogram`)
     ``phi(k) = sum_p c_p (k - k0)^p`` (orders ``p >= 2``, ``c_p`` in µm^p) is the dispersion
     mismatch between the arms; it enters the cross term only.
 
-Processing (:func:`process`)
+Processing (:func:`process_interferogram`)
     background subtraction, k-linearisation by resampling (``linear``, ``cubic``; ``exact``
     evaluates the camera model on the grid, see :func:`system_ascan`), numerical dispersion
     compensation (multiply by ``exp(-i phi)``), a spectral window (none, Hann, Gaussian) and
@@ -42,6 +42,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from .._deprecate import moved
 from .._validate import (
     as_finite_array,
     check_bool,
@@ -76,7 +77,7 @@ __all__ = [
     "interferogram_bytes",
     "interpolation_gain",
     "linearize",
-    "process",
+    "process_interferogram",
     "resampling_error",
     "resampling_response",
     "rolloff_power",
@@ -84,6 +85,10 @@ __all__ = [
     "system_ascan",
     "to_pixels",
 ]
+
+
+#: ``process`` (retired, :data:`speckle.conventions.RETIRED`) is now ``process_interferogram``.
+__getattr__ = moved(__name__, __name__, [], {"process": "process_interferogram"})
 
 DETECTIONS = ("complex", "real")
 RESAMPLING = ("none", "linear", "cubic", "exact")
@@ -472,7 +477,7 @@ def to_pixels(field: np.ndarray) -> np.ndarray:
     return np.fft.fft(np.fft.ifftshift(field, axes=-1), axis=-1)
 
 
-def process(
+def process_interferogram(
     signal: object,
     *,
     grid: object,
@@ -677,7 +682,7 @@ def system_ascan(
     (the same mapping as ``dispersion`` for perfect compensation). ``camera``: keyword
     arguments of :func:`camera_signal` (``sampling``, ``pixel_width``, ``resolution``,
     ``detection``, ``dc``, ``autocorrelation``, ``reference_power``, ``dispersion``). Other
-    parameters: :func:`process`.
+    parameters: :func:`process_interferogram`.
 
     Returns
     -------
@@ -687,7 +692,7 @@ def system_ascan(
     check_choice(resample, "resample", RESAMPLING)
     sig, k = camera_signal(system, z, amplitude, on_grid=resample == "exact", **camera)
     interpolate = resample in ("linear", "cubic")
-    return process(
+    return process_interferogram(
         sig,
         grid=grid_wavenumbers(system),
         k0=system.k0,

@@ -121,20 +121,20 @@ def _shared(y_range=None):
 def test_image_refuses_method_tol_pairs_at_call(kw, match):
     """Refused when the lazy image is built, not in the first Dask task."""
     with pytest.raises(ValueError, match=match):
-        speckle.image(_shared(), SRC, waist=4.0, x=speckle.scan_lines(8, 2.0), **kw)
+        speckle.scan_image(_shared(), SRC, waist=4.0, x=speckle.scan_lines(8, 2.0), **kw)
 
 
 def test_image_refuses_finufft_on_a_3d_scene_at_call():
     scene = _shared(y_range=(-20.0, 30.0))
     with pytest.raises(ValueError, match="2-D scene without focus"):
-        speckle.image(scene, SRC, waist=4.0, x=[0.0, 2.0], y=[0.0, 2.0], method="finufft")
+        speckle.scan_image(scene, SRC, waist=4.0, x=[0.0, 2.0], y=[0.0, 2.0], method="finufft")
 
 
 @pytest.mark.parametrize("wrap", ["False", "no", 0, 1.0, None])
 def test_image_refuses_a_wrap_that_is_not_a_bool(wrap):
     """``wrap="False"`` was taken as true (a non-empty string)."""
     with pytest.raises(TypeError, match="wrap must be True or False"):
-        speckle.image(_shared(), SRC, waist=4.0, x=speckle.scan_lines(8, 2.0), wrap=wrap)
+        speckle.scan_image(_shared(), SRC, waist=4.0, x=speckle.scan_lines(8, 2.0), wrap=wrap)
 
 
 # --- property test: malformed inputs -------------------------------------------------------
@@ -161,7 +161,7 @@ def _beam_call(param, value, method):
 def _image_call(param, value, method):
     kw = dict(waist=4.0, x=speckle.scan_lines(6, 2.0), chunk=4, method=method, tol=1e-4)
     kw[param] = value
-    return speckle.image(_shared(), SRC, **kw).field.values
+    return speckle.scan_image(_shared(), SRC, **kw).field.values
 
 
 def _named(param: str, message: str) -> bool:

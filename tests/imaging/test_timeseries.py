@@ -35,7 +35,9 @@ def test_mmode_is_the_image_at_each_time(setup):
     assert m.field.dims == ("time", "depth") and m.time.attrs["units"] == "s"
     ref = np.stack(
         [
-            speckle.image(moved.isel(time=i, drop=True), src, waist=W0, x=[48.0]).field.values[:, 0]
+            speckle.scan_image(moved.isel(time=i, drop=True), src, waist=W0, x=[48.0]).field.values[
+                :, 0
+            ]
             for i in range(t.size)
         ]
     )
@@ -57,7 +59,7 @@ def test_snapshot_series_carries_time(setup):
     out = ts.bscan_series(moved, src, waist=W0, x=x)
     assert out.field.dims == ("time", "depth", "x")
     np.testing.assert_array_equal(out.time.values, t)
-    one = speckle.image(moved.isel(time=2, drop=True), src, waist=W0, x=x).field.values
+    one = speckle.scan_image(moved.isel(time=2, drop=True), src, waist=W0, x=x).field.values
     np.testing.assert_array_equal(out.field.values[2], one)
 
 
@@ -73,7 +75,7 @@ def test_raster_lines_at_their_own_times(setup):
     f = out.field.values
     for fr, i in [(0, 0), (0, 5), (1, 7)]:
         pos = moved.isel(time=fr * x.size + i, drop=True)
-        ref = speckle.image(pos, src, waist=W0, x=[x[i]]).field.values[:, 0]
+        ref = speckle.scan_image(pos, src, waist=W0, x=[x[i]]).field.values[:, 0]
         np.testing.assert_allclose(f[fr, :, i], ref, rtol=0, atol=1e-12 * np.abs(ref).max())
     again = ts.bscan_series(moved, src, waist=W0, x=x, line_rate=2000.0, chunk=8)
     np.testing.assert_array_equal(again.field.values, f)
