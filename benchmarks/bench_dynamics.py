@@ -97,9 +97,9 @@ def main() -> None:
     moved, scene, src, x, w0 = phantom(args.pixels, args.lines, args.frames, 2e-3)
     scene_mb = sum(moved[v].nbytes for v in moved.data_vars) / 2**20
     with dask.config.set(scheduler="synchronous"):
-        speckle.scan_image(scene, src, waist=w0, x=x, **kw).field.compute()  # warm-up (FINUFFT)
+        speckle.scan_image(scene, src, waist=w0, lines=x, **kw).field.compute()  # warm-up (FINUFFT)
         t0 = time.perf_counter()
-        speckle.scan_image(scene, src, waist=w0, x=x, **kw).field.compute()
+        speckle.scan_image(scene, src, waist=w0, lines=x, **kw).field.compute()
         single = time.perf_counter() - t0
     print(
         f"{args.frames} frames of {args.pixels} x {args.lines} px, {moved.sizes['scatterer']} "
@@ -117,7 +117,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         for name in ("synchronous", "threads", "processes", "distributed"):
             path = Path(tmp) / f"{name}.nc"
-            series = bscan_series(moved, src, waist=w0, x=x, **kw)[["field"]]
+            series = bscan_series(moved, src, waist=w0, lines=x, **kw)[["field"]]
             tracemalloc.reset_peak()
             t0 = time.perf_counter()
             if name == "distributed":

@@ -30,7 +30,7 @@ scene = speckle.backscatter(scene, tissue)
 img = speckle.bscan(scene, src, method="finufft", tol=1e-9)
 truth = speckle_free_image(scene, src).values
 
-windows = sa.subband_windows(128, 4, window="rectangular", overlap=0.0)
+windows = sa.subband_apodizations(128, 4, apodization="rectangular", overlap=0.0)
 images = {
     "single look": img.intensity.values,
     "4 frequency looks": sa.compound(sa.frequency_looks(img, windows), "intensity").values,

@@ -174,6 +174,40 @@ RETIRED: dict[str, tuple[str, str]] = {
     "process": ("process_interferogram", "function"),
     "compress": ("compress_phantom", "function"),
     "layers": ("layer_stack", "function"),
+    "subband_windows": ("subband_apodizations", "function"),
+    "window_correlation": ("apodization_correlation", "function"),
+    "spectral_window": ("spectral_apodization", "function"),
+    "spectrometer.WINDOWS": ("APODIZATIONS", "constant"),
+    "compounding.WINDOWS": ("SUBBAND_APODIZATIONS", "constant"),
+    "band_window": ("band_apodization", "attr"),
+    # line positions are ``lines``; ``x`` is the lateral dim and scatterer positions
+    **{
+        f"{f}.x": ("lines", "parameter")
+        for f in (
+            "scan_image",
+            "image_regions",
+            "scan_kernel",
+            "bscan_series",
+            "speckle_free_image",
+            "angular_looks",
+            "spatial_looks",
+            "polarization_looks",
+            "temporal_looks",
+        )
+    },
+    # spectral windows are apodizations; ``window`` is a pixel window only
+    **{
+        f"{f}.{old}": (new, "parameter")
+        for f in ("process_interferogram", "system_ascan")
+        for old, new in (
+            ("window", "apodization"),
+            ("window_fwhm_fraction", "apodization_fwhm_fraction"),
+        )
+    },
+    "subband_apodizations.window": ("apodization", "parameter"),
+    "apodization_correlation.windows": ("apodizations", "parameter"),
+    "frequency_looks.windows": ("apodizations", "parameter"),
+    "ssada.band_window": ("band_apodization", "parameter"),
 }
 
 

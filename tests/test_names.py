@@ -191,3 +191,36 @@ def test_a_retired_public_name_warns_naming_the_new_one(old, new, package):
     )
     with pytest.warns(FutureWarning, match=rf"{old} moved to .*\.{new}"):
         assert getattr(module, old) is getattr(speckle, new)
+
+
+def _retired_parameters():
+    from speckle.conventions import RETIRED
+
+    return sorted(
+        (key.split(".")[0], key.split(".")[1], new)
+        for key, (new, kind) in RETIRED.items()
+        if kind == "parameter"
+    )
+
+
+@pytest.mark.parametrize(("func", "old", "new"), _retired_parameters())
+def test_a_retired_parameter_is_renamed_and_its_old_keyword_warns(func, old, new):
+    """``lines`` for line positions, ``apodization`` for spectral windows: the function takes
+    the new name, and the old keyword still works for a release, warning."""
+    f = getattr(speckle, func, None) or getattr(speckle.system.spectrometer, func)
+    params = inspect.signature(f).parameters
+    assert new in params and old not in params, (func, list(params))
+    with pytest.warns(FutureWarning, match=rf"{func}: parameter '{old}' is now '{new}'"):
+        with pytest.raises((TypeError, ValueError)):  # fails later (no other arguments)
+            f(**{old: None})
+
+
+def test_the_old_keyword_gives_the_same_result():
+    k = np.linspace(5.0, 5.5, 16)
+    sig = np.cos(2 * k * 40.0)[None]
+    new = speckle.process_interferogram(sig, grid=k, k0=5.25, apodization="hann")
+    with pytest.warns(FutureWarning, match="'window' is now 'apodization'"):
+        old = speckle.process_interferogram(sig, grid=k, k0=5.25, window="hann")
+    np.testing.assert_array_equal(new, old)
+    with pytest.raises(TypeError, match="both 'window' \\(retired\\) and 'apodization'"):
+        speckle.process_interferogram(sig, grid=k, k0=5.25, window="hann", apodization="hann")

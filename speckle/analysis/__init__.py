@@ -13,7 +13,7 @@ Doppler, speckle variance, SSADA, LIV, OCDS) and ``dynamics_theory`` their expec
 Names load on first use (SPEC 1, ``lazy_loader``).
 """
 
-from .._deprecate import moved
+from .._deprecate import moved, retired_names
 from .._lazy import attach, functions_of
 
 _lazy_getattr, __dir__, __all__ = attach(
@@ -52,6 +52,8 @@ _lazy_getattr, __dir__, __all__ = attach(
         "tracking": ["TRACK_METHODS", *functions_of(__name__, "tracking")],
     },
 )
+#: Retired names (:data:`speckle.conventions.RETIRED`) warn and resolve to the new ones.
+_retired = retired_names(__name__, _lazy_getattr)
 #: Names that moved to :mod:`speckle.studies` (issue 32): they warn for a release.
 _moved = moved(
     __name__,
@@ -70,6 +72,6 @@ _moved = moved(
 def __getattr__(name: str):
     """Lazy public names; the twin's old names warn (``FutureWarning``) and resolve."""
     try:
-        return _lazy_getattr(name)
+        return _retired(name)
     except AttributeError:
         return _moved(name)

@@ -143,9 +143,9 @@ def _physical_methods(lk: dict, ph: dict, cfg: Mapping):
     fr = phys["frequency"]
     n = ph["geo"]["n_pixels"]
     for nlook in fr["looks"]:
-        for win in fr["windows"]:
+        for win in fr["apodizations"]:
             for ov in fr["overlap"]:
-                w = cp.subband_windows(n, nlook, window=win, overlap=ov)
+                w = cp.subband_apodizations(n, nlook, apodization=win, overlap=ov)
 
                 def fn(noisy, w=w):
                     f = lk["single_noisy" if noisy else "single"]
@@ -156,7 +156,7 @@ def _physical_methods(lk: dict, ph: dict, cfg: Mapping):
                 yield (
                     "frequency",
                     f"L={nlook} {win} overlap={ov:g}",
-                    {"looks": nlook, "window": win, "overlap": ov},
+                    {"looks": nlook, "apodization": win, "overlap": ov},
                     1,
                     fn,
                 )
@@ -547,8 +547,11 @@ def _method_image(spec: Mapping, ph: dict, seed: int, snr_db: float, cache: dict
     if fam == "single":
         return np.abs(noisy(single).values[0]) ** 2
     if fam == "frequency":
-        w = cp.subband_windows(
-            ph["geo"]["n_pixels"], spec["looks"], window=spec["window"], overlap=spec["overlap"]
+        w = cp.subband_apodizations(
+            ph["geo"]["n_pixels"],
+            spec["looks"],
+            apodization=spec["apodization"],
+            overlap=spec["overlap"],
         )
         f = noisy(single).isel(look=0)
         return cp.compound(cp.frequency_looks(f, w), mode).values
@@ -721,7 +724,7 @@ def frequency_compounding_data(cfg: Mapping, seed: int) -> xr.Dataset:
     looks = [int(v) for v in cfg["looks"]]
     c, se, ct, cd, fw, ft = ([] for _ in range(6))
     for nlk in looks:
-        w = cp.subband_windows(n, nlk)
+        w = cp.subband_apodizations(n, nlk)
         comp = cp.compound(cp.frequency_looks(field, w), "intensity").values
         c.append(float(comp.std() / comp.mean()))
         blocks = [b.std() / b.mean() for b in np.array_split(comp, 16, axis=1)]

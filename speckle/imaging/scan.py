@@ -23,7 +23,7 @@ import dask.array as da
 import numpy as np
 import xarray as xr
 
-from .._deprecate import moved
+from .._deprecate import moved, renamed_parameters
 from .._validate import as_finite_array, check_int, check_real
 from ..conventions import attrs, coord, depth_range_of, spacing, units_of
 from ..provenance import provenance_attrs
@@ -168,7 +168,7 @@ def _dataset(
     return ds
 
 
-def _prepare(source, waist, x, y, chunk, method, tol, wrap, focus, rayleigh_range):
+def _prepare(source, waist, lines, y, chunk, method, tol, wrap, focus, rayleigh_range):
     """Checked arguments, the per-chunk kernel and the attrs shared by both entry points."""
     tol = check_tol(tol)
     src = _source(source)
@@ -184,7 +184,7 @@ def _prepare(source, waist, x, y, chunk, method, tol, wrap, focus, rayleigh_rang
         optics["rayleigh_range"] = check_real(
             rayleigh_range, "rayleigh_range", low=0, low_inclusive=False
         )
-    xs = _lines(x, "x")
+    xs = _lines(lines, "lines")
     ys = None if y is None else _lines(y, "y")
     c = check_int(chunk, "chunk", low=1)
     meta = {
@@ -217,11 +217,12 @@ def _prepare(source, waist, x, y, chunk, method, tol, wrap, focus, rayleigh_rang
     return src, w0, xs, ys, c, meta, kernel, optics
 
 
+@renamed_parameters({"x": "lines"})
 def scan_kernel(
     source: xr.DataArray,
     *,
     waist: float,
-    x: object,
+    lines: object,
     y: object | None = None,
     method: str = "direct",
     tol: float | None = None,
@@ -234,7 +235,7 @@ def scan_kernel(
 
     Parameters
     ----------
-    source, waist, x, y, method, tol, wrap, focus, rayleigh_range
+    source, waist, lines, y, method, tol, wrap, focus, rayleigh_range
         As in :func:`scan_image` (checked here, before any work).
     z_bounds : (float, float), optional
         Depth range (µm) of the scatterers, for the reach of a focused beam with ``wrap``;
@@ -253,12 +254,12 @@ def scan_kernel(
     --------
     >>> import numpy as np, speckle
     >>> kernel, reach, xs, ys, meta = scan_kernel(speckle.spectrum(8, 64.0, k0_dk=4),
-    ...                                           waist=4.0, x=[0.0])
+    ...                                           waist=4.0, lines=[0.0])
     >>> kernel((np.array([10.0]), np.array([0.0]), np.array([1.0 + 0j])), xs, ys).shape
     (8, 1)
     """
     src, w0, xs, ys, _, meta, kernel, optics = _prepare(
-        source, waist, x, y, 1, method, tol, bool(wrap), focus, rayleigh_range
+        source, waist, lines, y, 1, method, tol, bool(wrap), focus, rayleigh_range
     )
     lo, hi = (0.0, src["depth_range"]) if z_bounds is None else z_bounds
     reach = beam_reach(w0, widening=_widening(optics, w0, src["k0"], float(lo), float(hi)))
@@ -270,12 +271,13 @@ def _first(ys: np.ndarray | None) -> np.ndarray | None:
     return None if ys is None else ys[:1]
 
 
+@renamed_parameters({"x": "lines"})
 def scan_image(
     scene: xr.Dataset,
     source: xr.DataArray,
     *,
     waist: float,
-    x: object,
+    lines: object,
     y: object | None = None,
     chunk: int = 64,
     method: str = "direct",
@@ -296,12 +298,12 @@ def scan_image(
         Spectrum from :func:`speckle.spectrum` (gives ``N``, ``H`` in µm and ``k0`` in rad/µm).
     waist : float
         Beam waist ``w0`` in µm (> 0), as in :func:`speckle.beam_scan`.
-    x : array_like
+    lines : array_like
         Lateral positions of the lines in µm (1-D, increasing, uniform: e.g.
         :func:`scan_lines`).
     y : array_like, optional
         Positions of the lines along ``y`` in µm for a 3-D scene: a C-scan over the grid
-        ``x`` x ``y`` (one ``y`` value: one B-scan at that ``y``).
+        ``lines`` x ``y`` (one ``y`` value: one B-scan at that ``y``).
     chunk : int
         Lines per Dask chunk along each lateral axis (>= 1).
     method, tol
@@ -331,7 +333,7 @@ def scan_image(
     if not isinstance(wrap, bool | np.bool_):  # "False" would be true
         raise TypeError(f"wrap must be True or False, got {wrap!r} ({type(wrap).__name__})")
     src, w0, xs, ys, c, meta, kernel, optics = _prepare(
-        source, waist, x, y, chunk, method, tol, bool(wrap), focus, rayleigh_range
+        source, waist, lines, y, chunk, method, tol, bool(wrap), focus, rayleigh_range
     )
     if not isinstance(scene, xr.Dataset) or "z" not in scene:
         raise TypeError("scene must be a shared scene Dataset (see speckle.shared_scene)")
@@ -343,7 +345,7 @@ def scan_image(
                 scene.isel({d: i}),
                 source,
                 waist=w0,
-                x=xs,
+                lines=xs,
                 y=ys,
                 chunk=c,
                 method=method,
@@ -383,6 +385,7 @@ def scan_image(
     return _dataset(field, xs, ys, src, meta)
 
 
+@renamed_parameters({"x": "lines"})
 def image_regions(
     regions: xr.Dataset,
     source: xr.DataArray,
@@ -390,7 +393,7 @@ def image_regions(
     seed: int,
     tile: object = 64.0,
     waist: float,
-    x: object,
+    lines: object,
     y: object | None = None,
     chunk: int = 32,
     method: str = "direct",
@@ -411,7 +414,7 @@ def image_regions(
         Regions (:mod:`speckle.scene.regions`); densities per µm^2 (2-D, no ``y``) or per µm^3.
     seed, tile
         As in :func:`speckle.scene.shared.shared_scene`.
-    source, waist, x, y, chunk, method, tol, focus, rayleigh_range
+    source, waist, lines, y, chunk, method, tol, focus, rayleigh_range
         As in :func:`scan_image` (``wrap`` is ``False``: the scene is drawn over ``[0, H)`` only).
 
     Returns
@@ -420,7 +423,7 @@ def image_regions(
         As :func:`scan_image`.
     """
     src, w0, xs, ys, c, meta, kernel, optics = _prepare(
-        source, waist, x, y, chunk, method, tol, False, focus, rayleigh_range
+        source, waist, lines, y, chunk, method, tol, False, focus, rayleigh_range
     )
     reach = beam_reach(w0, widening=_widening(optics, w0, src["k0"], 0.0, src["depth_range"]))
     h = src["depth_range"]

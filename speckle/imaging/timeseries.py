@@ -35,6 +35,7 @@ import dask.array as da
 import numpy as np
 import xarray as xr
 
+from .._deprecate import renamed_parameters
 from .._validate import check_int, check_real
 from ..conventions import attrs, coord, units_of
 from ..provenance import provenance_attrs
@@ -205,7 +206,7 @@ def mmode(
     kernel, reach, xs, ys, meta = scan_kernel(
         source,
         waist=waist,
-        x=[x0],
+        lines=[x0],
         y=None if y0 is None else [y0],
         method=method,
         tol=tol,
@@ -243,12 +244,13 @@ def mmode(
     return _series_dataset(da.concatenate(parts), times, xs, ys, meta, squeeze_x=True)
 
 
+@renamed_parameters({"x": "lines"})
 def bscan_series(
     scene: xr.Dataset,
     source: xr.DataArray,
     *,
     waist: float | None = None,
-    x: object = None,
+    lines: object = None,
     y: float | None = None,
     line_rate: float | None = None,
     chunk: int = 64,
@@ -265,18 +267,18 @@ def bscan_series(
     scene : xarray.Dataset
         Moved scene (:mod:`speckle.scene.motion`): a shared scene over ``(time, scatterer)``,
         or independent lines over ``(time, aline, scatterer)`` (imaged by
-        :func:`speckle.bscan`; ``waist``, ``x``, ``y`` and ``line_rate`` are then not used).
+        :func:`speckle.bscan`; ``waist``, ``lines``, ``y`` and ``line_rate`` are then not used).
     source : xarray.DataArray
         Spectrum (:func:`speckle.spectrum`).
     waist : float
         Beam waist ``w0`` in µm (shared scenes).
-    x : array_like
+    lines : array_like
         Line positions in µm (1-D, increasing, uniform).
     y : float, optional
         The B-scan's ``y`` in µm for a 3-D scene (required there).
     line_rate : float, optional
         A-line rate in Hz. None: one snapshot B-scan per time of the scene. Given: the
-        scene's times are ``n_frames x len(x)`` line times (:func:`raster_times`, checked:
+        scene's times are ``n_frames x len(lines)`` line times (:func:`raster_times`, checked:
         lines of a frame ``1/line_rate`` apart), each line imaged at its own time.
     chunk : int
         Lines per Dask task (>= 1); the numbers do not depend on it.
@@ -293,7 +295,7 @@ def bscan_series(
     Raises
     ------
     ValueError
-        A scene without a ``time`` dim, raster times that do not match ``len(x)`` lines at
+        A scene without a ``time`` dim, raster times that do not match ``len(lines)`` lines at
         ``line_rate``, and the checks of :func:`~speckle.imaging.scan.scan_image`.
 
     Examples
@@ -306,7 +308,7 @@ def bscan_series(
     >>> t = raster_times(2, 4, line_rate=1e4)
     >>> moved = flow_motion(sc, t, velocity=[0.0, 1000.0])
     >>> src = speckle.spectrum(16, 64.0, k0_dk=5)
-    >>> out = bscan_series(moved, src, waist=8.0, x=[8.0, 16.0, 24.0, 32.0], line_rate=1e4)
+    >>> out = bscan_series(moved, src, waist=8.0, lines=[8.0, 16.0, 24.0, 32.0], line_rate=1e4)
     >>> out.field.dims, out.line_time.dims
     (('time', 'depth', 'x'), ('time', 'x'))
     """
@@ -320,8 +322,8 @@ def bscan_series(
         out = bscan(scene, source, method=method, tol=tol)
         return out.assign_attrs(protocol="repeated B-scans (independent lines)")
     ndim = _timed_scene(scene, "bscan_series")
-    if waist is None or x is None:
-        raise ValueError("bscan_series of a shared scene needs waist= (µm) and x= (µm)")
+    if waist is None or lines is None:
+        raise ValueError("bscan_series of a shared scene needs waist= (µm) and lines= (µm)")
     if (ndim == 3) != (y is not None):
         raise ValueError(
             f"a {ndim}-D scene needs {'y (µm, the B-scan plane)' if ndim == 3 else 'no y'}"
@@ -332,7 +334,7 @@ def bscan_series(
             scene,
             source,
             waist=waist,
-            x=x,
+            lines=lines,
             y=y0,
             chunk=chunk,
             method=method,
@@ -351,7 +353,7 @@ def bscan_series(
     kernel, reach, xs, ys, meta = scan_kernel(
         source,
         waist=waist,
-        x=x,
+        lines=lines,
         y=y0,
         method=method,
         tol=tol,

@@ -693,8 +693,8 @@ def _check_spec(spec: Mapping, geo: Mapping, path: str) -> None:
     if fam == "frequency":
         _key(
             path,
-            lambda: cp.subband_windows(
-                n, spec["looks"], window=spec["window"], overlap=spec["overlap"]
+            lambda: cp.subband_apodizations(
+                n, spec["looks"], apodization=spec["apodization"], overlap=spec["overlap"]
             ),
         )
     elif fam in dsp.FILTERS:
@@ -737,11 +737,13 @@ def check_despeckle(cfg: Mapping) -> None:
     n = int(geo["n_pixels"])
     fr = cfg["physical"]["frequency"]
     for nl in fr["looks"]:
-        for w in fr["windows"]:
+        for w in fr["apodizations"]:
             for ov in fr["overlap"]:
                 _key(
                     "physical.frequency",
-                    lambda nl=nl, w=w, ov=ov: cp.subband_windows(n, nl, window=w, overlap=ov),
+                    lambda nl=nl, w=w, ov=ov: cp.subband_apodizations(
+                        n, nl, apodization=w, overlap=ov
+                    ),
                 )
     phys = cfg["physical"]
     for fam, key in (("angular", "angles"), ("spatial", "offsets")):
@@ -765,7 +767,9 @@ def check_despeckle(cfg: Mapping) -> None:
         _check_spec(spec, fgeo, f"failure.methods.{name}")
     fc = cfg["frequency_compounding"]
     for nl in fc["looks"]:
-        _key("frequency_compounding.looks", lambda nl=nl: cp.subband_windows(fc["n_pixels"], nl))
+        _key(
+            "frequency_compounding.looks", lambda nl=nl: cp.subband_apodizations(fc["n_pixels"], nl)
+        )
         if fc["n_pixels"] % nl:
             raise ValueError(
                 f"config key despeckle.frequency_compounding.looks: {nl} equal sub-bands need "

@@ -313,7 +313,7 @@ def _frames(ph: dict, shifts: np.ndarray, kw: dict) -> np.ndarray:
     """
     out = [
         scan_image(
-            ph["scene"], ph["source"], waist=ph["waist"], x=ph["lines"] - d, **kw
+            ph["scene"], ph["source"], waist=ph["waist"], lines=ph["lines"] - d, **kw
         ).field.values
         for d in shifts
     ]

@@ -188,8 +188,8 @@ def test_schema_enums_match_the_package(schema):
     # every k-linearisation but "none" (no closed-form roll-off for unresampled pixels)
     resample = set(sysp["rolloff"]["properties"]["resample"]["enum"])
     assert resample == set(speckle.system.spectrometer.RESAMPLING) - {"none"}
-    assert set(sysp["bscan"]["properties"]["window"]["enum"]) == set(
-        speckle.system.spectrometer.WINDOWS
+    assert set(sysp["bscan"]["properties"]["apodization"]["enum"]) == set(
+        speckle.system.spectrometer.APODIZATIONS
     )
 
 

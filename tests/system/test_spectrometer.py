@@ -159,7 +159,7 @@ def test_dispersion_compensation_restores_eq4():
 
 
 @pytest.mark.parametrize("window", ["none", "hann", "gaussian"])
-def test_window_sets_axial_speckle_correlation(window):
+def test_apodization_sets_axial_speckle_correlation(window):
     """Pearson correlation of intensity at depth lags 1-3 px equals the Campbell/Siegert
     prediction from the window-weighted spectrum (Poisson scatterers, equal amplitudes)."""
     n, h, rho, lines = 128, 512.0, 2.0, 600
@@ -170,10 +170,12 @@ def test_window_sets_axial_speckle_correlation(window):
     z = rng.uniform(0, h, (lines, counts.max()))
     a = (np.arange(counts.max()) < counts[:, None]).astype(complex)
     sig = sp.interferogram(z, a, k, src.values, k0=k0)
-    img = sp.process_interferogram(sig, grid=k, k0=k0, window=window)
+    img = sp.process_interferogram(sig, grid=k, k0=k0, apodization=window)
     intensity = np.abs(img) ** 2
     lags = np.array([1, 2, 3])
-    theory = sp.axial_intensity_correlation(src.values * sp.spectral_window(n, window), lags, rho)
+    theory = sp.axial_intensity_correlation(
+        src.values * sp.spectral_apodization(n, window), lags, rho
+    )
     blocks = intensity.reshape(20, -1, n)
 
     def pearson(x, lag):
@@ -192,7 +194,7 @@ def test_window_sets_axial_speckle_correlation(window):
 
 def test_axial_correlation_dense_limit_is_siegert():
     """rho -> inf: |gamma|^2 with gamma the normalised Fourier transform of |u|^2."""
-    u = speckle.spectrum(64, 64.0, k0_dk=5.0).values * sp.spectral_window(64, "hann")
+    u = speckle.spectrum(64, 64.0, k0_dk=5.0).values * sp.spectral_apodization(64, "hann")
     lags = np.array([0.0, 0.5, 1.0, 2.5])
     n = np.arange(64) - 32
     gamma = (u**2 @ np.exp(-2j * np.pi * np.outer(n, lags) / 64)) / np.sum(u**2)
@@ -266,13 +268,13 @@ def test_real_detection_dc_autocorrelation_mirror():
     assert abs(dc_only[0]) == pytest.approx(total * (0.5**2 + 0.25**2), rel=1e-12)
 
 
-def test_spectral_windows():
+def test_spectral_apodizations():
     np.testing.assert_allclose(
-        sp.spectral_window(8, "hann"), np.cos(np.pi * np.arange(-4, 4) / 8) ** 2
+        sp.spectral_apodization(8, "hann"), np.cos(np.pi * np.arange(-4, 4) / 8) ** 2
     )
-    g = sp.spectral_window(100, "gaussian", 0.2)
+    g = sp.spectral_apodization(100, "gaussian", 0.2)
     assert g[50] == 1.0 and g[50 + 10] == pytest.approx(0.5, rel=1e-12)  # FWHM 0.2 N = 20
-    assert np.all(sp.spectral_window(16) == 1)
+    assert np.all(sp.spectral_apodization(16) == 1)
 
 
 def test_bad_inputs():
@@ -283,8 +285,8 @@ def test_bad_inputs():
         sp.interferogram(z, a, k, src.values, dispersion={-2: 1.0})
     with pytest.raises(ValueError, match="dispersion order"):
         sp.process_interferogram(np.ones(16), grid=k, k0=k0, dispersion={1: 1.0})
-    with pytest.raises(ValueError, match="window must be one of"):
-        sp.process_interferogram(np.ones(16), grid=k, k0=k0, window="hamming")
+    with pytest.raises(ValueError, match="apodization must be one of"):
+        sp.process_interferogram(np.ones(16), grid=k, k0=k0, apodization="hamming")
     with pytest.raises(ValueError, match="resample must be one of"):
         sp.process_interferogram(np.ones(16), grid=k, k0=k0, resample="sinc")
     with pytest.raises(ValueError, match="detection must be one of"):
