@@ -170,6 +170,7 @@ QUANTITIES: dict[str, tuple[str, str]] = {
 RETIRED: dict[str, tuple[str, str]] = {
     "aline": ("x", "dim"),
     "METHODS": ("ASCAN_METHODS", "constant"),
+    "strain.METHODS": ("STRAIN_METHODS", "constant"),
     "image": ("scan_image", "function"),
     "process": ("process_interferogram", "function"),
     "compress": ("compress_phantom", "function"),
