@@ -32,7 +32,9 @@ _GROUPS = {
 }
 #: Top-level infrastructure modules and the names they contribute (``speckle.sweep`` is the
 #: module of the Dask sweeps; its function is ``speckle.sweep.sweep``).
-_INFRASTRUCTURE = {"io": ["open_dataset", "stream_to_netcdf", "to_netcdf"]}
+_INFRASTRUCTURE = {
+    "io": ["IMAGE_KINDS", "load_image", "open_dataset", "stream_to_netcdf", "to_netcdf"]
+}
 
 _lazy_getattr, _lazy_dir, _names = attach(
     __name__, {**{name: mod.__all__ for name, mod in _GROUPS.items()}, **_INFRASTRUCTURE}

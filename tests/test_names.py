@@ -239,7 +239,6 @@ ALINE_LEFT = {
     "analysis/_strain_methods.py": 4,
     "analysis/autocorrelation.py": 2,
     "analysis/correlation.py": 8,
-    "analysis/image_files.py": 3,
     "analysis/measured.py": 13,
     "analysis/statistics.py": 1,
     "analysis/strain.py": 12,

@@ -5,9 +5,10 @@ two images with and without displacement compensation; ``tracking`` and ``strain
 displacement and strain (OCT elastography); ``autocorrelation``, ``beam`` and ``phase`` measure
 the resolution cell and noise; ``measured`` compares a measured image with the model;
 ``compounding`` (averaging looks and its theory), ``filters`` (digital despeckling) and
-``image_quality`` (metrics against a known truth) measure speckle suppression; ``image_files``
-reads a user's own image; ``dynamics`` computes the contrasts of speckle in time (g1, g2,
-Doppler, speckle variance, SSADA, LIV, OCDS) and ``dynamics_theory`` their expected values.
+``image_quality`` (metrics against a known truth) measure speckle suppression (a user's own
+image is read by :func:`speckle.io.load_image`); ``dynamics`` computes the contrasts of speckle
+in time (g1, g2, Doppler, speckle variance, SSADA, LIV, OCDS) and ``dynamics_theory`` their
+expected values.
 ``analysis`` imports no imaging: the experiments that image scenes to study these estimators
 (the twin, realism, failure maps, the compounding looks) are in :mod:`speckle.studies`.
 Names load on first use (SPEC 1, ``lazy_loader``).
@@ -35,7 +36,6 @@ _lazy_getattr, __dir__, __all__ = attach(
         "dynamics": functions_of(__name__, "dynamics"),
         "dynamics_theory": functions_of(__name__, "dynamics_theory"),
         "filters": ["FILTERS", "despeckle", "filter_available", "frost", "kuan", "lee"],
-        "image_files": ["IMAGE_KINDS", "load_image"],
         "image_quality": [
             "bandlimited",
             "cnr",
@@ -69,9 +69,17 @@ _moved = moved(
 )
 
 
+#: The loader of measured images moved to :mod:`speckle.io` (issue 32): it warns for a release.
+_moved_io = moved(__name__, "speckle.io", ["IMAGE_KINDS", "load_image"])
+
+
 def __getattr__(name: str):
-    """Lazy public names; the twin's old names warn (``FutureWarning``) and resolve."""
+    """Lazy public names; the twin's and the loader's old names warn (``FutureWarning``)."""
     try:
         return _retired(name)
     except AttributeError:
+        pass
+    try:
         return _moved(name)
+    except AttributeError:
+        return _moved_io(name)

@@ -34,11 +34,11 @@ import xarray as xr
 from .._validate import MAX_BYTES
 from ..analysis import compounding as cp
 from ..analysis import filters as dsp
-from ..analysis.image_files import load_image
 from ..analysis.measured import measured_shape, roi_slices
 from ..figures.despeckle import parameter_grid
 from ..imaging.nufft import NUFFT_TOL_FLOOR, float32_error_estimate
 from ..imaging.scan import beam_reach
+from ..io import load_image
 from ..scene.shared import MAX_TILES
 from .adapters import system_from_config
 from .dynamics_checks import check_dynamics_config

@@ -2,10 +2,9 @@
 
 import logging
 
-from speckle.analysis.image_files import load_image
 from speckle.analysis.measured import load_measured
 from speckle.figures import realism
-from speckle.io import to_netcdf
+from speckle.io import load_image, to_netcdf
 from speckle.pipeline.outputs import save
 from speckle.pipeline.runner import run
 from speckle.provenance import provenance_attrs
