@@ -67,6 +67,7 @@ them; docstrings write µm.
 from __future__ import annotations
 
 import warnings
+from collections.abc import Mapping
 
 import numpy as np
 import xarray as xr
@@ -78,6 +79,7 @@ __all__ = [
     "RETIRED",
     "attrs",
     "canonical_dims",
+    "canonical_keys",
     "coord",
     "depth_range_of",
     "inverse_units",
@@ -474,3 +476,55 @@ def canonical_dims(obj: object, what: str = "image") -> object:
             stacklevel=3,
         )
     return obj.rename(renames)
+
+
+def canonical_keys(mapping: object, what: str = "mapping") -> object:
+    """``mapping`` with keys that are retired dim names renamed (``aline`` -> ``x``), warning.
+
+    For mappings keyed by dim, e.g. a region of interest ``{"depth": [0, 64], "x": [0, 128]}``;
+    anything that is not a mapping (``None`` included) passes unchanged.
+
+    Parameters
+    ----------
+    mapping : mapping or any
+        Keyed by dim names.
+    what : str
+        Name of ``mapping`` in messages (e.g. ``"roi"``).
+
+    Returns
+    -------
+    same as ``mapping`` or dict
+        A new dict when a key was renamed, else ``mapping`` itself.
+
+    Raises
+    ------
+    ValueError
+        If ``mapping`` has both a retired key and its new name.
+
+    Warns
+    -----
+    FutureWarning
+        Naming the new key, e.g. ``dim 'aline' is now 'x'``.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore", FutureWarning)
+    ...     canonical_keys({"depth": [0, 4], "aline": [0, 8]}, "roi")
+    {'depth': [0, 4], 'x': [0, 8]}
+    """
+    if not isinstance(mapping, Mapping):
+        return mapping
+    dims = {old: new for old, (new, kind) in RETIRED.items() if kind == "dim"}
+    found = [k for k in mapping if k in dims]
+    for old in found:
+        if dims[old] in mapping:
+            raise ValueError(f"{what} has both keys {old!r} (retired) and {dims[old]!r}")
+        warnings.warn(
+            f"dim {old!r} is now {dims[old]!r}: {what} key {old!r} is renamed; the old name will "
+            f"be refused in the next release",
+            FutureWarning,
+            stacklevel=3,
+        )
+    return {dims.get(k, k): v for k, v in mapping.items()} if found else mapping

@@ -1196,10 +1196,15 @@ ENTRIES: dict[str, Entry] = {
         path="path",
         scale="choice",
         roi="mapping",
-        aline_pitch="positive_length",
+        pitch="positive_length",
     ),
     "compare_measured": E(
-        lambda: dict(image=speckle.load_measured(F.npy, scale="linear"), n_blocks=2),
+        lambda: dict(
+            image=speckle.load_image(
+                F.npy, kind="intensity", dims=("depth", "x"), pixel_size=1.0, pitch=1.0
+            ),
+            n_blocks=2,
+        ),
         image="image",
         n_blocks="count",
     ),

@@ -237,9 +237,7 @@ SHIM_FILES = {"conventions.py", "_deprecate.py"}
 ALINE_LEFT = {
     "analysis/_common.py": 2,
     "analysis/_strain_methods.py": 4,
-    "analysis/autocorrelation.py": 2,
     "analysis/correlation.py": 8,
-    "analysis/measured.py": 13,
     "analysis/statistics.py": 1,
     "analysis/strain.py": 12,
     "analysis/tracking.py": 12,
@@ -262,7 +260,6 @@ ALINE_LEFT = {
     "scene/mechanics.py": 1,
     "scene/scatterers.py": 5,
     "scene/shared.py": 3,
-    "studies/realism.py": 1,
     "studies/twin/_estimates.py": 2,
     "studies/twin/_inputs.py": 3,
     "system/_scene.py": 1,

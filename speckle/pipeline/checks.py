@@ -274,13 +274,13 @@ def _measured_roi(path: str | None, roi: Mapping) -> None:
     if not path or not str(path).endswith(".npy") or not os.path.isfile(path):
         return  # no file: Fig. 4 draws the simulated panels only (README)
     shape = np.load(path, mmap_mode="r").shape
-    for axis, dim in enumerate(("depth", "aline")):
+    for axis, dim in enumerate(("depth", "x")):
         bounds = roi.get(dim) or [None, None]
         for b in bounds:
             if b is not None and len(shape) == 2 and b > shape[axis]:
                 raise ValueError(
                     f"config key fig4.measured.roi.{dim} = {bounds} lies outside the measured "
-                    f"image of shape {tuple(shape)} (depth, aline)"
+                    f"image of shape {tuple(shape)} (depth, x)"
                 )
 
 
