@@ -10,8 +10,10 @@ attributes (:func:`spacing`).
 name          units       meaning
 ============  ==========  ===============================================================
 depth         um          depth of a pixel centre in the medium, ``q*H/N`` (pixel axis)
-aline         um          lateral position of an independent A-line (the paper's B-scans)
-x, y          um          lateral position in a shared scene or of a scanned beam line
+x, y          um          lateral position: the lateral dim of every image, a shared scene's
+                          scatterers, a scanned beam line
+aline         um          retired name of ``x`` (:data:`RETIRED`, :func:`canonical_dims`), still
+                          the line dim of independent-line scenes and their B-scans
 z             um          depth of a scatterer (a variable, not a dim)
 wavenumber    rad/um      spectral component ``k_n = k0 + n*pi/H``
 strain        1           uniaxial strain, compression > 0
