@@ -255,7 +255,7 @@ ALINE_LEFT = {
     "imaging/timeseries.py": 1,
     "imaging/truth.py": 1,
     "io.py": 1,
-    "pipeline/checks.py": 3,
+    "pipeline/checks.py": 1,
     "scene/deformation.py": 20,
     "scene/mechanics.py": 1,
     "scene/scatterers.py": 5,

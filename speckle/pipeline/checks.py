@@ -35,6 +35,7 @@ from .._validate import MAX_BYTES
 from ..analysis import compounding as cp
 from ..analysis import filters as dsp
 from ..analysis.measured import measured_shape, roi_slices
+from ..conventions import canonical_keys
 from ..figures.despeckle import parameter_grid
 from ..imaging.nufft import NUFFT_TOL_FLOOR, float32_error_estimate
 from ..imaging.scan import beam_reach
@@ -306,7 +307,7 @@ def _image_shape(cfg: Mapping) -> tuple[int, int]:
                 f"config key twin.kind = {kind!r} cannot describe {path}: it holds negative "
                 "values (log-compressed data are kind 'log')"
             )
-        names = ["x" if d == "aline" else d for d in dims]
+        names = list(canonical_keys(dict.fromkeys(dims), "config key twin.dims"))
         if len(names) != len(shape):
             raise ValueError(
                 f"config key twin.dims = {list(dims)} does not name the {len(shape)} axes of "
@@ -566,7 +567,7 @@ def _realism(config: Mapping) -> None:
             except (TypeError, ValueError) as exc:
                 raise ValueError(
                     f"config key {key} = {roi!r} does not fit the measured image {path} of shape "
-                    f"{shape} (depth, aline): {exc}"
+                    f"{shape} (depth, x): {exc}"
                 ) from None
     show = real.get("showcase")
     if show is None:
