@@ -263,7 +263,7 @@ ALINE_LEFT = {
     "studies/twin/_estimates.py": 2,
     "studies/twin/_inputs.py": 3,
     "system/_scene.py": 1,
-    "system/noise.py": 3,
+    "system/noise.py": 2,
     "system/phase.py": 2,
     "system/polarization.py": 2,
 }
