@@ -213,6 +213,7 @@ RETIRED: dict[str, tuple[str, str]] = {
     "apodization_correlation.windows": ("apodizations", "parameter"),
     "frequency_looks.windows": ("apodizations", "parameter"),
     "ssada.band_window": ("band_apodization", "parameter"),
+    "load_measured.aline_pitch": ("pitch", "parameter"),
 }
 
 
