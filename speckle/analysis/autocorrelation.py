@@ -22,7 +22,7 @@ import xarray as xr
 from scipy import optimize
 
 from .._validate import as_finite_array, check_int, check_real
-from ..conventions import attrs, coord
+from ..conventions import attrs, canonical_dims, coord
 
 __all__ = [
     "axial_correlation_theory",
@@ -43,12 +43,12 @@ def _pearson(a: np.ndarray, b: np.ndarray) -> float:
 def intensity_autocorrelation(
     intensity: xr.DataArray, *, max_lag: int = 8, n_blocks: int = 16
 ) -> xr.Dataset:
-    """Pearson autocorrelation along ``depth`` and ``aline`` at lags ``0 .. max_lag``.
+    """Pearson autocorrelation along ``depth`` and ``x`` at lags ``0 .. max_lag``.
 
     Parameters
     ----------
     intensity : xarray.DataArray
-        Linear intensities with dims ``(depth, aline)``.
+        Linear intensities with dims ``(depth, x)`` (``(depth, aline)`` warns).
     max_lag : int
         Largest lag in pixels / A-lines (>= 1, less than either size).
     n_blocks : int
@@ -60,9 +60,10 @@ def intensity_autocorrelation(
         ``autocorrelation`` and ``autocorrelation_se`` with dims ``(axis, lag)``, ``axis`` =
         ``("depth", "lateral")``.
     """
-    if not isinstance(intensity, xr.DataArray) or set(intensity.dims) != {"depth", "aline"}:
-        raise TypeError("intensity must be a DataArray with dims (depth, aline)")
-    x = as_finite_array(intensity.transpose("depth", "aline").values, "intensity")
+    intensity = canonical_dims(intensity, "intensity")
+    if not isinstance(intensity, xr.DataArray) or set(intensity.dims) != {"depth", "x"}:
+        raise TypeError("intensity must be a DataArray with dims (depth, x)")
+    x = as_finite_array(intensity.transpose("depth", "x").values, "intensity")
     nz, nl = x.shape
     ml = check_int(max_lag, "max_lag", low=1, high=min(nz, nl) - 2)
     nb = check_int(n_blocks, "n_blocks", low=2, high=max(2, nl // (ml + 2)))

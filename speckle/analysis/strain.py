@@ -77,6 +77,7 @@ import numpy as np
 import xarray as xr
 from scipy import ndimage
 
+from .._deprecate import moved
 from .._validate import check_choice, check_real
 from ..conventions import attrs
 from ._strain_methods import (
@@ -87,7 +88,7 @@ from ._strain_methods import (
     DEFAULT_METHOD,
     DEFAULT_WINDOWS,
     DISPLACEMENT_METHODS,
-    METHODS,
+    STRAIN_METHODS,
     TRACK_MIN_QUALITY,
     _as_images,
     _auto_aligned,
@@ -109,13 +110,16 @@ __all__ = [
     "DEFAULT_METHOD",
     "DEFAULT_WINDOWS",
     "DISPLACEMENT_METHODS",
-    "METHODS",
+    "STRAIN_METHODS",
     "TRACK_MIN_QUALITY",
     "accumulate_strain",
     "estimate_displacement",
     "estimate_strain",
     "predicted_strain_std",
 ]
+
+#: ``METHODS`` (retired, :data:`speckle.conventions.RETIRED`) is now ``STRAIN_METHODS``.
+__getattr__ = moved(__name__, __name__, [], {"METHODS": "STRAIN_METHODS"})
 
 
 # --------------------------------------------------------------------------------------------
@@ -223,7 +227,7 @@ def estimate_strain(
     a1, a2, template = _as_images(reference, deformed)
     k = check_real(k0, "k0", low=0, low_inclusive=False)
     p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
-    check_choice(method, "method", METHODS)
+    check_choice(method, "method", STRAIN_METHODS)
     wz, wx = _check_window(window, DEFAULT_WINDOWS[method], a1.shape)
     opts = _options(method, options)
     if opts.get("align") == "auto":
@@ -286,7 +290,7 @@ def _strain_frames(reference, deformed, has_frame, k0, pixel_size, method, windo
             raise ValueError(f"reference and deformed have different {dim} coordinates")
     k = check_real(k0, "k0", low=0, low_inclusive=False)
     p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
-    check_choice(method, "method", METHODS)
+    check_choice(method, "method", STRAIN_METHODS)
     n_frames, n, m = d1.shape
     wz, wx = _check_window(window, DEFAULT_WINDOWS[method], (n, m))
     _options(method, options)
@@ -581,7 +585,7 @@ def accumulate_strain(
     data, coords = _frames_input(frames)
     p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
     k = check_real(k0, "k0", low=0, low_inclusive=False)
-    check_choice(method, "method", METHODS)
+    check_choice(method, "method", STRAIN_METHODS)
     n_frames, n, m = data.shape
     wz, wx = _check_window(window, DEFAULT_WINDOWS[method], (n, m))
     opts = _options(method, options)  # unknown or malformed options: refused before any work

@@ -19,7 +19,8 @@ from ..scene.scatterers import AMPLITUDE_MODELS
 from ..scene.shared import check_not_empty
 from ..system.source import check_source, check_weights
 from ._rules import check_tol
-from .aline import METHODS, ascan, pixel_depths
+from .aline import ascan, pixel_depths
+from .methods import ASCAN_METHODS
 
 __all__ = ["NORMALISATIONS", "bscan", "expected_intensity", "map_lines"]
 
@@ -128,7 +129,7 @@ def bscan(
     check_not_empty(scene)
     src = check_source(source)
     n, h, k0 = src["n_pixels"], src["depth_range"], src["k0"]
-    check_choice(method, "method", METHODS)
+    check_choice(method, "method", ASCAN_METHODS)
     check_tol(tol)
     for var in ("z", "amplitude"):
         if "scatterer" not in scene[var].dims:

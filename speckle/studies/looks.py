@@ -1,9 +1,9 @@
 """Physical compounding looks that image one scene differently: angle, offset, polarization, time.
 
 The looks of :mod:`speckle.analysis.compounding` that form images (they call
-:func:`speckle.image`), moved here from ``analysis`` (issue 32) so that the estimators and theory
-they are measured with import no imaging. Every look function returns a complex ``DataArray``
-with a leading dim ``look`` on the pixel grid of the reference image, ready for
+:func:`speckle.scan_image`), moved here from ``analysis`` (issue 32) so that the estimators and
+theory they are measured with import no imaging. Every look function returns a complex
+``DataArray`` with a leading dim ``look`` on the pixel grid of the reference image, ready for
 :func:`speckle.compound`.
 
 * **angular** (:func:`angular_looks`): the scene is rotated by each angle about the image centre
@@ -24,11 +24,12 @@ import numpy as np
 import scipy.ndimage as ndi
 import xarray as xr
 
+from .._deprecate import renamed_parameters
 from .._validate import as_finite_array, check_int, check_memory
 from ..analysis._common import label_looks
 from ..analysis.compounding import brownian_frames
 from ..conventions import coord
-from ..imaging.scan import image
+from ..imaging.scan import scan_image
 from ..scene.shared import check_scene
 from ..system.polarization import depolarize
 from ..system.source import check_source
@@ -36,23 +37,23 @@ from ..system.source import check_source
 __all__ = ["angular_looks", "polarization_looks", "spatial_looks", "temporal_looks"]
 
 
-def _image_kw(waist, x, method, tol, chunk) -> dict:
-    return {"waist": waist, "x": x, "method": method, "tol": tol, "chunk": chunk}
+def _image_kw(waist, lines, method, tol, chunk) -> dict:
+    return {"waist": waist, "lines": lines, "method": method, "tol": tol, "chunk": chunk}
 
 
 def _moved_field(scene: xr.Dataset, source: xr.DataArray, kw: dict) -> np.ndarray:
     """Complex field of a shared scene whose scatterers moved (sorted by ``x`` again first)."""
     order = np.argsort(scene.x.values, kind="stable")
-    return image(scene.isel(scatterer=order), source, **kw).field.values
+    return scan_image(scene.isel(scatterer=order), source, **kw).field.values
 
 
-def _inputs(scene: object, source: object, x: object) -> tuple[np.ndarray, dict]:
-    """The checked lines ``x`` (µm) and source of a look function (a shared scene only)."""
+def _inputs(scene: object, source: object, lines: object) -> tuple[np.ndarray, dict]:
+    """The checked ``lines`` (µm) and source of a look function (a shared scene only)."""
     check_scene(scene)
     src = check_source(source)
-    xs = as_finite_array(x, "x")  # spacing is checked by the imaging (speckle.image)
+    xs = as_finite_array(lines, "lines")  # spacing is checked by the imaging (scan_image)
     if xs.ndim != 1 or xs.size == 0:
-        raise ValueError("x must be a non-empty 1-D array of line positions in µm")
+        raise ValueError("lines must be a non-empty 1-D array of line positions in µm")
     return xs, src
 
 
@@ -64,13 +65,14 @@ def _stacked_looks(
     return label_looks(looks, kind, **extra)
 
 
+@renamed_parameters({"x": "lines"})
 def angular_looks(
     scene: xr.Dataset,
     source: xr.DataArray,
     angles: Sequence[float],
     *,
     waist: float,
-    x: object,
+    lines: object,
     method: str = "direct",
     tol: float | None = None,
     chunk: int = 64,
@@ -78,7 +80,7 @@ def angular_looks(
     """Looks at beam angles ``angles`` (degrees): rotated scene, image resampled back.
 
     The scene is rotated by ``-angle`` about the centre of the image (depths ``[0, H)``, the
-    lines ``x``), so the beam crosses it at ``angle`` to the depth axis; the complex image is
+    ``lines``), so the beam crosses it at ``angle`` to the depth axis; the complex image is
     then sampled at the rotated pixel positions (cubic spline of its real and imaginary parts)
     onto the reference grid. Draw the scene with a margin of ``H |sin(angle)|`` in x (and the
     beam reach), or the corners come from empty space.
@@ -88,7 +90,7 @@ def angular_looks(
     xarray.DataArray
         Complex looks ``(look, depth, x)``; coordinate ``angle`` (degrees) along ``look``.
     """
-    xs, src = _inputs(scene, source, x)
+    xs, src = _inputs(scene, source, lines)
     ang = as_finite_array(angles, "angles")
     if ang.ndim != 1 or ang.size == 0 or np.any(np.abs(ang) >= 90):
         raise ValueError("angles must be a non-empty 1-D list of degrees in (-90, 90)")
@@ -117,18 +119,19 @@ def angular_looks(
     return _stacked_looks(out, "angular", "angle", angle)
 
 
+@renamed_parameters({"x": "lines"})
 def spatial_looks(
     scene: xr.Dataset,
     source: xr.DataArray,
     offsets: Sequence[float],
     *,
     waist: float,
-    x: object,
+    lines: object,
     method: str = "direct",
     tol: float | None = None,
     chunk: int = 64,
 ) -> xr.DataArray:
-    """Looks of A-lines offset laterally by ``offsets`` (µm), kept at the lines ``x``.
+    """Looks of A-lines offset laterally by ``offsets`` (µm), kept at the ``lines``.
 
     The complex correlation of two looks ``d`` apart is ``exp(-d^2/w0^2)`` (dense scene).
 
@@ -137,18 +140,19 @@ def spatial_looks(
     xarray.DataArray
         Complex looks ``(look, depth, x)``; coordinate ``offset`` (µm) along ``look``.
     """
-    xs, _ = _inputs(scene, source, x)
+    xs, _ = _inputs(scene, source, lines)
     off = as_finite_array(offsets, "offsets")
     if off.ndim != 1 or off.size == 0:
         raise ValueError("offsets must be a non-empty 1-D list of lateral offsets in µm")
     out = [
-        image(scene, source, **_image_kw(waist, xs + d, method, tol, chunk)).field.values
+        scan_image(scene, source, **_image_kw(waist, xs + d, method, tol, chunk)).field.values
         for d in off
     ]
     offset = coord("length", off, "lateral offset of the lines", dims="look")
     return _stacked_looks(out, "spatial", "offset", offset)
 
 
+@renamed_parameters({"x": "lines"})
 def polarization_looks(
     scene: xr.Dataset,
     source: xr.DataArray,
@@ -156,7 +160,7 @@ def polarization_looks(
     *,
     seed: int,
     waist: float,
-    x: object,
+    lines: object,
     method: str = "direct",
     tol: float | None = None,
     chunk: int = 64,
@@ -166,14 +170,15 @@ def polarization_looks(
     Intensity-averaged they give the polarization-insensitive image, contrast
     ``sqrt((1 + P^2)/2)``, ``P = |1 - 2 f|`` (dense scene).
     """
-    xs, _ = _inputs(scene, source, x)
+    xs, _ = _inputs(scene, source, lines)
     dep = depolarize(scene, depolarization, seed=seed)
-    f = image(dep, source, **_image_kw(waist, xs, method, tol, chunk)).field
+    f = scan_image(dep, source, **_image_kw(waist, xs, method, tol, chunk)).field
     looks = f.rename(channel="look").transpose("look", "depth", "x")
     looks = looks.assign_coords(channel=("look", looks.look.values)).drop_vars("look")
     return label_looks(looks, "polarization", depolarization=float(depolarization))
 
 
+@renamed_parameters({"x": "lines"})
 def temporal_looks(
     scene: xr.Dataset,
     source: xr.DataArray,
@@ -183,13 +188,13 @@ def temporal_looks(
     interval: float,
     seed: int,
     waist: float,
-    x: object,
+    lines: object,
     method: str = "direct",
     tol: float | None = None,
     chunk: int = 64,
 ) -> xr.DataArray:
     """Frames of a shared scene in Brownian motion (:func:`brownian_frames`) as looks."""
-    xs, _ = _inputs(scene, source, x)
+    xs, _ = _inputs(scene, source, lines)
     nf = check_int(n_frames, "n_frames", low=1)
     # the frames hold z, x and the amplitude (complex) of every scatterer: 32 bytes each
     check_memory(32.0 * nf * scene.sizes["scatterer"], "n_frames", f"{nf} frames of the scene")
