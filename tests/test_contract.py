@@ -1595,7 +1595,7 @@ ENTRIES: dict[str, Entry] = {
     "open_dataset": E(lambda: dict(path=F.nc), path="path", load="flag"),
     # --- the formerly PENDING names (issue 36's merge) ------------------------------------------
     "bscan_series": E(
-        lambda: dict(scene=F.moved, source=F.src, waist=6.0, x=[8.0, 16.0]),
+        lambda: dict(scene=F.moved, source=F.src, waist=6.0, lines=[8.0, 16.0]),
         y="real",
         line_rate="positive",
     ),
@@ -1606,7 +1606,7 @@ ENTRIES: dict[str, Entry] = {
         time_chunk="count",
     ),
     "scan_kernel": E(
-        lambda: dict(source=F.src, waist=6.0, x=[8.0, 16.0]),
+        lambda: dict(source=F.src, waist=6.0, lines=[8.0, 16.0]),
         y="real",
         z_bounds="none",
         why="z_bounds: a (low, high) pair checked with the kernel's scene (tests/imaging)",
@@ -1747,12 +1747,12 @@ ANSWERS: dict[tuple[str, str, str], str] = {
     ("interpolation_gain", "t", "empty"): "pointwise closed form: no point asked, an empty answer",
     ("interpolation_gain", "theta", "empty"): "as t",
     ("resampling_response", "z", "empty"): "pointwise closed form: no depth asked, an empty answer",
-    ("process", "signal", "complex"): "documented: a complex camera signal (interferogram's "
+    ("process_interferogram", "signal", "complex"): "documented: a complex camera signal (interferogram's "
     "complex detection) is processed as is",
     **{
-        (n, "window_fwhm_fraction", "above_one"): "a Gaussian window wider than the band (FWHM "
+        (n, "apodization_fwhm_fraction", "above_one"): "a Gaussian apodization wider than the band (FWHM "
         "1.5 N) is a valid, nearly flat window"
-        for n in ("process", "system_ascan")
+        for n in ("process_interferogram", "system_ascan")
     },
     ("add_complex_noise", "field", "one_pixel"): "one pixel: its intensity is the mean, the "
     "noise is drawn per pixel",

@@ -26,7 +26,7 @@ import xarray as xr
 
 from .._deprecate import moved, renamed_parameters
 from .._validate import as_finite_array, check_bool, check_int, check_real, check_size
-from ..conventions import attrs, coord, depth_range_of, spacing, units_of
+from ..conventions import attrs, coord, spacing, units_of
 from ..provenance import provenance_attrs
 from ..scene.shared import check_scene, scene_window, shared_scene
 from ..system.source import check_source

@@ -33,7 +33,7 @@ import xarray as xr
 
 from .._deprecate import renamed_parameters
 from .._validate import as_finite_array, check_int, check_real, check_size
-from ..conventions import attrs, coord, depth_range_of, units_of
+from ..conventions import attrs, coord, units_of
 from ..provenance import provenance_attrs
 from ..scene.shared import check_not_empty
 from ..system.source import check_source, check_weights, spectrum
