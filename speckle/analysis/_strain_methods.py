@@ -7,6 +7,7 @@ alignment of the pair; :mod:`speckle.analysis.strain` documents them and is the 
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 
 import numpy as np
@@ -14,8 +15,9 @@ import xarray as xr
 from scipy import ndimage
 
 from .._validate import check_int, check_real
+from .._wrap import ArraySpec
 from ..system.source import spectrum
-from ._common import depth_major, parse_window
+from ._common import DEPTH, LATERAL, depth_major, parse_window
 from ._kernels import MARGIN, box_sums, lagrange_resample, vector_phase
 from .correlation import amplitude_from_gamma, correlation_array, expected_gamma, resample_depth
 from .phase import DEFAULT_MAX_BIAS, choose_lag, depth_autocorrelation, lag_and_rho
@@ -82,54 +84,27 @@ ALIGN_TRACKING = {"window": (64, 8), "step": (64, 8), "upsample": 20, "oversampl
 # --------------------------------------------------------------------------------------------
 
 
-def _as_images(reference: object, deformed: object) -> tuple[np.ndarray, np.ndarray, object]:
-    """Both images as complex (depth, aline) arrays, plus the DataArray template (or None)."""
-    arrays, template = [], None
-    kinds = {type(reference) is xr.DataArray, type(deformed) is xr.DataArray}
-    if kinds == {True, False}:
-        raise TypeError("reference and deformed must both be numpy arrays or both DataArrays")
-    for name, img in (("reference", reference), ("deformed", deformed)):
-        if isinstance(img, xr.DataArray):
-            if set(img.dims) != {"depth", "aline"}:
-                raise ValueError(f"{name} must have dims (depth, aline), got {img.dims}")
-            img = img.transpose("depth", "aline")
-            template = img if template is None else template
-            values = img.values
-        elif isinstance(img, np.ndarray):
-            values = img
-        else:
-            raise TypeError(
-                f"{name} must be a complex numpy array or xarray.DataArray (depth, aline), got "
-                f"{type(img).__name__}"
-            )
-        if not np.iscomplexobj(values):
-            raise TypeError(
-                f"{name} must be a complex image (the phase carries the strain), got dtype "
-                f"{values.dtype}"
-            )
-        if values.ndim != 2:
-            raise ValueError(f"{name} must be 2-D (depth, aline), got shape {values.shape}")
-        finite = np.isfinite(values)
-        if not finite.all():
-            raise ValueError(
-                f"{name} holds {int(finite.size - finite.sum())} NaN or infinite pixels of "
-                f"{finite.size}; the phase methods cannot bridge them (crop or fill them first)"
-            )
-        # the input's own layout: the numba kernels handle both (a C-order copy of a transposed
-        # B-scan cost more than it saved once the lag and the sums left numpy)
-        arrays.append(values.astype(np.complex128, copy=False))
-    if arrays[0].shape != arrays[1].shape:
-        raise ValueError(
-            f"reference and deformed must have the same shape, got {arrays[0].shape} and "
-            f"{arrays[1].shape}"
+#: A complex (depth, aline) image of the strain estimators: finite, at least 2 x 1 pixels.
+IMAGE = ArraySpec(kind="complex", dims=(DEPTH, LATERAL), min_shape=(2, 1))
+
+
+def _image_pair(*, lazy: bool = False) -> dict[str, ArraySpec]:
+    """The decorator's checks of ``reference`` and ``deformed``: complex images, same grid."""
+    image = dataclasses.replace(IMAGE, lazy=lazy)
+    return {"reference": image, "deformed": dataclasses.replace(image, same_as="reference")}
+
+
+def _frames_spec() -> dict[str, ArraySpec]:
+    """The decorator's check of a compression sequence: complex (frame >= 2, depth, aline)."""
+    return {
+        "frames": ArraySpec(
+            kind="complex",
+            dims=("frame", DEPTH, LATERAL),
+            min_shape=(2, 2, 1),
+            lazy=True,
+            keep_labels=True,
         )
-    if template is not None:
-        d = deformed.transpose("depth", "aline")
-        for dim in ("depth", "aline"):
-            if dim in template.coords or dim in d.coords:
-                if not np.array_equal(template[dim].values, d[dim].values):
-                    raise ValueError(f"reference and deformed have different {dim} coordinates")
-    return arrays[0], arrays[1], template
+    }
 
 
 def _check_window(window: object, default: tuple[int, int], shape: tuple[int, int]):

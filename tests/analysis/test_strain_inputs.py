@@ -3,6 +3,7 @@ meaning of ``window`` (an int is a square window everywhere)."""
 
 import numpy as np
 import pytest
+import xarray as xr
 
 import speckle
 
@@ -71,3 +72,19 @@ def test_window_int_is_square_everywhere(pair):
     assert tr["uz"].shape == (N // 8, LINES // 8)
     with pytest.raises(ValueError, match="larger than the image"):
         speckle.estimate_strain(ref, dfm, window=32, **kw)  # (32, 32) > 16 A-lines
+
+
+def test_pixel_size_read_from_the_depth_coordinate_and_a_disagreeing_one_refused(pair):
+    ref, dfm, kw = pair
+    p = kw["pixel_size"]
+    dims = ("depth", "aline")
+    coords = {"depth": (np.arange(ref.shape[0]) + 0.5) * p}
+    a, b = (xr.DataArray(x, dims=dims, coords=coords) for x in (ref, dfm))
+    read = speckle.estimate_strain(a, b, k0=kw["k0"])
+    np.testing.assert_array_equal(read.values, speckle.estimate_strain(ref, dfm, **kw))
+    with pytest.raises(ValueError, match=r"pixel_size=4.0 disagrees with reference's coord"):
+        speckle.estimate_strain(a, b, k0=kw["k0"], pixel_size=4.0)
+    with pytest.raises(ValueError, match="needs pixel_size"):
+        speckle.estimate_strain(ref, dfm, k0=kw["k0"])
+    u = speckle.estimate_displacement(a, b, k0=kw["k0"])
+    np.testing.assert_array_equal(u.values, speckle.estimate_displacement(ref, dfm, **kw))
