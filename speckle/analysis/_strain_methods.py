@@ -12,7 +12,7 @@ import warnings
 
 import numpy as np
 import xarray as xr
-from scipy import ndimage
+from scipy import ndimage, special
 
 from .._validate import check_int, check_real
 from .._wrap import ArraySpec
@@ -32,9 +32,12 @@ DEFAULT_METHOD = "vector"
 #: correlation ``rho`` = 0.44. Measured (issue 36; 256 x 32 pixels, Gaussian spectrum, R = 10):
 #: unrelated scenes give at most 0.042 (99 % below 0.034); 2 % strain at least 0.13 (1st
 #: percentile), 1 % 0.37; at 4 % strain (0.02, as unrelated) the tracked strain is wrong.
-#: Narrower windows have a higher null (single A-line windows: 56 % of unrelated pixels pass
-#: 0.1): raise ``min_quality`` with them.
+#: Narrower windows have a higher null (single A-line windows: 56 % of unrelated pixels passed
+#: 0.1), so a tracked window also needs its chance level (:func:`_chance_quality`, at
+#: :data:`TRACK_FALSE_RATE`): 0.02 for the default (64, 8), 0.13 for (64, 1), 0.24 for (32, 1).
 TRACK_MIN_QUALITY = 0.1
+#: Probability that a tracked window of two unrelated images passes its chance level.
+TRACK_FALSE_RATE = 0.01
 #: Local amplitude correlation (the correlation method's quality) below which it has no answer:
 #: unrelated scenes reach it by chance. Measured (issue 36; 256 x 32 pixels, R = 10, windows
 #: 32 x 8): unrelated scenes give correlations up to 0.26 (99 % below 0.17; 31 % of the pixels
@@ -420,12 +423,54 @@ def _track_options(a1, wx, opts):
     }
 
 
+def _coherence_length(a: np.ndarray, width: int) -> float:
+    """``sum_L rho_A(L)^2`` over lags ``|L| < width`` along axis 0 (pixels): the amplitude
+    correlation ``rho_A`` from the field's (:func:`amplitude_from_gamma` of
+    :func:`~speckle.analysis.phase.depth_autocorrelation`); 1 for independent pixels."""
+    m = min(width, a.shape[0]) - 1
+    if m < 1:
+        return 1.0
+    rho = amplitude_from_gamma(depth_autocorrelation(a, m))
+    return float(1.0 + 2.0 * np.sum(rho[1:] ** 2))
+
+
+def _chance_quality(a1: np.ndarray, window: tuple[int, int]) -> float:
+    """Tracking quality that two unrelated images reach in a window with probability
+    :data:`TRACK_FALSE_RATE`.
+
+    The registration quality is ``1 - sqrt(1 - r^2)`` with ``r`` the peak normalised
+    cross-correlation of the windows' mean-removed amplitudes. For unrelated images the
+    correlation at one lag has (Fisher) ``atanh(r) ~ N(0, 1/(n - 3))`` with ``n = wz wx /
+    (Lz Lx)`` independent speckle cells in the window (``L = sum rho_A^2``, the amplitude
+    correlation length of the reference along depth and along the lines), and the peak is the
+    largest of ``m = (wz/Lz)(wx/Lx)`` independent lags, so ``P(max |atanh r| > t) =
+    TRACK_FALSE_RATE`` at ``t = z / sqrt(n - 3)``, ``z = Phi^-1(1 - rate / (2 m))``.
+    Measured (``tests/analysis/test_strain_inputs.py``): at the 98th-99th percentile of
+    unrelated scenes' quality for windows of 1 to 8 lines.
+    """
+    wz, wx = window
+    lz = _coherence_length(a1, wz)
+    lx = _coherence_length(a1.T, wx) if wx > 1 else 1.0
+    n = wz * wx / (lz * lx)
+    m = max(wz / lz, 1.0) * max(wx / lx, 1.0)
+    z = float(special.ndtri(1.0 - TRACK_FALSE_RATE / (2.0 * m)))
+    r = np.tanh(z / np.sqrt(max(n - 3.0, 1.0)))
+    return float(1.0 - np.sqrt(1.0 - r * r))
+
+
+def _track_threshold(a1: np.ndarray, window: tuple[int, int], opts: dict) -> float:
+    """Quality below which a tracked window has no answer: ``min_quality`` or its chance
+    level, the higher."""
+    return max(opts["min_quality"], _chance_quality(a1, window))
+
+
 def _tracking(a1, a2, k0, p, wz, wx, opts):
     kw = _track_options(a1, wx, opts)
     uz, quality, _ = _tracked(a1, a2, **kw)
-    uz = np.where(quality >= opts["min_quality"], uz, np.nan)  # no answer below the threshold
+    threshold = _track_threshold(a1, kw["window"], opts)
+    uz = np.where(quality >= threshold, uz, np.nan)  # no answer below the threshold
     strain = -_pooled_slope(uz, None, wz, 1)
-    return strain, quality, {"track_window": kw["window"][0]}
+    return strain, quality, {"track_window": kw["window"][0], "min_quality": threshold}
 
 
 def _measured_spectrum(a1: np.ndarray, k0: float, p: float) -> xr.DataArray:

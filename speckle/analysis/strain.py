@@ -90,6 +90,7 @@ from ._strain_methods import (
     DEFAULT_WINDOWS,
     DISPLACEMENT_METHODS,
     METHODS,
+    TRACK_FALSE_RATE,
     TRACK_MIN_QUALITY,
     _auto_aligned,
     _check_shape_options,
@@ -100,6 +101,7 @@ from ._strain_methods import (
     _options,
     _place,
     _track_options,
+    _track_threshold,
     _tracked,
     _unwrapped_phase,
 )
@@ -113,6 +115,7 @@ __all__ = [
     "DEFAULT_WINDOWS",
     "DISPLACEMENT_METHODS",
     "METHODS",
+    "TRACK_FALSE_RATE",
     "TRACK_MIN_QUALITY",
     "accumulate_strain",
     "estimate_displacement",
@@ -132,8 +135,8 @@ def _no_answer_reason(method: str, quality: np.ndarray, opts: dict, window) -> s
     head = f"estimate_strain(method={method!r}) has no answer at any pixel: "
     if "min_quality" in opts and q.size and q.max() < opts["min_quality"]:
         return head + (
-            f"every window's quality is below min_quality={opts['min_quality']:g} (highest "
-            f"{q.max():.3f}); lower min_quality or use a larger window"
+            f"every window's quality is below min_quality={opts['min_quality']:g} (or the "
+            f"window's chance level; highest {q.max():.3f}); use a larger window"
         )
     if not q.size:
         return head + f"no window {tuple(window)} has a finite quality (image too small?)"
@@ -164,7 +167,8 @@ def _strain_pair(a1, a2, k, p, method, wz, wx, opts):
     else:
         strain, quality, info = _METHOD_FUNCS[method](a1, a2, k, p, wz, wx, opts)
     if not np.isfinite(strain).any():
-        warnings.warn(_no_answer_reason(method, quality, opts, (wz, wx)), stacklevel=4)
+        used = {**opts, **{k: v for k, v in info.items() if k == "min_quality"}}
+        warnings.warn(_no_answer_reason(method, quality, used, (wz, wx)), stacklevel=4)
     return strain, quality, info
 
 
@@ -305,8 +309,10 @@ def estimate_displacement(
     _, wx = _check_window(window, (2, 1), a1.shape)
     if method == "tracking":
         opts = _options("tracking", options)
-        uz, quality, _ = _tracked(a1, a2, **_track_options(a1, wx, opts))
-        uz = np.where(quality >= opts["min_quality"], uz, np.nan) * p  # no answer below it
+        kw = _track_options(a1, wx, opts)
+        uz, quality, _ = _tracked(a1, a2, **kw)
+        # no answer below min_quality or the window's chance level (single lines: higher)
+        uz = np.where(quality >= _track_threshold(a1, kw["window"], opts), uz, np.nan) * p
     else:
         allowed = {"lag": None, "max_bias": DEFAULT_MAX_BIAS}
         unknown = set(options) - set(allowed)
