@@ -70,6 +70,11 @@ class ArraySpec:
     keep_labels : bool
         The body receives the checked ``DataArray`` itself (transposed to ``dims``), for
         results that are not on its grid (e.g. a Dataset built from its coordinates).
+    variable : str, optional
+        A ``Dataset`` argument stands for this variable (e.g. a B-scan's ``field``), its
+        attributes merged with the Dataset's; a Dataset without it is refused.
+    extra_dims : bool
+        ``dims`` are required, any other dims allowed (kept in place, not transposed).
     """
 
     kind: str = "number"
@@ -83,6 +88,8 @@ class ArraySpec:
     optional: bool = False
     lazy: bool = False
     keep_labels: bool = False
+    variable: str | None = None
+    extra_dims: bool = False
 
     def __post_init__(self):
         if self.kind not in ("number", "real", "complex"):
@@ -139,11 +146,23 @@ def _values(name: str, value: object, spec: ArraySpec, stack: Sequence[str]):
     """(checked values, the labelled template or None, stacked?) of one argument."""
     template = None
     if isinstance(value, xr.Dataset):
-        if spec.labelled:
-            return value, value, False  # the body reads its variables (e.g. a B-scan's field)
-        raise TypeError(f"{name} must be an array or DataArray, got a Dataset")
+        if spec.variable is None:
+            raise TypeError(f"{name} must be an array or DataArray, got a Dataset")
+        if spec.variable not in value.data_vars:
+            raise TypeError(
+                f"{name} must hold a variable {spec.variable!r} (a Dataset such as a B-scan "
+                f"from speckle.bscan), got variables {list(value.data_vars)}"
+            )
+        var = value[spec.variable]  # attrs merged on a copy: the caller's object is unchanged
+        value = var.assign_attrs({**value.attrs, **var.attrs})
     if isinstance(value, xr.DataArray):
-        if spec.dims is not None:
+        if spec.dims is not None and spec.extra_dims:
+            missing = [d for d in spec.dims if d not in value.dims]
+            if missing:
+                raise ValueError(
+                    f"{name} must have dims {spec.dims} (and any others), got {value.dims}"
+                )
+        elif spec.dims is not None:
             extra = [d for d in value.dims if d not in spec.dims]
             missing = [d for d in spec.dims if d not in value.dims]
             stacked = [d for d in extra if d in stack]
@@ -154,9 +173,10 @@ def _values(name: str, value: object, spec: ArraySpec, stack: Sequence[str]):
         template = value
         data = value.data if spec.lazy and _is_dask(value.data) else value.values
     elif spec.labelled:
+        what = "DataArray or Dataset" if spec.variable else "DataArray"
         raise TypeError(
-            f"{name} must be a labelled xarray DataArray or Dataset (coordinates give its "
-            f"grid), got {type(value).__name__}"
+            f"{name} must be a labelled xarray {what} (coordinates give its grid), got "
+            f"{type(value).__name__}"
         )
     elif isinstance(value, np.ndarray) or (spec.lazy and _is_dask(value)):
         data = value
@@ -174,7 +194,7 @@ def _values(name: str, value: object, spec: ArraySpec, stack: Sequence[str]):
         )
     if spec.kind == "real" and np.issubdtype(data.dtype, np.complexfloating):
         raise TypeError(f"{name} must be real, got complex dtype {data.dtype}")
-    n_core = len(spec.dims) if spec.dims is not None else None
+    n_core = len(spec.dims) if spec.dims is not None and not spec.extra_dims else None
     # a stack is a named leading dim: only a DataArray has one
     labelled_stack = template is not None and stack and n_core is not None
     allowed = (n_core, n_core + 1) if labelled_stack else (n_core,)

@@ -378,7 +378,7 @@ def _tracked(a1, a2, window, step, upsample, oversample, lateral=True, outside="
     (:func:`speckle.analysis.tracking.interpolate_windows`); beyond the outer window centres
     NaN (``outside="nan"``) or the nearest centre's value (``"nearest"``).
     """
-    tr = track_array(
+    tr = track_array.__wrapped__(  # the numpy body: the images are checked already
         a1,
         a2,
         window=window,
@@ -430,7 +430,7 @@ def _coherence_length(a: np.ndarray, width: int) -> float:
     m = min(width, a.shape[0]) - 1
     if m < 1:
         return 1.0
-    rho = amplitude_from_gamma(depth_autocorrelation(a, m))
+    rho = amplitude_from_gamma.__wrapped__(depth_autocorrelation(a, m))  # the numpy body
     return float(1.0 + 2.0 * np.sum(rho[1:] ** 2))
 
 
@@ -520,7 +520,7 @@ def _resampled(a2, uz_pixels, samples=None):
     """
     q = np.arange(a2.shape[0], dtype=float)[:, None]
     if samples is None:
-        return resample_depth(a2, q + uz_pixels)
+        return resample_depth.__wrapped__(a2, q + uz_pixels)  # the numpy body: checked
     y = np.ascontiguousarray((q + uz_pixels).T)  # (aline, depth), as the samples
     out = np.empty(y.shape, dtype=np.complex128)
     lagrange_resample(samples, y, ALIGN_TRACKING["oversample"], out)
@@ -546,7 +546,8 @@ def _alignment(a1, a2):
     One coarse tracking pass (:data:`ALIGN_TRACKING`: displacement only, no registration
     error), interpolated once, laid out with depth contiguous for the resampling.
     """
-    tr = track_axial(a1, a2, keep_samples=True, **_align_tracking(a1))
+    # the numpy body: the images are checked already
+    tr = track_axial.__wrapped__(a1, a2, keep_samples=True, **_align_tracking(a1))
     qz, qx = np.arange(a1.shape[0], dtype=float), np.arange(a1.shape[1], dtype=float)
     uz = interpolate_windows(  # transposed: (aline, depth), each A-line contiguous
         tr["uz"].T, tr["centre_aline"], tr["centre_depth"], qx, qz, outside="nearest"
@@ -606,7 +607,7 @@ def _correlation(a1, a2, k0, p, wz, wx, opts):
     covered = inside & np.isfinite(uz)
     filled, _ = _alignment_fill(uz)  # failed windows: filled from their neighbours in depth
     comp = _resampled(a2, filled)
-    r = correlation_array(np.abs(a1), np.abs(comp), (wz, wx))
+    r = correlation_array.__wrapped__(np.abs(a1), np.abs(comp), (wz, wx))  # the numpy body
     ts, tv = (x[::-1] for x in correlation_theory(_measured_spectrum(a1, k0, p)))
     strain = np.interp(r, tv, ts, left=np.nan, right=0.0)
     strain = np.where(covered & np.isfinite(r) & (r >= opts["min_quality"]), strain, np.nan)
