@@ -1592,8 +1592,7 @@ ANSWERS: dict[tuple[str, str, str], str] = {
     ("correlation_array", "x", "nan"): "NaN pixels blank only the windows holding them "
     "(docstring; tests/test_strict.py)",
     ("correlation_array", "y", "nan"): "as x",
-    ("track_array", "reference", "nan"): "NaN pixels give the windows holding them NaN "
-    "(docstring)",
+    ("track_array", "reference", "nan"): "NaN pixels give the windows holding them NaN (docstring)",
     ("track_array", "deformed", "nan"): "as reference",
     ("track_axial", "reference", "nan"): "as track_array",
     ("track_axial", "deformed", "nan"): "as track_array",
