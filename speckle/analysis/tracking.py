@@ -279,7 +279,7 @@ def track_array(
         if not isinstance(flag, (bool, np.bool_)):
             raise TypeError(f"{name} must be True or False, got {flag!r}")
     wz, wx = parse_window(window, shape=a.shape)
-    stz, stx = parse_window(step, "step", low=1, shape=a.shape)
+    stz, stx = parse_window(step, "step", low=1)
     up = check_int(upsample, "upsample", low=1)
     ov = check_int(oversample, "oversample", low=1)
     _check_upsample(up, wz * ov, wx)
@@ -363,7 +363,7 @@ def track_axial(
     """
     a, b = reference, deformed  # checked by the decorator
     wz, wx = parse_window(window, shape=a.shape)
-    stz, stx = parse_window(step, "step", low=1, shape=a.shape)
+    stz, stx = parse_window(step, "step", low=1)
     up = check_int(upsample, "upsample", low=1)
     ov = check_int(oversample, "oversample", low=1)
     _check_upsample(up, wz * ov, 1)
