@@ -45,7 +45,7 @@ from scipy import ndimage, special
 
 from .._validate import check_bool, check_choice, check_int, check_real
 from .._wrap import ArraySpec, preprocess_and_wrap
-from ..conventions import attrs, coord
+from ..conventions import attrs, coord, grid
 from ..system.source import index_shift_phase, spectral_index
 from ._common import DEPTH, LATERAL, grid_spacing, matched, parse_window, same_grid
 from ._kernels import lagrange_resample
@@ -269,7 +269,8 @@ def compensate(
         )
     check_field(displacement, extra_dims=[d for d in field.dims if d not in ("depth", "aline")])
     pixel, pitch = grid_spacing(field)  # from the coordinates, refused if missing/non-uniform
-    if carrier and "k0" not in field.attrs:
+    k0 = grid(field).k0  # the central wavenumber in the medium (attribute k0), or None
+    if carrier and k0 is None:
         raise ValueError(
             "deformed needs attribute k0 (rad/µm) to remove the carrier phase, as a B-scan "
             "from speckle.bscan has (or pass carrier=False)"
@@ -286,7 +287,6 @@ def compensate(
     p_np = pos.transpose(*other, "depth").values
     out = sample_field.__wrapped__(f_np, p_np)  # the numpy body: both checked
     if carrier:
-        k0 = float(field.attrs["k0"])
         out = out * np.exp(-2j * k0 * uz.transpose(*other, "depth").values)
     result = xr.DataArray(out, dims=(*other, "depth"), coords=field.coords).transpose(*field.dims)
     if "ux" in displacement and np.any(displacement["ux"].values != 0):
