@@ -461,13 +461,14 @@ def accumulate_strain(
     -------
     xarray.Dataset
         ``interframe`` (``frame`` = pair index, depth, aline; on each earlier frame's grid),
-        ``quality`` (of each interframe estimate), ``cumulative`` (strain of frame ``i+1``
+        ``quality`` (of each interframe estimate), ``accumulated`` (strain of frame ``i+1``
         relative to frame 0 on frame 0's pixels) and ``position`` (pixel ``y_{i+1}`` of each
         frame-0 pixel in frame ``i+1``). The input's depth and aline coordinates are kept
         (else depth = pixel index times ``pixel_size``). The numbers do not depend on the
-        scheduler or the number of workers. Read the variables by key
-        (``result["cumulative"]``): ``result.cumulative`` is xarray's
-        :meth:`xarray.Dataset.cumulative` method, not the variable.
+        scheduler or the number of workers. The accumulated strain was named ``cumulative``
+        before: that name is :meth:`xarray.Dataset.cumulative`, a method, so
+        ``result.cumulative`` did not give the variable; ``result.accumulated`` does (files
+        written before hold ``cumulative``).
 
     Raises
     ------
@@ -505,7 +506,7 @@ def accumulate_strain(
     variables = {
         "interframe": attrs("strain", "interframe strain"),
         "quality": attrs("dimensionless", "interframe quality"),
-        "cumulative": attrs("strain", "strain to frame 0"),
+        "accumulated": attrs("strain", "strain to frame 0"),
         "position": attrs("pixels", "position in frame"),
     }
     meta = {
@@ -581,7 +582,7 @@ def _frame(fields, state) -> dict:
     return {
         "interframe": fields[0],
         "quality": fields[1],
-        "cumulative": 1 - state[1],
+        "accumulated": 1 - state[1],
         "position": state[0],
     }
 
