@@ -757,7 +757,8 @@ def plot_sequence_large(ds: xr.Dataset, per_frame: float) -> Figure:
     colorbar(fig, im, axes[0, 0], "cumulative axial strain")
     axes[0, 0].set_title(f"frame {int(ds.frame[-1])} against frame 0")
     med = [
-        float(np.nanmedian(ds["accumulated"].isel(frame=i).values)) for i in range(ds.sizes["frame"])
+        float(np.nanmedian(ds["accumulated"].isel(frame=i).values))
+        for i in range(ds.sizes["frame"])
     ]
     f = ds.frame.values
     axes[0, 1].plot(f, med, "o", label="accumulated (median)")
