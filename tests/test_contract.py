@@ -1258,17 +1258,17 @@ ENTRIES: dict[str, Entry] = {
     "g1_transverse_flow": E(
         lambda: dict(lag=[0.0, 1e-3], velocity=100.0, waist=6.0), lag="real_array", velocity="real"
     ),
-    "liv_expected": E(lambda: dict(g1=[1.0, 0.5, 0.2]), g1="real_array", ddof="count0"),
-    "log_intensity_correlation": E(lambda: dict(g1=[1.0, 0.5, 0.2]), g1="real_array"),
-    "siegert_g2": E(lambda: dict(g1=[1.0, 0.5, 0.2]), g1="real_array", beta="probability"),
+    "liv_expected": E(lambda: dict(g1=[1.0, 0.5, 0.2]), g1="complex_array", ddof="count0"),
+    "log_intensity_correlation": E(lambda: dict(g1=[1.0, 0.5, 0.2]), g1="complex_array"),
+    "siegert_g2": E(lambda: dict(g1=[1.0, 0.5, 0.2]), g1="complex_array", beta="probability"),
     "speckle_variance_expected": E(
-        lambda: dict(g1=[1.0, 0.5, 0.2]), g1="real_array", ddof="count0"
+        lambda: dict(g1=[1.0, 0.5, 0.2]), g1="complex_array", ddof="count0"
     ),
-    "ssada_expected": E(lambda: dict(g1_bands=[0.5, 0.6]), g1_bands="real_array"),
-    "ssada_ratio": E(lambda: dict(g1=[0.5]), g1="real_array"),
+    "ssada_expected": E(lambda: dict(g1_bands=[0.5, 0.6]), g1_bands="complex_array"),
+    "ssada_ratio": E(lambda: dict(g1=[0.5]), g1="complex_array"),
     "ocds_expected": E(
         lambda: dict(g1=[1.0, 0.8, 0.6, 0.4], lags=[0, 1, 2, 3], delays=(1, 2)),
-        g1="real_array",
+        g1="complex_array",  # a complex correlation: |g1| is used (docstring)
         lags="real_array",
         delays="none",
         why="delays: a pair, tests/analysis/test_dynamics*",

@@ -65,11 +65,21 @@ __all__ = [
 DB2 = float((10.0 / np.log(10.0)) ** 2)
 
 
-def _lags(lag: object) -> np.ndarray:
-    t = as_finite_array(lag, "lag")
+def _lags(lag: object, name: str = "lag") -> np.ndarray:
+    t = as_finite_array(lag, name)
+    if t.size == 0:
+        raise ValueError(f"{name} must hold at least one lag (s), got an empty array")
     if np.any(t < 0):
-        raise ValueError("lag must be >= 0 s")
+        raise ValueError(f"{name} must be >= 0 s")
     return t
+
+
+def _abs_g1(g1: object, name: str = "g1") -> np.ndarray:
+    """``|g1|`` of a finite, non-empty (real or complex) correlation, refused by ``name``."""
+    g = np.abs(as_finite_array(g1, name, dtype=complex))
+    if g.size == 0:
+        raise ValueError(f"{name} must hold at least one value, got an empty array")
+    return g
 
 
 def _band(spectrum: xr.DataArray | None, k0: float) -> tuple[np.ndarray, np.ndarray]:
@@ -78,10 +88,14 @@ def _band(spectrum: xr.DataArray | None, k0: float) -> tuple[np.ndarray, np.ndar
         return np.array([k0]), np.array([1.0])
     if not isinstance(spectrum, xr.DataArray) or "wavenumber" not in spectrum.coords:
         raise TypeError("spectrum must be a DataArray from speckle.spectrum")
+    if spectrum.size == 0:
+        raise ValueError("spectrum must hold at least one wavenumber, got an empty spectrum")
     k0s = float(spectrum.attrs.get("k0", np.nan))
     if not np.isclose(k0s, k0, rtol=1e-9):
         raise ValueError(f"k0 = {k0:g} rad/µm differs from the spectrum's k0 = {k0s:g} rad/µm")
-    w = np.asarray(spectrum.values, float) ** 2
+    w = as_finite_array(spectrum.values, "spectrum") ** 2
+    if not w.sum() > 0:
+        raise ValueError("spectrum must have some power (all its weights are zero)")
     return np.asarray(spectrum.wavenumber.values, float), w / w.sum()
 
 
@@ -150,11 +164,9 @@ def siegert_g2(g1: object, *, beta: float = 1.0) -> np.ndarray:
     >>> float(siegert_g2(0.5))
     1.25
     """
-    g = np.asarray(g1)
-    if not np.all(np.isfinite(g)):
-        raise ValueError("g1 must be finite")
+    g = _abs_g1(g1)
     b = check_real(beta, "beta", low=0, high=1)
-    return 1.0 + b * np.abs(g) ** 2
+    return 1.0 + b * g**2
 
 
 def g1_ballistic(
@@ -283,8 +295,8 @@ def doppler_shift(lag: object, *, velocity: float, k0: float) -> np.ndarray:
 
 
 def _g1_series(g1: object) -> np.ndarray:
-    g = np.abs(np.asarray(g1))
-    if g.ndim != 1 or g.size < 2 or not np.all(np.isfinite(g)):
+    g = _abs_g1(g1)
+    if g.ndim != 1 or g.size < 2:
         raise ValueError(
             "g1 must be a finite 1-D sequence of |g1| at lags 0, dt, ..., (N-1) dt (N >= 2)"
         )
@@ -310,7 +322,7 @@ def log_intensity_correlation(g1: object) -> np.ndarray:
     >>> float(log_intensity_correlation(1.0))
     1.0
     """
-    g = np.abs(np.asarray(g1, dtype=complex))
+    g = _abs_g1(g1)
     return spence(1.0 - np.minimum(g, 1.0) ** 2) / (np.pi**2 / 6.0)
 
 
@@ -365,8 +377,8 @@ def ocds_expected(g1: object, lags: object, *, delays: tuple[float, float]) -> f
     >>> abs(ocds_expected(np.ones(4), t, delays=(0.01, 0.03))) < 1e-9  # no decay
     True
     """
-    g = np.abs(np.asarray(g1, dtype=complex))
-    t = _lags(lags)
+    g = _abs_g1(g1)
+    t = _lags(lags, "lags")
     if g.shape != t.shape or g.ndim != 1:
         raise ValueError(f"g1 and lags must be 1-D of one shape, got {g.shape}, {t.shape}")
     sel = delay_selection(t, delays)
@@ -383,7 +395,7 @@ def ssada_ratio(g1: object) -> np.ndarray:
     >>> round(float(ssada_ratio(0.0)), 6)
     0.785398
     """
-    m = np.minimum(np.abs(np.asarray(g1, dtype=complex)) ** 2, 1.0)
+    m = np.minimum(_abs_g1(g1) ** 2, 1.0)
     small = m < 1e-8
     mm = np.where(small, 0.5, m)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -412,7 +424,7 @@ def ssada_expected(g1_bands: object) -> float:
     >>> ssada_expected([1.0])
     0.0
     """
-    g = np.abs(np.atleast_1d(np.asarray(g1_bands, dtype=complex)))
-    if g.ndim != 1 or g.size == 0 or np.any(g > 1 + 1e-12):
+    g = np.atleast_1d(_abs_g1(g1_bands, "g1_bands"))
+    if g.ndim != 1 or np.any(g > 1 + 1e-12):
         raise ValueError("g1_bands must be a non-empty 1-D sequence of |g1| <= 1, one per band")
     return float(1.0 - np.mean(ssada_ratio(g)))
