@@ -33,7 +33,7 @@ from functools import lru_cache
 import numpy as np
 from scipy import optimize, special
 
-from .._validate import check_real
+from .._validate import as_finite_array, check_real
 
 __all__ = ["depth_intensity_psf", "log_intensity_moments", "sparse_inverse_density"]
 
@@ -64,20 +64,36 @@ def _lateral(a: np.ndarray) -> np.ndarray:
     return np.where(lna < la[0], -(a**2) * np.sqrt(np.pi) / 8, -np.exp(np.interp(lna, la, g)))
 
 
+def _weights(weights: object) -> np.ndarray:
+    """The spectral weights as a finite real 1-D array with some power, refused by name."""
+    w = as_finite_array(weights, "weights")
+    if w.ndim != 1 or w.size == 0:
+        raise ValueError(f"weights must be a non-empty 1-D array, got shape {w.shape}")
+    if not np.any(w):
+        raise ValueError("weights must not all be zero (no power: the PSF is undefined)")
+    return w
+
+
 def depth_intensity_psf(weights: np.ndarray) -> np.ndarray:
     """``|P(u)|^2`` of the model's depth PSF over one period, 8 samples per pixel.
 
     Parameters
     ----------
     weights : numpy.ndarray
-        Spectral weights of the ``N`` components, centred on ``N // 2``.
+        Spectral weights of the ``N`` components, centred on ``N // 2`` (finite, real,
+        1-D, not all zero).
 
     Returns
     -------
     numpy.ndarray
         ``8 N`` samples, ``u = 0, 1/8, ...`` pixels.
+
+    Raises
+    ------
+    TypeError, ValueError
+        ``weights`` not a finite real non-empty 1-D array, or all zero.
     """
-    w = np.asarray(weights, dtype=float)
+    w = _weights(weights)
     n = w.size
     # P(k/8) = sum_n w_n exp(2 pi i k (n - N//2) / (8 N)): a zero-padded inverse FFT
     padded = np.zeros(8 * n, complex)
@@ -118,16 +134,18 @@ def log_intensity_moments(
 
     Raises
     ------
-    ValueError
-        A non-positive waist or density, or a negative ``inverse_snr``.
+    TypeError, ValueError
+        A non-positive waist or density, a negative ``inverse_snr``, or ``weights`` as
+        :func:`depth_intensity_psf` refuses them.
     """
+    wts = _weights(weights)
     w = check_real(waist_pitch, "waist_pitch", low=0, low_inclusive=False)
     rho = check_real(density, "density", low=0, low_inclusive=False)
     n = check_real(inverse_snr, "inverse_snr", low=0)
     g = np.euler_gamma
     if not np.isfinite(rho):
         return -g, np.pi**2 / 6
-    lam, area = _lambda_cached(tuple(np.asarray(weights, dtype=float)), w)
+    lam, area = _lambda_cached(tuple(wts), w)
     t = np.exp(_TAU) / np.sqrt(area)
     s2 = rho * area * (1 + n)
     dphi = np.exp(rho * lam - rho * area * n * t**2 / 4) - np.exp(-s2 * t**2 / 4)
@@ -168,6 +186,7 @@ def sparse_inverse_density(
         A non-positive ``log_variance`` (and as :func:`log_intensity_moments`).
     """
     v = check_real(log_variance, "log_variance", low=0, low_inclusive=False)
+    log_intensity_moments(weights, waist_pitch, 1.0, inverse_snr)  # checks every argument first
 
     def gap(y):
         return log_intensity_moments(weights, waist_pitch, 1 / y, inverse_snr)[1] - v
