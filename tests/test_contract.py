@@ -1577,6 +1577,8 @@ PENDING: dict[str, str] = {
 #: (function, parameter, bad value) -> why the call's answer is the right one.
 ANSWERS: dict[tuple[str, str, str], str] = {
     ("velocity_range", "snr_db", "inf"): "no noise: the noise floor is the static one",
+    ("contrast_theory", "n_pixels", "huge"): "a rectangular spectrum's moments are closed "
+    "forms (speckle.analysis.statistics.spectrum_moments): nothing is allocated",
     **{
         (n, "intensity", "complex"): "a complex field is taken as its intensity |A|^2 "
         "(speckle.analysis.dynamics._series)"

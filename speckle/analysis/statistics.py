@@ -43,6 +43,8 @@ Rectangular spectrum: ``mu4/mu2^2 = (2 N^2 + 1) / (3 N)``. Contrast does not dep
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import xarray as xr
 from scipy import stats
@@ -271,13 +273,26 @@ def fit_exponential(intensity: object, *, chi2_bins: int = 50) -> xr.Dataset:
     return _fit(intensity, "intensity", stats.expon, "mean", chi2_bins)
 
 
+def _reduced_dims(data: xr.DataArray, dim: object) -> tuple[str, ...]:
+    """The dims ``dim`` names (all when None), refused by name when unknown."""
+    if dim is None:
+        return tuple(data.dims)
+    names = [dim] if isinstance(dim, str) else dim
+    if not isinstance(names, list | tuple) or not all(isinstance(d, str) for d in names):
+        raise TypeError(f"dim must be a dim name or a list of them, got {dim!r}")
+    unknown = [d for d in names if d not in data.dims]
+    if unknown:
+        raise ValueError(f"dim {unknown} not among intensity's dims {tuple(data.dims)}")
+    return tuple(names)
+
+
 def speckle_contrast(intensity: object, dim: str | list[str] | None = None) -> object:
     """Speckle contrast ``C = std(I)/mean(I)`` (population std, ``ddof=0``).
 
     Parameters
     ----------
     intensity : array_like or xarray.DataArray
-        Pixel intensities ``|A|^2``.
+        Pixel intensities ``|A|^2`` (finite; at least 2 values per contrast).
     dim : str or list of str, optional
         Dims to reduce over (DataArray only); default all.
 
@@ -285,15 +300,48 @@ def speckle_contrast(intensity: object, dim: str | list[str] | None = None) -> o
     -------
     float or xarray.DataArray
         The contrast (dimensionless); a DataArray over the remaining dims if ``dim`` is given.
+        NaN, with a ``RuntimeWarning`` saying so, where the mean intensity is zero (no
+        contrast is defined).
+
+    Raises
+    ------
+    TypeError, ValueError
+        ``intensity`` not finite numbers or with fewer than 2 values per contrast; ``dim`` not
+        a dim of ``intensity`` (or given with a plain array).
+
+    Examples
+    --------
+    >>> speckle_contrast([1.0, 3.0])  # std 1, mean 2
+    0.5
     """
     if isinstance(intensity, xr.DataArray):
+        dims = _reduced_dims(intensity, dim)
         as_finite_array(intensity.values, "intensity")
-        c = intensity.std(dim=dim) / intensity.mean(dim=dim)
+        n = int(np.prod([intensity.sizes[d] for d in dims]))
+        if n < 2:
+            raise ValueError(f"intensity must hold at least 2 values over {dims}, got {n}")
+        mean = intensity.mean(dim=dim)
+        zero = mean == 0
+        if bool(zero.any()):
+            _warn_zero_mean(int(zero.sum()))
+        c = intensity.std(dim=dim) / mean.where(~zero)
         return c.rename("contrast").assign_attrs(attrs("contrast", "speckle contrast std/mean"))
     if dim is not None:
         raise TypeError("dim needs intensity as an xarray.DataArray")
     x = _values(intensity, "intensity")
-    return float(x.std() / x.mean())
+    mean = x.mean()
+    if mean == 0:
+        _warn_zero_mean(1)
+        return float("nan")
+    return float(x.std() / mean)
+
+
+def _warn_zero_mean(count: int) -> None:
+    warnings.warn(
+        f"speckle_contrast: the mean intensity is zero in {count} place(s): no contrast, NaN",
+        RuntimeWarning,
+        stacklevel=3,
+    )
 
 
 def contrast_standard_error(
@@ -336,10 +384,9 @@ def spectrum_moments(n_pixels: int, spectrum: object | None = None) -> tuple[flo
     ``spectrum=None`` is the rectangular spectrum (``mu2 = N``, ``mu4 = (2N^3 + N)/3``).
     """
     n = check_int(n_pixels, "n_pixels", low=2)
-    if spectrum is None:
-        s = np.ones(n)
-    else:
-        s = check_weights(spectrum, n)
+    if spectrum is None:  # closed form: no allocation for any N (exact integers to 2^53)
+        return float(n), (2.0 * n**3 + n) / 3.0
+    s = check_weights(spectrum, n)
     return float(np.sum(s**2)), float(np.sum(np.convolve(s, s) ** 2))
 
 
