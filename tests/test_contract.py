@@ -1044,7 +1044,7 @@ ENTRIES: dict[str, Entry] = {
         why="path: a file to stream to; **options: estimate_strain's",
     ),
     "compound": E(lambda: dict(looks=F.looks), looks="dataset"),
-    "compounded_contrast": E(lambda: dict(mu=np.eye(2)), mu="image"),
+    "compounded_contrast": E(lambda: dict(mu=np.eye(2)), mu="complex_image"),
     "frequency_looks": E(
         lambda: dict(img=F.img, windows=speckle.subband_windows(16, 2)),
         img="dataset",
@@ -1055,10 +1055,14 @@ ENTRIES: dict[str, Entry] = {
     ),
     "subband_fwhm": E(lambda: dict(n_pixels=16, n_samples=8)),
     "window_correlation": E(
-        lambda: dict(windows=speckle.subband_windows(16, 2)), windows="image", spectrum="real_array"
+        lambda: dict(windows=speckle.subband_windows(16, 2)),
+        windows="complex_image",
+        spectrum="real_array",
     ),
     "split_spectrum_contrast": E(
-        lambda: dict(weights=np.ones((2, 16)), density=4.0), weights="image", kurtosis="positive"
+        lambda: dict(weights=np.ones((2, 16)), density=4.0),
+        weights="complex_image",
+        kurtosis="positive",
     ),
     "noisy_looks": E(
         lambda: dict(looks=F.looks, snr_db=10.0, seed=3),
@@ -1113,9 +1117,14 @@ ENTRIES: dict[str, Entry] = {
         )
     ),
     "brownian_frames": E(
-        lambda: dict(scene=F.shared, n_frames=2, diffusion=1.0, interval=0.01, seed=1)
+        lambda: dict(scene=F.shared, n_frames=2, diffusion=1.0, interval=0.01, seed=1),
+        diffusion="nonnegative",  # D = 0: a static scene (docstring)
     ),
-    "brownian_g1": E(lambda: dict(tau=[0.0, 0.01], diffusion=1.0, k0=5.0), tau="real_array"),
+    "brownian_g1": E(
+        lambda: dict(tau=[0.0, 0.01], diffusion=1.0, k0=5.0),
+        tau="real_array",
+        diffusion="nonnegative",  # D = 0: g1 = 1 (docstring)
+    ),
     "despeckle": E(
         lambda: dict(intensity=F.speckled, name="median"), name="choice", params="mapping"
     ),
@@ -1577,6 +1586,13 @@ PENDING: dict[str, str] = {
 #: (function, parameter, bad value) -> why the call's answer is the right one.
 ANSWERS: dict[tuple[str, str, str], str] = {
     ("velocity_range", "snr_db", "inf"): "no noise: the noise floor is the static one",
+    ("compounded_contrast", "mu", "one_pixel"): "one look: the contrast of one look (1)",
+    ("window_correlation", "windows", "one_pixel"): "one look of one sample: [[1]]",
+    ("split_spectrum_contrast", "weights", "one_pixel"): "one look of one spectral sample: "
+    "sqrt(1 + kurtosis/density), the random walk of a Poisson number of phasors",
+    ("split_spectrum_contrast", "density", "inf"): "the dense limit (docstring): "
+    "compounded_contrast of the windows' correlations",
+    ("subband_fwhm", "n_pixels", "huge"): "a scalar root (brentq): nothing is allocated",
     ("contrast_theory", "n_pixels", "huge"): "a rectangular spectrum's moments are closed "
     "forms (speckle.analysis.statistics.spectrum_moments): nothing is allocated",
     **{

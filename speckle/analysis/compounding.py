@@ -42,7 +42,7 @@ import scipy.optimize as opt
 import xarray as xr
 
 from .._deprecate import moved
-from .._validate import as_finite_array, check_choice, check_int, check_real
+from .._validate import as_finite_array, check_choice, check_int, check_memory, check_real
 from ..conventions import attrs, coord, units_of
 from ..scene.motion import brownian_motion
 from ._common import label_looks
@@ -117,6 +117,7 @@ def subband_windows(
     nl = check_int(n_looks, "n_looks", low=1, high=n)
     ov = check_real(overlap, "overlap", low=0.0, high=1.0, high_inclusive=False)
     check_choice(window, "window", WINDOWS)
+    check_memory(3 * 8.0 * nl * n, "n_samples", f"{nl} windows of {n} samples")
     w = n / (nl - (nl - 1) * ov)
     if w < 1.0:
         raise ValueError(
@@ -137,6 +138,14 @@ def subband_windows(
     return win
 
 
+def _looks_by_samples(values: object, name: str) -> np.ndarray:
+    """A finite complex (looks, samples) array with at least one of each, refused by name."""
+    a = as_finite_array(values, name, dtype=np.complex128)
+    if a.ndim != 2 or a.size == 0:
+        raise ValueError(f"{name} must be 2-D (looks, samples) and non-empty, got shape {a.shape}")
+    return a
+
+
 def window_correlation(windows: object, spectrum: object | None = None) -> np.ndarray:
     """Field correlation ``mu_ij`` of split-spectrum looks: the windows' weighted overlap.
 
@@ -155,26 +164,45 @@ def window_correlation(windows: object, spectrum: object | None = None) -> np.nd
     -------
     numpy.ndarray, shape (L, L)
         Hermitian, unit diagonal.
+
+    Raises
+    ------
+    TypeError, ValueError
+        ``windows`` not a finite non-empty 2-D array, ``spectrum`` not ``N`` finite real
+        weights, or a window with no power under the spectrum (its correlation is undefined).
+
+    Examples
+    --------
+    >>> window_correlation(subband_windows(8, 2)).round(6).tolist()  # disjoint halves
+    [[(1+0j), 0j], [0j, (1+0j)]]
     """
-    w = as_finite_array(windows, "windows", dtype=np.complex128)
-    if w.ndim != 2:
-        raise ValueError(f"windows must be 2-D (looks, samples), got shape {w.shape}")
-    s2 = np.ones(w.shape[1]) if spectrum is None else np.asarray(spectrum, float) ** 2
+    w = _looks_by_samples(windows, "windows")
+    s2 = np.ones(w.shape[1]) if spectrum is None else as_finite_array(spectrum, "spectrum") ** 2
     if s2.shape != (w.shape[1],):
         raise ValueError(f"spectrum must hold {w.shape[1]} weights, got shape {s2.shape}")
     g = (w * s2) @ w.conj().T
     d = np.sqrt(np.real(np.diag(g)))
+    if not np.all(d > 0):
+        raise ValueError(
+            f"windows {np.flatnonzero(~(d > 0)).tolist()} have no power under the spectrum: "
+            "their correlation is undefined"
+        )
     return g / np.outer(d, d)
 
 
 def compounded_contrast(mu: object) -> float:
     """Contrast of the intensity average of ``L`` looks of equal mean: ``sqrt(sum |mu_ij|^2)/L``.
 
-    Dense-scene (Gaussian speckle) result; ``mu`` the (L, L) field correlations (identity:
-    ``1/sqrt(L)``).
+    Dense-scene (Gaussian speckle) result; ``mu`` the (L, L) complex field correlations
+    (identity: ``1/sqrt(L)``; one look, ``[[1]]``: 1).
+
+    Examples
+    --------
+    >>> compounded_contrast([[1.0, 0.0], [0.0, 1.0]])  # 1/sqrt(2)
+    0.7071067811865476
     """
-    m = as_finite_array(mu, "mu", dtype=np.complex128)
-    if m.ndim != 2 or m.shape[0] != m.shape[1]:
+    m = _looks_by_samples(mu, "mu")
+    if m.shape[0] != m.shape[1]:
         raise ValueError(f"mu must be a square (L, L) matrix, got shape {m.shape}")
     return float(np.sqrt(np.sum(np.abs(m) ** 2)) / m.shape[0])
 
@@ -202,14 +230,25 @@ def split_spectrum_contrast(weights: object, density: float, *, kurtosis: float 
     -------
     float
         The contrast (std / mean) of the intensity averaged over the looks.
+
+    Raises
+    ------
+    TypeError, ValueError
+        ``weights`` not a finite non-empty 2-D array or without power; ``density`` not a
+        positive real (``inf`` allowed); ``kurtosis`` below 1 (``E|a|^4 >= (E|a|^2)^2``,
+        Cauchy-Schwarz) or not finite.
+
+    Examples
+    --------
+    >>> round(split_spectrum_contrast([[1.0]], float("inf")), 12)  # one look, dense: 1
+    1.0
     """
-    g = as_finite_array(weights, "weights", dtype=np.complex128)
-    if g.ndim != 2:
-        raise ValueError(f"weights must be 2-D (looks, samples), got shape {g.shape}")
-    rho = float(density)
-    if not rho > 0 or np.isnan(rho):
-        raise ValueError(f"density must be > 0 scatterers per pixel, got {density!r}")
-    kap = check_real(kurtosis, "kurtosis", low=0)
+    g = _looks_by_samples(weights, "weights")
+    dense = isinstance(density, float | np.floating) and density == np.inf
+    rho = np.inf if dense else check_real(density, "density", low=0, low_inclusive=False)
+    kap = check_real(kurtosis, "kurtosis", low=1)
+    if not np.any(g):
+        raise ValueError("weights must not all be zero (no signal: the contrast is undefined)")
     n = g.shape[1]
     cross = g @ g.conj().T  # sum_n G_i G_j*
     mean = np.real(np.diag(cross))
@@ -240,9 +279,11 @@ def subband_fwhm(n_pixels: int, n_samples: int) -> float:
 
 
 def _field(img: xr.Dataset | xr.DataArray) -> xr.DataArray:
-    f = img.field if isinstance(img, xr.Dataset) else img
+    f = img.field if isinstance(img, xr.Dataset) and "field" in img else img
     if not isinstance(f, xr.DataArray) or not np.iscomplexobj(f) or "depth" not in f.dims:
-        raise TypeError("image must be a complex field DataArray (or Dataset 'field') with 'depth'")
+        raise TypeError("img must be a complex field DataArray (or Dataset 'field') with 'depth'")
+    if f.size == 0:
+        raise ValueError(f"img must hold at least one pixel, got sizes {dict(f.sizes)}")
     return f
 
 
@@ -291,6 +332,14 @@ def frequency_looks(img: xr.Dataset | xr.DataArray, windows: object) -> xr.DataA
     return label_looks(looks.transpose("look", *f.dims), "frequency")
 
 
+def _check_looks(looks: object) -> None:
+    """Looks: a DataArray with a ``look`` dim and at least one pixel, refused by name."""
+    if not isinstance(looks, xr.DataArray) or "look" not in looks.dims:
+        raise TypeError("looks must be a DataArray with a 'look' dim (see frequency_looks)")
+    if looks.size == 0:
+        raise ValueError(f"looks must hold at least one look and pixel, got {dict(looks.sizes)}")
+
+
 def compound(looks: xr.DataArray, mode: str = "intensity") -> xr.DataArray:
     """Average looks (dim ``look``) into one intensity image.
 
@@ -299,8 +348,7 @@ def compound(looks: xr.DataArray, mode: str = "intensity") -> xr.DataArray:
     realisation; raises the SNR of noisy looks).
     """
     check_choice(mode, "mode", AVERAGING)
-    if not isinstance(looks, xr.DataArray) or "look" not in looks.dims:
-        raise TypeError("looks must be a DataArray with a 'look' dim (see frequency_looks)")
+    _check_looks(looks)
     if mode == "intensity":
         out = (abs(looks) ** 2).mean("look")
     elif mode == "magnitude":
@@ -342,8 +390,7 @@ def noisy_looks(
     xarray.DataArray
         The looks plus noise (attrs ``snr_db``, ``noise_intensity`` of the first look).
     """
-    if not isinstance(looks, xr.DataArray) or "look" not in looks.dims:
-        raise TypeError("looks must be a DataArray with a 'look' dim")
+    _check_looks(looks)
     snr = check_real(snr_db, "snr_db")
     sd = check_int(seed, "seed", low=0)
     ref = (
@@ -372,6 +419,8 @@ def brownian_g1(tau: object, diffusion: float, k0: float) -> np.ndarray:
     :func:`speckle.analysis.dynamics_theory.g1_brownian`.
     """
     t = as_finite_array(tau, "tau")  # named as here (g1_brownian calls it lag)
+    if t.size == 0:
+        raise ValueError("tau must hold at least one lag (s), got an empty array")
     if np.any(t < 0):
         raise ValueError("tau must be >= 0 (s)")
     return g1_brownian(t, diffusion=diffusion, k0=k0)
@@ -409,6 +458,10 @@ def brownian_frames(
     sd = check_int(seed, "seed", low=0)
     if not isinstance(scene, xr.Dataset) or "z" not in scene:
         raise TypeError("scene must be a scatterer Dataset with a variable 'z'")
+    if scene.z.size == 0:
+        raise ValueError("scene must hold at least one scatterer, got none")
+    axes = sum(a in scene for a in ("z", "x", "y"))
+    check_memory(2 * 8.0 * nf * scene.z.size * axes, "n_frames", f"{nf} frames of the scene")
     # one implementation: the scene layer's Brownian motion, its time dim named frame here
     out = brownian_motion(scene, np.arange(nf) * dt, diffusion=d, seed=sd)
     out = out.rename_dims(time="frame").assign_coords(

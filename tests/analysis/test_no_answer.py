@@ -26,3 +26,13 @@ def test_rectangular_spectrum_moments_are_the_closed_form():
     s = np.ones(n)
     assert spectrum_moments(n) == (float(n), float(np.sum(np.convolve(s, s) ** 2)))
     assert spectrum_moments(10**12)[0] == 1e12  # nothing allocated
+
+
+def test_split_spectrum_refuses_a_kurtosis_below_one_and_takes_the_dense_limit():
+    w = speckle.subband_windows(16, 2)
+    with pytest.raises(ValueError, match="kurtosis"):
+        speckle.split_spectrum_contrast(w, 4.0, kurtosis=0.5)  # E|a|^4 >= (E|a|^2)^2
+    dense = speckle.split_spectrum_contrast(w, float("inf"))
+    assert dense == pytest.approx(speckle.compounded_contrast(speckle.window_correlation(w)))
+    with pytest.raises(ValueError, match="no power"):
+        speckle.window_correlation(np.vstack([w[0], np.zeros(16)]))
