@@ -252,8 +252,14 @@ FILTERS: dict[str, tuple[Callable, dict[str, Callable]]] = {
 
 
 def filter_available(name: str) -> bool:
-    """Whether filter ``name`` can run here (``bm3d`` needs the optional ``bm3d`` package)."""
-    check_choice(name, "filter", FILTERS)
+    """Whether filter ``name`` can run here (``bm3d`` needs the optional ``bm3d`` package).
+
+    Examples
+    --------
+    >>> filter_available("median")
+    True
+    """
+    check_choice(name, "filter name", FILTERS)
     if name != "bm3d":
         return True
     try:
@@ -265,9 +271,13 @@ def filter_available(name: str) -> bool:
 
 def check_filter(name: str, params: Mapping | None = None, domain: str = "linear") -> dict:
     """Checked parameters of filter ``name`` (``ValueError`` naming the bad one)."""
-    check_choice(name, "filter", FILTERS)
+    check_choice(name, "filter name", FILTERS)
     check_choice(domain, "domain", DOMAINS)
     allowed = FILTERS[name][1]
+    if params is not None and not isinstance(params, Mapping):
+        raise TypeError(
+            f"params must be a mapping of filter parameters (or None), got {type(params).__name__}"
+        )
     params = dict(params or {})
     unknown = set(params) - set(allowed)
     if unknown:
