@@ -1593,6 +1593,7 @@ ANSWERS: dict[tuple[str, str, str], str] = {
     ("split_spectrum_contrast", "density", "inf"): "the dense limit (docstring): "
     "compounded_contrast of the windows' correlations",
     ("subband_fwhm", "n_pixels", "huge"): "a scalar root (brentq): nothing is allocated",
+    ("bandlimited", "field", "one_pixel"): "one sample: the constant polynomial, exact",
     ("contrast_theory", "n_pixels", "huge"): "a rectangular spectrum's moments are closed "
     "forms (speckle.analysis.statistics.spectrum_moments): nothing is allocated",
     **{

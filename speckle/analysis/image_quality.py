@@ -55,15 +55,44 @@ def _masked(img: object, mask: object, name: str = "intensity", mask_name: str =
     return a[m]
 
 
+def _no_answer(func: str, why: str, value: float = np.nan) -> float:
+    """``value`` (NaN: no answer) with a ``RuntimeWarning`` saying why."""
+    warnings.warn(f"{func}: {why}; returning {value}", RuntimeWarning, stacklevel=3)
+    return value
+
+
 def contrast(intensity: object, mask: object) -> float:
-    """Speckle contrast ``std/mean`` (ddof 0) of the intensities in ``mask``."""
+    """Speckle contrast ``std/mean`` (ddof 0) of the intensities in ``mask``.
+
+    NaN, with a ``RuntimeWarning``, where the mean intensity in the mask is zero.
+
+    Examples
+    --------
+    >>> contrast(np.array([1.0, 3.0]), np.array([True, True]))
+    0.5
+    """
     v = _masked(intensity, mask)
+    if v.mean() == 0:
+        return _no_answer("contrast", "the mean intensity in the mask is zero (no contrast)")
     return float(v.std() / v.mean())
 
 
 def enl(intensity: object, mask: object) -> float:
-    """Equivalent number of looks ``mean^2/var`` of the intensities in ``mask``."""
+    """Equivalent number of looks ``mean^2/var`` of the intensities in ``mask``.
+
+    ``inf``, with a ``RuntimeWarning``, for a constant non-zero region (no speckle); NaN,
+    with a warning, for an all-zero one.
+
+    Examples
+    --------
+    >>> enl(np.array([1.0, 3.0]), np.array([True, True]))  # mean 2, variance 1
+    4.0
+    """
     v = _masked(intensity, mask)
+    if v.var() == 0:
+        if v.mean() == 0:
+            return _no_answer("enl", "the intensity in the mask is all zero (no looks)")
+        return _no_answer("enl", "the intensity in the mask is constant (no speckle)", np.inf)
     return float(v.mean() ** 2 / v.var())
 
 
@@ -74,9 +103,23 @@ def to_db(intensity: object, reference: float) -> np.ndarray:
 
 
 def cnr(image_db: object, mask_a: object, mask_b: object) -> float:
-    """Contrast-to-noise ratio ``|m_a - m_b|/sqrt(v_a + v_b)`` of two regions of a dB image."""
+    """Contrast-to-noise ratio ``|m_a - m_b|/sqrt(v_a + v_b)`` of two regions of a dB image.
+
+    Both regions constant: ``inf`` if their means differ, NaN if not (each with a
+    ``RuntimeWarning``).
+
+    Examples
+    --------
+    >>> img = np.array([[0.0, 2.0], [2.0, 4.0]])
+    >>> cnr(img, img < 3, img > 1)  # means 4/3 and 8/3, variances 8/9 and 8/9
+    1.0
+    """
     a = _masked(image_db, mask_a, "image_db", "mask_a")
     b = _masked(image_db, mask_b, "image_db", "mask_b")
+    if a.var() + b.var() == 0:
+        if a.mean() == b.mean():
+            return _no_answer("cnr", "both regions are constant and equal (no contrast, no noise)")
+        return _no_answer("cnr", "both regions are constant (no noise)", np.inf)
     return float(abs(a.mean() - b.mean()) / np.sqrt(a.var() + b.var()))
 
 
@@ -163,8 +206,13 @@ def peak_fwhm(profile: object, spacing: float = 1.0, *, background: float = 0.0)
     """FWHM of the highest peak of a profile (linear interpolation of the half-level crossings).
 
     The half level is ``background + (max - background)/2``; ``spacing`` is the sample step
-    (µm or pixels). NaN when a crossing lies outside the profile. ``background`` must lie
-    below the maximum (``ValueError`` otherwise: there is no peak).
+    (µm or pixels). NaN, with a ``RuntimeWarning``, when a crossing lies outside the profile.
+    ``background`` must lie below the maximum (``ValueError`` otherwise: there is no peak).
+
+    Examples
+    --------
+    >>> peak_fwhm([0.0, 1.0, 2.0, 1.0, 0.0])  # half level 1 crossed at samples 1 and 3
+    2.0
     """
     y = as_finite_array(profile, "profile")
     if y.ndim != 1 or y.size < 3:
@@ -179,7 +227,10 @@ def peak_fwhm(profile: object, spacing: float = 1.0, *, background: float = 0.0)
         )
     level = background + (y[i] - background) / 2
     x = np.arange(y.size) * dx
-    return _crossing(x, y, level, i, 1) - _crossing(x, y, level, i, -1)
+    width = _crossing(x, y, level, i, 1) - _crossing(x, y, level, i, -1)
+    if np.isnan(width):
+        return _no_answer("peak_fwhm", "a half-level crossing lies outside the profile")
+    return width
 
 
 def edge_width(profile: object, spacing: float = 1.0) -> float:

@@ -36,3 +36,22 @@ def test_split_spectrum_refuses_a_kurtosis_below_one_and_takes_the_dense_limit()
     assert dense == pytest.approx(speckle.compounded_contrast(speckle.window_correlation(w)))
     with pytest.raises(ValueError, match="no power"):
         speckle.window_correlation(np.vstack([w[0], np.zeros(16)]))
+
+
+def test_image_metrics_without_an_answer_warn():
+    from speckle.analysis import image_quality as iq
+
+    mask = np.ones(4, bool)
+    with pytest.warns(RuntimeWarning, match="mean intensity in the mask is zero"):
+        assert np.isnan(iq.contrast(np.zeros(4), mask))
+    with pytest.warns(RuntimeWarning, match="all zero"):
+        assert np.isnan(speckle.enl(np.zeros(4), mask))
+    with pytest.warns(RuntimeWarning, match="constant"):
+        assert speckle.enl(np.full(4, 2.0), mask) == np.inf  # no speckle: infinitely many looks
+    img = np.array([1.0, 1.0, 3.0, 3.0])
+    with pytest.warns(RuntimeWarning, match="constant and equal"):
+        assert np.isnan(speckle.cnr(np.ones(4), mask, mask))
+    with pytest.warns(RuntimeWarning, match="no noise"):
+        assert speckle.cnr(img, img < 2, img > 2) == np.inf
+    with pytest.warns(RuntimeWarning, match="outside the profile"):
+        assert np.isnan(speckle.peak_fwhm([2.0, 1.5, 0.0, 0.0]))  # no left crossing
