@@ -411,6 +411,11 @@ def _timed(images: object, what: str, *, complex_: bool, uniform: bool, stride: 
         )
     st = check_int(stride, "stride", low=1)
     da = images.transpose("time", ...).isel(time=slice(None, None, st))
+    if da.sizes["time"] < 2 or da.size == 0:
+        raise ValueError(
+            f"images must hold at least 2 frames along 'time' (every {st}-th taken) and a "
+            f"pixel ({what}), got sizes {dict(images.sizes)}"
+        )
     dt = None
     if uniform:
         if "time" not in da.coords:
@@ -474,7 +479,7 @@ def g1(
         Dataset. Valid when the blocks' speckle is independent: blocks of depth pixels (a
         rectangular spectrum's pixels are uncorrelated) or of lines much wider than the beam.
     block_dim : str, optional
-        The spatial dim split into blocks (default: the last).
+        The spatial dim split into blocks (default: the last); only with ``blocks``.
 
     Returns
     -------
@@ -496,6 +501,13 @@ def g1(
     [0.0, 0.1, 0.2]
     """
     da, dt = _timed(images, "g1", complex_=True, uniform=True, stride=stride)
+    if block_dim is not None:
+        if not isinstance(block_dim, str):
+            raise TypeError(f"block_dim must be a dim name, got {block_dim!r}")
+        if block_dim not in da.dims[1:]:
+            raise ValueError(f"block_dim must be a spatial dim of {da.dims[1:]}, got {block_dim!r}")
+        if blocks is None:
+            raise ValueError("block_dim is used only with blocks (the standard error)")
     n = da.sizes["time"]
     m = np.arange(n) if lags is None else _lags_of(lags, n)
     arr = da.values  # computed once (a Dask series is not recomputed per block)
@@ -507,8 +519,6 @@ def g1(
     if window is not None or da.ndim < 2:
         raise ValueError("blocks needs window=None and a spatial dim to split")
     last = da.dims[-1] if block_dim is None else block_dim
-    if last not in da.dims[1:]:
-        raise ValueError(f"block_dim must be a spatial dim of {da.dims[1:]}, got {last!r}")
     if da.sizes[last] < k:
         raise ValueError(f"blocks={k} exceeds the {da.sizes[last]} elements along {last!r}")
     axis = da.dims.index(last)
