@@ -11,6 +11,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import check_int, check_real
+from .._wrap import check_same_grid
 from ..conventions import attrs, spacing
 
 __all__ = [
@@ -49,24 +50,9 @@ def depth_major(image: object) -> np.ndarray:
 
 
 def same_grid(x: xr.DataArray, y: xr.DataArray, names: tuple[str, str]) -> None:
-    """``ValueError`` unless every dim ``x`` and ``y`` share has the same size and coordinates."""
-    a_name, b_name = names
-    for d in [d for d in x.dims if d in y.dims]:
-        if x.sizes[d] != y.sizes[d]:
-            raise ValueError(
-                f"{a_name} and {b_name} differ along {d!r}: {x.sizes[d]} vs {y.sizes[d]} "
-                f"values; put both on the same grid or select the same region of both "
-                f"(e.g. .isel({d}=slice(...)) on each)"
-            )
-        if d in x.coords and d in y.coords:
-            a, b = np.asarray(x[d].values), np.asarray(y[d].values)
-            if not np.array_equal(a, b):
-                i = int(np.flatnonzero(a != b)[0])
-                raise ValueError(
-                    f"{a_name} and {b_name} have different {d!r} coordinates (first difference "
-                    f"at index {i}: {a[i]!r} vs {b[i]!r}); put both on the same grid or select "
-                    "the same region of both"
-                )
+    """``ValueError`` unless every dim ``x`` and ``y`` share has the same size and coordinates
+    (:func:`speckle._wrap.check_same_grid`, the decorator's check)."""
+    check_same_grid(x, y, names)
 
 
 def matched(x: xr.DataArray, y: xr.DataArray) -> tuple[xr.DataArray, xr.DataArray]:
