@@ -33,7 +33,8 @@ from functools import lru_cache
 import numpy as np
 from scipy import optimize, special
 
-from .._validate import as_finite_array, check_real
+from .._validate import check_real
+from .._wrap import ArraySpec, preprocess_and_wrap
 
 __all__ = ["depth_intensity_psf", "log_intensity_moments", "sparse_inverse_density"]
 
@@ -64,16 +65,19 @@ def _lateral(a: np.ndarray) -> np.ndarray:
     return np.where(lna < la[0], -(a**2) * np.sqrt(np.pi) / 8, -np.exp(np.interp(lna, la, g)))
 
 
-def _weights(weights: object) -> np.ndarray:
-    """The spectral weights as a finite real 1-D array with some power, refused by name."""
-    w = as_finite_array(weights, "weights")
-    if w.ndim != 1 or w.size == 0:
-        raise ValueError(f"weights must be a non-empty 1-D array, got shape {w.shape}")
+#: Spectral weights: finite, real, 1-D, non-empty (the decorator's checks).
+_WEIGHTS = {"weights": ArraySpec(kind="real", ndim=1)}
+
+
+def _weights(weights: np.ndarray) -> np.ndarray:
+    """The decorator-checked weights as floats, refused when all zero."""
+    w = np.asarray(weights, dtype=float)
     if not np.any(w):
         raise ValueError("weights must not all be zero (no power: the PSF is undefined)")
     return w
 
 
+@preprocess_and_wrap(checks=_WEIGHTS)
 def depth_intensity_psf(weights: np.ndarray) -> np.ndarray:
     """``|P(u)|^2`` of the model's depth PSF over one period, 8 samples per pixel.
 
@@ -110,6 +114,7 @@ def _lambda_cached(weights: tuple, waist_pitch: float) -> tuple[np.ndarray, floa
     return lam, area
 
 
+@preprocess_and_wrap(checks=_WEIGHTS)
 def log_intensity_moments(
     weights: np.ndarray, waist_pitch: float, density: float, inverse_snr: float = 0.0
 ) -> tuple[float, float]:
@@ -157,6 +162,7 @@ def log_intensity_moments(
     return float(mean - np.log(s2)), float(second - mean**2)
 
 
+@preprocess_and_wrap(checks=_WEIGHTS)
 def sparse_inverse_density(
     log_variance: float, weights: np.ndarray, waist_pitch: float, inverse_snr: float = 0.0
 ) -> float:
