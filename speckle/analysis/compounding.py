@@ -42,7 +42,8 @@ import scipy.optimize as opt
 import xarray as xr
 
 from .._deprecate import moved
-from .._validate import as_finite_array, check_choice, check_int, check_memory, check_real
+from .._validate import check_choice, check_int, check_memory, check_real
+from .._wrap import ArraySpec, preprocess_and_wrap
 from ..conventions import attrs, coord, units_of
 from ..scene.motion import brownian_motion
 from ._common import label_looks
@@ -138,14 +139,11 @@ def subband_windows(
     return win
 
 
-def _looks_by_samples(values: object, name: str) -> np.ndarray:
-    """A finite complex (looks, samples) array with at least one of each, refused by name."""
-    a = as_finite_array(values, name, dtype=np.complex128)
-    if a.ndim != 2 or a.size == 0:
-        raise ValueError(f"{name} must be 2-D (looks, samples) and non-empty, got shape {a.shape}")
-    return a
+#: A finite non-empty (looks, samples) matrix, real or complex (the decorator's checks).
+_MATRIX = ArraySpec(kind="number", ndim=2)
 
 
+@preprocess_and_wrap(checks={"windows": _MATRIX, "spectrum": ArraySpec(kind="real", optional=True)})
 def window_correlation(windows: object, spectrum: object | None = None) -> np.ndarray:
     """Field correlation ``mu_ij`` of split-spectrum looks: the windows' weighted overlap.
 
@@ -176,8 +174,8 @@ def window_correlation(windows: object, spectrum: object | None = None) -> np.nd
     >>> window_correlation(subband_windows(8, 2)).round(6).tolist()  # disjoint halves
     [[(1+0j), 0j], [0j, (1+0j)]]
     """
-    w = _looks_by_samples(windows, "windows")
-    s2 = np.ones(w.shape[1]) if spectrum is None else as_finite_array(spectrum, "spectrum") ** 2
+    w = np.asarray(windows, dtype=np.complex128)
+    s2 = np.ones(w.shape[1]) if spectrum is None else np.asarray(spectrum, dtype=float) ** 2
     if s2.shape != (w.shape[1],):
         raise ValueError(f"spectrum must hold {w.shape[1]} weights, got shape {s2.shape}")
     g = (w * s2) @ w.conj().T
@@ -190,6 +188,7 @@ def window_correlation(windows: object, spectrum: object | None = None) -> np.nd
     return g / np.outer(d, d)
 
 
+@preprocess_and_wrap(checks={"mu": _MATRIX})
 def compounded_contrast(mu: object) -> float:
     """Contrast of the intensity average of ``L`` looks of equal mean: ``sqrt(sum |mu_ij|^2)/L``.
 
@@ -201,12 +200,13 @@ def compounded_contrast(mu: object) -> float:
     >>> compounded_contrast([[1.0, 0.0], [0.0, 1.0]])  # 1/sqrt(2)
     0.7071067811865476
     """
-    m = _looks_by_samples(mu, "mu")
+    m = np.asarray(mu, dtype=np.complex128)
     if m.shape[0] != m.shape[1]:
         raise ValueError(f"mu must be a square (L, L) matrix, got shape {m.shape}")
     return float(np.sqrt(np.sum(np.abs(m) ** 2)) / m.shape[0])
 
 
+@preprocess_and_wrap(checks={"weights": _MATRIX})
 def split_spectrum_contrast(weights: object, density: float, *, kurtosis: float = 1.0) -> float:
     """Exact contrast of intensity-averaged looks of independent A-lines, Poisson scatterers.
 
@@ -243,7 +243,7 @@ def split_spectrum_contrast(weights: object, density: float, *, kurtosis: float 
     >>> round(split_spectrum_contrast([[1.0]], float("inf")), 12)  # one look, dense: 1
     1.0
     """
-    g = _looks_by_samples(weights, "weights")
+    g = np.asarray(weights, dtype=np.complex128)
     dense = isinstance(density, float | np.floating) and density == np.inf
     rho = np.inf if dense else check_real(density, "density", low=0, low_inclusive=False)
     kap = check_real(kurtosis, "kurtosis", low=1)
@@ -287,6 +287,7 @@ def _field(img: xr.Dataset | xr.DataArray) -> xr.DataArray:
     return f
 
 
+@preprocess_and_wrap(checks={"windows": ArraySpec(kind="real", ndim=2)})
 def frequency_looks(img: xr.Dataset | xr.DataArray, windows: object) -> xr.DataArray:
     """Split-spectrum looks of a complex image: the depth spectrum times each window.
 
@@ -307,8 +308,8 @@ def frequency_looks(img: xr.Dataset | xr.DataArray, windows: object) -> xr.DataA
     """
     f = _field(img)
     n = f.sizes["depth"]
-    w = as_finite_array(windows, "windows")
-    if w.ndim != 2 or w.shape[1] != n:
+    w = np.asarray(windows, dtype=float)
+    if w.shape[1] != n:
         raise ValueError(
             f"windows must have shape (looks, {n}) for an image of {n} depth pixels, got {w.shape}"
         )
@@ -412,15 +413,14 @@ def noisy_looks(
     return res.assign_attrs(looks.attrs, snr_db=snr, noise_intensity=sigma2[0])
 
 
+@preprocess_and_wrap(checks={"tau": ArraySpec(kind="real")})
 def brownian_g1(tau: object, diffusion: float, k0: float) -> np.ndarray:
     """Field autocorrelation ``exp(-q^2 D tau)``, ``q = 2 k0`` (rad/µm, in the medium).
 
     ``tau`` in s (>= 0), ``diffusion`` ``D`` in µm^2/s (>= 0); the one implementation is
     :func:`speckle.analysis.dynamics_theory.g1_brownian`.
     """
-    t = as_finite_array(tau, "tau")  # named as here (g1_brownian calls it lag)
-    if t.size == 0:
-        raise ValueError("tau must hold at least one lag (s), got an empty array")
+    t = np.asarray(tau, dtype=float)  # named as here (g1_brownian calls it lag)
     if np.any(t < 0):
         raise ValueError("tau must be >= 0 (s)")
     return g1_brownian(t, diffusion=diffusion, k0=k0)
