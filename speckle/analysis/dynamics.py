@@ -46,6 +46,7 @@ import scipy.ndimage as ndi
 import xarray as xr
 
 from .._validate import check_choice, check_int, check_real
+from .._wrap import ArraySpec, preprocess_and_wrap
 from ..conventions import attrs, coord, spacing
 from ._common import delay_selection, parse_window
 from .compounding import frequency_looks, subband_windows
@@ -100,6 +101,12 @@ _THEORY = (
 # ------------------------------------------------------------------------------------------
 
 
+#: A series (time on axis 0): finite, non-empty numbers; the field complex (the decorator's
+#: checks). :func:`_series` adds the frame count and the intensity's sign.
+_INTENSITY = ArraySpec(kind="number")
+_FIELD = ArraySpec(kind="complex")
+
+
 def _series(a: object, name: str, *, complex_: bool = False, min_frames: int = 2) -> np.ndarray:
     arr = np.asarray(a)
     if arr.ndim < 1 or arr.shape[0] < min_frames:
@@ -110,8 +117,6 @@ def _series(a: object, name: str, *, complex_: bool = False, min_frames: int = 2
         raise TypeError(f"{name} must be the complex field (phase needed), got dtype {arr.dtype}")
     if not complex_ and np.iscomplexobj(arr):
         arr = np.abs(arr) ** 2  # a field given where an intensity is used
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must be finite")
     if not complex_ and np.any(arr < 0):
         raise ValueError(f"{name} intensities must be >= 0")
     return arr
@@ -169,6 +174,7 @@ def _ratio(num: np.ndarray, den: np.ndarray, what: str, why: str) -> np.ndarray:
 # ------------------------------------------------------------------------------------------
 
 
+@preprocess_and_wrap(checks={"field": _FIELD})
 def g1_array(field: object, lags: object, *, window: object = None) -> np.ndarray:
     """Complex field autocorrelation at integer frame ``lags`` (module docstring).
 
@@ -208,6 +214,7 @@ def g1_array(field: object, lags: object, *, window: object = None) -> np.ndarra
     return np.stack(out)
 
 
+@preprocess_and_wrap(checks={"intensity": _INTENSITY})
 def g2_array(intensity: object, lags: object, *, window: object = None) -> np.ndarray:
     """Intensity autocorrelation ``<I(t) I(t+tau)> / (<I(t)> <I(t+tau)>)`` at frame ``lags``.
 
@@ -233,6 +240,7 @@ def g2_array(intensity: object, lags: object, *, window: object = None) -> np.nd
     return np.stack(out)
 
 
+@preprocess_and_wrap(checks={"field": _FIELD})
 def doppler_phase_array(field: object, *, lag: int = 1, window: object = None) -> np.ndarray:
     """Kasai's phase estimator ``arg <A*(t) A(t+lag)>`` in rad, in ``(-pi, pi]``.
 
@@ -260,6 +268,7 @@ def _db(i: np.ndarray, what: str) -> np.ndarray:
         return np.where(bad, np.nan, 10.0 * np.log10(np.where(bad, 1.0, i)))
 
 
+@preprocess_and_wrap(checks={"intensity": _INTENSITY})
 def speckle_variance_array(
     intensity: object, *, ddof: int = 0, log: bool = False, window: object = None
 ) -> np.ndarray:
@@ -282,6 +291,7 @@ def speckle_variance_array(
     return _pool(np.var(x, axis=0, ddof=d), _window(window, i.ndim - 1))
 
 
+@preprocess_and_wrap(checks={"intensity": _INTENSITY})
 def liv_array(intensity: object, *, ddof: int = 0, window: object = None) -> np.ndarray:
     """Logarithmic intensity variance ``var_t(10 log10 I)`` (dB^2) per pixel.
 
@@ -298,6 +308,7 @@ def liv_array(intensity: object, *, ddof: int = 0, window: object = None) -> np.
     return _pool(np.var(_db(i, "liv"), axis=0, ddof=d), _window(window, i.ndim - 1))
 
 
+@preprocess_and_wrap(checks={"amplitudes": ArraySpec(kind="number", ndim=tuple(range(2, 8)))})
 def ssada_array(amplitudes: object, *, window: object = None) -> np.ndarray:
     """Split-spectrum amplitude decorrelation from sub-band amplitudes ``(band, time, ...)``.
 
@@ -312,16 +323,11 @@ def ssada_array(amplitudes: object, *, window: object = None) -> np.ndarray:
     >>> float(ssada_array(np.ones((2, 3, 4))))
     0.0
     """
-    a = np.asarray(amplitudes)
-    if a.dtype.kind not in "fciu":
-        raise TypeError(f"amplitudes must be numbers (complex: |A| is used), got dtype {a.dtype}")
-    a = np.abs(a)
-    if a.ndim < 2 or a.shape[1] < 2:
+    a = np.abs(np.asarray(amplitudes))
+    if a.shape[1] < 2:
         raise ValueError(
             f"amplitudes must be (band, time, ...) with at least 2 frames, got {a.shape}"
         )
-    if not np.all(np.isfinite(a)):
-        raise ValueError("amplitudes must be finite")
     num = a[:, :-1] * a[:, 1:]
     den = 0.5 * (a[:, :-1] ** 2 + a[:, 1:] ** 2)
     r = _ratio(num, den, "ssada", "zero amplitude in both frames of a band")
@@ -329,6 +335,7 @@ def ssada_array(amplitudes: object, *, window: object = None) -> np.ndarray:
     return _pool(d, _window(window, a.ndim - 2))
 
 
+@preprocess_and_wrap(checks={"intensity": _INTENSITY})
 def ocds_array(
     intensity: object,
     lags: object,
