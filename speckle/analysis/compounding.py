@@ -426,6 +426,7 @@ def brownian_g1(tau: object, diffusion: float, k0: float) -> np.ndarray:
     return g1_brownian(t, diffusion=diffusion, k0=k0)
 
 
+@preprocess_and_wrap(checks={"scene": ArraySpec(labelled=True)})
 def brownian_frames(
     scene: xr.Dataset, n_frames: int, *, diffusion: float, interval: float, seed: int
 ) -> xr.Dataset:
