@@ -179,6 +179,13 @@ def _chi_square(x: np.ndarray, dist, bins: int) -> tuple[float, int]:
     number of bins is reduced until each expects at least :data:`MIN_EXPECTED`.
     """
     nb = int(max(2, min(bins, x.size // MIN_EXPECTED)))
+    if nb < 3:
+        warnings.warn(
+            f"chi-square: {x.size} samples give {nb} bins of {MIN_EXPECTED:g} expected counts, "
+            "0 degrees of freedom: chi2_pvalue is NaN (use >= 15 samples)",
+            RuntimeWarning,
+            stacklevel=5,
+        )
     edges = dist.ppf(np.linspace(0.0, 1.0, nb + 1))
     edges[0], edges[-1] = -np.inf, np.inf
     observed, _ = np.histogram(x, bins=edges)
@@ -193,7 +200,13 @@ def _fit(values: object, name: str, family, parameter: str, chi2_bins: int) -> x
     check_int(chi2_bins, "chi2_bins", low=3)
     if np.any(x < 0):
         raise ValueError(f"{name} must be non-negative")
-    _, scale = family.fit(x, floc=0.0)
+    if not np.any(x > 0):
+        raise ValueError(
+            f"{name} must hold a positive value: all zero, the fitted law is degenerate"
+        )
+    # the maximum-likelihood scale in closed form (scipy's fit gives the same numbers, but
+    # refuses a Rayleigh sample holding an exact zero, e.g. from 8-bit data)
+    scale = np.sqrt(np.mean(x**2) / 2) if family.name == "rayleigh" else np.mean(x)
     model = {"rayleigh": "rayleigh", "expon": "exponential"}[family.name]
     return _fit_result(
         x, family(scale=scale), parameter, float(scale), _units(values), model, chi2_bins
@@ -359,7 +372,8 @@ def contrast_standard_error(
     Returns
     -------
     (float, float)
-        ``(C, SE(C))``.
+        ``(C, SE(C))``; ``(NaN, NaN)`` at zero mean intensity and ``(0, NaN)`` for a constant
+        one (each with a ``RuntimeWarning``).
     """
     if not isinstance(intensity, xr.DataArray) or sample_dim not in intensity.dims:
         raise TypeError(f"intensity must be a DataArray with a {sample_dim!r} dim")
@@ -370,7 +384,18 @@ def contrast_standard_error(
     x = x.reshape(n_lines, -1)
     m1, m2 = x.mean(axis=1), (x**2).mean(axis=1)
     big1, big2 = m1.mean(), m2.mean()
+    if big1 == 0:
+        _warn_zero_mean(1)
+        return float("nan"), float("nan")
     c2 = big2 / big1**2 - 1.0
+    if c2 == 0:
+        warnings.warn(
+            "contrast_standard_error: the intensity is constant (contrast 0): the delta "
+            "method's standard error (SE(C^2)/2C) is undefined, NaN",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+        return 0.0, float("nan")
     grad = np.array([-2.0 * big2 / big1**3, 1.0 / big1**2])
     var_c2 = float(grad @ np.cov(np.vstack([m1, m2])) @ grad) / n_lines
     c = float(np.sqrt(c2))

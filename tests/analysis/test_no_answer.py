@@ -55,3 +55,26 @@ def test_image_metrics_without_an_answer_warn():
         assert speckle.cnr(img, img < 2, img > 2) == np.inf
     with pytest.warns(RuntimeWarning, match="outside the profile"):
         assert np.isnan(speckle.peak_fwhm([2.0, 1.5, 0.0, 0.0]))  # no left crossing
+
+
+def test_fits_take_exact_zeros_refuse_all_zero_and_warn_without_chi2_dof():
+    from speckle.analysis import statistics as st
+
+    a = np.array([0.0, 1.0, 2.0, 3.0] * 10)  # an exact zero (8-bit data) in the sample
+    fit = st.fit_rayleigh(a)
+    assert float(fit["sigma"]) == pytest.approx(np.sqrt(np.mean(a**2) / 2), rel=1e-15)
+    with pytest.raises(ValueError, match="intensity must hold a positive value"):
+        st.fit_exponential(np.zeros(20))
+    with pytest.warns(RuntimeWarning, match="0 degrees of freedom"):
+        assert np.isnan(float(st.fit_exponential(np.arange(1.0, 11.0))["chi2_pvalue"]))
+
+
+def test_contrast_standard_error_without_an_answer_warns():
+    from speckle.analysis import statistics as st
+
+    zero = xr.DataArray(np.zeros((4, 5)), dims=("depth", "aline"))
+    with pytest.warns(RuntimeWarning, match="mean intensity is zero"):
+        assert np.isnan(st.contrast_standard_error(zero)).all()
+    with pytest.warns(RuntimeWarning, match="constant"):
+        c, se = st.contrast_standard_error(zero + 1.0)
+    assert c == 0.0 and np.isnan(se)
