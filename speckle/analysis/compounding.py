@@ -203,6 +203,10 @@ def compounded_contrast(mu: object) -> float:
     m = np.asarray(mu, dtype=np.complex128)
     if m.shape[0] != m.shape[1]:
         raise ValueError(f"mu must be a square (L, L) matrix, got shape {m.shape}")
+    if not (np.allclose(np.diag(m), 1.0, rtol=0, atol=1e-6) and np.all(np.abs(m) <= 1 + 1e-6)):
+        raise ValueError(
+            "mu must be field correlations: unit diagonal and |mu_ij| <= 1 (window_correlation)"
+        )
     return float(np.sqrt(np.sum(np.abs(m) ** 2)) / m.shape[0])
 
 

@@ -78,3 +78,10 @@ def test_contrast_standard_error_without_an_answer_warns():
     with pytest.warns(RuntimeWarning, match="constant"):
         c, se = st.contrast_standard_error(zero + 1.0)
     assert c == 0.0 and np.isnan(se)
+
+
+def test_compounded_contrast_refuses_what_is_not_a_correlation_matrix():
+    with pytest.raises(ValueError, match="unit diagonal"):
+        speckle.compounded_contrast(np.zeros((2, 2)))  # was 0.0: no speckle invented
+    with pytest.raises(ValueError, match="unit diagonal"):
+        speckle.compounded_contrast([[1.0, 2.0], [2.0, 1.0]])
