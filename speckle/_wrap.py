@@ -32,6 +32,9 @@ from .conventions import attrs, grid
 
 __all__ = ["ArraySpec", "Out", "check_same_grid", "map_frames", "preprocess_and_wrap"]
 
+#: Leading dims whose indices a refusal names (``frames [2] hold NaN``).
+FRAME_DIMS = ("frame", "time")
+
 #: Relative difference above which a given grid value disagrees with the coordinates.
 GRID_RTOL = 1e-9
 
@@ -64,6 +67,14 @@ class ArraySpec:
         ``None`` passes unchecked.
     lazy : bool
         A Dask-backed ``DataArray`` reaches the body as its Dask array (``.data``), not loaded.
+    keep_labels : bool
+        The body receives the checked ``DataArray`` itself (transposed to ``dims``), for
+        results that are not on its grid (e.g. a Dataset built from its coordinates).
+    variable : str, optional
+        A ``Dataset`` argument stands for this variable (e.g. a B-scan's ``field``), its
+        attributes merged with the Dataset's; a Dataset without it is refused.
+    extra_dims : bool
+        ``dims`` are required, any other dims allowed (kept in place, not transposed).
     """
 
     kind: str = "number"
@@ -76,6 +87,9 @@ class ArraySpec:
     labelled: bool = False
     optional: bool = False
     lazy: bool = False
+    keep_labels: bool = False
+    variable: str | None = None
+    extra_dims: bool = False
 
     def __post_init__(self):
         if self.kind not in ("number", "real", "complex"):
@@ -132,11 +146,23 @@ def _values(name: str, value: object, spec: ArraySpec, stack: Sequence[str]):
     """(checked values, the labelled template or None, stacked?) of one argument."""
     template = None
     if isinstance(value, xr.Dataset):
-        if spec.labelled:
-            return value, value, False  # the body reads its variables (e.g. a B-scan's field)
-        raise TypeError(f"{name} must be an array or DataArray, got a Dataset")
+        if spec.variable is None:
+            raise TypeError(f"{name} must be an array or DataArray, got a Dataset")
+        if spec.variable not in value.data_vars:
+            raise TypeError(
+                f"{name} must hold a variable {spec.variable!r} (a Dataset such as a B-scan "
+                f"from speckle.bscan), got variables {list(value.data_vars)}"
+            )
+        var = value[spec.variable]  # attrs merged on a copy: the caller's object is unchanged
+        value = var.assign_attrs({**value.attrs, **var.attrs})
     if isinstance(value, xr.DataArray):
-        if spec.dims is not None:
+        if spec.dims is not None and spec.extra_dims:
+            missing = [d for d in spec.dims if d not in value.dims]
+            if missing:
+                raise ValueError(
+                    f"{name} must have dims {spec.dims} (and any others), got {value.dims}"
+                )
+        elif spec.dims is not None:
             extra = [d for d in value.dims if d not in spec.dims]
             missing = [d for d in spec.dims if d not in value.dims]
             stacked = [d for d in extra if d in stack]
@@ -147,9 +173,10 @@ def _values(name: str, value: object, spec: ArraySpec, stack: Sequence[str]):
         template = value
         data = value.data if spec.lazy and _is_dask(value.data) else value.values
     elif spec.labelled:
+        what = "DataArray or Dataset" if spec.variable else "DataArray"
         raise TypeError(
-            f"{name} must be a labelled xarray DataArray or Dataset (coordinates give its "
-            f"grid), got {type(value).__name__}"
+            f"{name} must be a labelled xarray {what} (coordinates give its grid), got "
+            f"{type(value).__name__}"
         )
     elif isinstance(value, np.ndarray) or (spec.lazy and _is_dask(value)):
         data = value
@@ -167,17 +194,19 @@ def _values(name: str, value: object, spec: ArraySpec, stack: Sequence[str]):
         )
     if spec.kind == "real" and np.issubdtype(data.dtype, np.complexfloating):
         raise TypeError(f"{name} must be real, got complex dtype {data.dtype}")
-    n_core = len(spec.dims) if spec.dims is not None else None
-    allowed = (n_core, n_core + 1) if n_core is not None and stack else (n_core,)
+    n_core = len(spec.dims) if spec.dims is not None and not spec.extra_dims else None
+    # a stack is a named leading dim: only a DataArray has one
+    labelled_stack = template is not None and stack and n_core is not None
+    allowed = (n_core, n_core + 1) if labelled_stack else (n_core,)
     if spec.ndim is not None:
         allowed = (spec.ndim,) if isinstance(spec.ndim, int) else tuple(spec.ndim)
     if allowed != (None,) and data.ndim not in allowed:
-        what = (
-            f"dims {spec.dims}" if spec.dims is not None else f"{' or '.join(map(str, allowed))}-D"
-        )
+        what = f"{' or '.join(map(str, allowed))}-D"
+        if spec.dims is not None:
+            what = f"{n_core}-D {spec.dims}"
         raise ValueError(
             f"{name} must be {what}"
-            + (f" (or a stack of them along {tuple(stack)})" if stack else "")
+            + (f" (a DataArray: or a stack along {tuple(stack)})" if stack else "")
             + f", got shape {data.shape}"
         )
     stacked = n_core is not None and data.ndim == n_core + 1
@@ -186,9 +215,14 @@ def _values(name: str, value: object, spec: ArraySpec, stack: Sequence[str]):
     if spec.min_shape is not None:
         core = data.shape[data.ndim - len(spec.min_shape) :]
         if any(s < m for s, m in zip(core, spec.min_shape, strict=True)):
-            raise ValueError(
-                f"{name} must be at least {tuple(spec.min_shape)} pixels, got shape {data.shape}"
-            )
+            least = tuple(spec.min_shape)
+            if spec.dims is not None and len(spec.dims) == len(least):
+                least = (
+                    "("
+                    + ", ".join(f"{d} >= {m}" for d, m in zip(spec.dims, least, strict=True))
+                    + ")"
+                )
+            raise ValueError(f"{name} must be at least {least} pixels, got shape {data.shape}")
     if stacked and data.shape[0] < 1:
         raise ValueError(f"{name} has an empty {tuple(stack)} stack")
     if spec.finite:
@@ -198,30 +232,34 @@ def _values(name: str, value: object, spec: ArraySpec, stack: Sequence[str]):
             n_bad = n_bad.compute()
         if n_bad:
             where = ""
-            if stacked:
+            if stacked or (spec.dims is not None and spec.dims[0] in (*stack, *FRAME_DIMS)):
                 bad = np.flatnonzero(~np.asarray(finite.all(axis=tuple(range(1, data.ndim)))))
                 where = f" in frames {bad[:10].tolist()}{' ...' if bad.size > 10 else ''}"
             raise ValueError(
-                f"{name} holds {int(n_bad)} NaN or infinite values of {finite.size}{where}; "
+                f"{name} holds {int(n_bad)} NaN or infinite {'pixels' if spec.dims else 'values'} "
+                f"of {finite.size}{where}; "
                 "crop, drop or fill them first"
             )
     return data, template, stacked
 
 
-def _same(name: str, other: str, a, b) -> None:
+def _same(name: str, other: str, a, b, stack: Sequence[str] = ()) -> None:
     """Refuse ``a`` (argument ``name``) unless it matches ``b`` (argument ``other``)."""
     (da, ta, sa), (db, tb, sb) = a, b
     if (ta is None) != (tb is None):
         raise TypeError(f"{other} and {name} must both be numpy arrays or both DataArrays")
     if sa != sb:
         which = other if sa is False else name
+        dim = "/".join(stack) or "frame"
+        first = stack[0] if stack else "frame"
         raise ValueError(
-            f"only {which} is a stack of frames: give both the same leading frame dim or select "
-            "one frame (.isel(frame=i))"
+            f"only {which} has a {dim!r} dim: give both the same leading {dim} dim (pairs "
+            f"{other}[i], {name}[i]) or select one of it (.isel({first}=i))"
         )
     if da.shape != db.shape:
         raise ValueError(
-            f"{other} and {name} must have the same shape, got {db.shape} and {da.shape}"
+            f"{other} and {name} differ in shape: {db.shape} vs {da.shape}; they must have the "
+            "same shape (nothing is aligned or cut)"
         )
     if ta is not None and not isinstance(ta, xr.Dataset):
         check_same_grid(tb, ta, (other, name))
@@ -416,8 +454,10 @@ def preprocess_and_wrap(
                     continue
                 seen[arg] = _values(arg, value, spec, stack)
                 if spec.same_as is not None and spec.same_as in seen:
-                    _same(arg, spec.same_as, seen[arg], seen[spec.same_as])
-                bound.arguments[arg] = seen[arg][0]
+                    _same(arg, spec.same_as, seen[arg], seen[spec.same_as], stack)
+                bound.arguments[arg] = seen[arg][
+                    1 if spec.keep_labels and seen[arg][1] is not None else 0
+                ]
             if wrap_like in seen:
                 template = seen[wrap_like][1]
             for arg in arrays:

@@ -1611,6 +1611,15 @@ ANSWERS: dict[tuple[str, str, str], str] = {
     ("correlation_array", "x", "nan"): "NaN pixels blank only the windows holding them "
     "(docstring; tests/test_strict.py)",
     ("correlation_array", "y", "nan"): "as x",
+    ("track_array", "reference", "nan"): "NaN pixels give the windows holding them NaN (docstring)",
+    ("track_array", "deformed", "nan"): "as reference",
+    ("track_axial", "reference", "nan"): "as track_array",
+    ("track_axial", "deformed", "nan"): "as track_array",
+    ("sample_field", "field", "one_pixel"): "N = 1: the band-limited interpolant is the constant "
+    "A_0, exact",
+    ("oversample_depth", "field", "one_pixel"): "as sample_field: the constant A_0",
+    ("amplitude_from_gamma", "gamma", "complex"): "a complex coherence: its modulus |gamma| is "
+    "used (docstring)",
 }
 
 

@@ -15,6 +15,8 @@ from .._wrap import check_same_grid
 from ..conventions import attrs, spacing
 
 __all__ = [
+    "DEPTH",
+    "LATERAL",
     "delay_selection",
     "depth_major",
     "field_of",
@@ -24,6 +26,11 @@ __all__ = [
     "parse_window",
     "same_grid",
 ]
+
+
+#: The image dims of the analysis modules (one place to rename them: the lateral dim is
+#: ``aline`` until the vocabulary step of issue 32 makes it ``x``).
+DEPTH, LATERAL = "depth", "aline"
 
 
 def field_of(data: xr.Dataset | xr.DataArray) -> xr.DataArray:

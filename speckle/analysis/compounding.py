@@ -282,16 +282,19 @@ def subband_fwhm(n_pixels: int, n_samples: int) -> float:
     return 2.0 * opt.brentq(f, 1e-9, n / m)
 
 
-def _field(img: xr.Dataset | xr.DataArray) -> xr.DataArray:
-    f = img.field if isinstance(img, xr.Dataset) and "field" in img else img
-    if not isinstance(f, xr.DataArray) or not np.iscomplexobj(f) or "depth" not in f.dims:
-        raise TypeError("img must be a complex field DataArray (or Dataset 'field') with 'depth'")
-    if f.size == 0:
-        raise ValueError(f"img must hold at least one pixel, got sizes {dict(f.sizes)}")
-    return f
-
-
-@preprocess_and_wrap(checks={"windows": ArraySpec(kind="real", ndim=2)})
+@preprocess_and_wrap(
+    checks={
+        "img": ArraySpec(
+            kind="complex",
+            labelled=True,
+            keep_labels=True,
+            variable="field",
+            dims=("depth",),
+            extra_dims=True,
+        ),
+        "windows": ArraySpec(kind="real", ndim=2),
+    }
+)
 def frequency_looks(img: xr.Dataset | xr.DataArray, windows: object) -> xr.DataArray:
     """Split-spectrum looks of a complex image: the depth spectrum times each window.
 
@@ -310,7 +313,7 @@ def frequency_looks(img: xr.Dataset | xr.DataArray, windows: object) -> xr.DataA
         Complex looks over ``(look, ...)``; look ``i`` equals the image formed with the spectrum
         ``S W_i`` (exact).
     """
-    f = _field(img)
+    f = img  # the complex field (a Dataset's 'field'), checked by the decorator
     n = f.sizes["depth"]
     w = np.asarray(windows, dtype=float)
     if w.shape[1] != n:
@@ -337,14 +340,11 @@ def frequency_looks(img: xr.Dataset | xr.DataArray, windows: object) -> xr.DataA
     return label_looks(looks.transpose("look", *f.dims), "frequency")
 
 
-def _check_looks(looks: object) -> None:
-    """Looks: a DataArray with a ``look`` dim and at least one pixel, refused by name."""
-    if not isinstance(looks, xr.DataArray) or "look" not in looks.dims:
-        raise TypeError("looks must be a DataArray with a 'look' dim (see frequency_looks)")
-    if looks.size == 0:
-        raise ValueError(f"looks must hold at least one look and pixel, got {dict(looks.sizes)}")
+#: Looks: a labelled, finite, non-empty DataArray with a ``look`` dim (the decorator's checks).
+_LOOKS = {"looks": ArraySpec(labelled=True, keep_labels=True, dims=("look",), extra_dims=True)}
 
 
+@preprocess_and_wrap(checks=_LOOKS)
 def compound(looks: xr.DataArray, mode: str = "intensity") -> xr.DataArray:
     """Average looks (dim ``look``) into one intensity image.
 
@@ -353,7 +353,6 @@ def compound(looks: xr.DataArray, mode: str = "intensity") -> xr.DataArray:
     realisation; raises the SNR of noisy looks).
     """
     check_choice(mode, "mode", AVERAGING)
-    _check_looks(looks)
     if mode == "intensity":
         out = (abs(looks) ** 2).mean("look")
     elif mode == "magnitude":
@@ -369,6 +368,7 @@ def compound(looks: xr.DataArray, mode: str = "intensity") -> xr.DataArray:
     )
 
 
+@preprocess_and_wrap(checks=_LOOKS)
 def noisy_looks(
     looks: xr.DataArray,
     snr_db: float,
@@ -395,7 +395,6 @@ def noisy_looks(
     xarray.DataArray
         The looks plus noise (attrs ``snr_db``, ``noise_intensity`` of the first look).
     """
-    _check_looks(looks)
     snr = check_real(snr_db, "snr_db")
     sd = check_int(seed, "seed", low=0)
     ref = (
@@ -430,7 +429,6 @@ def brownian_g1(tau: object, diffusion: float, k0: float) -> np.ndarray:
     return g1_brownian(t, diffusion=diffusion, k0=k0)
 
 
-@preprocess_and_wrap(checks={"scene": ArraySpec(labelled=True)})
 def brownian_frames(
     scene: xr.Dataset, n_frames: int, *, diffusion: float, interval: float, seed: int
 ) -> xr.Dataset:

@@ -44,9 +44,10 @@ import xarray as xr
 from scipy import ndimage, special
 
 from .._validate import as_finite_array, check_bool, check_choice, check_int, check_real
+from .._wrap import ArraySpec, preprocess_and_wrap
 from ..conventions import attrs, coord
 from ..system.source import index_shift_phase, spectral_index
-from ._common import field_of, grid_spacing, matched, parse_window, same_grid
+from ._common import DEPTH, LATERAL, grid_spacing, matched, parse_window, same_grid
 from ._kernels import lagrange_resample
 
 __all__ = [
@@ -69,10 +70,27 @@ __all__ = [
 
 #: Correlated quantities.
 KINDS = ("intensity", "amplitude", "complex")
+#: A labelled B-scan (a field DataArray or a B-scan Dataset's ``field``), dims (..., depth,
+#: aline), NaN allowed (left out or blanking its windows), passed labelled to the body.
+_SCAN = ArraySpec(
+    dims=(DEPTH, LATERAL),
+    extra_dims=True,
+    labelled=True,
+    variable="field",
+    keep_labels=True,
+    finite=False,
+)
+#: A source spectrum (:func:`speckle.spectrum`), passed labelled (its attrs give ``k0_dk``).
+_SPECTRUM = ArraySpec(kind="real", dims=("wavenumber",), labelled=True, keep_labels=True)
+#: Strains of the theory: real, finite, at least one.
+_STRAIN = ArraySpec(kind="real")
 #: Largest number of complex phase factors held in memory at once by :func:`sample_field`.
 CHUNK_ELEMENTS = 1 << 22
 
 
+@preprocess_and_wrap(
+    checks={"field": ArraySpec(ndim=tuple(range(1, 33))), "positions": ArraySpec(kind="real")}
+)
 def sample_field(field: object, positions: object) -> np.ndarray:
     """Evaluate band-limited A-scans at real pixel positions (exact trigonometric interpolation).
 
@@ -90,8 +108,8 @@ def sample_field(field: object, positions: object) -> np.ndarray:
         ``A(y) = sum_n F_n exp(-2i pi n y/N)``: equals ``field`` at integer ``y``, and Eq. 4
         evaluated at the pixel depth ``z_q = y H/N`` otherwise.
     """
-    a = np.asarray(field, dtype=np.complex128)
-    y = as_finite_array(positions, "positions")
+    a = np.asarray(field, dtype=np.complex128)  # checked: numeric, finite, not empty
+    y = np.asarray(positions, dtype=float)
     n = a.shape[-1]
     shift = n // 2
     spec = np.fft.ifft(a * index_shift_phase(n, -np.arange(n)), axis=-1)  # F_n, n=-(N//2)...
@@ -106,6 +124,7 @@ def sample_field(field: object, positions: object) -> np.ndarray:
     return np.broadcast_to(out, (spec.shape[0], yy.shape[1])).reshape(*batch, y.shape[-1])
 
 
+@preprocess_and_wrap(checks={"field": ArraySpec(ndim=tuple(range(1, 33)))})
 def oversample_depth(field: np.ndarray, factor: int, axis: int = 0) -> np.ndarray:
     """Complex A-scans (depth on ``axis``) at ``factor`` samples per pixel, exactly.
 
@@ -116,7 +135,7 @@ def oversample_depth(field: np.ndarray, factor: int, axis: int = 0) -> np.ndarra
     """
     a = np.asarray(field)
     a = a if a.dtype == np.complex64 else a.astype(np.complex128)
-    f = check_int(factor, "oversample", low=1)
+    f = check_int(factor, "factor", low=1)
     if f == 1:
         return a
     ax = axis % a.ndim
@@ -144,6 +163,12 @@ def oversample_depth(field: np.ndarray, factor: int, axis: int = 0) -> np.ndarra
 RESAMPLE_OVERSAMPLE = 4
 
 
+@preprocess_and_wrap(
+    checks={
+        "field": ArraySpec(kind="complex", ndim=2),
+        "positions": ArraySpec(kind="real", ndim=2),
+    }
+)
 def resample_depth(field: object, positions: object) -> np.ndarray:
     """Complex image ``(depth, aline)`` evaluated at real depth positions, every A-line at once.
 
@@ -169,14 +194,13 @@ def resample_depth(field: object, positions: object) -> np.ndarray:
     numpy.ndarray, shape (N, M)
         Pixel ``(q, j)``: A-line ``j`` evaluated at depth ``positions[q, j]``.
     """
-    a = np.asarray(field)
-    if a.ndim != 2 or not np.iscomplexobj(a):
-        raise ValueError(f"field must be a complex (depth, aline) image, got shape {a.shape}")
-    y = as_finite_array(positions, "positions")
+    a, y = field, positions  # checked: complex 2-D image, finite real positions
     if y.shape != a.shape:
         raise ValueError(f"positions must have the field's shape {a.shape}, got {y.shape}")
     # single precision: 1e-7 relative, far below the interpolation error
-    fine = oversample_depth(np.ascontiguousarray(a.T, dtype=np.complex64), RESAMPLE_OVERSAMPLE, -1)
+    fine = oversample_depth.__wrapped__(  # the numpy body: the field is checked
+        np.ascontiguousarray(a.T, dtype=np.complex64), RESAMPLE_OVERSAMPLE, -1
+    )
     out = np.empty(a.shape[::-1], dtype=np.complex128)  # (aline, depth): each A-line contiguous
     positions = np.ascontiguousarray(np.asarray(y, dtype=float).T)  # (aline, depth), as ``fine``
     lagrange_resample(fine, positions, RESAMPLE_OVERSAMPLE, out)
@@ -195,6 +219,7 @@ def _horner(coef: np.ndarray, w: np.ndarray) -> np.ndarray:
     return acc
 
 
+@preprocess_and_wrap(checks={"deformed": _SCAN})
 def compensate(
     deformed: xr.Dataset | xr.DataArray,
     displacement: xr.Dataset,
@@ -231,7 +256,8 @@ def compensate(
         On a missing or non-uniform ``depth``/``aline`` coordinate (named), a missing ``k0``
         attribute with ``carrier=True``, or a displacement on another grid.
     """
-    field = field_of(deformed)
+    field = deformed  # the B-scan's field, labelled (the decorator)
+    carrier = check_bool(carrier, "carrier")
     from ..scene.deformation import (
         check_field,  # local import: deformation imports nothing from here
     )
@@ -258,7 +284,7 @@ def compensate(
     other = [d for d in field.dims if d != "depth"]
     f_np = field.transpose(*other, "depth").values
     p_np = pos.transpose(*other, "depth").values
-    out = sample_field(f_np, p_np)
+    out = sample_field.__wrapped__(f_np, p_np)  # the numpy body: both checked
     if carrier:
         k0 = float(field.attrs["k0"])
         out = out * np.exp(-2j * k0 * uz.transpose(*other, "depth").values)
@@ -291,6 +317,7 @@ def _quantity(field: xr.DataArray, kind: str) -> xr.DataArray:
     return field
 
 
+@preprocess_and_wrap(checks={"reference": _SCAN, "deformed": _SCAN})
 def pearson(
     reference: xr.Dataset | xr.DataArray,
     deformed: xr.Dataset | xr.DataArray,
@@ -311,9 +338,15 @@ def pearson(
         Dims averaged over; the others (e.g. ``strain``) are kept.
     """
     check_choice(kind, "kind", KINDS)
-    x = _quantity(field_of(reference), kind)
-    y = _quantity(field_of(deformed), kind)
+    x = _quantity(reference, kind)
+    y = _quantity(deformed, kind)
     x, y = matched(x, y)
+    names = (dims,) if isinstance(dims, str) else dims
+    if not isinstance(names, (tuple, list)) or not names:
+        raise TypeError(f"dims must be a dim name or a tuple of them, got {dims!r}")
+    unknown = [d for d in names if d not in x.dims]
+    if unknown:
+        raise ValueError(f"dims {unknown} are not dims of the images; they have {x.dims}")
     ok = np.isfinite(abs(x)) & np.isfinite(abs(y))
     x, y = x.where(ok), y.where(ok)
     dx = x - x.mean(dims)
@@ -333,6 +366,9 @@ def _numeric(v: object, name: str) -> np.ndarray:
     return a
 
 
+@preprocess_and_wrap(
+    checks={"x": ArraySpec(finite=False), "y": ArraySpec(finite=False, same_as="x")}
+)
 def correlation_array(
     x: np.ndarray,
     y: np.ndarray,
@@ -399,6 +435,7 @@ def correlation_array(
     return np.where(valid, r, np.nan)
 
 
+@preprocess_and_wrap(checks={"reference": _SCAN, "deformed": _SCAN})
 def correlation_map(
     reference: xr.Dataset | xr.DataArray,
     deformed: xr.Dataset | xr.DataArray,
@@ -427,8 +464,8 @@ def correlation_map(
     """
     check_choice(kind, "kind", KINDS)
     wz, wx = parse_window(window)
-    x = _quantity(field_of(reference), kind)
-    y = _quantity(field_of(deformed), kind)
+    x = _quantity(reference, kind)
+    y = _quantity(deformed, kind)
     x, y = matched(x, y)
     y = y.transpose(*x.dims)
     if x.sizes["depth"] < wz or x.sizes["aline"] < wx:
@@ -436,7 +473,9 @@ def correlation_map(
             f"window {(wz, wx)} is larger than the image {(x.sizes['depth'], x.sizes['aline'])}"
         )
     axes = (x.dims.index("depth"), x.dims.index("aline"))
-    r = correlation_array(x.values, y.values, (wz, wx), axes=axes, modulus=kind == "complex")
+    r = correlation_array.__wrapped__(  # the numpy body: the images are checked
+        x.values, y.values, (wz, wx), axes=axes, modulus=kind == "complex"
+    )
     return xr.DataArray(
         r,
         dims=x.dims,
@@ -498,6 +537,7 @@ def _integrals(
     return out
 
 
+@preprocess_and_wrap(checks={"strain": _STRAIN, "spectrum": _SPECTRUM})
 def expected_correlation(
     strain: object = 0.0,
     *,
@@ -537,7 +577,7 @@ def expected_correlation(
         correlation left when ``gamma = 0``), over dim ``strain``. Poisson scatterer counts;
         for a fixed count the difference is ``O(1/(density*N))``.
     """
-    s = np.atleast_1d(as_finite_array(strain, "strain"))
+    s = np.atleast_1d(strain).astype(float)  # checked: real, finite, not empty
     if np.any((s <= -1) | (s >= 1)):
         raise ValueError(f"strain must lie in (-1, 1), got {s.tolist()}")
     rho = check_real(density, "density", low=0, low_inclusive=False)
@@ -548,7 +588,7 @@ def expected_correlation(
     if compensation == "none" and np.any(s != 0):
         raise ValueError("compensation='none' is derived for a rigid shift only; use strain=0")
     w = np.asarray(spectrum, float)
-    r_ratio = float(spectrum.attrs["k0_dk"])
+    r_ratio = _k0_dk(spectrum)
     res = {k: [] for k in ("intensity", "complex", "amplitude", "floor")}
     for si in s:
         if compensation == "exact":
@@ -569,7 +609,7 @@ def expected_correlation(
         res["floor"].append(rho * kappa * d / var)
         g = abs(c_mean) / np.sqrt(a * a_def)
         res["complex"].append(g)
-        res["amplitude"].append(amplitude_from_gamma(g))
+        res["amplitude"].append(amplitude_from_gamma.__wrapped__(g))
     coords = {"strain": coord("strain", s, "compressive strain")}
     meta = {
         "density": rho,
@@ -589,13 +629,24 @@ def expected_correlation(
     )
 
 
+def _k0_dk(spectrum: xr.DataArray) -> float:
+    """``R = k0/delta_k`` of a source spectrum (ValueError naming ``spectrum`` without it)."""
+    if "k0_dk" not in spectrum.attrs:
+        raise ValueError(
+            "spectrum needs attribute k0_dk (a spectrum from speckle.spectrum); it has "
+            f"{sorted(spectrum.attrs)}"
+        )
+    return float(spectrum.attrs["k0_dk"])
+
+
+@preprocess_and_wrap(checks={"gamma": ArraySpec()})
 def amplitude_from_gamma(gamma: object) -> np.ndarray:
     """Amplitude correlation of Gaussian speckle whose fields correlate by ``|gamma|``.
 
     ``(pi/4) (2F1(-1/2, -1/2; 1; |gamma|^2) - 1) / (1 - pi/4)``: 0 at ``gamma = 0``, 1 at 1.
     ``|gamma| <= 1`` (Cauchy-Schwarz): a computed value above 1 by rounding counts as 1.
     """
-    g = np.minimum(np.abs(np.asarray(gamma, dtype=float)), 1.0)
+    g = np.minimum(np.abs(gamma), 1.0)  # checked: numbers (|gamma| of complex), finite
     return (np.pi / 4) * (special.hyp2f1(-0.5, -0.5, 1.0, g**2) - 1) / (1 - np.pi / 4)
 
 
@@ -618,6 +669,7 @@ def _kernel_on_grid(weights: np.ndarray, x0: float, oversample: int, count: int)
 GAMMA_EPS = 1e-14
 
 
+@preprocess_and_wrap(checks={"strain": _STRAIN, "spectrum": _SPECTRUM})
 def expected_gamma(strain: object, *, spectrum: xr.DataArray, oversample: int = 8) -> np.ndarray:
     """``|gamma|`` after exact compensation, as ``expected_correlation(...)["complex"]``, fast.
 
@@ -649,12 +701,12 @@ def expected_gamma(strain: object, *, spectrum: xr.DataArray, oversample: int = 
     ValueError
         A strain outside (-1, 1) or ``oversample`` below 2.
     """
-    s = np.atleast_1d(as_finite_array(strain, "strain")).astype(float)
+    s = np.atleast_1d(strain).astype(float)  # checked: real, finite, not empty
     if np.any((s <= -1) | (s >= 1)):
         raise ValueError(f"strain must lie in (-1, 1), got {s.tolist()}")
     ov = check_int(oversample, "oversample", low=2)
     w = np.asarray(spectrum, float)
-    r_ratio = float(spectrum.attrs["k0_dk"])
+    r_ratio = _k0_dk(spectrum)
     n = w.size
     dx = 1.0 / ov
     count = 2 * n * ov  # x_j = -N + (j + 1/2) dx, j < count: the grid of _integrals

@@ -39,8 +39,9 @@ from .._validate import (
     check_memory,
     check_real,
 )
+from .._wrap import ArraySpec, preprocess_and_wrap
 from ..conventions import attrs, coord
-from ._common import field_of, grid_spacing, matched, parse_window
+from ._common import DEPTH, LATERAL, grid_spacing, parse_window
 from ._kernels import refine_shifts, window_moments
 from .correlation import oversample_depth, sample_field
 
@@ -52,6 +53,24 @@ __all__ = [
     "track_array",
     "track_axial",
 ]
+
+#: The images of :func:`track_array` and :func:`track_axial`: complex (depth, aline), NaN
+#: allowed (their windows get NaN).
+_IMAGES = {
+    "reference": ArraySpec(kind="complex", dims=(DEPTH, LATERAL), finite=False),
+    "deformed": ArraySpec(kind="complex", dims=(DEPTH, LATERAL), finite=False, same_as="reference"),
+}
+#: The B-scans of :func:`track`: labelled (a field DataArray or a B-scan Dataset), finite.
+_SCANS = {
+    name: ArraySpec(
+        dims=(DEPTH, LATERAL),
+        labelled=True,
+        variable="field",
+        keep_labels=True,
+        same_as=None if name == "reference" else "reference",
+    )
+    for name in ("reference", "deformed")
+}
 
 #: Tracking methods: the vectorised pass and the per-window skimage reference.
 TRACK_METHODS = ("fft", "reference")
@@ -197,6 +216,7 @@ def _reference_shifts(pa: np.ndarray, pb: np.ndarray, up: int):
     return out[:, 0], out[:, 1], out[:, 2]
 
 
+@preprocess_and_wrap(checks=_IMAGES)
 def track_array(
     reference: np.ndarray,
     deformed: np.ndarray,
@@ -253,21 +273,22 @@ def track_array(
     TypeError, ValueError
         Real or mismatched images, a window larger than the image, bad parameters.
     """
-    a, b = _pair(reference, deformed)
+    a, b = reference, deformed  # checked by the decorator
     check_choice(quantity, "quantity", ("amplitude", "intensity"))
     check_choice(method, "method", TRACK_METHODS)
     for name, flag in (("lateral", lateral), ("error", error)):
         if not isinstance(flag, (bool, np.bool_)):
             raise TypeError(f"{name} must be True or False, got {flag!r}")
     wz, wx = parse_window(window, shape=a.shape)
-    stz, stx = parse_window(step, "step", low=1)
+    stz, stx = parse_window(step, "step", low=1, shape=a.shape)
     up = check_int(upsample, "upsample", low=1)
     ov = check_int(oversample, "oversample", low=1)
     _check_upsample(up, wz * ov, wx)
     a, b, bad = _zero_bad(a, b)
     if method == "reference":  # today's path: per-sample trigonometric interpolation
         fine = np.arange(0, a.shape[0], 1 / ov)
-        ha, hb = np.abs(sample_field(a.T, fine)), np.abs(sample_field(b.T, fine))
+        sample = sample_field.__wrapped__  # the numpy body: the images are checked
+        ha, hb = np.abs(sample(a.T, fine)), np.abs(sample(b.T, fine))
     else:
         ha, hb, _ = _amplitudes(a, b, ov)
     if quantity == "intensity":
@@ -296,6 +317,7 @@ def track_array(
     }
 
 
+@preprocess_and_wrap(checks=_IMAGES)
 def track_axial(
     reference: np.ndarray,
     deformed: np.ndarray,
@@ -340,9 +362,9 @@ def track_axial(
     TypeError, ValueError
         As :func:`track_array`.
     """
-    a, b = _pair(reference, deformed)
+    a, b = reference, deformed  # checked by the decorator
     wz, wx = parse_window(window, shape=a.shape)
-    stz, stx = parse_window(step, "step", low=1)
+    stz, stx = parse_window(step, "step", low=1, shape=a.shape)
     up = check_int(upsample, "upsample", low=1)
     ov = check_int(oversample, "oversample", low=1)
     _check_upsample(up, wz * ov, 1)
@@ -401,20 +423,6 @@ def track_axial(
     return out
 
 
-def _pair(reference, deformed) -> tuple[np.ndarray, np.ndarray]:
-    """Both images as 2-D complex arrays of the same shape (else TypeError/ValueError)."""
-    a = np.asarray(reference)
-    b = np.asarray(deformed)
-    for name, x in (("reference", a), ("deformed", b)):
-        if x.ndim != 2:
-            raise ValueError(f"{name} must be a 2-D (depth, aline) array, got shape {x.shape}")
-        if not np.issubdtype(x.dtype, np.complexfloating):
-            raise TypeError(f"{name} must be a complex image, got dtype {x.dtype}")
-    if a.shape != b.shape:
-        raise ValueError(f"reference and deformed differ in shape: {a.shape} vs {b.shape}")
-    return a, b
-
-
 def _zero_bad(a, b):
     """NaN/inf pixels of either image zeroed in both, and their mask (None when all finite:
     a finite sum means every pixel is, one pass without a mask)."""
@@ -437,7 +445,7 @@ def _amplitudes(a, b, ov: int, keep: bool = False):
     for x, want in ((a, False), (b, keep)):
         lines = np.ascontiguousarray(x.T, dtype=np.complex64)
         if ov != 2:
-            fine = oversample_depth(lines, ov, axis=-1)
+            fine = oversample_depth.__wrapped__(lines, ov, axis=-1)  # checked images
             out.append((np.abs(fine), fine if want else None))
             continue
         n = lines.shape[1]
@@ -484,6 +492,7 @@ def _textured(ha, hb, ov, bad, shape, window, step) -> np.ndarray:
     return ok
 
 
+@preprocess_and_wrap(checks=_SCANS)
 def track(
     reference: xr.Dataset | xr.DataArray,
     deformed: xr.Dataset | xr.DataArray,
@@ -521,22 +530,14 @@ def track(
         ``uz_residual`` (pixels) and ``failed`` (bool).
     """
     tol = check_real(max_error, "max_error", low=0, low_inclusive=False)
-    ref = field_of(reference)
-    dfm = field_of(deformed)
-    for name, f in (("reference", ref), ("deformed", dfm)):
-        if set(f.dims) != {"depth", "aline"}:
-            raise ValueError(f"{name} must have dims exactly (depth, aline), got {f.dims}")
-    ref, dfm = matched(ref, dfm)
-    ref, dfm = ref.transpose("depth", "aline"), dfm.transpose("depth", "aline")
-    for name, f in (("reference", ref), ("deformed", dfm)):
-        bad = int(np.size(f) - np.count_nonzero(np.isfinite(f.values)))
-        if bad:
-            raise ValueError(
-                f"{name} must be finite: {bad} NaN or infinite pixels of {f.size} (crop them, "
-                "or use speckle.analysis.track_array, which gives the windows holding them NaN)"
-            )
+    if truth is not None and not (isinstance(truth, xr.Dataset) and "uz" in truth):
+        raise TypeError(
+            f"truth must be an xarray.Dataset with 'uz' (µm) on the pixel grid, got "
+            f"{type(truth).__name__}"
+        )
+    ref, dfm = reference, deformed  # fields (depth, aline), finite, same grid: the decorator
     pixel, pitch = grid_spacing(ref)
-    res = track_array(
+    res = track_array.__wrapped__(  # the numpy body: checked by track's decorator
         ref.values,
         dfm.values,
         window=window,
@@ -548,9 +549,9 @@ def track(
     )
     wz, wx = parse_window(window)
     sz, sx = parse_window(step, "step", low=1)
-    cz = ref.depth.values[0] + res["centre_depth"] * pixel
-    cx = ref.aline.values[0] + res["centre_aline"] * pitch
-    dims = ("depth", "aline")
+    cz = ref[DEPTH].values[0] + res["centre_depth"] * pixel
+    cx = ref[LATERAL].values[0] + res["centre_aline"] * pitch
+    dims = (DEPTH, LATERAL)
     out = xr.Dataset(
         {
             "uz": (dims, res["uz"] * pixel, attrs("depth", "tracked axial displacement")),

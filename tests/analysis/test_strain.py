@@ -380,7 +380,7 @@ def test_bad_inputs_get_clear_errors():
         speckle.estimate_strain(ref[None], dfm[0][None], **kw)
     a = xr.DataArray(ref, dims=("depth", "aline"), coords={"aline": np.arange(32.0)})
     b = xr.DataArray(dfm[0], dims=("depth", "aline"), coords={"aline": np.arange(32.0) + 1})
-    with pytest.raises(ValueError, match="aline coordinates"):
+    with pytest.raises(ValueError, match="'aline' coordinates"):
         speckle.estimate_strain(a, b, **kw)
     with pytest.raises(TypeError, match="both"):
         speckle.estimate_strain(a, dfm[0], **kw)

@@ -35,8 +35,7 @@ EXCEPTIONS = {
     "contrast_standard_error": _REDUCED + " (blocks along a named dim)",
     "rayleigh_pdf": "elementwise through xarray.apply_ufunc, which keeps any argument's labels",
     "exponential_pdf": "elementwise through xarray.apply_ufunc, which keeps any argument's labels",
-    "compound": _REDUCED + " (the look dim averaged out; the body needs the labelled looks)",
-    "noisy_looks": "the body needs the labelled looks (their look dim by name)",
+    "brownian_frames": "scene: a scatterer Dataset (positions per scatterer), not an image",
     **{n: _WRAPPER for n in ("doppler_phase", "g1", "g2", "liv", "ocds", "speckle_variance")},
     "ssada": _WRAPPER + " (through frequency_looks, decorated)",
 }
