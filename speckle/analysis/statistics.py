@@ -50,7 +50,7 @@ import xarray as xr
 from scipy import stats
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
-from .._wrap import preprocess_and_wrap
+from .._wrap import ArraySpec, preprocess_and_wrap
 from ..conventions import attrs, inverse_units, labelled, units_of
 from ..scene.scatterers import AMPLITUDE_MODELS, COUNT_MODELS, amplitude_kurtosis
 from ..system.source import check_weights
@@ -71,18 +71,21 @@ __all__ = [
 MIN_EXPECTED = 5.0
 
 
-def _values(values: object, name: str) -> np.ndarray:
-    """Flattened finite float values of an array or DataArray (at least two)."""
-    data = values.values if isinstance(values, xr.DataArray) else values
-    arr = as_finite_array(data, name).ravel()
+#: Samples: finite real numbers, the DataArray kept for its units (the decorator's checks).
+_SAMPLES = ArraySpec(kind="real", keep_labels=True)
+
+
+def _flat(values: object, name: str) -> np.ndarray:
+    """The decorator-checked samples, flattened floats (at least two)."""
+    arr = np.asarray(values, dtype=float).ravel()
     if arr.size < 2:
         raise ValueError(f"{name} must hold at least 2 values, got {arr.size}")
     return arr
 
 
 def _units(values: object) -> str:
-    one = units_of("dimensionless")
-    return str(values.attrs.get("units", one)) if isinstance(values, xr.DataArray) else one
+    """The samples' units attribute (dimensionless for plain numpy)."""
+    return str(getattr(values, "attrs", {}).get("units", units_of("dimensionless")))
 
 
 def _usable(edges: np.ndarray) -> bool:
@@ -92,6 +95,7 @@ def _usable(edges: np.ndarray) -> bool:
         return bool(np.all(widths > 0) and np.all(np.isfinite(1.0 / widths)))
 
 
+@preprocess_and_wrap(checks={"values": _SAMPLES})
 def histogram(
     values: object, bins: int | object = 50, range: tuple[float, float] | None = None
 ) -> xr.DataArray:
@@ -114,7 +118,7 @@ def histogram(
         samples), ``outside`` (samples outside the edges, not counted), ``units`` (1/units of
         values). The density integrates to ``(count - outside)/count``.
     """
-    x = _values(values, "values")
+    x = _flat(values, "values")
     if isinstance(bins, int | np.integer) and not isinstance(bins, bool):
         nb = check_int(bins, "bins", low=1)
         if range is None:
@@ -139,7 +143,7 @@ def histogram(
     counts, _ = np.histogram(x, bins=edges)
     density = counts / (x.size * np.diff(edges))
     units = _units(values)
-    name = values.name if isinstance(values, xr.DataArray) and values.name else "values"
+    name = getattr(values, "name", None) or "values"
     return xr.DataArray(
         density,
         dims=("bin",),
@@ -196,7 +200,7 @@ def _chi_square(x: np.ndarray, dist, bins: int) -> tuple[float, int]:
 
 def _fit(values: object, name: str, family, parameter: str, chi2_bins: int) -> xr.Dataset:
     """Maximum-likelihood fit (loc 0) of a one-parameter scipy family, with goodness of fit."""
-    x = _values(values, name)
+    x = _flat(values, name)
     check_int(chi2_bins, "chi2_bins", low=3)
     if np.any(x < 0):
         raise ValueError(f"{name} must be non-negative")
@@ -256,6 +260,7 @@ def _fit_result(
     )
 
 
+@preprocess_and_wrap(checks={"amplitude": _SAMPLES})
 def fit_rayleigh(amplitude: object, *, chi2_bins: int = 50) -> xr.Dataset:
     """Maximum-likelihood Rayleigh fit of speckle amplitudes (``scipy.stats.rayleigh``, loc 0).
 
@@ -277,6 +282,7 @@ def fit_rayleigh(amplitude: object, *, chi2_bins: int = 50) -> xr.Dataset:
     return _fit(amplitude, "amplitude", stats.rayleigh, "sigma", chi2_bins)
 
 
+@preprocess_and_wrap(checks={"intensity": _SAMPLES})
 def fit_exponential(intensity: object, *, chi2_bins: int = 50) -> xr.Dataset:
     """Maximum-likelihood exponential fit of speckle intensities (``scipy.stats.expon``, loc 0).
 
@@ -299,6 +305,7 @@ def _reduced_dims(data: xr.DataArray, dim: object) -> tuple[str, ...]:
     return tuple(names)
 
 
+@preprocess_and_wrap(checks={"intensity": _SAMPLES})
 def speckle_contrast(intensity: object, dim: str | list[str] | None = None) -> object:
     """Speckle contrast ``C = std(I)/mean(I)`` (population std, ``ddof=0``).
 
@@ -329,7 +336,6 @@ def speckle_contrast(intensity: object, dim: str | list[str] | None = None) -> o
     """
     if isinstance(intensity, xr.DataArray):
         dims = _reduced_dims(intensity, dim)
-        as_finite_array(intensity.values, "intensity")
         n = int(np.prod([intensity.sizes[d] for d in dims]))
         if n < 2:
             raise ValueError(f"intensity must hold at least 2 values over {dims}, got {n}")
@@ -341,7 +347,7 @@ def speckle_contrast(intensity: object, dim: str | list[str] | None = None) -> o
         return c.rename("contrast").assign_attrs(attrs("contrast", "speckle contrast std/mean"))
     if dim is not None:
         raise TypeError("dim needs intensity as an xarray.DataArray")
-    x = _values(intensity, "intensity")
+    x = _flat(intensity, "intensity")
     mean = x.mean()
     if mean == 0:
         _warn_zero_mean(1)
@@ -357,6 +363,7 @@ def _warn_zero_mean(count: int) -> None:
     )
 
 
+@preprocess_and_wrap(checks={"intensity": ArraySpec(kind="real", labelled=True, keep_labels=True)})
 def contrast_standard_error(
     intensity: xr.DataArray, sample_dim: str = "aline"
 ) -> tuple[float, float]:
@@ -375,12 +382,12 @@ def contrast_standard_error(
         ``(C, SE(C))``; ``(NaN, NaN)`` at zero mean intensity and ``(0, NaN)`` for a constant
         one (each with a ``RuntimeWarning``).
     """
-    if not isinstance(intensity, xr.DataArray) or sample_dim not in intensity.dims:
+    if sample_dim not in intensity.dims:
         raise TypeError(f"intensity must be a DataArray with a {sample_dim!r} dim")
     n_lines = intensity.sizes[sample_dim]
     if n_lines < 3:
         raise ValueError(f"need >= 3 independent samples along {sample_dim!r}, got {n_lines}")
-    x = as_finite_array(intensity.transpose(sample_dim, ...).values, "intensity")
+    x = np.asarray(intensity.transpose(sample_dim, ...).values, dtype=float)
     x = x.reshape(n_lines, -1)
     m1, m2 = x.mean(axis=1), (x**2).mean(axis=1)
     big1, big2 = m1.mean(), m2.mean()
