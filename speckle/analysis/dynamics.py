@@ -105,6 +105,10 @@ _THEORY = (
 #: checks). :func:`_series` adds the frame count and the intensity's sign.
 _INTENSITY = ArraySpec(kind="number")
 _FIELD = ArraySpec(kind="complex")
+#: A labelled complex series (a DataArray with a time dim, or a Dataset's field).
+_FIELD_SERIES = {
+    "images": ArraySpec(kind="complex", labelled=True, keep_labels=True, variable="field")
+}
 
 
 def _series(a: object, name: str, *, complex_: bool = False, min_frames: int = 2) -> np.ndarray:
@@ -457,6 +461,7 @@ def _lag_da(values, m, dt, da, window, name, quantity) -> xr.DataArray:
     return xr.DataArray(values, dims=dims, coords=coords, name=name, attrs=attrs(*quantity))
 
 
+@preprocess_and_wrap(checks=_FIELD_SERIES)
 def g1(
     images: xr.DataArray | xr.Dataset,
     *,
@@ -518,7 +523,7 @@ def g1(
     n = da.sizes["time"]
     m = np.arange(n) if lags is None else _lags_of(lags, n)
     arr = da.values  # computed once (a Dask series is not recomputed per block)
-    values = g1_array(arr, m, window=window)
+    values = g1_array.__wrapped__(arr, m, window=window)  # checked here once
     out = _lag_da(values, m, dt, da, window, "g1", ("correlation", "field autocorrelation g1"))
     if blocks is None:
         return out
@@ -530,7 +535,7 @@ def g1(
         raise ValueError(f"blocks={k} exceeds the {da.sizes[last]} elements along {last!r}")
     axis = da.dims.index(last)
     parts = np.array_split(np.arange(da.sizes[last]), k)
-    est = np.stack([np.abs(g1_array(np.take(arr, p, axis=axis), m)) for p in parts])
+    est = np.stack([np.abs(g1_array.__wrapped__(np.take(arr, p, axis=axis), m)) for p in parts])
     se = est.std(axis=0, ddof=1) / np.sqrt(k)
     se_da = out.copy(data=se).rename("g1_se")
     se_da.attrs = attrs("correlation", f"standard error of |g1| from {k} blocks along {last}")
@@ -567,6 +572,7 @@ def g2(
     return _lag_da(values, m, dt, da, window, "g2", ("correlation", "intensity autocorrelation"))
 
 
+@preprocess_and_wrap(checks=_FIELD_SERIES)
 def doppler_phase(
     images: xr.DataArray | xr.Dataset,
     *,
@@ -602,7 +608,7 @@ def doppler_phase(
     0.2
     """
     da, dt = _timed(images, "doppler_phase", complex_=True, uniform=True, stride=stride)
-    v = doppler_phase_array(da.values, lag=lag, window=window)
+    v = doppler_phase_array.__wrapped__(da.values, lag=lag, window=window)
     out = _map(v, da, window, "doppler_phase", ("phase", "Doppler phase shift (Kasai)"))
     return out.assign_attrs(interval=float(lag * dt))
 
@@ -687,6 +693,7 @@ def liv(
     return _map(v, da, window, "liv", ("log_variance", "logarithmic intensity variance"))
 
 
+@preprocess_and_wrap(checks=_FIELD_SERIES)
 def ssada(
     images: xr.DataArray | xr.Dataset,
     *,

@@ -19,8 +19,9 @@ _REDUCED = (
     "wrap_like labels same-shaped results only, and its body would lose the units/dims it needs"
 )
 _WRAPPER = (
-    "the one xarray wrapper of a decorated numpy core (*_array): its result lies on new dims "
-    "(lag) or a map built from the time coordinate"
+    "the one xarray wrapper of a decorated numpy core (*_array): a Dataset gives its "
+    "intensity or, without one, its field (two variables; the decorator's ArraySpec.variable "
+    "names one)"
 )
 #: Public functions that are not decorated, and why.
 EXCEPTIONS = {
@@ -31,8 +32,7 @@ EXCEPTIONS = {
     "rayleigh_pdf": "elementwise through xarray.apply_ufunc, which keeps any argument's labels",
     "exponential_pdf": "elementwise through xarray.apply_ufunc, which keeps any argument's labels",
     "brownian_frames": "scene: a scatterer Dataset (positions per scatterer), not an image",
-    **{n: _WRAPPER for n in ("doppler_phase", "g1", "g2", "liv", "ocds", "speckle_variance")},
-    "ssada": _WRAPPER + " (through frequency_looks, decorated)",
+    **{n: _WRAPPER for n in ("g2", "liv", "ocds", "speckle_variance")},
 }
 
 
