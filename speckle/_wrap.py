@@ -270,6 +270,8 @@ def _fill_grid(bound, from_grid: Mapping[str, str], func_name: str) -> None:
     for param, source in from_grid.items():
         given = bound.arguments.get(param)
         src = bound.arguments.get(source)
+        if src is None:
+            continue  # an optional source not given: the body decides what it needs
         if not isinstance(src, (xr.DataArray, xr.Dataset)):
             if given is None:
                 raise ValueError(

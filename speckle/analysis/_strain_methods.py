@@ -246,7 +246,7 @@ def _unit_weight_slope(y: np.ndarray, wz: int, wx: int) -> np.ndarray:
 
 def _lag(a1: np.ndarray, opts: dict) -> int:
     if opts["lag"] is None:
-        return choose_lag(a1, max_bias=opts["max_bias"])
+        return choose_lag.__wrapped__(a1, max_bias=opts["max_bias"])  # checked image
     return check_int(opts["lag"], "lag", low=1, high=a1.shape[0] - 2)
 
 
@@ -269,13 +269,13 @@ def _four_product_sums(a1, a2, lag, wz, wx, terms=("C", "absC", "R1", "R2")):
 def _vector(a1, a2, k0, p, wz, wx, opts):
     a1 = depth_major(a1)  # once: the lag's pass and the kernel read depth-contiguous A-lines
     if opts["lag"] is None:
-        lag, rho = lag_and_rho(a1, max_bias=opts["max_bias"])
+        lag, rho = lag_and_rho.__wrapped__(a1, max_bias=opts["max_bias"])  # checked image
     else:
         lag, rho = _lag(a1, opts), None
     a2 = _aligned(a1, a2, p, opts)
     wrap = bool(opts["wrap_check"]) and lag > 1
     if wrap and rho is None:
-        rho = depth_autocorrelation(a1, 1)
+        rho = depth_autocorrelation.__wrapped__(a1, 1)  # checked image
     # the lag-1 phase wraps only at 1/(2R); scaled by L and by its known low bias
     # 1 + rho(1)^2 (image autocorrelation) it picks the 2 pi branch of the lag-L phase
     # (multi-lag unwrapping); a branch error needs a predictor error > pi
@@ -391,7 +391,7 @@ def _tracked(a1, a2, window, step, upsample, oversample, lateral=True, outside="
     out = []
     for values in (tr["uz"], 1.0 - tr["error"]):
         out.append(
-            interpolate_windows(
+            interpolate_windows.__wrapped__(  # the numpy body: the centres are the tracker's
                 values, tr["centre_depth"], tr["centre_aline"], qz, qx, outside=outside
             )
         )
@@ -430,7 +430,8 @@ def _coherence_length(a: np.ndarray, width: int) -> float:
     m = min(width, a.shape[0]) - 1
     if m < 1:
         return 1.0
-    rho = amplitude_from_gamma.__wrapped__(depth_autocorrelation(a, m))  # the numpy body
+    # the numpy bodies: the image is checked
+    rho = amplitude_from_gamma.__wrapped__(depth_autocorrelation.__wrapped__(a, m))
     return float(1.0 + 2.0 * np.sum(rho[1:] ** 2))
 
 

@@ -43,9 +43,9 @@ import scipy.fft as sfft
 import xarray as xr
 from scipy import ndimage, special
 
-from .._validate import as_finite_array, check_bool, check_choice, check_int, check_real
+from .._validate import check_bool, check_choice, check_int, check_real
 from .._wrap import ArraySpec, preprocess_and_wrap
-from ..conventions import attrs, coord
+from ..conventions import attrs, coord, grid
 from ..system.source import index_shift_phase, spectral_index
 from ._common import DEPTH, LATERAL, grid_spacing, matched, parse_window, same_grid
 from ._kernels import lagrange_resample
@@ -269,7 +269,8 @@ def compensate(
         )
     check_field(displacement, extra_dims=[d for d in field.dims if d not in ("depth", "aline")])
     pixel, pitch = grid_spacing(field)  # from the coordinates, refused if missing/non-uniform
-    if carrier and "k0" not in field.attrs:
+    k0 = grid(field).k0  # the central wavenumber in the medium (attribute k0), or None
+    if carrier and k0 is None:
         raise ValueError(
             "deformed needs attribute k0 (rad/µm) to remove the carrier phase, as a B-scan "
             "from speckle.bscan has (or pass carrier=False)"
@@ -286,7 +287,6 @@ def compensate(
     p_np = pos.transpose(*other, "depth").values
     out = sample_field.__wrapped__(f_np, p_np)  # the numpy body: both checked
     if carrier:
-        k0 = float(field.attrs["k0"])
         out = out * np.exp(-2j * k0 * uz.transpose(*other, "depth").values)
     result = xr.DataArray(out, dims=(*other, "depth"), coords=field.coords).transpose(*field.dims)
     if "ux" in displacement and np.any(displacement["ux"].values != 0):
@@ -494,15 +494,17 @@ def correlation_map(
 # --------------------------------------------------------------------------------------------
 
 
+@preprocess_and_wrap(
+    checks={"x": ArraySpec(kind="real", nonempty=False), "spectrum": ArraySpec(kind="real", ndim=1)}
+)
 def kernel(x: object, spectrum: object) -> np.ndarray:
     """Point-spread kernel ``P(x) = sum_n S_n exp(2i pi n x/N)`` at pixel offsets ``x``.
 
     A scatterer ``x`` pixels below pixel ``q`` contributes ``a exp(2i k0 z) P(x)`` to ``A(q)``.
     """
-    s = as_finite_array(spectrum, "spectrum")
+    s, xx = spectrum, x  # checked: real, finite (spectrum 1-D)
     n = s.size
     idx = spectral_index(n).astype(float)
-    xx = as_finite_array(x, "x")
     w = np.exp(2j * np.pi * np.mod(xx.ravel(), n) / n)[None, :]
     out = _horner(s[None, :].astype(np.complex128), w)[0] * w[0] ** float(idx[0])
     return out.reshape(xx.shape)
@@ -519,8 +521,9 @@ def _integrals(
     n = spectrum.size
     dx = 1.0 / oversample
     x = np.arange(-n, n, dx) + 0.5 * dx  # midpoint rule on band-limited integrands
-    p = kernel(x, spectrum)
-    h = np.exp(-2j * np.pi * phase * x) * kernel(scale * x + offset, spectrum)
+    core = kernel.__wrapped__  # the numpy body: the spectrum is checked
+    p = core(x, spectrum)
+    h = np.exp(-2j * np.pi * phase * x) * core(scale * x + offset, spectrum)
     grid = {
         "C": p * np.conj(h),
         "D": np.abs(p) ** 2 * np.abs(h) ** 2,
@@ -730,6 +733,7 @@ def expected_gamma(strain: object, *, spectrum: xr.DataArray, oversample: int = 
     return np.abs(c_mean) / np.sqrt(a * a / (1 - s))
 
 
+@preprocess_and_wrap(checks={"strain": _STRAIN})
 def continuum_gamma(strain: object, k0_dk: float) -> np.ndarray:
     """Continuum-limit ``|gamma|`` after exact compensation, rectangular spectrum.
 
@@ -766,6 +770,7 @@ def two_peak_weights(n_pixels: int, *, separation: float, fwhm: float) -> np.nda
     return peak(-sep / 2) + peak(sep / 2)
 
 
+@preprocess_and_wrap(checks={"strain": _STRAIN})
 def carrier_window_factor(strain: object, k0_dk: float, window: int) -> np.ndarray:
     """``|sum_{q<W} exp(2i pi R s q)|/W``: a W-pixel window of uncompensated carrier phase.
 

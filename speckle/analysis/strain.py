@@ -41,7 +41,10 @@ Methods (``method=``)
     then a least-squares gradient over the window (unit weights: closed form from two running
     sums). Serves supra-pixel displacements; its noise floor is set by the registration error.
     Quality: ``1 - registration error``; NaN below ``min_quality`` (:data:`TRACK_MIN_QUALITY`,
-    0.1: unrelated images stay below it).
+    0.1) or below the window's chance level, whichever is higher: the quality two unrelated
+    images reach in that window with probability :data:`TRACK_FALSE_RATE` (1 %), from the
+    number of independent speckle cells it holds (0.02 for the default 64 x 8 window, 0.13
+    for 64 x 1, 0.24 for 32 x 1; :func:`estimate_displacement` too).
 ``"correlation"``
     Correlation stability: the deformed image is compensated with the tracked displacement
     (:func:`speckle.compensate`, no carrier; tracked every 16 px by default, the displacement
@@ -458,13 +461,14 @@ def accumulate_strain(
     -------
     xarray.Dataset
         ``interframe`` (``frame`` = pair index, depth, aline; on each earlier frame's grid),
-        ``quality`` (of each interframe estimate), ``cumulative`` (strain of frame ``i+1``
+        ``quality`` (of each interframe estimate), ``accumulated`` (strain of frame ``i+1``
         relative to frame 0 on frame 0's pixels) and ``position`` (pixel ``y_{i+1}`` of each
         frame-0 pixel in frame ``i+1``). The input's depth and aline coordinates are kept
         (else depth = pixel index times ``pixel_size``). The numbers do not depend on the
-        scheduler or the number of workers. Read the variables by key
-        (``result["cumulative"]``): ``result.cumulative`` is xarray's
-        :meth:`xarray.Dataset.cumulative` method, not the variable.
+        scheduler or the number of workers. The accumulated strain was named ``cumulative``
+        before: that name is :meth:`xarray.Dataset.cumulative`, a method, so
+        ``result.cumulative`` did not give the variable; ``result.accumulated`` does (files
+        written before hold ``cumulative``).
 
     Raises
     ------
@@ -502,7 +506,7 @@ def accumulate_strain(
     variables = {
         "interframe": attrs("strain", "interframe strain"),
         "quality": attrs("dimensionless", "interframe quality"),
-        "cumulative": attrs("strain", "strain to frame 0"),
+        "accumulated": attrs("strain", "strain to frame 0"),
         "position": attrs("pixels", "position in frame"),
     }
     meta = {
@@ -578,7 +582,7 @@ def _frame(fields, state) -> dict:
     return {
         "interframe": fields[0],
         "quality": fields[1],
-        "cumulative": 1 - state[1],
+        "accumulated": 1 - state[1],
         "position": state[0],
     }
 

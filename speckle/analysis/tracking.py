@@ -32,7 +32,6 @@ import xarray as xr
 from skimage.registration import phase_cross_correlation
 
 from .._validate import (
-    as_finite_array,
     check_bool,
     check_choice,
     check_int,
@@ -280,7 +279,7 @@ def track_array(
         if not isinstance(flag, (bool, np.bool_)):
             raise TypeError(f"{name} must be True or False, got {flag!r}")
     wz, wx = parse_window(window, shape=a.shape)
-    stz, stx = parse_window(step, "step", low=1, shape=a.shape)
+    stz, stx = parse_window(step, "step", low=1)
     up = check_int(upsample, "upsample", low=1)
     ov = check_int(oversample, "oversample", low=1)
     _check_upsample(up, wz * ov, wx)
@@ -364,7 +363,7 @@ def track_axial(
     """
     a, b = reference, deformed  # checked by the decorator
     wz, wx = parse_window(window, shape=a.shape)
-    stz, stx = parse_window(step, "step", low=1, shape=a.shape)
+    stz, stx = parse_window(step, "step", low=1)
     up = check_int(upsample, "upsample", low=1)
     ov = check_int(oversample, "oversample", low=1)
     _check_upsample(up, wz * ov, 1)
@@ -592,6 +591,19 @@ def track(
     return out
 
 
+#: A pixel grid (µm): real, finite, 1-D; empty allowed (no pixel asked).
+_GRID = ArraySpec(kind="real", ndim=1, nonempty=False)
+
+
+@preprocess_and_wrap(
+    checks={
+        "values": ArraySpec(kind="real", ndim=2, finite=False, nonempty=False),
+        "centre_depth": ArraySpec(kind="real", ndim=1),
+        "centre_aline": ArraySpec(kind="real", ndim=1),
+        "depth": _GRID,
+        "aline": _GRID,
+    }
+)
 def interpolate_windows(
     values: np.ndarray,
     centre_depth: np.ndarray,
@@ -625,13 +637,10 @@ def interpolate_windows(
         Shape ``(len(depth), len(aline))``.
     """
     check_choice(outside, "outside", ("linear", "nearest", "nan"))
-    v = np.asarray(values)
-    if v.dtype.kind not in "fiu":
-        raise TypeError(f"values must be real numbers (NaN allowed), got dtype {v.dtype}")
+    v, z, x = values, depth, aline  # checked: real, finite grids (values: NaN allowed)
     cz, cx = (
         _axis(c, n) for c, n in ((centre_depth, "centre_depth"), (centre_aline, "centre_aline"))
     )
-    z, x = as_finite_array(depth, "depth"), as_finite_array(aline, "aline")
     if v.shape != (cz.size, cx.size):
         raise ValueError(
             f"values must have shape (centre_depth, centre_aline) = {(cz.size, cx.size)}, got "
@@ -643,10 +652,9 @@ def interpolate_windows(
     return _interp_axis(out, cx, x, 1, outside)
 
 
-def _axis(c: object, name: str) -> np.ndarray:
-    """Window centres: a finite, increasing 1-D array of at least one value."""
-    a = as_finite_array(c, name)
-    if a.ndim != 1 or a.size < 1 or np.any(np.diff(a) <= 0):
+def _axis(a: np.ndarray, name: str) -> np.ndarray:
+    """Window centres (finite, 1-D, checked): increasing, else ValueError."""
+    if np.any(np.diff(a) <= 0):
         raise ValueError(f"{name} must be an increasing 1-D array of window centres, got {a}")
     return a
 
@@ -669,6 +677,7 @@ def _interp_axis(v: np.ndarray, xp: np.ndarray, x: np.ndarray, axis: int, outsid
     return out
 
 
+@preprocess_and_wrap(checks={"depth": _GRID, "aline": _GRID})
 def interpolate_displacement(
     tracked: xr.Dataset, depth: np.ndarray, aline: np.ndarray, *, axial_only: bool = True
 ) -> xr.Dataset:
@@ -700,9 +709,9 @@ def interpolate_displacement(
     axial_only = check_bool(axial_only, "axial_only")
     names = ("uz",) if axial_only else ("uz", "ux")
     for name in names:
-        vals = tracked[name].transpose("depth", "aline").values
+        vals = tracked[name].transpose(DEPTH, LATERAL).values
         grid = interpolate_windows(
-            vals, tracked.depth.values, tracked.aline.values, np.asarray(depth), np.asarray(aline)
+            vals, tracked[DEPTH].values, tracked[LATERAL].values, depth, aline
         )
-        out[name] = (("depth", "aline"), grid, dict(tracked[name].attrs))
-    return xr.Dataset(out, coords={"depth": coord("depth", depth), "aline": coord("aline", aline)})
+        out[name] = ((DEPTH, LATERAL), grid, dict(tracked[name].attrs))
+    return xr.Dataset(out, coords={DEPTH: coord(DEPTH, depth), LATERAL: coord(LATERAL, aline)})

@@ -88,7 +88,7 @@ def test_bad_autocorrelation_inputs():
     img = xr.DataArray(np.ones((10, 40)), dims=("depth", "aline"))
     with pytest.raises(ValueError, match="max_lag"):
         ac.intensity_autocorrelation(img, max_lag=9)
-    with pytest.raises(TypeError, match="dims"):
+    with pytest.raises(ValueError, match="dims"):
         ac.intensity_autocorrelation(img.rename(aline="x"))
     with pytest.raises(ValueError, match="snr_db"):
         ac.noise_factor(float("nan"))
