@@ -426,7 +426,7 @@ def brownian_g1(tau: object, diffusion: float, k0: float) -> np.ndarray:
     t = np.asarray(tau, dtype=float)  # named as here (g1_brownian calls it lag)
     if np.any(t < 0):
         raise ValueError("tau must be >= 0 (s)")
-    return g1_brownian(t, diffusion=diffusion, k0=k0)
+    return g1_brownian.__wrapped__(t, diffusion=diffusion, k0=k0)  # tau checked once, here
 
 
 def brownian_frames(

@@ -740,7 +740,7 @@ def ssada(
     check_choice(band_window, "band_window", ("rectangular", "gaussian", "hann"))
     w = subband_windows(da.sizes["depth"], n_bands, window=band_window, overlap=overlap)
     looks = frequency_looks(da, w)  # (look, time, ...)
-    v = ssada_array(np.abs(looks.transpose("look", *da.dims).values), window=window)
+    v = ssada_array.__wrapped__(np.abs(looks.transpose("look", *da.dims).values), window=window)
     out = _map(v, da, window, "ssada", ("dimensionless", "split-spectrum amplitude decorrelation"))
     return out.assign_attrs(n_bands=int(n_bands), band_window=band_window, overlap=float(overlap))
 

@@ -195,7 +195,8 @@ def sparse_inverse_density(
     log_intensity_moments(weights, waist_pitch, 1.0, inverse_snr)  # checks every argument first
 
     def gap(y):
-        return log_intensity_moments(weights, waist_pitch, 1 / y, inverse_snr)[1] - v
+        # the body: the arguments were checked once, just above
+        return log_intensity_moments.__wrapped__(weights, waist_pitch, 1 / y, inverse_snr)[1] - v
 
     lo = 0.01
     g_lo = gap(lo)
