@@ -736,7 +736,7 @@ def ssada(
     da, _ = _timed(images, "ssada", complex_=True, uniform=False, stride=stride)
     if "depth" not in da.dims:
         raise ValueError("ssada needs a 'depth' dim (the A-line, to split its spectrum)")
-    n_bands = check_int(n_bands, "n_bands", low=1)
+    n_bands = check_int(n_bands, "n_bands", low=1, high=da.sizes["depth"])
     check_choice(band_window, "band_window", ("rectangular", "gaussian", "hann"))
     w = subband_windows(da.sizes["depth"], n_bands, window=band_window, overlap=overlap)
     looks = frequency_looks(da, w)  # (look, time, ...)

@@ -189,7 +189,9 @@ def bandlimited(field: object, factor: int, axis: int = -1) -> np.ndarray:
     zero-padding them (keeping each at its own frequency ``n``) evaluates it at
     ``q = m/factor``, ``m = 0 ... factor N - 1``.
     """
-    f = np.moveaxis(np.asarray(field, dtype=np.complex128), axis, -1)
+    nd = np.ndim(field)
+    ax = check_int(axis, "axis", low=-max(nd, 1), high=max(nd, 1) - 1)
+    f = np.moveaxis(np.asarray(field, dtype=np.complex128), ax, -1)
     k = check_int(factor, "factor", low=1)
     n = f.shape[-1]
     if n < 1:
@@ -201,7 +203,7 @@ def bandlimited(field: object, factor: int, axis: int = -1) -> np.ndarray:
     idx = np.arange(n) - n // 2
     big = np.zeros((*f.shape[:-1], k * n), dtype=np.complex128)
     big[..., idx % (k * n)] = g[..., idx % n]
-    return np.moveaxis(np.fft.fft(big, axis=-1), -1, axis)
+    return np.moveaxis(np.fft.fft(big, axis=-1), -1, ax)
 
 
 def _crossing(x: np.ndarray, y: np.ndarray, level: float, i: int, step: int) -> float:

@@ -383,7 +383,10 @@ def contrast_standard_error(
         one (each with a ``RuntimeWarning``).
     """
     if sample_dim not in intensity.dims:
-        raise TypeError(f"intensity must be a DataArray with a {sample_dim!r} dim")
+        raise TypeError(
+            f"intensity must be a DataArray with a {sample_dim!r} dim (sample_dim), got "
+            f"dims {intensity.dims}"
+        )
     n_lines = intensity.sizes[sample_dim]
     if n_lines < 3:
         raise ValueError(f"need >= 3 independent samples along {sample_dim!r}, got {n_lines}")

@@ -85,3 +85,19 @@ def test_compounded_contrast_refuses_what_is_not_a_correlation_matrix():
         speckle.compounded_contrast(np.zeros((2, 2)))  # was 0.0: no speckle invented
     with pytest.raises(ValueError, match="unit diagonal"):
         speckle.compounded_contrast([[1.0, 2.0], [2.0, 1.0]])
+
+
+def test_options_refused_by_name():
+    from speckle.analysis import image_quality as iq
+    from speckle.analysis import statistics as st
+
+    with pytest.raises(TypeError, match="axis"):
+        iq.bandlimited(np.ones((4, 4)), 2, axis="a")
+    with pytest.raises(ValueError, match="axis"):
+        iq.bandlimited(np.ones((4, 4)), 2, axis=2)
+    img = xr.DataArray(np.ones((4, 5)), dims=("depth", "x"))
+    with pytest.raises(TypeError, match="sample_dim"):
+        st.contrast_standard_error(img, sample_dim="aline")
+    series = xr.DataArray(np.ones((3, 8, 2), complex), dims=("time", "depth", "x"))
+    with pytest.raises(ValueError, match="n_bands"):
+        speckle.ssada(series, n_bands=9)  # more sub-bands than the A-line's 8 samples
