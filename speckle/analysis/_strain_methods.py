@@ -430,8 +430,13 @@ def _coherence_length(a: np.ndarray, width: int) -> float:
     m = min(width, a.shape[0]) - 1
     if m < 1:
         return 1.0
-    # the numpy bodies: the image is checked
-    rho = amplitude_from_gamma.__wrapped__(depth_autocorrelation.__wrapped__(a, m))
+    # the numpy bodies (the image is checked); lags until |gamma|^2 <= 0.5 % (rho_A^2 ~
+    # |gamma|^4 <= 3e-5 beyond: the sum is complete), all of them if it stays correlated
+    try:
+        _, gamma = lag_and_rho.__wrapped__(a, max_lag=m)
+    except ValueError:
+        gamma = depth_autocorrelation.__wrapped__(a, m)
+    rho = amplitude_from_gamma.__wrapped__(gamma)
     return float(1.0 + 2.0 * np.sum(rho[1:] ** 2))
 
 
