@@ -28,7 +28,7 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 import xarray as xr
 
-from .conventions import attrs, grid
+from .conventions import attrs, canonical_dims, grid
 
 __all__ = ["ArraySpec", "Out", "check_same_grid", "map_frames", "preprocess_and_wrap"]
 
@@ -165,6 +165,7 @@ def _values(name: str, value: object, spec: ArraySpec, stack: Sequence[str]):
         var = value[spec.variable]  # attrs merged on a copy: the caller's object is unchanged
         value = var.assign_attrs({**value.attrs, **var.attrs})
     if isinstance(value, xr.DataArray):
+        value = canonical_dims(value, name)  # (depth, aline) -> (depth, x), warning (issue 32)
         if spec.dims is not None and spec.extra_dims:
             missing = [d for d in spec.dims if d not in value.dims]
             if missing:

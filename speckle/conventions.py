@@ -95,7 +95,11 @@ __all__ = [
 #: Coordinate/dimension name -> (units, long_name).
 COORDS: dict[str, tuple[str, str]] = {
     "depth": ("um", "depth in the medium (pixel centre)"),
-    "aline": ("um", "lateral position of the A-line"),
+    "aline": (
+        "um",
+        "lateral position of an independent A-line (scene dim of a scatterer field of "
+        "independent lines; images over them have the dim x)",
+    ),
     "x": ("um", "lateral position x"),
     "y": ("um", "lateral position y"),
     "z": ("um", "scatterer depth"),
@@ -174,7 +178,7 @@ QUANTITIES: dict[str, tuple[str, str]] = {
 #: (dims through :func:`canonical_dims`); ``tests/test_names.py`` checks that no module uses
 #: one outside its deprecation shim.
 RETIRED: dict[str, tuple[str, str]] = {
-    "aline": ("x", "dim"),
+    "aline": ("x", "dim"),  # as an IMAGE dim only: scenes of independent lines keep it
     "METHODS": ("ASCAN_METHODS", "constant"),
     "strain.METHODS": ("STRAIN_METHODS", "constant"),
     "image": ("scan_image", "function"),
@@ -216,6 +220,12 @@ RETIRED: dict[str, tuple[str, str]] = {
     "frequency_looks.windows": ("apodizations", "parameter"),
     "ssada.band_window": ("band_apodization", "parameter"),
     "load_measured.aline_pitch": ("pitch", "parameter"),
+    # image axes say x (issue 32, xdim); count parameters of line scenes (n_alines) stay
+    "interpolate_windows.centre_aline": ("centre_x", "parameter"),
+    "interpolate_windows.aline": ("x", "parameter"),
+    "interpolate_displacement.aline": ("x", "parameter"),
+    "window_aline_pixels": ("window_x_pixels", "attr"),
+    "step_aline_pixels": ("step_x_pixels", "attr"),
 }
 
 
@@ -380,8 +390,9 @@ def spacing(obj: xr.DataArray | xr.Dataset, dim: str, default: float | None = No
     return step
 
 
-#: Lateral dims whose coordinate gives the line pitch, in the order they are looked for.
-LATERAL_DIMS = ("aline", "x")
+#: Lateral dims whose coordinate gives the line pitch, in the order they are looked for (``x``
+#: of images; ``aline`` of scenes of independent lines).
+LATERAL_DIMS = ("x", "aline")
 
 
 @dataclasses.dataclass(frozen=True)

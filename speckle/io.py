@@ -37,6 +37,7 @@ import xarray as xr
 from ._atomic import atomic_path
 from ._image_files import IMAGE_DIMS, IMAGE_KINDS, load_image
 from ._validate import check_bool, check_int, check_path
+from .conventions import canonical_dims
 
 __all__ = [
     "ENGINE",
@@ -292,7 +293,7 @@ def write_frames(
     """Write a sequence frame by frame to a chunked NetCDF file (one chunk per frame), atomically.
 
     Memory holds one frame, not the sequence: ``frames`` yields, for each index along
-    ``frame``, a mapping from variable name to its ``(depth, aline)`` array.
+    ``frame``, a mapping from variable name to its ``(depth, x)`` array.
 
     Parameters
     ----------
@@ -303,8 +304,8 @@ def write_frames(
     n_frames : int
         Number of frames ``frames`` yields.
     template : xarray.Dataset
-        Coordinates (``frame``, ``depth``, ``aline``, ...), attrs, and the variables' names,
-        dims ``(frame, depth, aline)`` and attrs (their data is not read).
+        Coordinates (``frame``, ``depth``, ``x``, ...), attrs, and the variables' names,
+        dims ``(frame, depth, x)`` and attrs (their data is not read).
     progress : bool
         A text progress bar on stderr.
     complevel : int
@@ -317,7 +318,8 @@ def write_frames(
         raise ValueError(f"complevel must be an integer in [0, 9], got {complevel!r}")
     skeleton = template.drop_vars(list(template.data_vars))
     names = list(template.data_vars)
-    shape = tuple(template.sizes[d] for d in ("depth", "aline"))
+    template = canonical_dims(template, "template")  # (frame, depth, aline) warns: now x
+    shape = tuple(template.sizes[d] for d in ("depth", "x"))
     with atomic_path(path) as tmp:
         skeleton.to_netcdf(tmp, engine=ENGINE)  # coordinates and attrs, the xarray way
         with netCDF4.Dataset(tmp, "a") as nc:

@@ -88,12 +88,12 @@ class Fixtures:
 
     @functools.cached_property
     def strain_pair(self):
-        """Complex fields (depth, aline) of 64 x 8 pixels at strains 0 and 1e-3, pixel 8 µm."""
+        """Complex fields (depth, x) of 64 x 8 pixels at strains 0 and 1e-3, pixel 8 µm."""
         n, p = 64, 8.0
         src = speckle.spectrum(n, n * p, k0_dk=10, shape="gaussian", fwhm=0.5 * np.pi / p)
         sc = speckle.deformable_scene(8, 4.0, n_pixels=n, depth_range=n * p, seed=4, strain=1e-3)
         b = speckle.bscan(speckle.uniaxial_strain(sc, [0.0, 1e-3]), src)
-        f = b.field.transpose("strain", "depth", "aline").values
+        f = b.field.transpose("strain", "depth", "x").values
         return f[0], f[1], float(src.attrs["k0"])
 
     @functools.cached_property
@@ -220,20 +220,20 @@ class Fixtures:
 
     @functools.cached_property
     def series(self):
-        """A complex series (time, depth, aline) of 6 x 8 x 4 pixels (Gaussian speckle)."""
+        """A complex series (time, depth, x) of 6 x 8 x 4 pixels (Gaussian speckle)."""
         rng = np.random.default_rng(0)
         return rng.normal(size=(6, 8, 4)) + 1j * rng.normal(size=(6, 8, 4))
 
     @functools.cached_property
     def series_da(self):
-        """:attr:`series` as a DataArray (time, depth, aline) with coordinates."""
+        """:attr:`series` as a DataArray (time, depth, x) with coordinates."""
         return xr.DataArray(
             self.series,
-            dims=("time", "depth", "aline"),
+            dims=("time", "depth", "x"),
             coords={
                 "time": np.arange(6) * 1e-3,
                 "depth": np.arange(8) * 8.0,
-                "aline": np.arange(4) * 8.0,
+                "x": np.arange(4) * 8.0,
             },
         )
 
@@ -931,7 +931,7 @@ ENTRIES: dict[str, Entry] = {
         lambda: dict(
             deformed=F.pair[1],
             displacement=speckle.scene.deformation.pixel_displacement(
-                lambda z, x: 0 * z, F.pair[1].depth, F.pair[1].aline
+                lambda z, x: 0 * z, F.pair[1].depth, F.pair[1].x
             ),
         ),
         deformed="dataset",
@@ -1017,26 +1017,26 @@ ENTRIES: dict[str, Entry] = {
         lambda: dict(
             tracked=speckle.track(F.pair[0], F.pair[1], window=(16, 8), step=(8, 8), upsample=4),
             depth=F.pair[0].depth.values,
-            aline=F.pair[0].aline.values,
+            x=F.pair[0].x.values,
         ),
         tracked="dataset",
         depth="positions",
-        aline="positions",
+        x="positions",
         axial_only="flag",
     ),
     "interpolate_windows": E(
         lambda: dict(
             values=np.ones((2, 2)),
             centre_depth=np.array([4.0, 12.0]),
-            centre_aline=np.array([1.0, 3.0]),
+            centre_x=np.array([1.0, 3.0]),
             depth=np.arange(16.0),
-            aline=np.arange(4.0),
+            x=np.arange(4.0),
         ),
         values="image",
         centre_depth="positions",
-        centre_aline="positions",
+        centre_x="positions",
         depth="positions",
-        aline="positions",
+        x="positions",
         outside="choice",
     ),
     "estimate_strain": E(
@@ -1726,9 +1726,9 @@ ANSWERS: dict[tuple[str, str, str], str] = {
     ("interpolate_windows", "values", "nan"): "a NaN window (no answer) spreads only to the "
     "pixels whose interpolation uses it (docstring)",
     ("interpolate_windows", "depth", "empty"): "no pixel asked: an empty grid",
-    ("interpolate_windows", "aline", "empty"): "no pixel asked: an empty grid",
+    ("interpolate_windows", "x", "empty"): "no pixel asked: an empty grid",
     ("interpolate_displacement", "depth", "empty"): "no pixel asked: an empty grid",
-    ("interpolate_displacement", "aline", "empty"): "no pixel asked: an empty grid",
+    ("interpolate_displacement", "x", "empty"): "no pixel asked: an empty grid",
     ("correlation_array", "x", "nan"): "NaN pixels blank only the windows holding them "
     "(docstring; tests/test_strict.py)",
     ("correlation_array", "y", "nan"): "as x",
@@ -1764,11 +1764,17 @@ ANSWERS: dict[tuple[str, str, str], str] = {
     ("interpolation_gain", "t", "empty"): "pointwise closed form: no point asked, an empty answer",
     ("interpolation_gain", "theta", "empty"): "as t",
     ("resampling_response", "z", "empty"): "pointwise closed form: no depth asked, an empty answer",
-    ("process_interferogram", "signal", "complex"): "documented: a complex camera signal (interferogram's "
-    "complex detection) is processed as is",
+    (
+        "process_interferogram",
+        "signal",
+        "complex",
+    ): "documented: a complex camera signal (interferogram's complex detection) is processed as is",
     **{
-        (n, "apodization_fwhm_fraction", "above_one"): "a Gaussian apodization wider than the band (FWHM "
-        "1.5 N) is a valid, nearly flat window"
+        (
+            n,
+            "apodization_fwhm_fraction",
+            "above_one",
+        ): "a Gaussian apodization wider than the band (FWHM 1.5 N) is a valid, nearly flat window"
         for n in ("process_interferogram", "system_ascan")
     },
     ("add_complex_noise", "field", "one_pixel"): "one pixel: its intensity is the mean, the "

@@ -63,7 +63,7 @@ def test_stream_to_netcdf_refuses_the_processes_scheduler_and_runs_on_threads(tm
 
     src = speckle.spectrum(16, 128.0, k0_dk=3)
     sc = speckle.random_scatterers(4, 2.0, n_pixels=16, depth_range=128.0, seed=1)
-    ds = speckle.bscan(sc, src).chunk({"aline": 2})
+    ds = speckle.bscan(sc, src).chunk({"x": 2})
     with dask.config.set(scheduler="processes"):
         with pytest.raises(ValueError, match=r"'processes' scheduler.*threads"):
             stream_to_netcdf(ds, tmp_path / "p.nc", progress=False)
@@ -83,10 +83,10 @@ def test_empty_dataset_round_trips(tmp_path):
     src = speckle.spectrum(16, 128.0, k0_dk=3)
     sc = speckle.random_scatterers(4, 2.0, n_pixels=16, depth_range=128.0, seed=1)
     ds = speckle.bscan(sc, src)
-    empty = ds.isel(depth=slice(0, 0), aline=slice(0, 0))
+    empty = ds.isel(depth=slice(0, 0), x=slice(0, 0))
     to_netcdf(empty, tmp_path / "e.nc")
     stream_to_netcdf(empty, tmp_path / "s.nc", progress=False)
     for name in ("e.nc", "s.nc"):
         back = open_dataset(tmp_path / name)
-        assert dict(back.sizes) == {"depth": 0, "aline": 0}
+        assert dict(back.sizes) == {"depth": 0, "x": 0}
         xr.testing.assert_equal(back, empty)

@@ -29,7 +29,7 @@ def _field(seed, strain=1e-3):
                                   strain=strain)  # fmt: skip
     b = speckle.bscan(speckle.uniaxial_strain(sc, [0.0, strain]), _src(), method="nufft",
                       tol=1e-8)  # fmt: skip
-    return b.field.transpose("strain", "depth", "aline").values
+    return b.field.transpose("strain", "depth", "x").values
 
 
 @pytest.fixture(scope="module")
@@ -379,7 +379,7 @@ def test_lazy_frame_stacks_check_shape_options_at_the_call(opts, name):
     import dask.array as da
 
     f = np.exp(1j * np.random.default_rng(0).uniform(0, 6, (3, 64, 8)))
-    lazy = xr.DataArray(da.from_array(f, chunks=(1, 64, 8)), dims=("frame", "depth", "aline"))
+    lazy = xr.DataArray(da.from_array(f, chunks=(1, 64, 8)), dims=("frame", "depth", "x"))
     with pytest.raises(ValueError, match=name):
         speckle.accumulate_strain(lazy, k0=1.0, pixel_size=8.0, **opts)  # was at .compute()
 

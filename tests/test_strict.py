@@ -199,16 +199,16 @@ def test_nan_pixel_blanks_only_the_windows_holding_it(pair, kind):
 
 def test_mismatched_images_are_refused(pair, src):
     ref, dfm = pair
-    with pytest.raises(ValueError, match="differ along 'aline': 32 vs 8"):
-        speckle.pearson(ref, dfm.isel(aline=slice(0, 8)))
-    with pytest.raises(ValueError, match="differ along 'aline'"):
-        speckle.correlation_map(ref, dfm.isel(aline=slice(0, 8)), window=4)
+    with pytest.raises(ValueError, match="differ along 'x': 32 vs 8"):
+        speckle.pearson(ref, dfm.isel(x=slice(0, 8)))
+    with pytest.raises(ValueError, match="differ along 'x'"):
+        speckle.correlation_map(ref, dfm.isel(x=slice(0, 8)), window=4)
     sc = speckle.random_scatterers(32, 4.0, n_pixels=128, depth_range=512.0, seed=2)
     fine = speckle.bscan(sc, speckle.spectrum(128, 512.0, k0_dk=3))
     with pytest.raises(ValueError, match="differ along 'depth': 64 vs 128"):
         speckle.pearson(ref, fine)
-    shifted = dfm.assign_coords(aline=dfm.aline + 1.0)
-    with pytest.raises(ValueError, match="different 'aline' coordinates"):
+    shifted = dfm.assign_coords(x=dfm.x + 1.0)
+    with pytest.raises(ValueError, match="different 'x' coordinates"):
         speckle.pearson(ref, shifted)
     # an extra dim (strain) still broadcasts
     stack = xr.concat([dfm, ref], dim="strain")
@@ -217,9 +217,7 @@ def test_mismatched_images_are_refused(pair, src):
 
 def test_compensate_refuses_other_grids_and_a_missing_k0(pair):
     ref, dfm = pair
-    disp = speckle.scene.deformation.pixel_displacement(
-        lambda z, x: 3.0 + 0 * z, ref.depth, ref.aline
-    )
+    disp = speckle.scene.deformation.pixel_displacement(lambda z, x: 3.0 + 0 * z, ref.depth, ref.x)
     assert speckle.compensate(dfm, disp).shape == dfm.field.shape
     with pytest.raises(ValueError, match="different 'depth' coordinates"):
         speckle.compensate(dfm, disp.assign_coords(depth=disp.depth * 2))
@@ -358,7 +356,7 @@ def test_scan_combine_refuses_duplicate_points():
 
 def _cases(scene, src, img, pair):
     ref, dfm = pair
-    disp = speckle.scene.deformation.pixel_displacement(lambda z, x: 0 * z, ref.depth, ref.aline)
+    disp = speckle.scene.deformation.pixel_displacement(lambda z, x: 0 * z, ref.depth, ref.x)
     return [
         (
             lambda: speckle.random_scatterers(

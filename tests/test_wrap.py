@@ -51,13 +51,13 @@ def test_first_users_keep_their_behaviour():
 from speckle._wrap import ArraySpec, Out, map_frames  # noqa: E402
 from speckle.conventions import grid  # noqa: E402
 
-_IMAGE = ArraySpec(kind="complex", dims=("depth", "aline"), min_shape=(2, 1), lazy=True)
+_IMAGE = ArraySpec(kind="complex", dims=("depth", "x"), min_shape=(2, 1), lazy=True)
 
 
 @preprocess_and_wrap(
     checks={
         "a": _IMAGE,
-        "b": ArraySpec(kind="complex", dims=("depth", "aline"), same_as="a", lazy=True),
+        "b": ArraySpec(kind="complex", dims=("depth", "x"), same_as="a", lazy=True),
     },
     stack=("frame",),
     from_grid={"pixel_size": "a"},
@@ -76,8 +76,8 @@ def _phase_step(a, b, *, pixel_size=None):
 def _image(shape=(4, 3), dz=2.0, seed=0):
     rng = np.random.default_rng(seed)
     v = rng.normal(size=shape) + 1j * rng.normal(size=shape)
-    dims = ("depth", "aline") if len(shape) == 2 else ("frame", "depth", "aline")
-    coords = {"depth": np.arange(shape[-2]) * dz, "aline": np.arange(shape[-1]) * 5.0}
+    dims = ("depth", "x") if len(shape) == 2 else ("frame", "depth", "x")
+    coords = {"depth": np.arange(shape[-2]) * dz, "x": np.arange(shape[-1]) * 5.0}
     return xr.DataArray(v, dims=dims, coords=coords)
 
 
@@ -110,7 +110,7 @@ def _image(shape=(4, 3), dz=2.0, seed=0):
             np.ones((1, 3), complex),
             {"pixel_size": 1.0},
             ValueError,
-            r"a must be at least \(depth >= 2, aline >= 1\)",
+            r"a must be at least \(depth >= 2, x >= 1\)",
         ),
         (
             np.ones(4, complex),
@@ -148,7 +148,7 @@ def test_labelled_inputs_mismatched_or_mixed_refused_never_aligned():
     with pytest.raises(TypeError, match="both be numpy arrays or both DataArrays"):
         _phase_step(a, a.values)
     with pytest.raises(ValueError, match="must have dims"):
-        _phase_step(a.rename(aline="x"), a.rename(aline="x"))
+        _phase_step(a.rename(x="lateral"), a.rename(x="lateral"))
     with pytest.raises(ValueError, match=r"only a has a .frame. dim"):
         _phase_step(a.expand_dims(frame=2), a)
 
@@ -169,7 +169,7 @@ def test_grid_read_from_coordinates_and_a_disagreeing_value_refused():
 def test_frame_stack_mapped_in_one_pass_lazy_or_not():
     a, b = _image((3, 4, 2)), _image((3, 4, 2), seed=1)
     out = _phase_step(a, b)
-    assert out.dims == ("frame", "depth", "aline") and out.sizes["frame"] == 3
+    assert out.dims == ("frame", "depth", "x") and out.sizes["frame"] == 3
     for i in range(3):  # every frame as if alone
         np.testing.assert_array_equal(out[i].values, _phase_step(a[i], b[i]).values)
     dask = pytest.importorskip("dask")

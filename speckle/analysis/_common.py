@@ -2,7 +2,7 @@
 window parser and the pixel spacing read from coordinates.
 
 ``window`` means the same in every analysis function: an int ``w`` is a square window
-``(w, w)`` of (depth, aline) pixels, a pair is ``(depth, aline)`` pixels.
+``(w, w)`` of (depth, x) pixels, a pair is ``(depth, x)`` pixels.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import xarray as xr
 
 from .._validate import check_int, check_real
 from .._wrap import check_same_grid
-from ..conventions import attrs, spacing
+from ..conventions import attrs, canonical_dims, spacing
 
 __all__ = [
     "DEPTH",
@@ -24,13 +24,14 @@ __all__ = [
     "label_looks",
     "matched",
     "parse_window",
+    "pixel_field",
     "same_grid",
 ]
 
 
-#: The image dims of the analysis modules (one place to rename them: the lateral dim is
-#: ``aline`` until the vocabulary step of issue 32 makes it ``x``).
-DEPTH, LATERAL = "depth", "aline"
+#: The image dims of the analysis modules (issue 32: the lateral dim of every image is ``x``;
+#: ``aline`` is accepted for one release through :func:`speckle.conventions.canonical_dims`).
+DEPTH, LATERAL = "depth", "x"
 
 
 def field_of(data: xr.Dataset | xr.DataArray) -> xr.DataArray:
@@ -41,14 +42,27 @@ def field_of(data: xr.Dataset | xr.DataArray) -> xr.DataArray:
                 "B-scan dataset must hold a complex 'field' (see speckle.imaging.bscan)"
             )
         field = data["field"]  # attrs merged on a copy: the caller's dataset is not modified
-        return field.assign_attrs({**data.attrs, **field.attrs})
+        return canonical_dims(field.assign_attrs({**data.attrs, **field.attrs}), "image")
     if not isinstance(data, xr.DataArray):
         raise TypeError(f"expected a B-scan Dataset or DataArray, got {type(data).__name__}")
-    return data
+    return canonical_dims(data, "image")
+
+
+def pixel_field(displacement: xr.Dataset) -> xr.Dataset:
+    """A displacement field at an image's pixels ``(depth, x)``.
+
+    The scene module's fields (:func:`speckle.scene.deformation.pixel_displacement`) are over
+    its lines ``(depth, aline)``: the same lateral positions (µm) as the image's ``x``, so the
+    dim is renamed without a warning (``aline`` is a scene dim, not a retired image dim).
+    """
+    if isinstance(displacement, xr.Dataset) and "aline" in displacement.dims:
+        stale = [LATERAL] if LATERAL in displacement.variables else []  # not a dim: dropped
+        return displacement.drop_vars(stale).rename({"aline": LATERAL})
+    return displacement
 
 
 def depth_major(image: object) -> np.ndarray:
-    """A (depth, aline) image as complex128 with depth the contiguous axis (the layout the
+    """A (depth, x) image as complex128 with depth the contiguous axis (the layout the
     kernels of :mod:`speckle.analysis._kernels` read fastest; no copy when it already is)."""
     a = np.asarray(image)
     if a.flags.f_contiguous and a.dtype == np.complex128:
@@ -65,7 +79,7 @@ def same_grid(x: xr.DataArray, y: xr.DataArray, names: tuple[str, str]) -> None:
 def matched(x: xr.DataArray, y: xr.DataArray) -> tuple[xr.DataArray, xr.DataArray]:
     """Broadcast two images after checking they cover the same pixels (else ``ValueError``).
 
-    Both must have ``depth`` and ``aline`` dims; every dim they share must have the same size
+    Both must have ``depth`` and ``x`` dims; every dim they share must have the same size
     and the same coordinate values. Nothing is aligned, padded or cut silently. A ``time`` dim
     (an image series, :mod:`speckle.imaging.timeseries`) in one input only is refused: it
     would broadcast one image against every frame.
@@ -77,9 +91,9 @@ def matched(x: xr.DataArray, y: xr.DataArray) -> tuple[xr.DataArray, xr.DataArra
             "select one frame of the series (.isel(time=i))"
         )
     for name, f in (("reference", x), ("deformed", y)):
-        missing = [d for d in ("depth", "aline") if d not in f.dims]
+        missing = [d for d in ("depth", "x") if d not in f.dims]
         if missing:
-            raise ValueError(f"{name} must have dims 'depth' and 'aline'; got dims {f.dims}")
+            raise ValueError(f"{name} must have dims 'depth' and 'x'; got dims {f.dims}")
     same_grid(x, y, ("reference", "deformed"))
     return xr.broadcast(x, y)
 
@@ -91,18 +105,18 @@ def parse_window(
     low: int = 2,
     shape: tuple[int, int] | None = None,
 ) -> tuple[int, int]:
-    """``(depth, aline)`` pixel counts from an int (square window) or a pair.
+    """``(depth, x)`` pixel counts from an int (square window) or a pair.
 
     Parameters
     ----------
     window : int or (int, int)
-        An int ``w`` means ``(w, w)``; a pair means ``(depth, aline)`` pixels.
+        An int ``w`` means ``(w, w)``; a pair means ``(depth, x)`` pixels.
     name : str
         Parameter name used in error messages.
     low : int
         Smallest depth size (aline: 1).
     shape : (int, int), optional
-        Image shape ``(depth, aline)``: a window larger than it is refused.
+        Image shape ``(depth, x)``: a window larger than it is refused.
 
     Raises
     ------
@@ -110,29 +124,29 @@ def parse_window(
         Not an int or a pair of ints, below ``low``, or larger than ``shape``.
     """
     if isinstance(window, (str, bytes)):
-        raise TypeError(f"{name} must be an int or (depth, aline) pixels, got {window!r}")
+        raise TypeError(f"{name} must be an int or (depth, x) pixels, got {window!r}")
     w = np.atleast_1d(np.asarray(window, dtype=object))
     if w.ndim != 1 or w.size not in (1, 2):
-        raise ValueError(f"{name} must be an int or (depth, aline) pixels, got {window!r}")
+        raise ValueError(f"{name} must be an int or (depth, x) pixels, got {window!r}")
     if w.size == 1:
         w = np.repeat(w, 2)
-    out = (check_int(w[0], f"{name}[depth]", low=low), check_int(w[1], f"{name}[aline]", low=1))
+    out = (check_int(w[0], f"{name}[depth]", low=low), check_int(w[1], f"{name}[x]", low=1))
     if shape is not None and (out[0] > shape[0] or out[1] > shape[1]):
         raise ValueError(
-            f"{name} {out} (depth, aline) is larger than the image {tuple(shape)}; {name} must "
+            f"{name} {out} (depth, x) is larger than the image {tuple(shape)}; {name} must "
             f"be at most {tuple(shape)} pixels"
         )
     return out
 
 
 def grid_spacing(field: xr.DataArray | xr.Dataset) -> tuple[float, float]:
-    """Pixel size and A-line pitch (µm) read from the ``depth`` and ``aline`` coordinates.
+    """Pixel size and A-line pitch (µm) read from the ``depth`` and ``x`` coordinates.
 
     Spacing comes only from coordinates (:func:`speckle.conventions.spacing`); with a single
     A-line the pitch defaults to the pixel size.
     """
     dz = spacing(field, "depth")
-    return dz, spacing(field, "aline", default=dz)
+    return dz, spacing(field, "x", default=dz)
 
 
 def delay_selection(t: np.ndarray, delays: object) -> np.ndarray:

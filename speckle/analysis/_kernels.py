@@ -2,10 +2,10 @@
 
 * :func:`vector_phase`: the vector method of :mod:`speckle.analysis.strain` in one pass per
   A-line: the interframe product ``d = A1 A2*``, the four-product ``C_L = d(z) d*(z+L)`` and
-  ``|C_L|`` summed over (depth, aline) windows (running sums in depth, the window's A-lines
+  ``|C_L|`` summed over (depth, x) windows (running sums in depth, the window's A-lines
   added in order), the phase of the sum, its quality and the multi-lag branch check. Nothing
   of image size is allocated but the two outputs.
-* :func:`box_sums`: the (depth, aline) window sums of
+* :func:`box_sums`: the (depth, x) window sums of
   :func:`speckle.analysis._strain_methods._box`,
   bit-identical to its numpy running sums (the same additions in the same order), in the
   input's memory layout.
@@ -108,7 +108,7 @@ MARGIN = 0.9
 def vector_phase(a1, a2, lag, wz, wx, denom, cfac, tan0, min_q, wrap, strain, quality):
     """Vector-method strain and quality of every window, written into ``strain``/``quality``.
 
-    ``a1``, ``a2``: complex (depth, aline) images (read depth-first: fastest when depth is the
+    ``a1``, ``a2``: complex (depth, x) images (read depth-first: fastest when depth is the
     contiguous axis). Output row ``r``, column ``c`` holds the window of ``C_L`` rows
     ``[r - wz//2 - lag//2, ... + wz)`` and A-lines ``[c - wx//2, ... + wx)``; the outputs
     (prefilled with NaN by the caller) are left untouched where the window leaves the image.
@@ -196,7 +196,7 @@ def vector_phase(a1, a2, lag, wz, wx, denom, cfac, tan0, min_q, wrap, strain, qu
 
 @numba.njit(cache=True)
 def box_sums(x, wz, wx, depth_major, target):
-    """Window sums of ``x`` (depth, aline) over ``wz`` rows and ``wx`` columns into ``target``.
+    """Window sums of ``x`` (depth, x) over ``wz`` rows and ``wx`` columns into ``target``.
 
     ``target[i, j] = sum x[i : i + wz, j : j + wx]`` for ``i < n - wz + 1``, ``j < m - wx + 1``,
     formed as numpy's running sums are: ``c = [0, cumsum(x, axis=0)]``, ``d = c[wz:] - c[:-wz]``,
@@ -262,7 +262,7 @@ def box_sums(x, wz, wx, depth_major, target):
 
 @numba.njit(cache=True)
 def lag_sums(a, lag_lo, lag_hi, power):
-    """``sum_z A(z) A*(z+L)`` over every A-line of the (depth, aline) image ``a`` for
+    """``sum_z A(z) A*(z+L)`` over every A-line of the (depth, x) image ``a`` for
     ``L = lag_lo ... lag_hi - 1``; with ``power`` (length depth, or empty), ``|A|^2`` summed
     per depth row is written into it on the way."""
     n, m = a.shape

@@ -26,7 +26,7 @@ from .tracking import interpolate_windows, track_array, track_axial
 STRAIN_METHODS = ("vector", "wls", "tracking", "correlation")
 DISPLACEMENT_METHODS = ("phase", "tracking")
 DEFAULT_METHOD = "vector"
-#: Default window (depth, aline) in pixels of each method.
+#: Default window (depth, x) in pixels of each method.
 #: Tracking quality ``1 - registration error`` below which a tracked window has no answer
 #: (tracking and correlation methods): ``1 - sqrt(1 - rho^2)`` = 0.1 is a normalised peak
 #: correlation ``rho`` = 0.44. Measured (issue 36; 256 x 32 pixels, Gaussian spectrum, R = 10):
@@ -77,8 +77,8 @@ OPTIONS = {
         "min_quality": CORRELATION_MIN_QUALITY,
     },
 }
-#: Tracking that aligns the pair for the phase methods (``align``): window (depth, aline)
-#: pixels, step (depth, aline) pixels; the displacement field is smooth, so coarse steps do.
+#: Tracking that aligns the pair for the phase methods (``align``): window (depth, x)
+#: pixels, step (depth, x) pixels; the displacement field is smooth, so coarse steps do.
 ALIGN_TRACKING = {"window": (64, 8), "step": (64, 8), "upsample": 20, "oversample": 2}
 
 
@@ -87,7 +87,7 @@ ALIGN_TRACKING = {"window": (64, 8), "step": (64, 8), "upsample": 20, "oversampl
 # --------------------------------------------------------------------------------------------
 
 
-#: A complex (depth, aline) image of the strain estimators: finite, at least 2 x 1 pixels.
+#: A complex (depth, x) image of the strain estimators: finite, at least 2 x 1 pixels.
 IMAGE = ArraySpec(kind="complex", dims=(DEPTH, LATERAL), min_shape=(2, 1))
 
 
@@ -98,7 +98,7 @@ def _image_pair(*, lazy: bool = False) -> dict[str, ArraySpec]:
 
 
 def _frames_spec() -> dict[str, ArraySpec]:
-    """The decorator's check of a compression sequence: complex (frame >= 2, depth, aline)."""
+    """The decorator's check of a compression sequence: complex (frame >= 2, depth, x)."""
     return {
         "frames": ArraySpec(
             kind="complex",
@@ -111,7 +111,7 @@ def _frames_spec() -> dict[str, ArraySpec]:
 
 
 def _check_window(window: object, default: tuple[int, int], shape: tuple[int, int]):
-    """(depth, aline) window in pixels (an int is square), checked against the image size."""
+    """(depth, x) window in pixels (an int is square), checked against the image size."""
     return parse_window(default if window is None else window, shape=shape)
 
 
@@ -373,7 +373,7 @@ def _wls(a1, a2, k0, p, wz, wx, opts):
 def _tracked(a1, a2, window, step, upsample, oversample, lateral=True, outside="nan"):
     """Tracked axial displacement (pixels) and 1 - registration error at every pixel.
 
-    :func:`speckle.analysis.tracking.track_array` on ``window`` (depth, aline) windows every
+    :func:`speckle.analysis.tracking.track_array` on ``window`` (depth, x) windows every
     ``step`` pixels, interpolated bilinearly to every pixel
     (:func:`speckle.analysis.tracking.interpolate_windows`); beyond the outer window centres
     NaN (``outside="nan"``) or the nearest centre's value (``"nearest"``).
@@ -392,7 +392,7 @@ def _tracked(a1, a2, window, step, upsample, oversample, lateral=True, outside="
     for values in (tr["uz"], 1.0 - tr["error"]):
         out.append(
             interpolate_windows.__wrapped__(  # the numpy body: the centres are the tracker's
-                values, tr["centre_depth"], tr["centre_aline"], qz, qx, outside=outside
+                values, tr["centre_depth"], tr["centre_x"], qz, qx, outside=outside
             )
         )
     return out[0], out[1], tr
@@ -556,7 +556,7 @@ def _alignment(a1, a2):
     tr = track_axial.__wrapped__(a1, a2, keep_samples=True, **_align_tracking(a1))
     qz, qx = np.arange(a1.shape[0], dtype=float), np.arange(a1.shape[1], dtype=float)
     uz = interpolate_windows(  # transposed: (aline, depth), each A-line contiguous
-        tr["uz"].T, tr["centre_aline"], tr["centre_depth"], qx, qz, outside="nearest"
+        tr["uz"].T, tr["centre_x"], tr["centre_depth"], qx, qz, outside="nearest"
     ).T
     uz, _ = _alignment_fill(uz)  # windows without texture: filled from their neighbours
     with warnings.catch_warnings():
@@ -607,7 +607,7 @@ def _correlation(a1, a2, k0, p, wz, wx, opts):
     # nearest-centre values beyond the outer windows compensate the image edges too; the
     # strain is given only between the outer centres (as the tracked displacement is)
     uz, _, tr = _tracked(a1, a2, outside="nearest", **_track_options(a1, wx, opts))
-    cz, cx = tr["centre_depth"], tr["centre_aline"]
+    cz, cx = tr["centre_depth"], tr["centre_x"]
     qz, qx = np.arange(a1.shape[0]), np.arange(a1.shape[1])
     inside = ((qz >= cz[0]) & (qz <= cz[-1]))[:, None] & ((qx >= cx[0]) & (qx <= cx[-1]))
     covered = inside & np.isfinite(uz)

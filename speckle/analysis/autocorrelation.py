@@ -53,7 +53,7 @@ def intensity_autocorrelation(
     Parameters
     ----------
     intensity : xarray.DataArray
-        Linear intensities with dims ``(depth, x)`` (``(depth, aline)`` warns).
+        Linear intensities with dims ``(depth, x)`` (``(depth, x)`` warns).
     max_lag : int
         Largest lag in pixels / A-lines (>= 1, less than either size).
     n_blocks : int
@@ -65,7 +65,7 @@ def intensity_autocorrelation(
         ``autocorrelation`` and ``autocorrelation_se`` with dims ``(axis, lag)``, ``axis`` =
         ``("depth", "lateral")``.
     """
-    x = intensity  # checked: a real, finite (depth, aline) DataArray's values
+    x = intensity  # checked: a real, finite (depth, x) DataArray's values
     nz, nl = x.shape
     ml = check_int(max_lag, "max_lag", low=1, high=min(nz, nl) - 2)
     nb = check_int(n_blocks, "n_blocks", low=2, high=max(2, nl // (ml + 2)))

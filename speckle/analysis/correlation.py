@@ -13,7 +13,7 @@ Correlation
 -----------
 Pearson correlation of intensity ``|A|^2``, amplitude ``|A|`` or the complex field (modulus of
 the complex Pearson coefficient), either over the whole area (:func:`pearson`) or in sliding
-windows of ``(depth, aline)`` pixels (:func:`correlation_map`).
+windows of ``(depth, x)`` pixels (:func:`correlation_map`).
 
 Theory (:func:`expected_correlation`)
 -------------------------------------
@@ -47,7 +47,7 @@ from .._validate import check_bool, check_choice, check_int, check_real
 from .._wrap import ArraySpec, preprocess_and_wrap
 from ..conventions import attrs, coord, grid
 from ..system.source import index_shift_phase, spectral_index
-from ._common import DEPTH, LATERAL, grid_spacing, matched, parse_window, same_grid
+from ._common import DEPTH, LATERAL, grid_spacing, matched, parse_window, pixel_field, same_grid
 from ._kernels import lagrange_resample
 
 __all__ = [
@@ -170,7 +170,7 @@ RESAMPLE_OVERSAMPLE = 4
     }
 )
 def resample_depth(field: object, positions: object) -> np.ndarray:
-    """Complex image ``(depth, aline)`` evaluated at real depth positions, every A-line at once.
+    """Complex image ``(depth, x)`` evaluated at real depth positions, every A-line at once.
 
     The band-limited interpolant of :func:`sample_field` (periodic in depth with period
     ``N``), computed fast: the A-lines are oversampled exactly ``RESAMPLE_OVERSAMPLE`` = 4 times
@@ -231,14 +231,14 @@ def compensate(
     Parameters
     ----------
     deformed : xarray.Dataset or xarray.DataArray
-        Deformed B-scan (from :func:`speckle.bscan`) with dims ``(..., depth, aline)``: the
-        pixel size and A-line pitch are read from its ``depth`` and ``aline`` coordinates
+        Deformed B-scan (from :func:`speckle.bscan`) with dims ``(..., depth, x)``: the
+        pixel size and A-line pitch are read from its ``depth`` and ``x`` coordinates
         (uniform, µm; never from attributes), the carrier from attribute ``k0`` (rad/µm).
     displacement : xarray.Dataset
         ``uz`` (and optionally ``ux``) in µm at the reference pixel centres, dims among
-        ``depth``, ``aline`` and any extra dims of ``deformed`` (e.g. ``strain``), e.g. from
+        ``depth``, ``x`` and any extra dims of ``deformed`` (e.g. ``strain``), e.g. from
         :func:`speckle.scene.deformation.pixel_displacement` or :func:`speckle.track`, on
-        the pixel grid of ``deformed`` (same ``depth``/``aline`` coordinates, else
+        the pixel grid of ``deformed`` (same ``depth``/``x`` coordinates, else
         ``ValueError``).
     carrier : bool
         Remove the carrier phase ``exp(2i k0 u_z)`` of moved scatterers (default). Needed for
@@ -253,7 +253,7 @@ def compensate(
     Raises
     ------
     ValueError
-        On a missing or non-uniform ``depth``/``aline`` coordinate (named), a missing ``k0``
+        On a missing or non-uniform ``depth``/``x`` coordinate (named), a missing ``k0``
         attribute with ``carrier=True``, or a displacement on another grid.
     """
     field = deformed  # the B-scan's field, labelled (the decorator)
@@ -267,7 +267,8 @@ def compensate(
             "displacement must be an xarray.Dataset with 'uz' (µm), got "
             f"{type(displacement).__name__}"
         )
-    check_field(displacement, extra_dims=[d for d in field.dims if d not in ("depth", "aline")])
+    check_field(displacement, extra_dims=[d for d in field.dims if d != "depth"])
+    displacement = pixel_field(displacement)  # (depth, aline) of the scene module: x
     pixel, pitch = grid_spacing(field)  # from the coordinates, refused if missing/non-uniform
     k0 = grid(field).k0  # the central wavenumber in the medium (attribute k0), or None
     if carrier and k0 is None:
@@ -298,14 +299,14 @@ def compensate(
 def _lateral(field: xr.DataArray, ux: xr.DataArray, pitch: float) -> xr.DataArray:
     """Take each pixel from the A-line nearest to its laterally displaced material point
     (``pitch``: the A-line pitch in µm)."""
-    aline = field.aline.values
-    f = field.transpose(..., "aline").values
-    u = ux.transpose(*field.transpose(..., "aline").dims).values
+    aline = field.x.values
+    f = field.transpose(..., "x").values
+    u = ux.transpose(*field.transpose(..., "x").dims).values
     src = np.arange(len(aline)) + np.rint(u / pitch).astype(int)
     ok = (src >= 0) & (src < len(aline))
     taken = np.take_along_axis(f, np.clip(src, 0, len(aline) - 1), axis=-1)
     taken = np.where(ok, taken, np.nan + 0j)
-    dims = field.transpose(..., "aline").dims
+    dims = field.transpose(..., "x").dims
     return xr.DataArray(taken, dims=dims, coords=field.coords).transpose(*field.dims)
 
 
@@ -323,7 +324,7 @@ def pearson(
     deformed: xr.Dataset | xr.DataArray,
     *,
     kind: str = "intensity",
-    dims: tuple[str, ...] = ("depth", "aline"),
+    dims: tuple[str, ...] = ("depth", "x"),
 ) -> xr.DataArray:
     """Pearson correlation over ``dims`` (the whole scan area by default).
 
@@ -384,7 +385,7 @@ def correlation_array(
     x, y : numpy.ndarray
         Real or complex arrays of the same shape (NaN pixels allowed).
     window : (int, int)
-        Window (pixels) along ``axes`` (depth, aline).
+        Window (pixels) along ``axes`` (depth, x).
     axes : (int, int)
         Axes of depth and aline.
     modulus : bool
@@ -400,7 +401,7 @@ def correlation_array(
     if x.shape != y.shape:
         raise ValueError(f"x and y must have the same shape, got {x.shape} and {y.shape}")
     if isinstance(window, str | bytes) or np.ndim(window) != 1 or len(window) != 2:
-        raise TypeError(f"window must be a pair (depth, aline) of pixel counts, got {window!r}")
+        raise TypeError(f"window must be a pair (depth, x) of pixel counts, got {window!r}")
     wz, wx = (check_int(w, f"window[{i}]", low=1) for i, w in enumerate(window))
     modulus = check_bool(modulus, "modulus")
     if x.ndim < 2 or min(x.shape[axes[0]], x.shape[axes[1]]) < 1:
@@ -443,15 +444,15 @@ def correlation_map(
     window: int | tuple[int, int] = 16,
     kind: str = "intensity",
 ) -> xr.DataArray:
-    """Pearson correlation in a window sliding pixel by pixel over ``(depth, aline)``.
+    """Pearson correlation in a window sliding pixel by pixel over ``(depth, x)``.
 
     Parameters
     ----------
     reference, deformed : xarray.Dataset or xarray.DataArray
-        Complex fields with dims ``(..., depth, aline)`` on the same pixel grid (shared dims of
+        Complex fields with dims ``(..., depth, x)`` on the same pixel grid (shared dims of
         equal size and coordinates, else ``ValueError``).
     window : int or (int, int)
-        Window size in pixels (depth, aline); an int means square.
+        Window size in pixels (depth, x); an int means square.
     kind : {"intensity", "amplitude", "complex"}
         Correlated quantity (``"complex"``: modulus of the complex coefficient).
 
@@ -468,11 +469,11 @@ def correlation_map(
     y = _quantity(deformed, kind)
     x, y = matched(x, y)
     y = y.transpose(*x.dims)
-    if x.sizes["depth"] < wz or x.sizes["aline"] < wx:
+    if x.sizes["depth"] < wz or x.sizes["x"] < wx:
         raise ValueError(
-            f"window {(wz, wx)} is larger than the image {(x.sizes['depth'], x.sizes['aline'])}"
+            f"window {(wz, wx)} is larger than the image {(x.sizes['depth'], x.sizes['x'])}"
         )
-    axes = (x.dims.index("depth"), x.dims.index("aline"))
+    axes = (x.dims.index("depth"), x.dims.index("x"))
     r = correlation_array.__wrapped__(  # the numpy body: the images are checked
         x.values, y.values, (wz, wx), axes=axes, modulus=kind == "complex"
     )
@@ -484,7 +485,7 @@ def correlation_map(
             **attrs("correlation", f"{kind} correlation in a sliding window"),
             "kind": kind,
             "window_depth_pixels": wz,
-            "window_aline_pixels": wx,
+            "window_x_pixels": wx,
         },
     )
 

@@ -102,7 +102,7 @@ def roi_slices(roi: Mapping | None, shape: tuple[int, int]) -> dict[str, slice]:
     ----------
     roi : mapping, optional
         ``{"depth": [start, stop], "x": [start, stop]}`` in pixel indices (half-open, either
-        key optional, ``None`` bounds allowed; the retired key ``aline`` is read as ``x``,
+        key optional, ``None`` bounds allowed; the retired key ``x`` is read as ``x``,
         warning).
     shape : (int, int)
         Image shape ``(depth, x)``.
@@ -256,7 +256,7 @@ def log_intensity(image: xr.DataArray) -> xr.DataArray:
     Log-compressed data are returned as they are; linear data ``v`` (amplitude or intensity)
     give ``ln v`` (zeros are refused: the log of an exact zero is undefined; crop them out with
     the ROI). Images from :func:`speckle.io.load_image` (``kind``) and the retired
-    :func:`load_measured` (``scale``) are accepted, ``(depth, x)`` (``aline`` warns).
+    :func:`load_measured` (``scale``) are accepted, ``(depth, x)`` (``x`` warns).
     """
     scale = _scale_of(image)
     image = canonical_dims(image).assign_attrs(scale=scale)

@@ -45,7 +45,7 @@ __all__ = ["DEFAULT_MAX_BIAS", "choose_lag", "depth_autocorrelation", "lag_and_r
 
 #: Largest relative low bias ``rho(L)^2`` accepted by :func:`choose_lag` (0.5 %).
 DEFAULT_MAX_BIAS = 0.005
-#: A complex (depth, aline) image, finite, at least two depth pixels.
+#: A complex (depth, x) image, finite, at least two depth pixels.
 _IMAGE = ArraySpec(kind="complex", ndim=2, min_shape=(2, 1))
 
 
@@ -117,7 +117,7 @@ def choose_lag(image: np.ndarray, *, max_bias: float = DEFAULT_MAX_BIAS, max_lag
 
     Parameters
     ----------
-    image : numpy.ndarray, shape (depth, aline)
+    image : numpy.ndarray, shape (depth, x)
         Complex reference image.
     max_bias : float
         Largest accepted relative low bias of the vector estimator, in (0, 1).

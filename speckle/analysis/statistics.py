@@ -364,9 +364,7 @@ def _warn_zero_mean(count: int) -> None:
 
 
 @preprocess_and_wrap(checks={"intensity": ArraySpec(kind="real", labelled=True, keep_labels=True)})
-def contrast_standard_error(
-    intensity: xr.DataArray, sample_dim: str = "aline"
-) -> tuple[float, float]:
+def contrast_standard_error(intensity: xr.DataArray, sample_dim: str = "x") -> tuple[float, float]:
     """Contrast over all pixels and its standard error from independent samples along a dim.
 
     Pixels inside an A-line are correlated (shared scatterers, fixed count) but A-lines are

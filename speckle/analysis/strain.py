@@ -2,7 +2,7 @@
 
 Conventions
 -----------
-Images are complex fields over ``(depth, aline)`` (axis 0 = depth). A scatterer at depth ``z``
+Images are complex fields over ``(depth, x)`` (axis 0 = depth). A scatterer at depth ``z``
 contributes ``exp(2i k0 z)`` (``k0`` = central wavenumber in the medium, rad/µm), so a
 displacement ``u`` (µm, positive = deeper, as in :mod:`speckle.scene.deformation`) turns the
 phase of the interframe product ``A2 A1*`` by ``dphi = 2 k0 u``. Under compression ``s`` by a
@@ -162,12 +162,12 @@ def _strain_attrs(method: str, wz: int, wx: int) -> dict:
         **attrs("strain", long_name),
         "method": method,
         "window_depth_pixels": wz,
-        "window_aline_pixels": wx,
+        "window_x_pixels": wx,
     }
 
 
 def _strain_pair(a1, a2, k, p, method, wz, wx, opts):
-    """Strain, quality and attrs of one pair of (depth, aline) numpy images (checked)."""
+    """Strain, quality and attrs of one pair of (depth, x) numpy images (checked)."""
     a1, a2 = a1.astype(np.complex128, copy=False), a2.astype(np.complex128, copy=False)
     if opts.get("align") == "auto":
         strain, quality, info = _auto_aligned(method, a1, a2, k, p, wz, wx, opts)
@@ -201,8 +201,8 @@ def estimate_strain(
     Parameters
     ----------
     reference, deformed : numpy.ndarray or xarray.DataArray
-        Complex images ``(depth, aline)`` of the same shape (DataArrays: dims ``depth`` and
-        ``aline``, identical coordinates; refused, never aligned, when they differ), all
+        Complex images ``(depth, x)`` of the same shape (DataArrays: dims ``depth`` and
+        ``x``, identical coordinates; refused, never aligned, when they differ), all
         finite. Axis 0 is depth with pixel size ``pixel_size``. DataArrays with a leading
         ``frame`` dim on both are pairs ``reference[i]``, ``deformed[i]``, checked once and
         estimated frame by frame (Dask-backed: lazily, one task per frame).
@@ -215,7 +215,7 @@ def estimate_strain(
     method : {"vector", "wls", "tracking", "correlation"}
         Estimator (see the module docstring); default ``"vector"``.
     window : int or (int, int), optional
-        Window (depth, aline) in pixels over which each estimate is taken; default
+        Window (depth, x) in pixels over which each estimate is taken; default
         :data:`DEFAULT_WINDOWS` of the method. An int ``w`` means the square window
         ``(w, w)``.
     return_quality : bool
@@ -292,7 +292,7 @@ def estimate_displacement(
     reference, deformed, k0, pixel_size
         As in :func:`estimate_strain`.
     method : {"tracking", "phase"}
-        ``"tracking"``: :func:`speckle.track` in ``(track_window, window[aline])`` windows
+        ``"tracking"``: :func:`speckle.track` in ``(track_window, window[x])`` windows
         stepped by ``step`` pixels, interpolated linearly (NaN beyond the outer window
         centres). ``"phase"``: the interframe phase ``A2 A1*`` summed over ``lag`` pixels,
         unwrapped along depth from the top pixel and divided by ``2 k0``; exact up to a
@@ -446,10 +446,10 @@ def accumulate_strain(
     Parameters
     ----------
     frames : numpy.ndarray or xarray.DataArray
-        Complex images ``(frame, depth, aline)``, at least two frames, all finite. A Dask-backed
+        Complex images ``(frame, depth, x)``, at least two frames, all finite. A Dask-backed
         DataArray (e.g. ``speckle.io.open_dataset(path, load=False)["field"]`` or
         ``xarray.open_zarr(...)``) is processed lazily, one pair per task; its chunks must hold
-        whole images (``frames.chunk({"frame": 1, "depth": -1, "aline": -1})``).
+        whole images (``frames.chunk({"frame": 1, "depth": -1, "x": -1})``).
     k0, pixel_size, method, window, **options
         As in :func:`estimate_strain` (``options`` go to the strain estimator).
     path : str, optional
@@ -464,7 +464,7 @@ def accumulate_strain(
     Returns
     -------
     xarray.Dataset
-        ``interframe`` (``frame`` = pair index, depth, aline; on each earlier frame's grid),
+        ``interframe`` (``frame`` = pair index, depth, x; on each earlier frame's grid),
         ``quality`` (of each interframe estimate), ``accumulated`` (strain of frame ``i+1``
         relative to frame 0 on frame 0's pixels) and ``position`` (pixel ``y_{i+1}`` of each
         frame-0 pixel in frame ``i+1``). The input's depth and aline coordinates are kept
@@ -488,7 +488,7 @@ def accumulate_strain(
         raise ValueError(
             f"frames' Dask chunks split depth or aline (chunks {chunks[1]} x {chunks[2]}): a "
             "pair needs whole images; rechunk with frames.chunk({'frame': 1, 'depth': -1, "
-            "'aline': -1})"
+            "'x': -1})"
         )
     p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
     k = check_real(k0, "k0", low=0, low_inclusive=False)
@@ -518,7 +518,7 @@ def accumulate_strain(
         "k0": k,
         "pixel_size": p,
         "window_depth_pixels": wz,
-        "window_aline_pixels": wx,
+        "window_x_pixels": wx,
     }
     frames_out = _scan(data, args, p, batch=_batch_size())
     if path is None:

@@ -31,6 +31,7 @@ import scipy.fft as sfft
 import xarray as xr
 from skimage.registration import phase_cross_correlation
 
+from .._deprecate import renamed_parameters
 from .._validate import (
     check_bool,
     check_choice,
@@ -40,7 +41,7 @@ from .._validate import (
 )
 from .._wrap import ArraySpec, preprocess_and_wrap
 from ..conventions import attrs, coord
-from ._common import DEPTH, LATERAL, grid_spacing, parse_window
+from ._common import DEPTH, LATERAL, grid_spacing, parse_window, pixel_field
 from ._kernels import refine_shifts, window_moments
 from .correlation import oversample_depth, sample_field
 
@@ -53,7 +54,7 @@ __all__ = [
     "track_axial",
 ]
 
-#: The images of :func:`track_array` and :func:`track_axial`: complex (depth, aline), NaN
+#: The images of :func:`track_array` and :func:`track_axial`: complex (depth, x), NaN
 #: allowed (their windows get NaN).
 _IMAGES = {
     "reference": ArraySpec(kind="complex", dims=(DEPTH, LATERAL), finite=False),
@@ -131,7 +132,7 @@ def _fft_shifts(ha, hb, count, size, step, up: int, lateral: bool, want_error: b
     """Displacement (samples, depth and aline) of ``hb`` relative to ``ha`` for every window,
     and the normalised RMS error ``sqrt(1 - CC^2/(|a|^2 |b|^2))`` (windows' means removed);
     ha, hb: real (aline, depth samples) images, windows ``count`` x ``size`` every ``step``
-    (aline, depth). Outputs are flat over windows ordered (depth, aline)."""
+    (aline, depth). Outputs are flat over windows ordered (depth, x)."""
     (nx, nz), (mx, mz) = count, size
     w = nx * nz
     p = np.conj(_column_spectra(ha, count, size, step))
@@ -170,7 +171,7 @@ def _fft_shifts(ha, hb, count, size, step, up: int, lateral: bool, want_error: b
             value,
         )
 
-    def order(v):  # (aline, depth) windows -> flat over (depth, aline)
+    def order(v):  # (aline, depth) windows -> flat over (depth, x)
         return v.reshape(nx, nz).T.ravel()
 
     if not want_error:
@@ -234,11 +235,11 @@ def track_array(
     Parameters
     ----------
     reference, deformed : numpy.ndarray
-        Complex images ``(depth, aline)`` of the same shape (axis 0 = depth). NaN pixels are
+        Complex images ``(depth, x)`` of the same shape (axis 0 = depth). NaN pixels are
         allowed: they are zeroed before the registration and every window holding one gets a
         NaN estimate.
     window : int or (int, int)
-        Window size in pixels (depth, aline); an int means a square window.
+        Window size in pixels (depth, x); an int means a square window.
     step : int or (int, int)
         Distance between window starts in pixels.
     upsample : int
@@ -263,7 +264,7 @@ def track_array(
     dict
         ``uz``, ``ux`` (displacement of the deformed image's content, pixels, positive deeper /
         towards higher aline index) and ``error`` (normalised RMS error, 0-1), each of shape
-        (windows in depth, windows in aline); ``centre_depth``, ``centre_aline`` (window
+        (windows in depth, windows in aline); ``centre_depth``, ``centre_x`` (window
         centres in pixels). NaN where a window holds a NaN pixel or has no texture (amplitude
         variance below :data:`LOW_SIGNAL` of the image's mean).
 
@@ -312,7 +313,7 @@ def track_array(
         "ux": np.where(textured, ux, np.nan).reshape(shape),
         "error": np.where(textured, err, np.nan).reshape(shape),
         "centre_depth": z0 + (wz - 1) / 2,
-        "centre_aline": x0 + (wx - 1) / 2,
+        "centre_x": x0 + (wx - 1) / 2,
     }
 
 
@@ -338,7 +339,7 @@ def track_axial(
     Parameters
     ----------
     reference, deformed : numpy.ndarray
-        Complex images ``(depth, aline)`` of the same shape; NaN pixels as in
+        Complex images ``(depth, x)`` of the same shape; NaN pixels as in
         :func:`track_array`.
     window, step, upsample, oversample
         As in :func:`track_array` (window default (32, 8)).
@@ -353,7 +354,7 @@ def track_axial(
     -------
     dict
         ``uz`` (pixels, windows in depth x windows in aline; NaN without texture or with a NaN
-        pixel), ``centre_depth``, ``centre_aline`` (pixels), and with ``keep_samples``
+        pixel), ``centre_depth``, ``centre_x`` (pixels), and with ``keep_samples``
         ``deformed_samples``.
 
     Raises
@@ -415,7 +416,7 @@ def track_axial(
     out = {
         "uz": np.where(textured, uz / ov, np.nan).reshape(shape),
         "centre_depth": z0 + (wz - 1) / 2,
-        "centre_aline": x0 + (wx - 1) / 2,
+        "centre_x": x0 + (wx - 1) / 2,
     }
     if keep_samples:
         out["deformed_samples"] = samples
@@ -475,7 +476,7 @@ def _half_pixel_ramp(n: int) -> np.ndarray:
 
 
 def _textured(ha, hb, ov, bad, shape, window, step) -> np.ndarray:
-    """Windows with texture in both images and no bad pixel, flat over (depth, aline).
+    """Windows with texture in both images and no bad pixel, flat over (depth, x).
 
     Texture from the whole-pixel samples (there the interpolant is the data, exactly: a region
     without signal is zero there, whatever the band-limited ringing between pixels): the
@@ -510,9 +511,9 @@ def track(
     Parameters
     ----------
     reference, deformed : xarray.Dataset or xarray.DataArray
-        Complex fields with dims exactly ``(depth, aline)`` on the same pixel grid, finite
+        Complex fields with dims exactly ``(depth, x)`` on the same pixel grid, finite
         (``ValueError`` otherwise, with the count of bad pixels). The pixel size and A-line
-        pitch are read from the ``depth`` and ``aline`` coordinates (µm).
+        pitch are read from the ``depth`` and ``x`` coordinates (µm).
     window, step, upsample, oversample, quantity, method
         As in :func:`track_array` (an int window or step means a square one).
     max_error : float
@@ -524,7 +525,7 @@ def track(
     Returns
     -------
     xarray.Dataset
-        On window centres (dims ``depth``, ``aline`` with µm coordinates): ``uz`` and ``ux``
+        On window centres (dims ``depth``, ``x`` with µm coordinates): ``uz`` and ``ux``
         (µm), ``uz_pixels``, ``registration_error`` (normalised RMS error) and, with ``truth``,
         ``uz_residual`` (pixels) and ``failed`` (bool).
     """
@@ -534,7 +535,7 @@ def track(
             f"truth must be an xarray.Dataset with 'uz' (µm) on the pixel grid, got "
             f"{type(truth).__name__}"
         )
-    ref, dfm = reference, deformed  # fields (depth, aline), finite, same grid: the decorator
+    ref, dfm = reference, deformed  # fields (depth, x), finite, same grid: the decorator
     pixel, pitch = grid_spacing(ref)
     res = track_array.__wrapped__(  # the numpy body: checked by track's decorator
         ref.values,
@@ -549,12 +550,12 @@ def track(
     wz, wx = parse_window(window)
     sz, sx = parse_window(step, "step", low=1)
     cz = ref[DEPTH].values[0] + res["centre_depth"] * pixel
-    cx = ref[LATERAL].values[0] + res["centre_aline"] * pitch
+    cx = ref[LATERAL].values[0] + res["centre_x"] * pitch
     dims = (DEPTH, LATERAL)
     out = xr.Dataset(
         {
             "uz": (dims, res["uz"] * pixel, attrs("depth", "tracked axial displacement")),
-            "ux": (dims, res["ux"] * pitch, attrs("aline", "tracked lateral displacement")),
+            "ux": (dims, res["ux"] * pitch, attrs("x", "tracked lateral displacement")),
             "uz_pixels": (dims, res["uz"], attrs("pixels", "tracked axial displacement")),
             "registration_error": (
                 dims,
@@ -564,13 +565,13 @@ def track(
         },
         coords={
             "depth": coord("depth", cz, "window centre depth"),
-            "aline": coord("aline", cx, "window centre"),
+            "x": coord("x", cx, "window centre"),
         },
         attrs={
             "window_depth_pixels": wz,
-            "window_aline_pixels": wx,
+            "window_x_pixels": wx,
             "step_depth_pixels": sz,
-            "step_aline_pixels": sx,
+            "step_x_pixels": sx,
             "upsample": int(upsample),
             "oversample": int(oversample),
             "quantity": quantity,
@@ -579,7 +580,7 @@ def track(
     )
     if truth is not None:
         exact = (
-            truth["uz"].interp(depth=out.depth, aline=out.aline, kwargs={"fill_value": None})
+            pixel_field(truth)["uz"].interp(depth=out.depth, x=out.x, kwargs={"fill_value": None})
             / pixel
         )
         resid = out["uz_pixels"] - exact
@@ -595,56 +596,54 @@ def track(
 _GRID = ArraySpec(kind="real", ndim=1, nonempty=False)
 
 
+@renamed_parameters({"centre_aline": "centre_x", "aline": "x"})
 @preprocess_and_wrap(
     checks={
         "values": ArraySpec(kind="real", ndim=2, finite=False, nonempty=False),
         "centre_depth": ArraySpec(kind="real", ndim=1),
-        "centre_aline": ArraySpec(kind="real", ndim=1),
+        "centre_x": ArraySpec(kind="real", ndim=1),
         "depth": _GRID,
-        "aline": _GRID,
+        "x": _GRID,
     }
 )
 def interpolate_windows(
     values: np.ndarray,
     centre_depth: np.ndarray,
-    centre_aline: np.ndarray,
+    centre_x: np.ndarray,
     depth: np.ndarray,
-    aline: np.ndarray,
+    x: np.ndarray,
     *,
     outside: str = "linear",
 ) -> np.ndarray:
-    """Window values interpolated bilinearly to the pixel grid ``depth x aline``.
+    """Window values interpolated bilinearly to the pixel grid ``depth`` x ``x``.
 
-    Separable linear interpolation along depth then aline, in the units of the centres (one
+    Separable linear interpolation along depth then x, in the units of the centres (one
     window column: depth only, the same for every A-line). Beyond the outer window centres
     (``outside``): ``"linear"`` extrapolation, the ``"nearest"`` centre's value, or ``"nan"``.
     A NaN window spreads only to the pixels whose interpolation uses it.
 
     Parameters
     ----------
-    values : array_like, shape (n_depth_windows, n_aline_windows)
+    values : array_like, shape (n_depth_windows, n_x_windows)
         One value per window.
-    centre_depth, centre_aline : array_like
+    centre_depth, centre_x : array_like
         Window centres (increasing), in the units of the pixel coordinates.
-    depth, aline : array_like
-        The pixel grid: values of the ``depth`` and ``aline`` coordinates (µm).
+    depth, x : array_like
+        The pixel grid: values of the ``depth`` and ``x`` coordinates (µm).
     outside : {"linear", "nearest", "nan"}
         Beyond the outer centres.
 
     Returns
     -------
     numpy.ndarray
-        Shape ``(len(depth), len(aline))``.
+        Shape ``(len(depth), len(x))``.
     """
     check_choice(outside, "outside", ("linear", "nearest", "nan"))
-    v, z, x = values, depth, aline  # checked: real, finite grids (values: NaN allowed)
-    cz, cx = (
-        _axis(c, n) for c, n in ((centre_depth, "centre_depth"), (centre_aline, "centre_aline"))
-    )
+    v, z = values, depth  # checked: real, finite grids (values: NaN allowed)
+    cz, cx = (_axis(c, n) for c, n in ((centre_depth, "centre_depth"), (centre_x, "centre_x")))
     if v.shape != (cz.size, cx.size):
         raise ValueError(
-            f"values must have shape (centre_depth, centre_aline) = {(cz.size, cx.size)}, got "
-            f"{v.shape}"
+            f"values must have shape (centre_depth, centre_x) = {(cz.size, cx.size)}, got {v.shape}"
         )
     out = _interp_axis(v.astype(float), cz, z, 0, outside)
     if v.shape[1] == 1:
@@ -677,18 +676,19 @@ def _interp_axis(v: np.ndarray, xp: np.ndarray, x: np.ndarray, axis: int, outsid
     return out
 
 
-@preprocess_and_wrap(checks={"depth": _GRID, "aline": _GRID})
+@renamed_parameters({"aline": "x"})
+@preprocess_and_wrap(checks={"depth": _GRID, "x": _GRID})
 def interpolate_displacement(
-    tracked: xr.Dataset, depth: np.ndarray, aline: np.ndarray, *, axial_only: bool = True
+    tracked: xr.Dataset, depth: np.ndarray, x: np.ndarray, *, axial_only: bool = True
 ) -> xr.Dataset:
     """Tracked window displacements interpolated (and extrapolated) linearly to every pixel.
 
     Parameters
     ----------
     tracked : xarray.Dataset
-        Window displacements ``uz`` (and ``ux``) over the window centres ``depth``/``aline``.
-    depth, aline : array_like
-        The pixel grid: values of the ``depth`` and ``aline`` coordinates (µm).
+        Window displacements ``uz`` (and ``ux``) over the window centres ``depth``/``x``.
+    depth, x : array_like
+        The pixel grid: values of the ``depth`` and ``x`` coordinates (µm).
     axial_only : bool
         Drop the lateral estimate (A-lines are independent in the model, so the lateral
         registration carries no sub-line information).
@@ -696,7 +696,7 @@ def interpolate_displacement(
     Returns
     -------
     xarray.Dataset
-        ``uz`` (and ``ux``) over ``(depth, aline)``.
+        ``uz`` (and ``ux``) over ``(depth, x)``.
     """
     out = {}
     if not isinstance(tracked, xr.Dataset) or "uz" not in tracked:
@@ -710,8 +710,6 @@ def interpolate_displacement(
     names = ("uz",) if axial_only else ("uz", "ux")
     for name in names:
         vals = tracked[name].transpose(DEPTH, LATERAL).values
-        grid = interpolate_windows(
-            vals, tracked[DEPTH].values, tracked[LATERAL].values, depth, aline
-        )
+        grid = interpolate_windows(vals, tracked[DEPTH].values, tracked[LATERAL].values, depth, x)
         out[name] = ((DEPTH, LATERAL), grid, dict(tracked[name].attrs))
-    return xr.Dataset(out, coords={DEPTH: coord(DEPTH, depth), LATERAL: coord(LATERAL, aline)})
+    return xr.Dataset(out, coords={DEPTH: coord(DEPTH, depth), LATERAL: coord(LATERAL, x)})

@@ -60,7 +60,7 @@ def _images(
     n_alines: int | None = None,
     max_strain: float = 0.05,
 ) -> tuple[list[np.ndarray], float]:
-    """Complex images (depth, aline) of one seeded scene under each displacement field."""
+    """Complex images (depth, x) of one seeded scene under each displacement field."""
     src = _source(cfg, k0_dk, fwhm)
     scene = _scene(
         cfg,
@@ -72,7 +72,7 @@ def _images(
     out = []
     for f in fields:
         img = bscan(displace(scene, f), src, method=cfg["method"], tol=cfg["tol"])
-        out.append(img.field.transpose("depth", "aline").values)
+        out.append(img.field.transpose("depth", "x").values)
     return out, float(src.attrs["k0"])
 
 

@@ -128,7 +128,7 @@ def bscans_data(source: Mapping, beam: Mapping, seed: int) -> xr.Dataset:
         xs.size, float(beam["density"]), **_line_scene(src, seed), aline_pitch=pitch
     )
     indep = speckle.bscan(lines, src, method=_line_method(beam), tol=beam["tol"]).field
-    indep = indep.rename(aline="x").assign_coords(x=field.x)
+    indep = indep.assign_coords(x=field.x)
     lat = np.arange(int(beam["lags"]) + 1)
     ax = np.arange(int(beam["lags"]) + 1)
     rho = reg.cell_density(float(beam["density"]), pixel, pitch, 2)
@@ -194,10 +194,10 @@ def _strain_images(scene, src, strains, nu, xs, w0, opts) -> xr.DataArray:
 
 
 def _compensated_correlations(ref: xr.DataArray, dfm: xr.DataArray) -> dict[str, np.ndarray]:
-    """Area correlation after exact axial compensation, per strain (x renamed to aline)."""
-    r = ref.rename(x="aline")
-    d = dfm.rename(x="aline")
-    disp = uniaxial_pixel_displacement(d.strain.values, d.depth.values, d.aline.values)
+    """Area correlation after exact axial compensation, per strain."""
+    r = ref
+    d = dfm
+    disp = uniaxial_pixel_displacement(d.strain.values, d.depth.values, d.x.values)
     comp = corr.compensate(d, disp[["uz"]])
     return {kind: corr.pearson(r, comp, kind=kind).values for kind in ("complex", "intensity")}
 
@@ -243,7 +243,7 @@ def strain_data(source: Mapping, beam: Mapping, seed: int) -> xr.Dataset:
     method = _line_method(beam)
     ref_l = speckle.bscan(speckle.uniaxial_strain(lines, 0.0).isel(strain=0), src, method=method)
     dfm_l = speckle.bscan(speckle.uniaxial_strain(lines, strains), src, method=method)
-    disp = uniaxial_pixel_displacement(strains, dfm_l.depth.values, dfm_l.aline.values)
+    disp = uniaxial_pixel_displacement(strains, dfm_l.depth.values, dfm_l.x.values)
     comp = corr.compensate(dfm_l, disp[["uz"]])
     for kind in ("complex", "intensity"):
         data[f"{kind}_lines"] = (("strain",), corr.pearson(ref_l, comp, kind=kind).values)

@@ -151,14 +151,15 @@ def strain_point(
     disp = uniaxial_pixel_displacement(
         [float(strain)],
         dfm.depth.values,
-        dfm.aline.values,
+        dfm.x.values,
         poisson_ratio=float(fig6["poisson_ratio"]),
     )
     dfm = dfm.isel(strain=0)
     disp = disp.isel(strain=0)
     exact = corr.compensate(dfm, disp)
     # the same positions with the carrier exp(2i k0 u_z) put back
-    no_carrier = exact * np.exp(2j * float(dfm.attrs["k0"]) * disp["uz"])
+    uz = disp["uz"].rename(aline="x")  # the scene's lines are the image's x
+    no_carrier = exact * np.exp(2j * float(dfm.attrs["k0"]) * uz)
     window = tuple(fig6["window"])
     out = {}
     for kind in corr.KINDS:
@@ -168,7 +169,7 @@ def strain_point(
             ref, exact, window=window, kind=kind
         ).mean()
     out["complex_correlation_windowed_no_carrier"] = corr.correlation_map(
-        ref, no_carrier, window=(carrier_window, dfm.sizes["aline"]), kind="complex"
+        ref, no_carrier, window=(carrier_window, dfm.sizes["x"]), kind="complex"
     ).mean()
     return xr.Dataset({k: xr.DataArray(float(v)) for k, v in out.items()})
 
@@ -374,7 +375,7 @@ def fig6a_data(source: Mapping, fig6: Mapping, seed: int) -> xr.Dataset:
     images = _images(source, fig6, seed, n_alines, strain, [0.0, strain], src)
     ref, dfm = images.isel(strain=0), images.isel(strain=1)
     disp = uniaxial_pixel_displacement(
-        [strain], ref.depth.values, ref.aline.values, poisson_ratio=float(fig6["poisson_ratio"])
+        [strain], ref.depth.values, ref.x.values, poisson_ratio=float(fig6["poisson_ratio"])
     ).isel(strain=0)
     tp = panel["tracking"]
     tracked = track(
@@ -387,7 +388,7 @@ def fig6a_data(source: Mapping, fig6: Mapping, seed: int) -> xr.Dataset:
         max_error=float(tp["max_error"]),
         truth=disp,
     )
-    est = interpolate_displacement(tracked, ref.depth.values, ref.aline.values)
+    est = interpolate_displacement(tracked, ref.depth.values, ref.x.values)
     kind = panel["kind"]
     window = tuple(fig6["window"])
     maps = {
@@ -412,7 +413,7 @@ def fig6a_data(source: Mapping, fig6: Mapping, seed: int) -> xr.Dataset:
             .assign_attrs(attrs("displacement", "exact axial displacement")),
         }
     )
-    trk = tracked.rename({"depth": "window_depth", "aline": "window_aline"})
+    trk = tracked.rename({"depth": "window_depth", "x": "window_x"})
     for name in trk.data_vars:
         ds[f"tracked_{name}"] = trk[name]
     ds.attrs.update(_run_attrs(source, fig6, seed, n_alines, src.attrs["shape"]))
@@ -523,17 +524,17 @@ def plot_fig6a(ds: xr.Dataset) -> Figure:
     """Reference image and correlation maps before/after exact and tracked compensation, at the
     physical aspect ratio (mm on both axes)."""
     span_z = float(ds.depth[-1] - ds.depth[0]) or 1.0
-    span_x = float(ds.aline[-1] - ds.aline[0]) or 1.0
+    span_x = float(ds.x[-1] - ds.x[0]) or 1.0
     height = min(max(1.5 * span_z / span_x, 2.5), 6.0) + 1.0  # panels at 1 µm = 1 µm
     fig, axes = new_figure(1, 4, width=11, height=height, sharey=True)
     axes = axes[0]
     extent = [
-        float(ds.aline[0]) / 1e3,
-        float(ds.aline[-1]) / 1e3,
+        float(ds.x[0]) / 1e3,
+        float(ds.x[-1]) / 1e3,
         float(ds.depth[-1]) / 1e3,
         float(ds.depth[0]) / 1e3,
     ]
-    amp = ds.reference_amplitude.transpose("depth", "aline")
+    amp = ds.reference_amplitude.transpose("depth", "x")
     ref = axes[0].imshow(
         20 * np.log10(amp / amp.max() + 1e-6),
         cmap="gray",
@@ -551,12 +552,12 @@ def plot_fig6a(ds: xr.Dataset) -> Figure:
     }
     im = None
     for ax, comp in zip(axes[1:], ds.compensation.values, strict=True):
-        m = ds.correlation.sel(compensation=comp).transpose("depth", "aline")
+        m = ds.correlation.sel(compensation=comp).transpose("depth", "x")
         im = ax.imshow(m, vmin=0, vmax=1, cmap="viridis", extent=extent, aspect="equal")
         ax.set_title(f"{titles[str(comp)]}\nmean {float(m.mean()):.3f}")
     failed = ds.tracked_failed.values
     if failed.any():
-        zz, xx = np.meshgrid(ds.window_depth.values, ds.window_aline.values, indexing="ij")
+        zz, xx = np.meshgrid(ds.window_depth.values, ds.window_x.values, indexing="ij")
         axes[3].plot(xx[failed] / 1e3, zz[failed] / 1e3, "rx", ms=4, label="tracking failed")
         legend_outside(axes[3])
     for ax in axes:

@@ -719,7 +719,7 @@ def frequency_compounding_data(cfg: Mapping, seed: int) -> xr.Dataset:
     h = n * p
     src = spectrum(n, h, k0_dk=float(cfg["k0_dk"]))
     sc = random_scatterers(nl, rho, n_pixels=n, depth_range=h, seed=seed, count="poisson")
-    field = bscan(sc, src, method=cfg["method"], tol=cfg["tol"]).field.transpose("depth", "aline")
+    field = bscan(sc, src, method=cfg["method"], tol=cfg["tol"]).field.transpose("depth", "x")
     point = ascan([(n / 2 + 0.37) * p], [1.0], n_pixels=n, depth_range=h, k0=src.attrs["k0"])
     looks = [int(v) for v in cfg["looks"]]
     c, se, ct, cd, fw, ft = ([] for _ in range(6))

@@ -97,19 +97,19 @@ def _maps(cfg, seed, fields, modulus, truth, n_alines=None) -> xr.Dataset:
     """Strain and error maps of every method for a reference/deformed pair."""
     (ref, dfm), k0 = _images(cfg, seed, fields, n_alines=n_alines)
     est = np.array([_estimate(ref, dfm, k0, cfg, m) for m in cfg["methods"]])
-    dims = ("method", "depth", "aline")
+    dims = ("method", "depth", "x")
     p = float(cfg["pixel_size"])
     return xr.Dataset(
         {
-            "modulus": (("depth", "aline"), modulus, attrs("modulus")),
-            "true_strain": (("depth", "aline"), truth, STRAIN),
+            "modulus": (("depth", "x"), modulus, attrs("modulus")),
+            "true_strain": (("depth", "x"), truth, STRAIN),
             "strain": (dims, est, STRAIN),
             "error": (dims, est - truth, attrs("strain", "estimate minus truth")),
         },
         coords={
             "method": list(cfg["methods"]),
             "depth": coord("depth", np.arange(ref.shape[0]) * p),
-            "aline": np.arange(ref.shape[1]),
+            "x": np.arange(ref.shape[1]),
         },
         attrs={"k0": k0, "pixel_size": p, "seed": seed, **provenance_attrs()},
     )
@@ -135,17 +135,17 @@ def inclusion_data(cfg: Mapping, seed: int) -> xr.Dataset:
     ic = cfg["inclusion"]
     lines = int(ic.get("n_alines", cfg["n_alines"]))
     labels, fe = _inclusion_fe(cfg, lines, float(ic["strain"]))
-    disp = fe[["uz", "ux"]].rename(x="aline")
+    disp = fe[["uz", "ux"]].rename(x="aline")  # a displacement of the scene's lines
     truth = fe["strain_zz"].values
     ds = _maps(cfg, seed, [_uniform(0.0), disp], fe["youngs_modulus"].values, truth, lines)
     wz, wx = _window(cfg)
     smooth = ndimage.uniform_filter(truth, size=(wz, wx), mode="nearest")
     ds["window_mean_strain"] = (
-        ("depth", "aline"),
+        ("depth", "x"),
         smooth,
         {**STRAIN, "long_name": "FE strain averaged over the estimator window"},
     )
-    ds["label"] = (("depth", "aline"), labels.values, {"long_name": "region label"})
+    ds["label"] = (("depth", "x"), labels.values, {"long_name": "region label"})
     ds.attrs.update(
         {
             "fe_contact": ic["contact"],
@@ -158,13 +158,13 @@ def inclusion_data(cfg: Mapping, seed: int) -> xr.Dataset:
 
 def _lateral(ds: xr.Dataset) -> np.ndarray:
     """Lateral A-line positions (µm): the A-line pitch of the scenes is the pixel size."""
-    return np.arange(ds.sizes["aline"]) * float(ds.attrs["pixel_size"])
+    return np.arange(ds.sizes["x"]) * float(ds.attrs["pixel_size"])
 
 
 def _map_figure(n_columns: int, ds: xr.Dataset):
     """Two rows of ``n_columns`` depth x lateral maps sized to their physical aspect ratio."""
     depth = float(ds.depth[-1] - ds.depth[0]) + float(ds.attrs["pixel_size"])
-    ratio = depth / (ds.sizes["aline"] * float(ds.attrs["pixel_size"]))
+    ratio = depth / (ds.sizes["x"] * float(ds.attrs["pixel_size"]))
     width = 1.5 + 1.9 * n_columns
     panel = min(max((width / n_columns - 0.9) * ratio, 1.6), 4.0)
     return new_figure(2, n_columns, width=width, height=2 * panel + 0.9, sharey=True)
@@ -700,12 +700,12 @@ def _inclusion_frame(cfg: Mapping, seed: int, disp: xr.Dataset, k: int, max_stra
     img = bscan(
         displace(scene, disp * k), _source(cfg, None, None), method=cfg["method"], tol=cfg["tol"]
     )
-    return img.field.transpose("depth", "aline").values[None]
+    return img.field.transpose("depth", "x").values[None]
 
 
 def sequence_large_frames(cfg: Mapping, seed: int) -> tuple[xr.DataArray, float]:
     """The compression sequence of the FE inclusion phantom as a lazy (Dask) DataArray
-    ``(frame, depth, aline)`` (each frame one task), and ``k0`` (rad/µm)."""
+    ``(frame, depth, x)`` (each frame one task), and ``k0`` (rad/µm)."""
     import dask
     import dask.array as da
 
@@ -726,8 +726,8 @@ def sequence_large_frames(cfg: Mapping, seed: int) -> tuple[xr.DataArray, float]
     ]
     frames = xr.DataArray(
         da.concatenate(parts),
-        dims=("frame", "depth", "aline"),
-        coords={"frame": np.arange(n_frames), "depth": depth, "aline": x},
+        dims=("frame", "depth", "x"),
+        coords={"frame": np.arange(n_frames), "depth": depth, "x": x},
     )
     return frames, float(_source(cfg, None, None).attrs["k0"])
 
@@ -752,7 +752,7 @@ def plot_sequence_large(ds: xr.Dataset, per_frame: float) -> Figure:
     against the nominal ``1 - (1 - s)^k``."""
     fig, axes = new_figure(1, 2, width=7.0, height=3.6, width_ratios=[1, 1.4])
     last = ds["accumulated"].isel(frame=-1)
-    im = physical_image(axes[0, 0], last.values, ds.depth.values, ds.aline.values, cmap="viridis")
+    im = physical_image(axes[0, 0], last.values, ds.depth.values, ds.x.values, cmap="viridis")
     axes[0, 0].xaxis.set_major_locator(MaxNLocator(2))
     colorbar(fig, im, axes[0, 0], "cumulative axial strain")
     axes[0, 0].set_title(f"frame {int(ds.frame[-1])} against frame 0")

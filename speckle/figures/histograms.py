@@ -250,7 +250,7 @@ def simulated_panels(
         },
         attrs={
             "density": density,
-            "n_alines": ds.sizes["aline"],
+            "n_alines": ds.sizes["x"],
             "floor": floor or 0.0,
             "normalisation": "expected (<I> = 1)",
         },

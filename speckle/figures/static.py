@@ -235,7 +235,7 @@ def speckle_image(
     Returns
     -------
     xarray.Dataset
-        The :func:`speckle.bscan` dataset (dims ``depth, aline``).
+        The :func:`speckle.bscan` dataset (dims ``depth, x``).
     """
     source = {"n_pixels": n_pixels, "pixel_size": pixel_size, "k0_dk": k0_dk, "shape": shape}
     source["fwhm_fraction"] = fwhm_fraction
@@ -327,15 +327,16 @@ def k0_sweep(
 
 
 def fragment(ds: xr.Dataset, frag: Mapping[str, int]) -> xr.Dataset:
-    """The ``size`` x ``size`` pixel fragment of a B-scan starting at pixel ``depth``, ``aline``.
+    """The ``size`` x ``size`` pixel fragment of a B-scan starting at pixel ``depth``,
+    ``aline`` (keys of ``fragment``: ``aline`` indexes the dim ``x``).
 
     ``frag`` holds integer pixel indices ``depth`` and ``aline`` (top-left corner) and ``size``;
     a fragment that does not fit in the image raises ``ValueError``.
     """
     size = check_int(frag["size"], "fragment.size", low=1)
     d0 = check_int(frag["depth"], "fragment.depth", low=0, high=ds.sizes["depth"] - size)
-    a0 = check_int(frag["aline"], "fragment.aline", low=0, high=ds.sizes["aline"] - size)
-    return ds.isel(depth=slice(d0, d0 + size), aline=slice(a0, a0 + size))
+    a0 = check_int(frag["aline"], "fragment.aline", low=0, high=ds.sizes["x"] - size)
+    return ds.isel(depth=slice(d0, d0 + size), x=slice(a0, a0 + size))
 
 
 def _amplitude_label(ds: xr.Dataset) -> str:
@@ -349,9 +350,9 @@ def _fragment_panels(axes, ds: xr.Dataset, dim: str, frag: Mapping[str, int], la
     vmax = float(part.max())
     im = None
     for ax, value in zip(axes, ds[dim].values, strict=True):
-        img = part.sel({dim: value}).transpose("depth", "aline")
+        img = part.sel({dim: value}).transpose("depth", "x")
         im = physical_image(
-            ax, img.values, img.depth.values, img.aline.values, cmap="gray", vmin=0, vmax=vmax
+            ax, img.values, img.depth.values, img.x.values, cmap="gray", vmin=0, vmax=vmax
         )
         ax.xaxis.set_major_locator(MaxNLocator(3))
         ax.set_title(f"{label} = {value:g}")
@@ -403,7 +404,7 @@ def plot_k0_fragments(ds: xr.Dataset, frag: Mapping[str, int]) -> Figure:
         )
         ax.set_xlabel(f"pixel amplitude {_amplitude_label(ds)}")
         ax.set_ylabel("probability density")
-        npx = ds.sizes["depth"] * ds.sizes["aline"]
+        npx = ds.sizes["depth"] * ds.sizes["x"]
         ax.set_title(f"k0/Δk = {value:g}: {npx} pixels, fit σ = {sig:.3g}")
     fig.legend(
         *axes[1, 0].get_legend_handles_labels(), loc="outside lower center", ncols=2, frameon=False

@@ -200,7 +200,7 @@ def artefact_bscan(
     tilt: float = 0.0,
     scatterer_amplitude: float = 0.1,
 ) -> xr.Dataset:
-    """A layered B-scan, raw and processed (``raw_db``, ``processed_db``: depth, aline).
+    """A layered B-scan, raw and processed (``raw_db``, ``processed_db``: depth, x).
 
     Raw: real camera signal with DC and autocorrelation, transformed as is (no background
     subtraction, no k-linearisation, no compensation, no apodization). Processed: subtraction of the
@@ -231,17 +231,17 @@ def artefact_bscan(
     depth = (np.arange(n) - shift) * system.pixel_size
     return xr.Dataset(
         {
-            "raw_db": (("aline", "depth"), np.roll(_db(raw, ref), shift, axis=-1), attrs("level")),
-            "processed_db": (("aline", "depth"), np.roll(_db(proc, ref), shift, axis=-1),
+            "raw_db": (("x", "depth"), np.roll(_db(raw, ref), shift, axis=-1), attrs("level")),
+            "processed_db": (("x", "depth"), np.roll(_db(proc, ref), shift, axis=-1),
                              attrs("level")),
         },
         coords={
             "depth": coord("depth", depth, "depth from the zero delay"),
-            "aline": ("aline", np.arange(n_alines)),
+            "x": ("x", np.arange(n_alines)),
         },
         attrs={"surface": surface, "tilt": tilt, "apodization": apodization,
                "reference_power": reference_power, "imaging_depth": system.imaging_depth},
-    ).transpose("depth", "aline")  # fmt: skip
+    ).transpose("depth", "x")  # fmt: skip
 
 
 # --- figures ----------------------------------------------------------------------------------
@@ -281,7 +281,7 @@ def plot_rolloff(ds: xr.Dataset) -> Figure:
 def plot_artefact_bscan(ds: xr.Dataset, dynamic_range: float = 60.0) -> Figure:
     """Raw (DC, autocorrelation, mirror, no linearisation) beside the processed B-scan."""
     fig, axes = new_figure(1, 2, width=7.0, height=3.6, sharey=True)
-    extent = [-0.5, ds.sizes["aline"] - 0.5, float(ds.depth[-1]), float(ds.depth[0])]
+    extent = [-0.5, ds.sizes["x"] - 0.5, float(ds.depth[-1]), float(ds.depth[0])]
     for ax, name, title in zip(
         axes[0], ("raw_db", "processed_db"), ("raw (FFT of the camera signal)", "processed"),
         strict=True,

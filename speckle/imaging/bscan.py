@@ -75,9 +75,11 @@ def map_lines(
     Returns
     -------
     xarray.DataArray
-        ``func``'s output over the scene's other dims and ``depth``.
+        ``func``'s output over the scene's other dims and ``depth``; the scene's line dim
+        ``aline`` becomes the image's lateral dim ``x`` (µm, the lines' positions). This is the
+        one place where a scene of independent lines becomes an image (issue 32).
     """
-    return xr.apply_ufunc(
+    out = xr.apply_ufunc(
         func,
         scene.z,
         scene.amplitude,
@@ -88,6 +90,12 @@ def map_lines(
         output_dtypes=[dtype],
         dask_gufunc_kwargs={"output_sizes": {"depth": n_pixels}},
     )
+    if "aline" not in out.dims:  # the scene dim of independent lines (conventions.COORDS)
+        return out
+    out = out.rename({"aline": "x"})
+    if "x" in out.coords:
+        out = out.assign_coords(x=coord("x", out["x"].values))
+    return out
 
 
 def bscan(
@@ -120,7 +128,8 @@ def bscan(
     -------
     xarray.Dataset
         ``field`` (complex), ``amplitude`` = ``|field|`` and ``intensity`` = ``|field|^2`` with
-        dims ``(..., depth, aline)``; coordinate ``depth`` = ``q*H/N`` in µm. Attributes carry
+        dims ``(..., depth, x)`` (a scene's lines ``aline`` become ``x``); coordinate
+        ``depth`` = ``q*H/N`` in µm. Attributes carry
         the source and scene parameters and provenance.
     """
     check_choice(normalise, "normalise", NORMALISATIONS)
@@ -170,7 +179,7 @@ def bscan(
             raise ValueError(f"scene amplitude_model must be one of {AMPLITUDE_MODELS}")
         scale = 1.0 / np.sqrt(expected_intensity(density, n, source.values))
     field = field * scale
-    dims = [d for d in field.dims if d not in ("depth", "aline")] + ["depth", "aline"]
+    dims = [d for d in field.dims if d not in ("depth", "x")] + ["depth", "x"]
     dims = [d for d in dims if d in field.dims]
     field = field.transpose(*dims)
     ds = xr.Dataset(

@@ -141,7 +141,7 @@ def speckle_free_image(
     Returns
     -------
     xarray.DataArray
-        ``truth`` over ``(..., depth, aline)`` or ``(..., depth, x)``: real, non-negative, in
+        ``truth`` over ``(..., depth, x)``: real, non-negative, in
         the units of ``|A|^2`` of the unnormalised image (``normalise="none"``).
 
     Raises
@@ -187,7 +187,7 @@ def speckle_free_image(
             tol=tol,
         )
         truth = truth.assign_coords(depth=coord("depth", pixel_depths(n, h)))
-        lateral = "aline"
+        lateral = "x"  # map_lines: the scene's lines become the image's x
     dims = [d for d in truth.dims if d not in ("depth", lateral)] + ["depth", lateral]
     truth = truth.transpose(*[d for d in dims if d in truth.dims])
     truth = truth.rename("truth").assign_attrs(

@@ -184,12 +184,7 @@ def simulate(
         intensity = add_floor(intensity, fit["floor"], mean_intensity=1.0)
     bits = 8 if "quantisation" in effects else None
     d = log_compress(intensity, fit["gain"], fit["offset"], bits=bits)
-    # the B-scan's lateral dim is still aline (issue 32: scenes and bscan are not renamed yet)
-    return (
-        d.rename(aline="x")
-        .transpose("depth", "x")
-        .assign_attrs(scale="log", effects=",".join(sorted(effects)))
-    )
+    return d.transpose("depth", "x").assign_attrs(scale="log", effects=",".join(sorted(effects)))
 
 
 def _score(model: xr.Dataset, meas: xr.Dataset) -> float:

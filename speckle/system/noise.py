@@ -31,7 +31,7 @@ import xarray as xr
 from scipy import special
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
-from ..conventions import attrs
+from ..conventions import attrs, canonical_dims
 from ._scene import line_rng
 from .source import index_shift_phase
 
@@ -139,11 +139,11 @@ def add_noise(
     snr = check_real(snr_db, "snr_db", low=-300.0, high=300.0)  # 10^(snr/10) stays finite
     sd = check_int(seed, "seed", low=0)
     check_choice(kind, "kind", NOISE_KINDS)
-    field = image.field
+    field = canonical_dims(image.field, "image")  # (depth, aline) warns: the dim is now x
     as_finite_array(field.values, "image field", dtype=complex)  # NaN refused with its count
-    lateral = "aline" if "aline" in field.dims else "x"
+    lateral = "x"
     if "depth" not in field.dims or lateral not in field.dims:
-        raise ValueError(f"field must have dims 'depth' and 'aline' (or 'x'), got {field.dims}")
+        raise ValueError(f"field must have dims 'depth' and 'x', got {field.dims}")
     if field.size == 0:
         raise ValueError(f"image holds no pixel (field sizes {dict(field.sizes)})")
     if spectrum is not None:  # checked for every kind (white noise does not use it)

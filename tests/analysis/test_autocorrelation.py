@@ -66,7 +66,7 @@ def test_beam_lines_field_correlation_is_gaussian_in_lag():
     scene = beam_lines(sc["z"], sc["x"], sc["amplitude"], lines=sc["lines"], waist=w0)
     src = speckle.spectrum(N, H, k0_dk=10)
     f = speckle.bscan(scene.assign_attrs(depth_range=H, n_pixels=N), src, method="nufft", tol=1e-10)
-    f = f.field.transpose("depth", "aline").values
+    f = f.field.transpose("depth", "x").values
     for m in range(1, 5):
         theory = float(np.sqrt(ac.lateral_correlation_theory(m, w0, p)))
         est, se = _field_correlation(f, m, axis=1)
@@ -85,10 +85,10 @@ def test_fits_recover_the_generating_parameters():
 
 
 def test_bad_autocorrelation_inputs():
-    img = xr.DataArray(np.ones((10, 40)), dims=("depth", "aline"))
+    img = xr.DataArray(np.ones((10, 40)), dims=("depth", "x"))
     with pytest.raises(ValueError, match="max_lag"):
         ac.intensity_autocorrelation(img, max_lag=9)
     with pytest.raises(ValueError, match="dims"):
-        ac.intensity_autocorrelation(img.rename(aline="x"))
+        ac.intensity_autocorrelation(img.rename(x="lateral"))
     with pytest.raises(ValueError, match="snr_db"):
         ac.noise_factor(float("nan"))

@@ -188,7 +188,7 @@ def test_partially_correlated_subbands(dense, window, overlap):
 def test_frequency_looks_equal_imaging_with_the_subband_spectrum(dense):
     src, sc, img = dense
     w = cp.subband_apodizations(N, 4, apodization="hann", overlap=0.25)
-    looks = cp.frequency_looks(img.isel(aline=slice(0, 4)), w)
+    looks = cp.frequency_looks(img.isel(x=slice(0, 4)), w)
     for i in range(4):
         s_i = speckle.spectrum(N, H, k0_dk=10, shape="array", weights=w[i] * src.values)
         ref = speckle.bscan(sc.isel(aline=slice(0, 4)), s_i, method="finufft", tol=1e-12).field
@@ -221,7 +221,7 @@ def test_brownian_g1():
     frames = cp.brownian_frames(sc, 9, diffusion=d, interval=dt, seed=5)
     img = (
         speckle.bscan(frames, src, method="finufft", tol=1e-10)
-        .field.transpose("frame", "depth", "aline")
+        .field.transpose("frame", "depth", "x")
         .values
     )
     for m in (1, 2, 4, 8):
@@ -244,7 +244,7 @@ def test_polarization_looks_contrast():
     sc = speckle.random_scatterers(256, 32.0, n_pixels=N, depth_range=H, seed=4, count="poisson")
     f = 0.3
     img = speckle.bscan(speckle.depolarize(sc, f, seed=1), src, method="finufft", tol=1e-9)
-    i = img.intensity.sum("channel").transpose("depth", "aline").values
+    i = img.intensity.sum("channel").transpose("depth", "x").values
     c, se = _blocked(_contrast, i)
     p = abs(1 - 2 * f)
     dense_c = np.sqrt((1 + p**2) / 2)
@@ -261,7 +261,7 @@ def test_complex_averaging():
     src = speckle.spectrum(N, H, k0_dk=10)
     sc = speckle.random_scatterers(64, 16.0, n_pixels=N, depth_range=H, seed=4)
     img = speckle.bscan(sc, src, method="finufft", tol=1e-10)
-    f = img.field.transpose("depth", "aline")
+    f = img.field.transpose("depth", "x")
     looks = xr.concat([f] * 8, "look")
     same = cp.compound(looks, "complex").values
     np.testing.assert_allclose(same, np.abs(f.values) ** 2, rtol=1e-12)
@@ -335,7 +335,7 @@ def test_truth_carries_the_polarization_channels():
     f = 0.3
     both = speckle_free_image(speckle.depolarize(sc, f, seed=2), src)
     total = speckle_free_image(sc, src)
-    assert both.dims == ("channel", "depth", "aline")
+    assert both.dims == ("channel", "depth", "x")
     np.testing.assert_allclose(both.sel(channel="co"), (1 - f) * total, rtol=1e-10)
     np.testing.assert_allclose(both.sel(channel="cross"), f * total, rtol=1e-10)
     with pytest.raises(ValueError, match="waist"):

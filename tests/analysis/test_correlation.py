@@ -31,7 +31,7 @@ def strained_images(strains, src, *, n_alines=512, density=4.0, seed=11, count="
         n_alines, density, n_pixels=N, depth_range=H, seed=seed, strain=strains, count=count
     )
     b = speckle.bscan(D.uniaxial_strain(sc, strains), src)
-    disp = D.uniaxial_pixel_displacement(strains, b.depth.values, b.aline.values)
+    disp = D.uniaxial_pixel_displacement(strains, b.depth.values, b.x.values)
     return b, corr.compensate(b, disp)
 
 
@@ -66,7 +66,7 @@ def test_exact_compensation_undoes_a_rigid_subpixel_shift():
     u = 0.37 * PIXEL
     ref = speckle.bscan(D.translate(sc, 0.0, wrap=True), src)
     moved = speckle.bscan(D.translate(sc, u, wrap=True), src)
-    disp = D.pixel_displacement(lambda z, x: np.full(z.shape, u), ref.depth, ref.aline)
+    disp = D.pixel_displacement(lambda z, x: np.full(z.shape, u), ref.depth, ref.x)
     comp = corr.compensate(moved, disp)
     np.testing.assert_allclose(comp, ref.field, atol=1e-9 * float(abs(ref.field).max()))
     assert float(corr.pearson(ref, comp, kind="complex")) == pytest.approx(1.0, abs=1e-12)
@@ -193,7 +193,7 @@ def test_correlation_decreases_with_k0_over_delta_k():
     for r in (1, 3, 10):
         src = speckle.spectrum(N, H, k0_dk=r)
         b = speckle.bscan(D.uniaxial_strain(sc, [0.0, 0.02]), src)
-        disp = D.uniaxial_pixel_displacement([0.02], b.depth.values, b.aline.values)
+        disp = D.uniaxial_pixel_displacement([0.02], b.depth.values, b.x.values)
         comp = corr.compensate(b.isel(strain=1), disp.isel(strain=0))
         sims.append(float(corr.pearson(b.isel(strain=0), comp)))
     assert sims[0] > sims[1] > sims[2]
@@ -236,14 +236,14 @@ def test_correlation_map_windows_and_edges():
 def test_pearson_kinds_and_conjugation():
     rng = np.random.default_rng(3)
     x = rng.normal(size=(32, 8)) + 1j * rng.normal(size=(32, 8))
-    xa = xr.DataArray(x, dims=("depth", "aline"))
+    xa = xr.DataArray(x, dims=("depth", "x"))
     assert float(corr.pearson(xa, xa * np.exp(0.7j), kind="complex")) == pytest.approx(1.0)
     assert float(corr.pearson(xa, 3 * xa, kind="amplitude")) == pytest.approx(1.0)
     assert float(corr.pearson(xa, np.conj(xa), kind="intensity")) == pytest.approx(1.0)
 
 
 def test_bad_correlation_input():
-    xa = xr.DataArray(np.ones((8, 4), complex), dims=("depth", "aline"))
+    xa = xr.DataArray(np.ones((8, 4), complex), dims=("depth", "x"))
     with pytest.raises(ValueError, match="kind must be one of"):
         corr.pearson(xa, xa, kind="phase")
     with pytest.raises(ValueError, match="larger than the image"):
@@ -269,7 +269,7 @@ def test_lateral_compensation_of_poisson_expansion():
     sc = D.deformable_scene(n_alines, 4.0, n_pixels=N, depth_range=H, seed=6, strain=[0.0, s])
     b = speckle.bscan(D.uniaxial_strain(sc, [0.0, s], poisson_ratio=nu), src)
     ref, dfm = b.isel(strain=0), b.isel(strain=1)
-    disp = D.uniaxial_pixel_displacement([s], b.depth.values, b.aline.values, poisson_ratio=nu)
+    disp = D.uniaxial_pixel_displacement([s], b.depth.values, b.x.values, poisson_ratio=nu)
     disp = disp.isel(strain=0)
     lateral = corr.compensate(dfm, disp)
     axial = corr.compensate(dfm, disp.drop_vars("ux"))
@@ -277,7 +277,7 @@ def test_lateral_compensation_of_poisson_expansion():
     with_x = float(corr.pearson(ref, lateral))
     without_x = float(corr.pearson(ref, axial))
     th = corr.expected_correlation(s, spectrum=src, density=4.0)
-    u = nu * s * (b.aline.values - b.aline.values.mean()) / PIXEL
+    u = nu * s * (b.x.values - b.x.values.mean()) / PIXEL
     source_line = np.arange(n_alines) + np.rint(u)
     f = (1 - np.abs(u - np.rint(u)))[(source_line >= 0) & (source_line < n_alines)]
     floor = th.floor.item()

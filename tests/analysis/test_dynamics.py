@@ -43,7 +43,7 @@ def _lines_series(motion, *, density, n_lines, frames, dt, seed=3, k0_dk=10):
     )
     moved = motion(sc, np.arange(frames) * dt)
     img = ts.bscan_series(moved, src, method="finufft", tol=1e-11)
-    return src, img.field.transpose("time", "depth", "aline").load()
+    return src, img.field.transpose("time", "depth", "x").load()
 
 
 def _report(name: str, measured: float, expected: float, se: float) -> None:
@@ -113,7 +113,7 @@ def test_g1_brownian(brownian):
 def test_siegert_g2(brownian):
     src, f, d, dt, k0 = brownian
     m = np.arange(8)
-    g2m, se = _blocked(lambda x: dy.g2(x).values, f, "aline")
+    g2m, se = _blocked(lambda x: dy.g2(x).values, f, "x")
     g1t = th.g1_brownian(m * dt, diffusion=d, k0=k0, spectrum=src)
     poisson = (2 * N**2 + 1) / (3 * 128.0 * N**2)  # fourth-order term of the Poisson scene
     expect = th.siegert_g2(g1t) + poisson
@@ -127,13 +127,13 @@ def test_speckle_variance_and_liv_of_a_brownian_region(brownian):
     g1t = th.g1_brownian(np.arange(8) * dt, diffusion=d, k0=k0, spectrum=src)
     intensity = np.abs(f) ** 2
     mean_i = float(intensity.mean())
-    sv, sv_se = _blocked(lambda x: dy.speckle_variance(x).values, intensity, "aline")
+    sv, sv_se = _blocked(lambda x: dy.speckle_variance(x).values, intensity, "x")
     sv_exp = th.speckle_variance_expected(g1t) * mean_i**2
     _report(
         "Brownian speckle variance / <I>^2", sv / mean_i**2, sv_exp / mean_i**2, sv_se / mean_i**2
     )
     assert abs(sv - sv_exp) < 3 * sv_se, (sv, sv_exp, sv_se)
-    lv, lv_se = _blocked(lambda x: dy.liv(x).values, intensity, "aline")
+    lv, lv_se = _blocked(lambda x: dy.liv(x).values, intensity, "x")
     lv_exp = th.liv_expected(g1t)
     _report("Brownian LIV (dB^2)", lv, lv_exp, lv_se)
     assert abs(lv - lv_exp) < 3 * lv_se, (lv, lv_exp, lv_se)
@@ -147,7 +147,7 @@ def test_ocds_of_a_brownian_region(brownian):
     g1t = th.g1_brownian(lags, diffusion=d, k0=k0, spectrum=src)
     delays = (dt, 4 * dt)
     intensity = np.abs(f) ** 2
-    oc, oc_se = _blocked(lambda x: dy.ocds(x, delays=delays).values, intensity, "aline")
+    oc, oc_se = _blocked(lambda x: dy.ocds(x, delays=delays).values, intensity, "x")
     oc_exp = th.ocds_expected(g1t, lags, delays=delays)
     _report("Brownian OCDS (1/s)", oc, oc_exp, oc_se)
     assert abs(oc - oc_exp) < 3 * oc_se, (oc, oc_exp, oc_se)
@@ -165,7 +165,7 @@ def test_ssada_of_a_brownian_region(brownian):
         for w in windows
     ]
     expect = th.ssada_expected(bands)
-    est, se = _blocked(lambda x: dy.ssada(x, n_bands=4).values, f, "aline")
+    est, se = _blocked(lambda x: dy.ssada(x, n_bands=4).values, f, "x")
     _report("SSADA of a Brownian region (4 Hann bands)", est, expect, se)
     assert abs(est - expect) < 3 * se, (est, expect, se)
     assert 0 < expect < 1 - np.pi / 4
@@ -210,7 +210,7 @@ def test_ballistic_constant_speed_oscillates():
         dt=dt,
     )
     lags = np.arange(6) * dt
-    re, se = _blocked(lambda x: dy.g1(x).values.real, f, "aline")
+    re, se = _blocked(lambda x: dy.g1(x).values.real, f, "x")
     theory = th.g1_ballistic(lags, speed=s, k0=k0, ndim=1, distribution="constant", spectrum=src)
     np.testing.assert_allclose(
         th.g1_ballistic(lags, speed=s, k0=k0, ndim=1, distribution="constant"),
@@ -264,8 +264,8 @@ def test_axial_flow_through_the_coherence_gate(axial):
     lags = np.arange(6)
     g = dy.g1(f).values
     theory = th.g1_axial_flow(lags * dt, velocity=v, spectrum=src)
-    _, re_se = _blocked(lambda x: dy.g1(x).values.real, f, "aline")
-    _, im_se = _blocked(lambda x: dy.g1(x).values.imag, f, "aline")
+    _, re_se = _blocked(lambda x: dy.g1(x).values.real, f, "x")
+    _, im_se = _blocked(lambda x: dy.g1(x).values.imag, f, "x")
     for i in lags[1:]:
         _report(f"axial flow Re g1, lag {i}", g[i].real, theory[i].real, re_se[i])
         _report(f"axial flow Im g1, lag {i}", g[i].imag, theory[i].imag, im_se[i])
@@ -286,7 +286,7 @@ def test_doppler_phase_kasai(axial):
         frames=4,
         dt=dt,
     )
-    est, se = _blocked(lambda x: dy.doppler_phase(x).values, f, "aline")
+    est, se = _blocked(lambda x: dy.doppler_phase(x).values, f, "x")
     exact = np.angle(th.g1_axial_flow(dt, velocity=v, spectrum=src))
     _report("Doppler phase (Kasai) vs arg G_z", est, exact, se)
     _report(
@@ -461,10 +461,10 @@ def test_ssada_limits():
         )
         frames.append(speckle.bscan(sc, src, method="finufft", tol=1e-11).field)
     f = xr.concat(frames, "time").assign_coords(time=[0.0, 1.0, 2.0])
-    f = f.transpose("time", "depth", "aline")
-    static = xr.concat([frames[0]] * 3, "time").transpose("time", "depth", "aline")
+    f = f.transpose("time", "depth", "x")
+    static = xr.concat([frames[0]] * 3, "time").transpose("time", "depth", "x")
     assert float(dy.ssada(static, n_bands=4)) == pytest.approx(0.0, abs=1e-12)
-    est, se = _blocked(lambda x: dy.ssada(x, n_bands=4).values, f, "aline")
+    est, se = _blocked(lambda x: dy.ssada(x, n_bands=4).values, f, "x")
     _report("SSADA of independent frames", est, 1 - np.pi / 4, se)
     assert abs(est - (1 - np.pi / 4)) < 3 * se, (est, 1 - np.pi / 4, se)
 
@@ -482,8 +482,8 @@ def test_no_answer_is_nan_with_a_reason():
 def test_a_time_dim_in_one_input_only_is_refused():
     img = xr.DataArray(
         np.exp(1j * np.arange(64.0)).reshape(8, 8),
-        dims=("depth", "aline"),
-        coords={"depth": np.arange(8.0), "aline": np.arange(8.0)},
+        dims=("depth", "x"),
+        coords={"depth": np.arange(8.0), "x": np.arange(8.0)},
     )
     series = xr.concat([img, img], "time").assign_coords(time=[0.0, 1.0])
     with pytest.raises(ValueError, match="'time' dim in deformed only"):

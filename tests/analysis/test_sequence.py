@@ -23,7 +23,7 @@ def frames():
         LINES, 4.0, n_pixels=N, depth_range=H, seed=3, strain=max(totals)
     )
     b = speckle.bscan(speckle.uniaxial_strain(scene, totals), src, method="nufft", tol=1e-9)
-    f = b.field.rename(strain="frame").transpose("frame", "depth", "aline")
+    f = b.field.rename(strain="frame").transpose("frame", "depth", "x")
     f = f.drop_vars("frame").assign_coords(depth=500.0 + f.depth)  # a window starting at 500 um
     return f.assign_attrs(k0=float(src.attrs["k0"]))
 
@@ -41,7 +41,7 @@ def test_coordinates_are_kept(frames):
     out = speckle.accumulate_strain(frames, **kw(frames))
     np.testing.assert_array_equal(out.depth.values, frames.depth.values)
     assert out.depth.values[0] == 500.0
-    np.testing.assert_array_equal(out.aline.values, frames.aline.values)
+    np.testing.assert_array_equal(out.x.values, frames.x.values)
 
 
 def test_cumulative_follows_the_composed_truth(in_memory):
@@ -62,7 +62,7 @@ def test_lazy_streamed_identical_under_schedulers(frames, in_memory, tmp_path, s
         ds.to_zarr(tmp_path / "frames.zarr")
         z = xr.open_zarr(tmp_path / "frames.zarr")
         lazy = z["re"] + 1j * z["im"]
-    lazy = lazy.chunk({"frame": 1, "depth": -1, "aline": -1})
+    lazy = lazy.chunk({"frame": 1, "depth": -1, "x": -1})
     assert lazy.chunks is not None
     with dask.config.set(scheduler=scheduler, num_workers=2):
         out = speckle.accumulate_strain(lazy, path=tmp_path / "seq.nc", **kw(frames))

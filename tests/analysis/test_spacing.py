@@ -24,10 +24,10 @@ def test_compensate_takes_the_pixel_size_from_the_depth_coordinate(img):
     ``A(q + 1) exp(-2i k0 p)`` (band-limited interpolation is exact at integer shifts,
     periodic over ``N``). Attributes saying ``H = 2 H`` (pixel ``2p``, a half-pixel shift)
     are ignored: the coordinate rules."""
-    p, field = H / N, img.field.transpose("depth", "aline")
+    p, field = H / N, img.field.transpose("depth", "x")
     wrong = img.assign_attrs(depth_range=2 * H, n_pixels=N // 2, pixel_size=2 * p)
-    disp = pixel_displacement(lambda z, x: p + 0 * z, img.depth, img.aline)
-    out = speckle.compensate(wrong, disp).transpose("depth", "aline")
+    disp = pixel_displacement(lambda z, x: p + 0 * z, img.depth, img.x)
+    out = speckle.compensate(wrong, disp).transpose("depth", "x")
     expected = np.roll(field.values, -1, axis=0) * np.exp(-2j * img.attrs["k0"] * p)
     np.testing.assert_allclose(out.values, expected, rtol=0, atol=1e-9 * np.abs(expected).max())
 
@@ -35,11 +35,11 @@ def test_compensate_takes_the_pixel_size_from_the_depth_coordinate(img):
 def test_compensate_takes_the_pitch_from_the_aline_coordinate(img):
     """``ux`` = one pitch: each pixel comes from the next A-line (NaN past the last one),
     whatever an ``aline_pitch`` attribute says."""
-    field = img.field.transpose("depth", "aline")
-    pitch = float(img.aline[1] - img.aline[0])
+    field = img.field.transpose("depth", "x")
+    pitch = float(img.x[1] - img.x[0])
     wrong = img.assign_attrs(aline_pitch=10 * pitch)
-    disp = pixel_displacement(lambda z, x: (0 * z, pitch + 0 * z), img.depth, img.aline)
-    out = speckle.compensate(wrong, disp, carrier=False).transpose("depth", "aline")
+    disp = pixel_displacement(lambda z, x: (0 * z, pitch + 0 * z), img.depth, img.x)
+    out = speckle.compensate(wrong, disp, carrier=False).transpose("depth", "x")
     # uz = 0 samples at the integer pixels: exact up to the FFT round trip (~N eps)
     scale = np.abs(field.values).max()
     np.testing.assert_allclose(out.values[:, :-1], field.values[:, 1:], rtol=0, atol=1e-12 * scale)
@@ -50,7 +50,7 @@ def test_compensate_takes_the_pitch_from_the_aline_coordinate(img):
     ("change", "match"),
     [
         (lambda f: f.drop_vars("depth"), "'depth' coordinate missing"),
-        (lambda f: f.drop_vars("aline"), "'aline' coordinate missing"),
+        (lambda f: f.drop_vars("x"), "'x' coordinate missing"),
         (
             lambda f: f.assign_coords(depth=f.depth.values**1.01),
             "coordinate 'depth' must be increasing and uniformly spaced",

@@ -186,7 +186,7 @@ def test_fits_recover_known_parameters():
 def test_histogram_density_and_labels():
     rng = np.random.default_rng(0)
     values = xr.DataArray(
-        rng.normal(size=(50, 40)), dims=("depth", "aline"), name="amplitude", attrs={"units": "1"}
+        rng.normal(size=(50, 40)), dims=("depth", "x"), name="amplitude", attrs={"units": "1"}
     )
     h = histogram(values, 30, range=(-5.0, 5.0))
     counts, edges = np.histogram(values.values, bins=30, range=(-5, 5))
@@ -223,12 +223,12 @@ def test_pdfs_are_normalised_and_keep_labels():
 @given(st.floats(1e-3, 1e3))
 def test_contrast_is_scale_free(scale):
     rng = np.random.default_rng(1)
-    i = xr.DataArray(rng.exponential(size=(20, 30)), dims=("depth", "aline"))
+    i = xr.DataArray(rng.exponential(size=(20, 30)), dims=("depth", "x"))
     assert float(speckle_contrast(i * scale)) == pytest.approx(float(speckle_contrast(i)))
 
 
 def test_speckle_contrast_values_and_dims():
-    i = xr.DataArray([[1.0, 3.0], [2.0, 2.0]], dims=("depth", "aline"))
+    i = xr.DataArray([[1.0, 3.0], [2.0, 2.0]], dims=("depth", "x"))
     assert float(speckle_contrast(i)) == pytest.approx(np.sqrt(0.5) / 2)
     per_line = speckle_contrast(i, dim="depth")
     np.testing.assert_allclose(per_line, [0.5 / 1.5, 0.5 / 2.5])
@@ -260,7 +260,7 @@ def test_speckle_contrast_values_and_dims():
         (
             lambda: contrast_standard_error(xr.DataArray(np.ones((3, 3)), dims=("a", "b"))),
             TypeError,
-            "aline",
+            "x",
         ),
     ],
 )

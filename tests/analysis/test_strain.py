@@ -153,7 +153,7 @@ def test_unit_weight_slope_is_the_least_squares_slope():
 def test_default_is_vector_and_dataarray_round_trip():
     ref, dfm = pair((1e-3,))
     da = lambda a: xr.DataArray(  # noqa: E731
-        a, dims=("depth", "aline"), coords={"depth": np.arange(N) * PIXEL}
+        a, dims=("depth", "x"), coords={"depth": np.arange(N) * PIXEL}
     )
     e = speckle.estimate_strain(da(ref), da(dfm[0]), k0=k0(), pixel_size=PIXEL)
     assert isinstance(e, xr.DataArray) and e.attrs["method"] == "vector"
@@ -249,8 +249,8 @@ def test_unaligned_phase_methods_lose_deep_pixels_when_displacement_exceeds_spec
     assert np.mean(np.isfinite(aligned[192:236])) > 0.5
     assert np.nanmedian(aligned[192:236]) == pytest.approx(s, rel=0.02)
     auto = speckle.estimate_strain(  # default align="auto": |u| reaches 2.5 px, so it aligns
-        xr.DataArray(ref, dims=("depth", "aline")),
-        xr.DataArray(dfm[0], dims=("depth", "aline")),
+        xr.DataArray(ref, dims=("depth", "x")),
+        xr.DataArray(dfm[0], dims=("depth", "x")),
         k0=k0(),
         pixel_size=PIXEL,
     )
@@ -378,9 +378,9 @@ def test_bad_inputs_get_clear_errors():
         speckle.estimate_strain(ref, dfm[0], smoothing=3, **kw)
     with pytest.raises(ValueError, match="2-D"):
         speckle.estimate_strain(ref[None], dfm[0][None], **kw)
-    a = xr.DataArray(ref, dims=("depth", "aline"), coords={"aline": np.arange(32.0)})
-    b = xr.DataArray(dfm[0], dims=("depth", "aline"), coords={"aline": np.arange(32.0) + 1})
-    with pytest.raises(ValueError, match="'aline' coordinates"):
+    a = xr.DataArray(ref, dims=("depth", "x"), coords={"x": np.arange(32.0)})
+    b = xr.DataArray(dfm[0], dims=("depth", "x"), coords={"x": np.arange(32.0) + 1})
+    with pytest.raises(ValueError, match="'x' coordinates"):
         speckle.estimate_strain(a, b, **kw)
     with pytest.raises(TypeError, match="both"):
         speckle.estimate_strain(a, dfm[0], **kw)
@@ -415,8 +415,8 @@ def test_fe_inclusion_contrast_matches_window_averaged_truth():
     dfm = speckle.bscan(speckle.displace(scene, disp), source(), method="nufft")
     window = (32, 4)
     e = speckle.estimate_strain(
-        ref.field.transpose("depth", "aline").values,
-        dfm.field.transpose("depth", "aline").values,
+        ref.field.transpose("depth", "x").values,
+        dfm.field.transpose("depth", "x").values,
         k0=k0(),
         pixel_size=PIXEL,
         window=window,

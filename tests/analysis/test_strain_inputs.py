@@ -17,7 +17,7 @@ def pair():
         LINES, 4.0, n_pixels=N, depth_range=N * PIXEL, seed=4, strain=1e-3
     )
     b = speckle.bscan(speckle.uniaxial_strain(scene, [0.0, 1e-3]), src)
-    f = b.field.transpose("strain", "depth", "aline").values
+    f = b.field.transpose("strain", "depth", "x").values
     return f[0], f[1], {"k0": float(src.attrs["k0"]), "pixel_size": PIXEL}
 
 
@@ -77,7 +77,7 @@ def test_window_int_is_square_everywhere(pair):
 def test_pixel_size_read_from_the_depth_coordinate_and_a_disagreeing_one_refused(pair):
     ref, dfm, kw = pair
     p = kw["pixel_size"]
-    dims = ("depth", "aline")
+    dims = ("depth", "x")
     coords = {"depth": (np.arange(ref.shape[0]) + 0.5) * p}
     a, b = (xr.DataArray(x, dims=dims, coords=coords) for x in (ref, dfm))
     read = speckle.estimate_strain(a, b, k0=kw["k0"])
@@ -101,7 +101,7 @@ def scenes():
             lines, 4.0, n_pixels=n, depth_range=n * p, seed=seed, strain=0.01
         )
         b = speckle.bscan(speckle.uniaxial_strain(sc, [0.0, 0.01]), src)
-        return b.field.transpose("strain", "depth", "aline").values
+        return b.field.transpose("strain", "depth", "x").values
 
     a, b = pair(1), pair(2)
     return a[0], b[0], a[1], {"k0": float(src.attrs["k0"]), "pixel_size": p}

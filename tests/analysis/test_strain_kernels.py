@@ -34,7 +34,7 @@ def pair(strain, lines=16, shape="gaussian", seed=4):
         lines, 4.0, n_pixels=N, depth_range=H, seed=seed, strain=[0.0, strain]
     )
     b = speckle.bscan(D.uniaxial_strain(scene, [0.0, strain]), source(shape), method="nufft")
-    img = b.field.transpose("strain", "depth", "aline").values
+    img = b.field.transpose("strain", "depth", "x").values
     return img[0], img[1]
 
 
@@ -216,7 +216,7 @@ def test_track_axial_low_signal_nan_and_bad_input():
     out = tracking.track_axial(a, b, window=(32, 8), step=(16, 8))
     z0 = out["centre_depth"] - 15.5
     assert np.isnan(out["uz"][z0 + 32 <= 64]).all()
-    x0 = out["centre_aline"] - 3.5
+    x0 = out["centre_x"] - 3.5
     holds = ((z0 <= 150) & (z0 + 32 > 150))[:, None] & ((x0 <= 5) & (x0 + 8 > 5))[None]
     assert np.isnan(out["uz"][holds]).all()
     assert np.isfinite(out["uz"][(z0 >= 64)[:, None] & ~holds]).all()

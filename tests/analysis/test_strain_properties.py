@@ -37,7 +37,7 @@ def pair():
         LINES, 4.0, n_pixels=N, depth_range=N * PIXEL, seed=2, strain=1e-3
     )
     b = speckle.bscan(speckle.uniaxial_strain(scene, [0.0, 1e-3]), src)
-    f = b.field.transpose("strain", "depth", "aline").values
+    f = b.field.transpose("strain", "depth", "x").values
     return f[0], f[1], float(src.attrs["k0"])
 
 

@@ -32,7 +32,7 @@ def test_rigid_subpixel_shifts_are_recovered(scene, shape, shift):
     src = speckle.spectrum(N, H, k0_dk=10, shape=shape, **kw)
     ref = speckle.bscan(D.translate(scene, 0.0, wrap=True), src)
     moved = speckle.bscan(D.translate(scene, shift * PIXEL, wrap=True), src)
-    truth = D.pixel_displacement(lambda z, x: np.full(z.shape, shift * PIXEL), ref.depth, ref.aline)
+    truth = D.pixel_displacement(lambda z, x: np.full(z.shape, shift * PIXEL), ref.depth, ref.x)
     tr = T.track(ref, moved, window=(32, 16), step=(32, 16), truth=truth)
     err = tr.uz_pixels - shift
     assert abs(float(err.mean())) < 0.05
@@ -46,11 +46,11 @@ def test_uniaxial_strain_is_tracked_and_compensated(scene):
     src = speckle.spectrum(N, H, k0_dk=10)
     b = speckle.bscan(D.uniaxial_strain(scene, [0.0, s]), src)
     ref, dfm = b.isel(strain=0), b.isel(strain=1)
-    truth = D.uniaxial_pixel_displacement([s], b.depth.values, b.aline.values).isel(strain=0)
+    truth = D.uniaxial_pixel_displacement([s], b.depth.values, b.x.values).isel(strain=0)
     tr = T.track(ref, dfm, truth=truth)
     assert float(np.sqrt((tr.uz_residual**2).mean())) < 0.1
     assert not bool(tr.failed.any())
-    est = T.interpolate_displacement(tr, b.depth.values, b.aline.values)
+    est = T.interpolate_displacement(tr, b.depth.values, b.x.values)
     exact = float(corr.pearson(ref, corr.compensate(dfm, truth)))
     tracked = float(corr.pearson(ref, corr.compensate(dfm, est)))
     none = float(corr.pearson(ref, dfm))
@@ -66,7 +66,7 @@ def test_failures_are_reported(scene):
     src = speckle.spectrum(N, H, k0_dk=10)
     ref = speckle.bscan(D.translate(scene, 0.0), src)
     other = speckle.bscan(D.deformable_scene(32, 4.0, n_pixels=N, depth_range=H, seed=77), src)
-    zero = D.pixel_displacement(lambda z, x: np.zeros(z.shape), ref.depth, ref.aline)
+    zero = D.pixel_displacement(lambda z, x: np.zeros(z.shape), ref.depth, ref.x)
     tr = T.track(ref, other, truth=zero, max_error=0.5)
     assert float(tr.failed.mean()) > 0.5
     assert "failed" in tr and tr.attrs["max_error_pixels"] == 0.5
@@ -75,7 +75,7 @@ def test_failures_are_reported(scene):
 def test_bad_tracking_input(scene):
     src = speckle.spectrum(N, H, k0_dk=10)
     b = speckle.bscan(D.uniaxial_strain(scene, [0.0, 0.01]), src)
-    with pytest.raises(ValueError, match=r"must have dims \('depth', 'aline'\), got \('strain'"):
+    with pytest.raises(ValueError, match=r"must have dims \('depth', 'x'\), got \('strain'"):
         T.track(b, b)
     ref = b.isel(strain=0)
     with pytest.raises(ValueError, match="larger than the image"):

@@ -58,7 +58,7 @@ def test_fft_equals_reference_per_window(strained):
     dz = np.abs(fast.uz_pixels - slow.uz_pixels).values
     assert np.mean(dz < 1e-9) > 0.95 and dz.max() <= 1 / 40 + 1e-9
     # lateral: coordinate-wise search vs the reference's 2-D grid: within one grid step
-    assert float(np.abs(fast.ux - slow.ux).max()) <= 1 / 20 * float(np.diff(ref.aline)[0]) + 1e-9
+    assert float(np.abs(fast.ux - slow.ux).max()) <= 1 / 20 * float(np.diff(ref.x)[0]) + 1e-9
     np.testing.assert_allclose(fast.registration_error, slow.registration_error, atol=2e-3)
 
 
@@ -66,7 +66,7 @@ def test_fft_equals_reference_per_window(strained):
 def test_subpixel_rigid_shifts(scene, shift):
     ref = speckle.bscan(D.translate(scene, 0.0, wrap=True), source())
     moved = speckle.bscan(D.translate(scene, shift * PIXEL, wrap=True), source())
-    truth = D.pixel_displacement(lambda z, x: np.full(z.shape, shift * PIXEL), ref.depth, ref.aline)
+    truth = D.pixel_displacement(lambda z, x: np.full(z.shape, shift * PIXEL), ref.depth, ref.x)
     fast = speckle.track(ref, moved, window=(32, 16), step=(32, 16), truth=truth)
     slow = speckle.track(
         ref, moved, window=(32, 16), step=(32, 16), truth=truth, method="reference"
@@ -81,11 +81,11 @@ def test_subpixel_rigid_shifts(scene, shift):
 
 def test_uniaxial_strain_and_interpolation(scene, strained):
     ref, dfm = strained
-    truth = D.uniaxial_pixel_displacement([0.01], ref.depth.values, ref.aline.values).isel(strain=0)
+    truth = D.uniaxial_pixel_displacement([0.01], ref.depth.values, ref.x.values).isel(strain=0)
     tr = speckle.track(ref, dfm, truth=truth)
     assert float(np.sqrt((tr.uz_residual**2).mean())) < 0.1
     # the dense field interpolated back: within the same budget of the exact one
-    est = interpolate_displacement(tr, ref.depth.values, ref.aline.values)
+    est = interpolate_displacement(tr, ref.depth.values, ref.x.values)
     inner = slice(16, N - 16)
     diff = (est.uz - truth.uz).isel(depth=inner) / PIXEL
     assert float(np.sqrt((diff**2).mean())) < 0.1
@@ -96,7 +96,7 @@ def test_poisson_lateral_motion_does_not_spoil_axial_tracking(scene):
     b = speckle.bscan(D.uniaxial_strain(scene, [0.0, s], poisson_ratio=nu), source())
     ref, dfm = b.isel(strain=0), b.isel(strain=1)
     truth = D.uniaxial_pixel_displacement(
-        [s], ref.depth.values, ref.aline.values, poisson_ratio=nu
+        [s], ref.depth.values, ref.x.values, poisson_ratio=nu
     ).isel(strain=0)
     tr = speckle.track(ref, dfm, truth=truth)
     slow = speckle.track(ref, dfm, truth=truth, method="reference")
@@ -114,14 +114,14 @@ def test_fe_inclusion_displacement():
     disp = fe[["uz", "ux"]].rename(x="aline")
     ref = speckle.bscan(speckle.displace(sc, lambda z, x: 0 * z), source(), method="nufft")
     dfm = speckle.bscan(speckle.displace(sc, disp), source(), method="nufft")
-    truth = disp[["uz"]].assign_coords(depth=ref.depth, aline=ref.aline)
+    truth = disp[["uz"]].assign_coords(depth=ref.depth, x=ref.x)
     tr = speckle.track(ref, dfm, truth=truth)
     assert float(np.sqrt((tr.uz_residual**2).mean())) < 0.1
     assert not bool(tr.failed.any())
 
 
 def test_low_signal_and_nan_windows(strained):
-    ref, dfm = (f.field.transpose("depth", "aline").values for f in strained)
+    ref, dfm = (f.field.transpose("depth", "x").values for f in strained)
     base = track_array(ref, dfm)
     a, b = ref.copy(), dfm.copy()
     a[:48] = b[:48] = 0.0  # no signal in the top 48 px: windows starting above 16 px
@@ -130,7 +130,7 @@ def test_low_signal_and_nan_windows(strained):
     z0 = out["centre_depth"] - 15.5
     empty = z0 + 32 <= 48
     assert np.isnan(out["uz"][empty]).all() and np.isnan(out["error"][empty]).all()
-    x0 = out["centre_aline"] - 7.5
+    x0 = out["centre_x"] - 7.5
     holds_nan = ((z0 <= 200) & (z0 + 32 > 200))[:, None] & ((x0 <= 40) & (x0 + 16 > 40))[None]
     assert np.isnan(out["uz"][holds_nan]).all()
     # windows away from both (band-limited oversampling: the gap disturbs only half-pixel

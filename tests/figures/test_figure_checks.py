@@ -346,21 +346,21 @@ def _beam():
 
 
 def _deformation():
-    depth, aline = np.arange(24) * 8.0, np.arange(8) * 8.0
+    depth, x = np.arange(24) * 8.0, np.arange(8) * 8.0
     strain = np.array([0.0, 0.01, 0.02])
     fig6a = _fake(
         {
             "compensation": ["none", "exact", "tracked"],
             "depth": depth,
-            "aline": aline,
+            "x": x,
             "window_depth": depth[::8],
-            "window_aline": aline[::4],
+            "window_x": x[::4],
         },
         {
-            "correlation": ("compensation", "depth", "aline"),
-            "reference_amplitude": ("depth", "aline"),
+            "correlation": ("compensation", "depth", "x"),
+            "reference_amplitude": ("depth", "x"),
             "tracked_failed": (
-                ("window_depth", "window_aline"),
+                ("window_depth", "window_x"),
                 np.array([[True, False], [False, False], [False, True]]),
             ),
         },
@@ -496,12 +496,12 @@ def _elastography():
     )  # fmt: skip
     depth, aline = np.arange(32) * 8.0, np.arange(8)
     maps = _fake(
-        {"method": ["vector", "wls"], "depth": depth, "aline": aline},
+        {"method": ["vector", "wls"], "depth": depth, "x": aline},
         {
-            "modulus": ("depth", "aline"),
-            "true_strain": ("depth", "aline"),
-            "strain": ("method", "depth", "aline"),
-            "error": ("method", "depth", "aline"),
+            "modulus": ("depth", "x"),
+            "true_strain": ("depth", "x"),
+            "strain": ("method", "depth", "x"),
+            "error": ("method", "depth", "x"),
         },
         {"pixel_size": 8.0},
     )
@@ -516,8 +516,8 @@ def _elastography():
         {f"{v}_cumulative": ("frame",) for v in ("true", "median", "rms_error")},
     )
     large = _fake(
-        {"frame": [1, 2], "depth": np.arange(32) * 8.0, "aline": np.arange(8) * 8.0},
-        {"accumulated": ("frame", "depth", "aline")},
+        {"frame": [1, 2], "depth": np.arange(32) * 8.0, "x": np.arange(8) * 8.0},
+        {"accumulated": ("frame", "depth", "x")},
         {"pixel_size": 8.0},
     )
     return {

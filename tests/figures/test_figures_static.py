@@ -90,7 +90,7 @@ def test_density_sweep_is_normalised_and_scheduler_independent():
     np.testing.assert_allclose(
         a.field.sel(density=2.0).values * np.sqrt(2.0), raw.field.values, rtol=1e-12
     )
-    assert a.field.dims == ("density", "depth", "aline")
+    assert a.field.dims == ("density", "depth", "x")
 
 
 def test_fragment_bounds():

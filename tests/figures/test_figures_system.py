@@ -108,7 +108,7 @@ def test_artefact_bscan_mirror_and_seed():
         apodization="hann", seed=3,
     )  # fmt: skip
     ds = fs.artefact_bscan(system, n_alines=3, **kw)
-    assert ds.raw_db.dims == ("depth", "aline") and ds.sizes["depth"] == 256
+    assert ds.raw_db.dims == ("depth", "x") and ds.sizes["depth"] == 256
     raw = ds.raw_db.values
     # a real camera signal has a Hermitian transform: |A(-z)| = |A(z)| (pixel 0 is depth 0)
     zero = int(np.argmin(np.abs(ds.depth.values)))

@@ -25,7 +25,7 @@ def test_beam_lines_equal_beam_scan():
         spectrum=src.values,
     )
     scene = beam_lines(sc["z"], sc["x"], sc["amplitude"], lines=sc["lines"], waist=w0)
-    img = speckle.bscan(scene, src).field.transpose("aline", "depth").values
+    img = speckle.bscan(scene, src).field.transpose("x", "depth").values
     # dropped weights < 1e-17 each, a few hundred scatterers: far below 1e-13 of the field
     np.testing.assert_allclose(img, ref, rtol=0, atol=1e-13 * np.abs(ref).max())
 

@@ -24,7 +24,7 @@ def source():
 
 def test_dataset_layout(scene, source):
     ds = bscan(scene, source)
-    assert ds.field.dims == ("depth", "aline") and ds.field.dtype == np.complex128
+    assert ds.field.dims == ("depth", "x") and ds.field.dtype == np.complex128
     np.testing.assert_allclose(ds.depth, np.arange(N) * H / N)
     assert ds.depth.attrs["units"] == "um"
     np.testing.assert_allclose(ds.intensity, np.abs(ds.field) ** 2)
@@ -38,7 +38,7 @@ def test_dataset_layout(scene, source):
         depth_range=H,
         k0=source.attrs["k0"],
     )
-    np.testing.assert_array_equal(ds.field.isel(aline=3).values, line)
+    np.testing.assert_array_equal(ds.field.isel(x=3).values, line)
 
 
 def test_density_normalisation_is_explicit(scene, source):
@@ -63,7 +63,7 @@ def test_expected_normalisation_gives_unit_mean_intensity(source):
 def test_extra_dims_are_carried(scene, source):
     stacked = xr.concat([scene, scene.assign(z=scene.z + H / N)], dim="strain")
     ds = bscan(stacked, source)
-    assert ds.field.dims == ("strain", "depth", "aline")
+    assert ds.field.dims == ("strain", "depth", "x")
     # a one-pixel shift rolls each line by one pixel with carrier exp(2i k0 H/N)
     k0 = source.attrs["k0"]
     np.testing.assert_allclose(

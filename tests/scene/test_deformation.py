@@ -224,7 +224,7 @@ def test_strain_sweep_is_independent_of_scheduler_and_workers():
     def point(strain):
         sc = D.deformable_scene(8, 2.0, n_pixels=N, depth_range=H, seed=9, strain=[0.0, 0.05])
         b = speckle.bscan(D.uniaxial_strain(sc, [0.0, strain]), src)
-        disp = D.uniaxial_pixel_displacement([strain], b.depth.values, b.aline.values)
+        disp = D.uniaxial_pixel_displacement([strain], b.depth.values, b.x.values)
         comp = corr.compensate(b.isel(strain=1), disp.isel(strain=0))
         return corr.pearson(b.isel(strain=0), comp).drop_vars("strain", errors="ignore").rename("r")
 

@@ -37,7 +37,7 @@ def _pair(seed: int, strain: float, warp: bool = False):
     scene = speckle.deformable_scene(LINES, 4.0, n_pixels=N, depth_range=N * PIXEL, seed=seed)
     a1, a2 = (
         speckle.bscan(speckle.displace(scene, lambda z, x, s=s: -s * z), _source())
-        .field.transpose("depth", "aline")
+        .field.transpose("depth", "x")
         .values
         for s in (0.0, strain)
     )
@@ -194,7 +194,7 @@ def test_tracking_reads_zero_below_half_its_registration_grid():
     src = speckle.spectrum(n, n * PIXEL, k0_dk=10.0, shape="gaussian", fwhm_fraction=0.5)
     a1, a2 = (
         speckle.bscan(speckle.displace(scene, lambda z, x, s=v: -s * z), src)
-        .field.transpose("depth", "aline")
+        .field.transpose("depth", "x")
         .values
         for v in (0.0, s)
     )

@@ -78,7 +78,7 @@ def test_noise_of_an_image_does_not_depend_on_the_other_images():
 
 def test_nan_in_noise_and_detection_inputs_is_refused_with_its_count():
     bad = IMAGE.copy()
-    bad["field"] = bad.field.where(~((bad.depth == bad.depth[3]) & (bad.aline == 0)))
+    bad["field"] = bad.field.where(~((bad.depth == bad.depth[3]) & (bad.x == 0)))
     with pytest.raises(ValueError, match="image field must be finite; it holds 1 NaN"):
         noise.add_noise(bad, 10.0, seed=1)
     inten = IMAGE.intensity.copy()

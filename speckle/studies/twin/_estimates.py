@@ -29,7 +29,7 @@ class _Data:
         sig = [self.signal[:, c] for c in cols]
         flat = np.concatenate([s.ravel() for s in sig])
         if self.kind == "log":
-            d = xr.DataArray(np.hstack(sig), dims=("depth", "aline"), attrs={"scale": "log"})
+            d = xr.DataArray(np.hstack(sig), dims=("depth", "x"), attrs={"scale": "log"})
             fl = ms.fit_floor(d)
             g, mean = float(fl["gain"]), float(flat.mean())
             inten = [np.exp((s - mean) / g) for s in sig]
@@ -39,9 +39,7 @@ class _Data:
                 else [np.exp((self.noise[:, c] - mean) / g) for c in cols]
             )
         else:
-            d = xr.DataArray(
-                np.log(np.hstack(sig)), dims=("depth", "aline"), attrs={"scale": "log"}
-            )
+            d = xr.DataArray(np.log(np.hstack(sig)), dims=("depth", "x"), attrs={"scale": "log"})
             fl = ms.fit_floor(d)
             g = 1.0
             inten = sig

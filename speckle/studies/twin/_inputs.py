@@ -8,7 +8,7 @@ import numpy as np
 import xarray as xr
 
 from ...analysis import measured as ms
-from ...conventions import spacing
+from ...conventions import canonical_dims, spacing
 from ...io import IMAGE_KINDS
 from ._estimates import _Data
 from ._theory import MIN_NOISE_ROWS, NOISE_ROW_DB
@@ -37,8 +37,7 @@ def _as_image(image: object) -> xr.DataArray:
             f"image.attrs['kind'] must be one of {IMAGE_KINDS} (load it with "
             f"speckle.load_image(path, kind=...)); got {kind!r}"
         )
-    if "aline" in image.dims:
-        image = image.rename({"aline": "x"})
+    image = canonical_dims(image, "image")  # (depth, aline) warns: the dim is now x
     if set(image.dims) - {"frame"} != {"depth", "x"}:
         raise ValueError(
             f"image must have dims (depth, x) (and optionally frame), got {image.dims}"
@@ -166,7 +165,7 @@ def _find_noise_rows(img: xr.DataArray, region: Mapping | None) -> list[int] | N
                 xr.DataArray(
                     d_in.reshape(-1, d_in.shape[-1]),
                     attrs={"scale": "log"},
-                    dims=("depth", "aline"),
+                    dims=("depth", "x"),
                 )
             )["gain"]
         )
