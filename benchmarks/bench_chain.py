@@ -55,14 +55,14 @@ def main(argv=None):
 
     def ideal_chain():
         sig = sp.interferogram(z, a, grid, src.values, k0=system.k0)
-        return sp.process(sig, grid=grid, k0=system.k0)
+        return sp.process_interferogram(sig, grid=grid, k0=system.k0)
 
     _, out = add("chain, ideal (k-linear, delta pixels, complex)", ideal_chain, t_direct)
     err = np.linalg.norm(out - ref) / np.linalg.norm(ref)
 
     def ideal_chain_nufft():
         sig = sp.interferogram(z, a, grid, src.values, k0=system.k0, method="finufft", tol=1e-10)
-        return sp.process(sig, grid=grid, k0=system.k0)
+        return sp.process_interferogram(sig, grid=grid, k0=system.k0)
 
     _, out = add("chain, ideal, camera by FINUFFT type 3 (tol 1e-10)", ideal_chain_nufft,
                  t_direct)  # fmt: skip
@@ -90,9 +90,9 @@ def main(argv=None):
     full = dict(grid=grid, k0=system.k0, wavenumber=cam["wavenumber"],
                 background=s_cam, dispersion={2: 20.0}, window="hann")  # fmt: skip
     add("processing: linear resampling + compensation + window + FFT",
-        lambda: sp.process(sig, resample="linear", **full), t_direct)  # fmt: skip
+        lambda: sp.process_interferogram(sig, resample="linear", **full), t_direct)  # fmt: skip
     add("processing: cubic resampling + compensation + window + FFT",
-        lambda: sp.process(sig, resample="cubic", **full), t_direct)  # fmt: skip
+        lambda: sp.process_interferogram(sig, resample="cubic", **full), t_direct)  # fmt: skip
     few = z[:, :64], a[:, :64]
     add("camera, 64 scatterers/line, no autocorrelation",
                      lambda: sp.interferogram(*few, cam["wavenumber"], s_cam,

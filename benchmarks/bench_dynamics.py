@@ -13,7 +13,7 @@ streamed to NetCDF (``speckle.io.stream_to_netcdf``) under the synchronous and t
 schedulers and a local ``dask.distributed`` cluster; under the processes scheduler (whose
 workers cannot share xarray's netCDF lock) in blocks of ``--block`` frames, each computed and
 written as it comes. The baseline, measured in the
-same process first, is one B-scan of the same scene at rest (``speckle.image``, synchronous).
+same process first, is one B-scan of the same scene at rest (``speckle.scan_image``, synchronous).
 Every scheduler's file must hold the same numbers, bit for bit (asserted). Printed: wall time,
 time per frame, its ratio to the single B-scan, the ratio to the synchronous run, and the peak
 memory traced in this process (``tracemalloc``: the scene, the graph and what the local
@@ -97,9 +97,9 @@ def main() -> None:
     moved, scene, src, x, w0 = phantom(args.pixels, args.lines, args.frames, 2e-3)
     scene_mb = sum(moved[v].nbytes for v in moved.data_vars) / 2**20
     with dask.config.set(scheduler="synchronous"):
-        speckle.image(scene, src, waist=w0, x=x, **kw).field.compute()  # warm-up (FINUFFT)
+        speckle.scan_image(scene, src, waist=w0, lines=x, **kw).field.compute()  # warm-up (FINUFFT)
         t0 = time.perf_counter()
-        speckle.image(scene, src, waist=w0, x=x, **kw).field.compute()
+        speckle.scan_image(scene, src, waist=w0, lines=x, **kw).field.compute()
         single = time.perf_counter() - t0
     print(
         f"{args.frames} frames of {args.pixels} x {args.lines} px, {moved.sizes['scatterer']} "
@@ -117,7 +117,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         for name in ("synchronous", "threads", "processes", "distributed"):
             path = Path(tmp) / f"{name}.nc"
-            series = bscan_series(moved, src, waist=w0, x=x, **kw)[["field"]]
+            series = bscan_series(moved, src, waist=w0, lines=x, **kw)[["field"]]
             tracemalloc.reset_peak()
             t0 = time.perf_counter()
             if name == "distributed":

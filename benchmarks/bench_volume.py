@@ -52,7 +52,7 @@ def main() -> None:
         seed=1,
         tile=(512.0, 64.0, 64.0),
         waist=2 * pitch,
-        x=xs,
+        lines=xs,
         y=xs,
         chunk=args.chunk,
         method=args.method,

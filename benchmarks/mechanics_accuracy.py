@@ -1,4 +1,5 @@
-"""Accuracy of the FE phantoms (speckle.compress): a stiff circular inclusion against Eshelby.
+"""Accuracy of the FE phantoms (speckle.compress_phantom): a stiff circular inclusion against
+Eshelby.
 
 Run from the repository root (~2 min on 2 cores)::
 

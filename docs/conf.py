@@ -69,7 +69,7 @@ numpydoc_validation_checks = {
     "RT02", "RT03",
     "SS01", "SS03", "SS04",
 }  # fmt: skip
-#: Not validated: constants (``METHODS``, ``ENGINE``, ...: data, documented by a ``#:``
+#: Not validated: constants (``ASCAN_METHODS``, ``ENGINE``, ...: data, documented by a ``#:``
 #: comment where they are defined) and members of classes (``System``, ``Beam``: dataclass
 #: fields are documented in the class's Attributes section; the class itself is validated).
 numpydoc_validation_exclude = {r"\.[A-Z][A-Z0-9_]+$", r"\.[A-Z]\w*\.\w+$"}

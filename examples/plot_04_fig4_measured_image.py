@@ -7,7 +7,7 @@ gain and offset of a scanner are unknown, so the comparison uses statistics free
 standardised log-intensity histogram, its skewness and excess kurtosis. The pipeline compares
 a measured PDMS B-scan that is not part of the repository; this example writes its own
 stand-in (the model with an intensity floor 20 dB below the mean, log-compressed to 8 bits,
-as an OCT engine stores it) and loads it with ``speckle.load_measured`` as you would load your
+as an OCT engine stores it) and loads it with ``speckle.load_image`` as you would load your
 scanner's ``.npy`` file. The pipeline target is ``results/fig4/fig4.png``.
 """
 
@@ -33,7 +33,7 @@ stored = speckle.log_compress(intensity / intensity.mean(), gain=21.85, offset=1
 with tempfile.TemporaryDirectory() as tmp:
     path = Path(tmp) / "my_bscan.npy"
     np.save(path, stored.values)
-    image = speckle.load_measured(path, scale="log", roi={"depth": [0, 64], "aline": [0, 256]})
+    image = speckle.load_image(path, kind="log", dims=("depth", "x"), pixel_size=8.0, pitch=8.0)
 
 sim = histograms.simulated_panels(
     density=fig4["density"],

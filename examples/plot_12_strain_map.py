@@ -3,7 +3,7 @@ A strain map: inclusion phantom compressed by finite elements
 =============================================================
 
 A stiff circular inclusion (40 vs 10 kPa, Poisson ratio 0.45) in a block compressed by 0.4 %
-with a sliding probe, solved by plane-strain finite elements (``speckle.compress``). The
+with a sliding probe, solved by plane-strain finite elements (``speckle.compress_phantom``). The
 scatterers move with the FE displacement; each strain estimator reads the strain from the two
 complex images. Top: modulus, FE strain and each method's strain map; bottom: error maps.
 Reduced here to 128 pixels x 32 A-lines (x: A-line index, 8 µm apart; radius 80 µm) and

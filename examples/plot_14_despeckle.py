@@ -25,12 +25,12 @@ src = speckle.spectrum(128, 1024.0, k0_dk=10)
 scene = speckle.random_scatterers(
     96, 16.0, n_pixels=128, depth_range=1024.0, seed=1, count="poisson"
 )
-tissue = speckle.layers([0.0, 300.0, 640.0], backscatter=[1.0, 4.0, 0.5])
+tissue = speckle.layer_stack([0.0, 300.0, 640.0], backscatter=[1.0, 4.0, 0.5])
 scene = speckle.backscatter(scene, tissue)
 img = speckle.bscan(scene, src, method="finufft", tol=1e-9)
 truth = speckle_free_image(scene, src).values
 
-windows = sa.subband_windows(128, 4, window="rectangular", overlap=0.0)
+windows = sa.subband_apodizations(128, 4, apodization="rectangular", overlap=0.0)
 images = {
     "single look": img.intensity.values,
     "4 frequency looks": sa.compound(sa.frequency_looks(img, windows), "intensity").values,

@@ -18,6 +18,7 @@ subpackage lists its own), and loads each on first use (scientific Python's SPEC
 """
 
 from . import analysis, imaging, scene, studies, synthoct, system
+from ._deprecate import retired_names
 from ._lazy import attach
 
 #: Subpackages whose public names the top level gathers, in the order of the flow.
@@ -31,11 +32,15 @@ _GROUPS = {
 }
 #: Top-level infrastructure modules and the names they contribute (``speckle.sweep`` is the
 #: module of the Dask sweeps; its function is ``speckle.sweep.sweep``).
-_INFRASTRUCTURE = {"io": ["open_dataset", "stream_to_netcdf", "to_netcdf"]}
+_INFRASTRUCTURE = {
+    "io": ["IMAGE_KINDS", "load_image", "open_dataset", "stream_to_netcdf", "to_netcdf"]
+}
 
 _lazy_getattr, _lazy_dir, _names = attach(
     __name__, {**{name: mod.__all__ for name, mod in _GROUPS.items()}, **_INFRASTRUCTURE}
 )
+#: Retired names (``speckle.METHODS``, ``speckle.image``, ...) warn and resolve to the new ones.
+_retired_getattr = retired_names(__name__, _lazy_getattr)
 #: Functions, classes and constants only (subpackages and modules are reached as attributes).
 __all__ = ["__version__", *_names]
 
@@ -46,11 +51,11 @@ def __getattr__(name: str):
         from .provenance import package_version
 
         return package_version()
-    return _lazy_getattr(name)
+    return _retired_getattr(name)
 
 
 def __dir__() -> list[str]:
     return sorted({*__all__, *_lazy_dir()})
 
 
-del analysis, attach, imaging, scene, studies, synthoct, system
+del analysis, attach, imaging, retired_names, scene, studies, synthoct, system

@@ -9,12 +9,14 @@ layer passes the new module's name instead: it is imported only when an old name
 
 from __future__ import annotations
 
+import functools
 import importlib
+import inspect
 import types
 import warnings
 from collections.abc import Callable, Iterable, Mapping
 
-__all__ = ["moved"]
+__all__ = ["moved", "renamed_parameters", "retired_names"]
 
 
 def moved(
@@ -73,3 +75,115 @@ def moved(
         return getattr(module, table[name])
 
     return __getattr__
+
+
+def retired_names(package: str, getattr_: Callable[[str], object]) -> Callable[[str], object]:
+    """A package ``__getattr__``: retired public names resolve to their new ones, warning.
+
+    The retired names are those of :data:`speckle.conventions.RETIRED` of kind ``function``
+    or ``constant`` whose new name the package exports (its ``__all__``) and that are not the
+    name of one of its modules (``speckle.scene.layers`` stays the module); any other name goes
+    to ``getattr_`` (the package's lazy ``__getattr__``). The old names are not in
+    ``__all__``.
+
+    Parameters
+    ----------
+    package : str
+        The package's ``__name__``.
+    getattr_ : callable
+        The package's own ``__getattr__``.
+
+    Returns
+    -------
+    callable
+        The package's ``__getattr__``.
+
+    Examples
+    --------
+    >>> import warnings, speckle
+    >>> with warnings.catch_warnings(record=True) as seen:
+    ...     warnings.simplefilter("always")
+    ...     table = speckle.METHODS
+    >>> table is speckle.ASCAN_METHODS, str(seen[0].message).split(";")[0]
+    (True, 'speckle.METHODS is now speckle.ASCAN_METHODS')
+    """
+    import pkgutil
+    import sys
+
+    def __getattr__(name: str) -> object:
+        from .conventions import RETIRED  # here: ``import speckle`` imports no xarray
+
+        new, kind = RETIRED.get(name, (None, None))
+        module = sys.modules[package]
+        if (
+            kind in ("function", "constant")
+            and new in getattr(module, "__all__", ())
+            and name not in {m.name for m in pkgutil.iter_modules(getattr(module, "__path__", []))}
+        ):
+            warnings.warn(
+                f"{package}.{name} is now {package}.{new}; the old name will be removed in the "
+                "next release",
+                FutureWarning,
+                stacklevel=2,
+            )
+            return getattr_(new)
+        return getattr_(name)
+
+    return __getattr__
+
+
+def renamed_parameters(renames: Mapping[str, str]) -> Callable[[Callable], Callable]:
+    """Decorator: retired keyword arguments (old -> new) still work for a release, warning.
+
+    Parameters
+    ----------
+    renames : mapping of str to str
+        Old keyword -> new parameter name (which the decorated function must have).
+
+    Returns
+    -------
+    callable
+        The decorator: a call with an old keyword warns (``FutureWarning`` naming the new one)
+        and passes the value under the new name; giving both is a ``TypeError``.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> @renamed_parameters({"window": "apodization"})
+    ... def f(n, *, apodization="none"):
+    ...     return apodization
+    >>> with warnings.catch_warnings(record=True) as seen:
+    ...     warnings.simplefilter("always")
+    ...     value = f(4, window="hann")
+    >>> value, str(seen[0].message).split(";")[0]
+    ('hann', "f: parameter 'window' is now 'apodization'")
+    """
+    table = dict(renames)
+
+    def decorator(func: Callable) -> Callable:
+        params = inspect.signature(func).parameters
+        wrong = [f"{o}->{n}" for o, n in table.items() if n not in params or o in params]
+        if wrong:
+            raise TypeError(f"{func.__name__}: renames {wrong} do not match its parameters")
+
+        @functools.wraps(func)
+        def wrapper(*args, **kwargs):
+            for old, new in table.items():
+                if old not in kwargs:
+                    continue
+                if new in kwargs:
+                    raise TypeError(
+                        f"{func.__name__} got both {old!r} (retired) and {new!r}: give {new!r}"
+                    )
+                warnings.warn(
+                    f"{func.__name__}: parameter {old!r} is now {new!r}; the old name will be "
+                    "removed in the next release",
+                    FutureWarning,
+                    stacklevel=2,
+                )
+                kwargs[new] = kwargs.pop(old)
+            return func(*args, **kwargs)
+
+        return wrapper
+
+    return decorator

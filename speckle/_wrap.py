@@ -28,9 +28,13 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 import xarray as xr
 
-from .conventions import attrs, grid
+from .conventions import RETIRED, attrs, canonical_dims, grid
 
 __all__ = ["ArraySpec", "Out", "check_same_grid", "map_frames", "preprocess_and_wrap"]
+
+#: Current names of retired dims (``x`` for ``aline``): a spec asking for one accepts the
+#: retired name with a FutureWarning (:func:`speckle.conventions.canonical_dims`).
+_RENAMED_DIMS = frozenset(new for new, kind in RETIRED.values() if kind == "dim")
 
 #: Leading dims whose indices a refusal names (``frames [2] hold NaN``).
 FRAME_DIMS = ("frame", "time")
@@ -165,6 +169,8 @@ def _values(name: str, value: object, spec: ArraySpec, stack: Sequence[str]):
         var = value[spec.variable]  # attrs merged on a copy: the caller's object is unchanged
         value = var.assign_attrs({**value.attrs, **var.attrs})
     if isinstance(value, xr.DataArray):
+        if spec.dims is not None and _RENAMED_DIMS.intersection(spec.dims):
+            value = canonical_dims(value, name)  # (depth, aline) -> (depth, x), warning
         if spec.dims is not None and spec.extra_dims:
             missing = [d for d in spec.dims if d not in value.dims]
             if missing:

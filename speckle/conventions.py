@@ -10,8 +10,10 @@ attributes (:func:`spacing`).
 name          units       meaning
 ============  ==========  ===============================================================
 depth         um          depth of a pixel centre in the medium, ``q*H/N`` (pixel axis)
-aline         um          lateral position of an independent A-line (the paper's B-scans)
-x, y          um          lateral position in a shared scene or of a scanned beam line
+x, y          um          lateral position: the lateral dim of every image, a shared scene's
+                          scatterers, a scanned beam line
+aline         um          retired name of ``x`` (:data:`RETIRED`, :func:`canonical_dims`), still
+                          the line dim of independent-line scenes and their B-scans
 z             um          depth of a scatterer (a variable, not a dim)
 wavenumber    rad/um      spectral component ``k_n = k0 + n*pi/H``
 strain        1           uniaxial strain, compression > 0
@@ -67,6 +69,8 @@ them; docstrings write µm.
 from __future__ import annotations
 
 import dataclasses
+import warnings
+from collections.abc import Mapping
 
 import numpy as np
 import xarray as xr
@@ -75,7 +79,10 @@ __all__ = [
     "COORDS",
     "DEPTH_RANGE",
     "QUANTITIES",
+    "RETIRED",
     "attrs",
+    "canonical_dims",
+    "canonical_keys",
     "coord",
     "depth_range_of",
     "grid",
@@ -157,6 +164,58 @@ QUANTITIES: dict[str, tuple[str, str]] = {
         "intensity relative to the mean speckle intensity",
     ),
     "log_data": ("1 (log-compressed, unknown gain/offset)", "log-compressed measured data"),
+}
+
+
+#: Retired names, old -> (new, kind); kind is ``dim``, ``attr``, ``function``, ``constant``
+#: (public names of the top level and their subpackage) or ``parameter`` (key
+#: ``"<function>.<parameter>"``: the parameter is retired in that function only).
+#: Each old name keeps working for one release with a ``FutureWarning`` naming the new one
+#: (dims through :func:`canonical_dims`); ``tests/test_names.py`` checks that no module uses
+#: one outside its deprecation shim.
+RETIRED: dict[str, tuple[str, str]] = {
+    "aline": ("x", "dim"),
+    "METHODS": ("ASCAN_METHODS", "constant"),
+    "strain.METHODS": ("STRAIN_METHODS", "constant"),
+    "image": ("scan_image", "function"),
+    "process": ("process_interferogram", "function"),
+    "compress": ("compress_phantom", "function"),
+    "layers": ("layer_stack", "function"),
+    "subband_windows": ("subband_apodizations", "function"),
+    "window_correlation": ("apodization_correlation", "function"),
+    "spectral_window": ("spectral_apodization", "function"),
+    "spectrometer.WINDOWS": ("APODIZATIONS", "constant"),
+    "compounding.WINDOWS": ("SUBBAND_APODIZATIONS", "constant"),
+    "band_window": ("band_apodization", "attr"),
+    # line positions are ``lines``; ``x`` is the lateral dim and scatterer positions
+    **{
+        f"{f}.x": ("lines", "parameter")
+        for f in (
+            "scan_image",
+            "image_regions",
+            "scan_kernel",
+            "bscan_series",
+            "speckle_free_image",
+            "angular_looks",
+            "spatial_looks",
+            "polarization_looks",
+            "temporal_looks",
+        )
+    },
+    # spectral windows are apodizations; ``window`` is a pixel window only
+    **{
+        f"{f}.{old}": (new, "parameter")
+        for f in ("process_interferogram", "system_ascan")
+        for old, new in (
+            ("window", "apodization"),
+            ("window_fwhm_fraction", "apodization_fwhm_fraction"),
+        )
+    },
+    "subband_apodizations.window": ("apodization", "parameter"),
+    "apodization_correlation.windows": ("apodizations", "parameter"),
+    "frequency_looks.windows": ("apodizations", "parameter"),
+    "ssada.band_window": ("band_apodization", "parameter"),
+    "load_measured.aline_pitch": ("pitch", "parameter"),
 }
 
 
@@ -450,3 +509,117 @@ def depth_range_of(
             f"{what} needs attribute 'depth_range' (unambiguous depth H in µm); it has {sorted(a)}"
         )
     return None
+
+
+def canonical_dims(obj: object, what: str = "image") -> object:
+    """``obj`` with retired dim names renamed to their current ones (``aline`` -> ``x``).
+
+    The front door of every function taking a labelled image: an image written before the
+    rename, with dims ``(depth, aline)``, is accepted for one release and renamed to
+    ``(depth, x)`` with a ``FutureWarning``; anything that is not an xarray object passes
+    unchanged.
+
+    Parameters
+    ----------
+    obj : xarray.DataArray, xarray.Dataset or any
+        A labelled image (or anything else, returned as is).
+    what : str
+        Name of ``obj`` used in error messages (e.g. ``"image"``, ``"frames"``).
+
+    Returns
+    -------
+    same type as ``obj``
+        ``obj`` with every retired dim (and its coordinate) renamed.
+
+    Raises
+    ------
+    ValueError
+        If ``obj`` has both a retired dim and its new name (e.g. ``aline`` and ``x``).
+
+    Warns
+    -----
+    FutureWarning
+        Naming the new dim, e.g. ``dim 'aline' is now 'x'``.
+
+    Examples
+    --------
+    >>> import warnings, xarray as xr
+    >>> old = xr.DataArray([[1.0, 2.0]], dims=("depth", "aline"))
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore", FutureWarning)
+    ...     canonical_dims(old).dims
+    ('depth', 'x')
+    """
+    if not isinstance(obj, xr.DataArray | xr.Dataset):
+        return obj
+    renames = {}
+    for old, (new, kind) in RETIRED.items():
+        if kind != "dim" or old not in obj.dims:
+            continue
+        if new in obj.dims or new in obj.coords:
+            raise ValueError(
+                f"{what} has both dims {old!r} (retired) and {new!r}: keep only {new!r}"
+            )
+        renames[old] = new
+    if not renames:
+        return obj
+    for old, new in renames.items():
+        warnings.warn(
+            f"dim {old!r} is now {new!r}: {what} with dim {old!r} is renamed; the old name will "
+            f"be refused in the next release",
+            FutureWarning,
+            stacklevel=3,
+        )
+    return obj.rename(renames)
+
+
+def canonical_keys(mapping: object, what: str = "mapping") -> object:
+    """``mapping`` with keys that are retired dim names renamed (``aline`` -> ``x``), warning.
+
+    For mappings keyed by dim, e.g. a region of interest ``{"depth": [0, 64], "x": [0, 128]}``;
+    anything that is not a mapping (``None`` included) passes unchanged.
+
+    Parameters
+    ----------
+    mapping : mapping or any
+        Keyed by dim names.
+    what : str
+        Name of ``mapping`` in messages (e.g. ``"roi"``).
+
+    Returns
+    -------
+    same as ``mapping`` or dict
+        A new dict when a key was renamed, else ``mapping`` itself.
+
+    Raises
+    ------
+    ValueError
+        If ``mapping`` has both a retired key and its new name.
+
+    Warns
+    -----
+    FutureWarning
+        Naming the new key, e.g. ``dim 'aline' is now 'x'``.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore", FutureWarning)
+    ...     canonical_keys({"depth": [0, 4], "aline": [0, 8]}, "roi")
+    {'depth': [0, 4], 'x': [0, 8]}
+    """
+    if not isinstance(mapping, Mapping):
+        return mapping
+    dims = {old: new for old, (new, kind) in RETIRED.items() if kind == "dim"}
+    found = [k for k in mapping if k in dims]
+    for old in found:
+        if dims[old] in mapping:
+            raise ValueError(f"{what} has both keys {old!r} (retired) and {dims[old]!r}")
+        warnings.warn(
+            f"dim {old!r} is now {dims[old]!r}: {what} key {old!r} is renamed; the old name will "
+            f"be refused in the next release",
+            FutureWarning,
+            stacklevel=3,
+        )
+    return {dims.get(k, k): v for k, v in mapping.items()} if found else mapping

@@ -35,11 +35,15 @@ import numpy as np
 import xarray as xr
 
 from ._atomic import atomic_path
+from ._image_files import IMAGE_DIMS, IMAGE_KINDS, load_image
 from ._validate import check_bool, check_int
 
 __all__ = [
     "ENGINE",
+    "IMAGE_DIMS",
+    "IMAGE_KINDS",
     "atomic_path",
+    "load_image",
     "netcdf_safe_attrs",
     "open_dataset",
     "stream_to_netcdf",

@@ -96,7 +96,7 @@ def test_function_wins_over_its_same_named_module_whatever_the_import_order():
         "import speckle.system.rolloff, speckle.imaging.bscan, speckle.scene.layers\n"
         "import speckle\n"
         "print(callable(speckle.system.rolloff), callable(speckle.rolloff),"
-        " callable(speckle.imaging.bscan), callable(speckle.layers))"
+        " callable(speckle.imaging.bscan), callable(speckle.layer_stack))"
     )
     assert out.split() == ["True"] * 4
 

@@ -155,7 +155,7 @@ class Fixtures:
 
     @functools.cached_property
     def fem(self):
-        return speckle.compress(self.fem_labels, {0: 10.0, 1: 40.0}, 0.3, strain=0.01)
+        return speckle.compress_phantom(self.fem_labels, {0: 10.0, 1: 40.0}, 0.3, strain=0.01)
 
     @functools.cached_property
     def system(self):
@@ -199,7 +199,7 @@ class Fixtures:
 
     @functools.cached_property
     def looks(self):
-        return speckle.frequency_looks(self.img, speckle.subband_windows(16, 2))
+        return speckle.frequency_looks(self.img, speckle.subband_apodizations(16, 2))
 
     @functools.cached_property
     def speckled(self):
@@ -411,6 +411,7 @@ BY_NAME = {
     "diffusion": "positive",
     "interval": "positive",
     "x": "positions",
+    "lines": "positions",
     "z": "positions",
     "amplitude": "complex_array",
     "source": "dataset",
@@ -488,7 +489,7 @@ ENTRIES: dict[str, Entry] = {
         displacement="none",
         why="displacement: a callable or a Dataset, checked in tests/scene",
     ),
-    "layers": E(
+    "layer_stack": E(
         lambda: dict(tops=[50.0, 80.0], properties={"backscatter": [2.0, 3.0]}),
         tops="positions",
         properties="none",
@@ -527,7 +528,7 @@ ENTRIES: dict[str, Entry] = {
         why="ranges: pairs checked in tests/scene/test_properties_scene.py",
     ),
     "from_lines": E(lambda: dict(scene=F.scene)),
-    "compress": E(
+    "compress_phantom": E(
         lambda: dict(
             labels=F.fem_labels,
             youngs_modulus={0: 10.0, 1: 40.0},
@@ -737,7 +738,7 @@ ENTRIES: dict[str, Entry] = {
     "interpolation_gain": E(
         lambda: dict(theta=1.0, t=0.3, method="cubic"), theta="real_array", t="real_array"
     ),
-    "process": E(
+    "process_interferogram": E(
         lambda: dict(
             signal=F.camera[0],
             grid=F.camera[2],
@@ -751,8 +752,8 @@ ENTRIES: dict[str, Entry] = {
         background="none",
         resample="choice",
         dispersion="none",
-        window="choice",
-        window_fwhm_fraction="probability",
+        apodization="choice",
+        apodization_fwhm_fraction="probability",
         why="background: array or 'mean'",
     ),
     "resampling_response": E(
@@ -766,8 +767,8 @@ ENTRIES: dict[str, Entry] = {
         background="none",
         resample="choice",
         compensate="none",
-        window="choice",
-        window_fwhm_fraction="probability",
+        apodization="choice",
+        apodization_fwhm_fraction="probability",
         camera="none",
         why="system: a System; **camera: camera_signal's options",
     ),
@@ -837,8 +838,8 @@ ENTRIES: dict[str, Entry] = {
     ),
     "beam_reach": E(lambda: dict(waist=6.0), eps="probability", widening="positive"),
     "scan_lines": E(lambda: dict(n_lines=4, pitch=2.0), start="real"),
-    "image": E(
-        lambda: dict(scene=F.shared, source=F.src, waist=4.0, x=speckle.scan_lines(4, 4.0)),
+    "scan_image": E(
+        lambda: dict(scene=F.shared, source=F.src, waist=4.0, lines=speckle.scan_lines(4, 4.0)),
         y="positions",
     ),
     "image_regions": E(
@@ -847,7 +848,7 @@ ENTRIES: dict[str, Entry] = {
             source=F.src,
             seed=1,
             waist=6.0,
-            x=speckle.scan_lines(4, 4.0),
+            lines=speckle.scan_lines(4, 4.0),
             chunk=4,
         ),
         regions="dataset",
@@ -1046,16 +1047,18 @@ ENTRIES: dict[str, Entry] = {
     "compound": E(lambda: dict(looks=F.looks), looks="dataset"),
     "compounded_contrast": E(lambda: dict(mu=np.eye(2)), mu="image"),
     "frequency_looks": E(
-        lambda: dict(img=F.img, windows=speckle.subband_windows(16, 2)),
+        lambda: dict(img=F.img, apodizations=speckle.subband_apodizations(16, 2)),
         img="dataset",
-        windows="image",
+        apodizations="image",
     ),
-    "subband_windows": E(
-        lambda: dict(n_samples=16, n_looks=2), window="choice", overlap="probability"
+    "subband_apodizations": E(
+        lambda: dict(n_samples=16, n_looks=2), apodization="choice", overlap="probability"
     ),
     "subband_fwhm": E(lambda: dict(n_pixels=16, n_samples=8)),
-    "window_correlation": E(
-        lambda: dict(windows=speckle.subband_windows(16, 2)), windows="image", spectrum="real_array"
+    "apodization_correlation": E(
+        lambda: dict(apodizations=speckle.subband_apodizations(16, 2)),
+        apodizations="image",
+        spectrum="real_array",
     ),
     "split_spectrum_contrast": E(
         lambda: dict(weights=np.ones((2, 16)), density=4.0), weights="image", kurtosis="positive"
@@ -1071,7 +1074,7 @@ ENTRIES: dict[str, Entry] = {
             source=F.src,
             offsets=[0.0, 8.0],
             waist=6.0,
-            x=speckle.scan_lines(4, 4.0),
+            lines=speckle.scan_lines(4, 4.0),
             chunk=4,
         ),
         offsets="real_array",
@@ -1082,7 +1085,7 @@ ENTRIES: dict[str, Entry] = {
             source=F.src,
             angles=[-3.0, 3.0],
             waist=6.0,
-            x=speckle.scan_lines(4, 4.0),
+            lines=speckle.scan_lines(4, 4.0),
             chunk=4,
         ),
         angles="real_array",
@@ -1094,7 +1097,7 @@ ENTRIES: dict[str, Entry] = {
             depolarization=0.3,
             seed=1,
             waist=6.0,
-            x=speckle.scan_lines(4, 4.0),
+            lines=speckle.scan_lines(4, 4.0),
             chunk=4,
         ),
         depolarization="probability",
@@ -1108,7 +1111,7 @@ ENTRIES: dict[str, Entry] = {
             interval=0.01,
             seed=1,
             waist=6.0,
-            x=speckle.scan_lines(4, 4.0),
+            lines=speckle.scan_lines(4, 4.0),
             chunk=4,
         )
     ),
@@ -1193,10 +1196,15 @@ ENTRIES: dict[str, Entry] = {
         path="path",
         scale="choice",
         roi="mapping",
-        aline_pitch="positive_length",
+        pitch="positive_length",
     ),
     "compare_measured": E(
-        lambda: dict(image=speckle.load_measured(F.npy, scale="linear"), n_blocks=2),
+        lambda: dict(
+            image=speckle.load_image(
+                F.npy, kind="intensity", dims=("depth", "x"), pixel_size=1.0, pitch=1.0
+            ),
+            n_blocks=2,
+        ),
         image="image",
         n_blocks="count",
     ),
@@ -1401,7 +1409,7 @@ ENTRIES: dict[str, Entry] = {
         lambda: dict(images=F.series_da, n_bands=2),
         images="dataset",
         n_bands="count",
-        band_window="choice",
+        band_apodization="choice",
         overlap="probability",
         window="none",
         stride="count",

@@ -205,13 +205,13 @@ def test_speckle_free_lines_refuses_a_float_pixel_count():
         speckle.speckle_free_lines([[8.0]], [[1.0]], n_pixels=16.7, depth_range=64.0)
 
 
-def test_frequency_looks_refuses_negative_windows():
+def test_frequency_looks_refuses_negative_apodizations():
     img = speckle.bscan(
         speckle.random_scatterers(4, 1.0, n_pixels=16, depth_range=128.0, seed=1),
         speckle.spectrum(16, 128.0, k0_dk=3.0),
     )
-    with pytest.raises(ValueError, match="windows"):
-        speckle.frequency_looks(img, -speckle.subband_windows(16, 2))
+    with pytest.raises(ValueError, match="apodizations"):
+        speckle.frequency_looks(img, -speckle.subband_apodizations(16, 2))
 
 
 # --- unclear errors ---------------------------------------------------------------------------

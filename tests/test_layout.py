@@ -32,7 +32,10 @@ RANK = {
 #: Third-party packages each group may import, and why.
 ALLOWED = {
     # infrastructure: arrays, I/O, sweeps and streaming on a dask.distributed cluster
-    None: {"numpy", "xarray", "dask", "distributed", "netCDF4", "yaml", "lazy_loader"},
+    None: {"numpy", "xarray", "dask", "distributed", "netCDF4", "yaml", "lazy_loader"}
+    # reading users' image files (speckle.io.load_image): MATLAB (scipy.io, h5py), Zarr, TIFF,
+    # each imported only when a file of its format is read
+    | {"scipy", "h5py", "zarr", "tifffile"},
     "scene": {"numpy", "xarray", "dask", "scipy", "skfem"},  # geometry, FEM mechanics
     "system": {"numpy", "xarray", "scipy", "finufft"},  # spectra, noise, fast camera model
     "imaging": {"numpy", "xarray", "dask", "scipy", "numba", "finufft"},  # fast synthesis

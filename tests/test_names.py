@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import ast
 import importlib
 import inspect
 import pkgutil
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -138,3 +140,244 @@ def test_a_file_written_before_the_rename_is_refused_clearly():
         depth_range_of(src.drop_attrs(), "source")
     assert depth_range_of(src.drop_attrs(), required=False) is None
     assert depth_range_of(src) == 128.0
+
+
+def test_canonical_dims_renames_the_retired_lateral_dim_with_a_warning():
+    from speckle.conventions import RETIRED, canonical_dims
+
+    assert RETIRED["aline"] == ("x", "dim")
+    old = speckle.__class__  # any non-xarray object passes unchanged
+    assert canonical_dims(old) is old
+    import xarray as xr
+
+    img = xr.DataArray(np.ones((2, 3)), dims=("depth", "aline"), coords={"aline": [0.0, 5.0, 10.0]})
+    with pytest.warns(FutureWarning, match="dim 'aline' is now 'x'"):
+        new = canonical_dims(img)
+    assert new.dims == ("depth", "x")
+    np.testing.assert_array_equal(new.x.values, [0.0, 5.0, 10.0])
+    current = img.rename({"aline": "x"})
+    assert canonical_dims(current) is current  # no copy, no warning
+    with pytest.warns(FutureWarning, match="dim 'aline' is now 'x'"):
+        assert canonical_dims(img.to_dataset(name="a")).sizes["x"] == 3
+    both = img.expand_dims(x=[1.0])
+    with pytest.raises(ValueError, match=r"both dims 'aline'.*and 'x'"):
+        canonical_dims(both)
+
+
+RETIRED_PUBLIC = [
+    ("METHODS", "ASCAN_METHODS", "imaging"),
+    ("image", "scan_image", "imaging"),
+    ("process", "process_interferogram", "system"),
+    ("compress", "compress_phantom", "scene"),
+    ("layers", "layer_stack", "scene"),
+]
+
+
+@pytest.mark.parametrize(("old", "new", "package"), RETIRED_PUBLIC)
+def test_a_retired_public_name_warns_naming_the_new_one(old, new, package):
+    from speckle.conventions import RETIRED
+
+    assert RETIRED[old][0] == new
+    sub = importlib.import_module(f"speckle.{package}")
+    assert old not in speckle.__all__ and old not in sub.__all__
+    assert new in speckle.__all__ and new in sub.__all__
+    with pytest.warns(FutureWarning, match=rf"speckle\.{old} is now speckle\.{new}"):
+        assert getattr(speckle, old) is getattr(speckle, new)
+    if old != "layers":  # speckle.scene.layers is the module
+        with pytest.warns(FutureWarning, match=rf"speckle\.{package}\.{old} is now"):
+            assert getattr(sub, old) is getattr(sub, new)
+    module = importlib.import_module(
+        getattr(speckle, new).__module__
+        if callable(getattr(speckle, new))
+        else "speckle.imaging.aline"
+    )
+    with pytest.warns(FutureWarning, match=rf"{old} moved to .*\.{new}"):
+        assert getattr(module, old) is getattr(speckle, new)
+
+
+def _retired_parameters():
+    from speckle.conventions import RETIRED
+
+    return sorted(
+        (key.split(".")[0], key.split(".")[1], new)
+        for key, (new, kind) in RETIRED.items()
+        if kind == "parameter"
+    )
+
+
+@pytest.mark.parametrize(("func", "old", "new"), _retired_parameters())
+def test_a_retired_parameter_is_renamed_and_its_old_keyword_warns(func, old, new):
+    """``lines`` for line positions, ``apodization`` for spectral windows: the function takes
+    the new name, and the old keyword still works for a release, warning."""
+    f = getattr(speckle, func, None) or getattr(speckle.system.spectrometer, func)
+    params = inspect.signature(f).parameters
+    assert new in params and old not in params, (func, list(params))
+    with pytest.warns(FutureWarning, match=rf"{func}: parameter '{old}' is now '{new}'"):
+        with pytest.raises((TypeError, ValueError)):  # fails later (no other arguments)
+            f(**{old: None})
+
+
+def test_the_old_keyword_gives_the_same_result():
+    k = np.linspace(5.0, 5.5, 16)
+    sig = np.cos(2 * k * 40.0)[None]
+    new = speckle.process_interferogram(sig, grid=k, k0=5.25, apodization="hann")
+    with pytest.warns(FutureWarning, match="'window' is now 'apodization'"):
+        old = speckle.process_interferogram(sig, grid=k, k0=5.25, window="hann")
+    np.testing.assert_array_equal(new, old)
+    with pytest.raises(TypeError, match="both 'window' \\(retired\\) and 'apodization'"):
+        speckle.process_interferogram(sig, grid=k, k0=5.25, window="hann", apodization="hann")
+
+
+# --- no module uses a retired name (speckle.conventions.RETIRED) outside its shim ----------------
+PACKAGE_ROOT = Path(speckle.__file__).parent
+#: Files allowed to spell retired names: the table itself and the deprecation machinery.
+SHIM_FILES = {"conventions.py", "_deprecate.py"}
+#: Files still using the retired dim ``aline`` as a string (issue 32, step 1 not finished), and
+#: how many times: the count only shrinks (a new use fails); remove a file's row when it is 0.
+ALINE_LEFT = {
+    "analysis/_common.py": 1,
+    "analysis/correlation.py": 8,
+    "analysis/statistics.py": 1,
+    "analysis/tracking.py": 5,
+    "figures/_elastography.py": 1,
+    "figures/beam.py": 2,
+    "figures/deformation.py": 4,
+    "figures/despeckle.py": 1,
+    "figures/elastography.py": 13,
+    "figures/histograms.py": 1,
+    "figures/static.py": 4,
+    "figures/system.py": 6,
+    "imaging/__init__.py": 1,
+    "imaging/beam_lines.py": 4,
+    "imaging/bscan.py": 2,
+    "imaging/timeseries.py": 1,
+    "imaging/truth.py": 1,
+    "io.py": 1,
+    "pipeline/checks.py": 1,
+    "scene/deformation.py": 20,
+    "scene/mechanics.py": 1,
+    "scene/scatterers.py": 5,
+    "scene/shared.py": 3,
+    "studies/twin/_estimates.py": 2,
+    "studies/twin/_inputs.py": 3,
+    "system/_scene.py": 1,
+    "system/noise.py": 2,
+    "system/phase.py": 2,
+    "system/polarization.py": 2,
+}
+
+
+#: Calls whose arguments spell retired names on purpose: the deprecation shims.
+SHIM_CALLS = {"moved", "renamed_parameters"}
+
+
+def _sources():
+    """``(file, tree)`` of every package module, the arguments of shim calls cut out."""
+    for path in sorted(PACKAGE_ROOT.rglob("*.py")):
+        rel = path.relative_to(PACKAGE_ROOT).as_posix()
+        if rel in SHIM_FILES:
+            continue
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Call) and getattr(node.func, "id", None) in SHIM_CALLS:
+                node.args, node.keywords = [], []
+        yield rel, tree
+
+
+def _retired(*kinds):
+    from speckle.conventions import RETIRED
+
+    return {old: new for old, (new, kind) in RETIRED.items() if kind in kinds}
+
+
+def _speckle_chain(node):
+    """Whether an attribute chain starts at the name ``speckle`` (``speckle.x.y``)."""
+    while isinstance(node, ast.Attribute):
+        node = node.value
+    return isinstance(node, ast.Name) and node.id == "speckle"
+
+
+def test_no_module_defines_imports_or_calls_a_retired_public_name():
+    names = {old.split(".")[-1]: new for old, new in _retired("function", "constant").items()}
+    found = []
+    for rel, tree in _sources():
+        for node in ast.walk(tree):
+            bad = None
+            if isinstance(node, ast.FunctionDef | ast.ClassDef) and node.name in names:
+                bad = f"def {node.name}"
+            elif isinstance(node, ast.ImportFrom) and (node.module or "").startswith(
+                ("speckle", "")
+            ):
+                if node.level or (node.module or "").startswith("speckle"):
+                    bad = next((f"import {a.name}" for a in node.names if a.name in names), None)
+            elif isinstance(node, ast.Attribute) and node.attr in names and _speckle_chain(node):
+                bad = f"speckle...{node.attr}"
+            if bad and not (rel == "imaging/__init__.py" and bad == "import aline"):
+                found.append(
+                    f"{rel}:{node.lineno} {bad} (now {names[bad.split()[-1].split('.')[-1]]})"
+                )
+    assert found == [], "retired names in use:\n" + "\n".join(found)
+
+
+def test_no_public_all_lists_a_retired_name():
+    names = {old.split(".")[-1] for old in _retired("function", "constant")}
+    found = []
+    for rel, tree in _sources():
+        for node in tree.body:
+            if (
+                isinstance(node, ast.Assign)
+                and any(isinstance(t, ast.Name) and t.id == "__all__" for t in node.targets)
+                and isinstance(node.value, ast.List | ast.Tuple)
+            ):
+                found += [
+                    f"{rel}: {e.value}"
+                    for e in node.value.elts
+                    if isinstance(e, ast.Constant) and e.value in names
+                ]
+    assert found == [], found
+    for package in PACKAGES:
+        assert not names & set(importlib.import_module(package).__all__), package
+
+
+def test_no_public_function_takes_a_retired_parameter():
+    callables = _callables()
+    wrong = []
+    for key in _retired("parameter"):
+        func, old = key.split(".")
+        for qual, obj in callables.items():
+            if qual.split(".")[-1] == func and old in {p.name for p in _parameters(obj)}:
+                wrong.append(f"{qual}({old}=)")
+    assert wrong == [], wrong
+
+
+def test_no_module_writes_a_retired_attribute():
+    attrs_ = _retired("attr")
+    found = [
+        f"{rel}:{node.lineno} {node.value!r}"
+        for rel, tree in _sources()
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Constant) and node.value in attrs_
+    ]
+    found += [
+        f"{rel}:{node.lineno} keyword {node.arg}"
+        for rel, tree in _sources()
+        for node in ast.walk(tree)
+        if isinstance(node, ast.keyword) and node.arg in attrs_
+    ]
+    assert found == [], found
+
+
+def test_the_retired_dim_only_leaves_the_package():
+    """``aline`` as a string (a dim, coordinate or key) only in the files of :data:`ALINE_LEFT`,
+    never more often than recorded there (the rename to ``x`` is under way)."""
+    dims = _retired("dim")
+    assert dims == {"aline": "x"}
+    now = {}
+    for rel, tree in _sources():
+        n = sum(isinstance(node, ast.Constant) and node.value == "aline" for node in ast.walk(tree))
+        if n:
+            now[rel] = n
+    grown = {f: (n, ALINE_LEFT.get(f, 0)) for f, n in now.items() if n > ALINE_LEFT.get(f, 0)}
+    assert not grown, f"more uses of the retired dim 'aline' (now, recorded): {grown}; use 'x'"
+    done = sorted(f for f in ALINE_LEFT if f not in now)
+    assert not done, f"no 'aline' left in {done}: remove their rows from ALINE_LEFT"

@@ -426,18 +426,19 @@ def test_tracking_accepts_a_one_pixel_step(pair):
     assert float(abs(out.uz - 3.0).mean()) < 0.05 * 8.0  # rigid 3 µm shift, < 0.05 px mean
 
 
+@pytest.mark.filterwarnings("ignore:load_measured is retired:FutureWarning")
 def test_measured_roi_must_be_a_mapping_inside_the_image(tmp_path):
     from speckle.analysis.measured import load_measured
 
     path = tmp_path / "m.npy"
     np.save(path, np.random.default_rng(0).uniform(1, 2, (20, 30)))
-    assert load_measured(path, roi={"depth": [0, 20], "aline": [5, 30]}).shape == (20, 25)
+    assert load_measured(path, roi={"depth": [0, 20], "x": [5, 30]}).shape == (20, 25)
     with pytest.raises(TypeError, match="roi must be a mapping"):
         load_measured(path, roi=[0, 5])
     with pytest.raises(ValueError, match=r"roi\['depth'\] must be an integer in \[0, 20\]"):
         load_measured(path, roi={"depth": [0, 40]})
-    with pytest.raises(ValueError, match=r"roi\['aline'\] must be an integer in \[0, 30\]"):
-        load_measured(path, roi={"aline": [31, None]})
+    with pytest.raises(ValueError, match=r"roi\['x'\] must be an integer in \[0, 30\]"):
+        load_measured(path, roi={"x": [31, None]})
 
 
 # --- property test: malformed inputs -------------------------------------------------------

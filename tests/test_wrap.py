@@ -208,7 +208,6 @@ PENDING_MODULES = {
     "speckle.analysis.dynamics",
     "speckle.analysis.dynamics_theory",
     "speckle.analysis.filters",
-    "speckle.analysis.image_files",
     "speckle.analysis.image_quality",
     "speckle.analysis.measured",
     "speckle.analysis.sparse",

@@ -17,6 +17,7 @@ from ..conventions import attrs, spacing
 __all__ = [
     "DEPTH",
     "LATERAL",
+    "X",
     "delay_selection",
     "depth_major",
     "field_of",
@@ -28,9 +29,10 @@ __all__ = [
 ]
 
 
-#: The image dims of the analysis modules (one place to rename them: the lateral dim is
-#: ``aline`` until the vocabulary step of issue 32 makes it ``x``).
-DEPTH, LATERAL = "depth", "aline"
+#: The image dims of the analysis modules (one place to rename them): the lateral dim is
+#: ``aline`` (``LATERAL``) until the vocabulary step of issue 32 makes it ``x`` (``X``; the
+#: modules already moved, e.g. autocorrelation, use ``X``: ``aline`` input warns there).
+DEPTH, LATERAL, X = "depth", "aline", "x"
 
 
 def field_of(data: xr.Dataset | xr.DataArray) -> xr.DataArray:
@@ -77,7 +79,7 @@ def matched(x: xr.DataArray, y: xr.DataArray) -> tuple[xr.DataArray, xr.DataArra
             "select one frame of the series (.isel(time=i))"
         )
     for name, f in (("reference", x), ("deformed", y)):
-        missing = [d for d in ("depth", "aline") if d not in f.dims]
+        missing = [d for d in (DEPTH, LATERAL) if d not in f.dims]
         if missing:
             raise ValueError(f"{name} must have dims 'depth' and 'aline'; got dims {f.dims}")
     same_grid(x, y, ("reference", "deformed"))
@@ -132,7 +134,7 @@ def grid_spacing(field: xr.DataArray | xr.Dataset) -> tuple[float, float]:
     A-line the pitch defaults to the pixel size.
     """
     dz = spacing(field, "depth")
-    return dz, spacing(field, "aline", default=dz)
+    return dz, spacing(field, LATERAL, default=dz)
 
 
 def delay_selection(t: np.ndarray, delays: object) -> np.ndarray:

@@ -23,7 +23,7 @@ from .correlation import amplitude_from_gamma, correlation_array, expected_gamma
 from .phase import DEFAULT_MAX_BIAS, choose_lag, depth_autocorrelation, lag_and_rho
 from .tracking import interpolate_windows, track_array, track_axial
 
-METHODS = ("vector", "wls", "tracking", "correlation")
+STRAIN_METHODS = ("vector", "wls", "tracking", "correlation")
 DISPLACEMENT_METHODS = ("phase", "tracking")
 DEFAULT_METHOD = "vector"
 #: Default window (depth, aline) in pixels of each method.

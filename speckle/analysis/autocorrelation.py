@@ -24,7 +24,7 @@ from scipy import optimize
 from .._validate import check_int, check_real
 from .._wrap import ArraySpec, preprocess_and_wrap
 from ..conventions import attrs, coord
-from ._common import DEPTH, LATERAL
+from ._common import DEPTH, X
 
 __all__ = [
     "axial_correlation_theory",
@@ -42,18 +42,16 @@ def _pearson(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.sum(a * b) / np.sqrt(np.sum(a * a) * np.sum(b * b)))
 
 
-@preprocess_and_wrap(
-    checks={"intensity": ArraySpec(kind="real", dims=(DEPTH, LATERAL), labelled=True)}
-)
+@preprocess_and_wrap(checks={"intensity": ArraySpec(kind="real", dims=(DEPTH, X), labelled=True)})
 def intensity_autocorrelation(
     intensity: xr.DataArray, *, max_lag: int = 8, n_blocks: int = 16
 ) -> xr.Dataset:
-    """Pearson autocorrelation along ``depth`` and ``aline`` at lags ``0 .. max_lag``.
+    """Pearson autocorrelation along ``depth`` and ``x`` at lags ``0 .. max_lag``.
 
     Parameters
     ----------
     intensity : xarray.DataArray
-        Linear intensities with dims ``(depth, aline)``.
+        Linear intensities with dims ``(depth, x)`` (``(depth, aline)`` warns).
     max_lag : int
         Largest lag in pixels / A-lines (>= 1, less than either size).
     n_blocks : int
@@ -65,7 +63,7 @@ def intensity_autocorrelation(
         ``autocorrelation`` and ``autocorrelation_se`` with dims ``(axis, lag)``, ``axis`` =
         ``("depth", "lateral")``.
     """
-    x = intensity  # checked: a real, finite (depth, aline) DataArray's values
+    x = intensity  # checked: a real, finite (depth, x) DataArray's values ('aline' warns)
     nz, nl = x.shape
     ml = check_int(max_lag, "max_lag", low=1, high=min(nz, nl) - 2)
     nb = check_int(n_blocks, "n_blocks", low=2, high=max(2, nl // (ml + 2)))

@@ -7,8 +7,8 @@ image, so any of :data:`AVERAGING` applies (:func:`compound`).
 
 * **frequency** (split spectrum, :func:`frequency_looks`): the complex image is exactly
   band-limited to the ``N`` components ``k_n`` of Eq. 4, so its spectrum is the inverse DFT
-  along depth; look ``i`` keeps ``W_i(k_n)`` of it (:func:`subband_windows`: rectangular,
-  Gaussian or Hann windows of ``L`` sub-bands with a fractional ``overlap``). Exact: the same
+  along depth; look ``i`` keeps ``W_i(k_n)`` of it (:func:`subband_apodizations`: rectangular,
+  Gaussian or Hann apodizations of ``L`` sub-bands with a fractional ``overlap``). Exact: the same
   as imaging with the spectrum ``S W_i``.
 * **angular** (:func:`angular_looks`): the scene is rotated by each angle about the image centre
   (the beam tilted the other way), imaged, and the complex image resampled back onto the
@@ -25,7 +25,7 @@ image, so any of :data:`AVERAGING` applies (:func:`compound`).
 Theory (dense scene, equal mean intensities; tested): ``L`` uncorrelated looks give contrast
 ``1/sqrt(L)``; partially correlated ones ``C_L = sqrt(sum_ij |mu_ij|^2)/L``
 (:func:`compounded_contrast`) with ``mu_ij`` the field correlation of looks ``i, j``, for split
-spectrum the overlap of the windows weighted by ``|S|^2`` (:func:`window_correlation`;
+spectrum the overlap of the apodizations weighted by ``|S|^2`` (:func:`apodization_correlation`;
 ``int W_i W_j* dk / sqrt(int |W_i|^2 int |W_j|^2)`` for a rectangular spectrum).
 :func:`split_spectrum_contrast` adds the finite-density (Poisson) term exactly. A sub-band of
 ``M`` of the ``N`` samples has the intensity PSF ``|sin(pi M x/N)/(M sin(pi x/N))|^2``, ``N/M``
@@ -41,7 +41,7 @@ import numpy as np
 import scipy.optimize as opt
 import xarray as xr
 
-from .._deprecate import moved
+from .._deprecate import moved, renamed_parameters
 from .._validate import as_finite_array, check_choice, check_int, check_real
 from ..conventions import attrs, coord, units_of
 from ..scene.motion import brownian_motion
@@ -49,15 +49,36 @@ from ._common import label_looks
 from .dynamics_theory import g1_brownian
 
 #: Looks that form images moved to :mod:`speckle.studies.looks` (issue 32); the old names warn.
-__getattr__ = moved(
+_looks = moved(
     __name__,
     "speckle.studies.looks",
     ["angular_looks", "polarization_looks", "spatial_looks", "temporal_looks"],
 )
+#: Retired names (:data:`speckle.conventions.RETIRED`): spectral windows are apodizations.
+_renamed = moved(
+    __name__,
+    __name__,
+    [],
+    {
+        "WINDOWS": "SUBBAND_APODIZATIONS",
+        "subband_windows": "subband_apodizations",
+        "window_correlation": "apodization_correlation",
+    },
+)
+
+
+def __getattr__(name: str) -> object:
+    """The looks' old place and the retired names warn (``FutureWarning``) and resolve."""
+    try:
+        return _looks(name)
+    except AttributeError:
+        return _renamed(name)
+
 
 __all__ = [
     "AVERAGING",
-    "WINDOWS",
+    "SUBBAND_APODIZATIONS",
+    "apodization_correlation",
     "brownian_frames",
     "brownian_g1",
     "compound",
@@ -65,21 +86,21 @@ __all__ = [
     "frequency_looks",
     "noisy_looks",
     "split_spectrum_contrast",
+    "subband_apodizations",
     "subband_fwhm",
-    "subband_windows",
-    "window_correlation",
 ]
 
-#: Sub-band window shapes of :func:`subband_windows`.
-WINDOWS = ("rectangular", "gaussian", "hann")
+#: Sub-band apodization shapes of :func:`subband_apodizations`.
+SUBBAND_APODIZATIONS = ("rectangular", "gaussian", "hann")
 #: How looks are averaged (:func:`compound`).
 AVERAGING = ("intensity", "magnitude", "complex")
 
 
-def subband_windows(
-    n_samples: int, n_looks: int, *, window: str = "rectangular", overlap: float = 0.0
+@renamed_parameters({"window": "apodization"})
+def subband_apodizations(
+    n_samples: int, n_looks: int, *, apodization: str = "rectangular", overlap: float = 0.0
 ) -> np.ndarray:
-    """Split-spectrum windows ``W_i(k_n)``, ``i = 0 ... L-1``, over ``N`` spectral samples.
+    """Split-spectrum apodizations (windows over wavenumber) ``W_i(k_n)``, ``i = 0 ... L-1``.
 
     Sub-bands of width ``w = N/(L - (L-1) overlap)`` samples, centred at
     ``w/2 + i w (1 - overlap)``, tile the band; sample ``n`` sits at ``n + 1/2``.
@@ -92,7 +113,7 @@ def subband_windows(
         Spectral samples ``N`` (the spectrum's ``n_pixels``), >= 1.
     n_looks : int
         Sub-bands ``L``, ``1 <= L <= N`` (and each sub-band must hold one sample at least).
-    window : {"rectangular", "gaussian", "hann"}
+    apodization : {"rectangular", "gaussian", "hann"}
         Window shape.
     overlap : float
         Fraction of a sub-band shared with the next, in ``[0, 1)``.
@@ -100,12 +121,12 @@ def subband_windows(
     Returns
     -------
     numpy.ndarray, shape (L, N)
-        Non-negative real windows (maximum 1), low to high wavenumber.
+        Non-negative real apodizations (maximum 1), low to high wavenumber.
 
     Raises
     ------
     ValueError
-        ``n_looks`` outside ``[1, N]``, ``overlap`` outside ``[0, 1)``, an unknown window, or a
+        ``n_looks`` outside ``[1, N]``, ``overlap`` outside ``[0, 1)``, an unknown apodization, or a
         sub-band narrower than one sample.
     """
     n = check_int(n_samples, "n_samples", low=1)
@@ -116,7 +137,7 @@ def subband_windows(
         )
     nl = check_int(n_looks, "n_looks", low=1, high=n)
     ov = check_real(overlap, "overlap", low=0.0, high=1.0, high_inclusive=False)
-    check_choice(window, "window", WINDOWS)
+    check_choice(apodization, "apodization", SUBBAND_APODIZATIONS)
     w = n / (nl - (nl - 1) * ov)
     if w < 1.0:
         raise ValueError(
@@ -126,9 +147,9 @@ def subband_windows(
     t = np.arange(n) + 0.5
     centres = w / 2 + np.arange(nl) * w * (1 - ov)
     u = (t[None, :] - centres[:, None]) / w  # position in sub-band widths from the centre
-    if window == "rectangular":
+    if apodization == "rectangular":
         win = ((u >= -0.5) & (u < 0.5)).astype(float)
-    elif window == "hann":
+    elif apodization == "hann":
         win = np.where(np.abs(u) < 0.5, np.cos(np.pi * u) ** 2, 0.0)
     else:
         win = np.exp(-4 * np.log(2) * u**2)
@@ -137,17 +158,18 @@ def subband_windows(
     return win
 
 
-def window_correlation(windows: object, spectrum: object | None = None) -> np.ndarray:
-    """Field correlation ``mu_ij`` of split-spectrum looks: the windows' weighted overlap.
+@renamed_parameters({"windows": "apodizations"})
+def apodization_correlation(apodizations: object, spectrum: object | None = None) -> np.ndarray:
+    """Field correlation ``mu_ij`` of split-spectrum looks: the apodizations' weighted overlap.
 
     ``mu_ij = sum_n S_n^2 W_i W_j* / sqrt(sum S^2 |W_i|^2 sum S^2 |W_j|^2)`` (Parseval: the
     complex correlation of two looks of a dense scene), i.e. the overlap integral of the
-    windows for a rectangular spectrum (``spectrum=None``).
+    apodizations for a rectangular spectrum (``spectrum=None``).
 
     Parameters
     ----------
-    windows : array_like, shape (L, N)
-        Windows from :func:`subband_windows`.
+    apodizations : array_like, shape (L, N)
+        Apodizations from :func:`subband_apodizations`.
     spectrum : array_like, shape (N,), optional
         Source weights ``S_n``.
 
@@ -156,9 +178,9 @@ def window_correlation(windows: object, spectrum: object | None = None) -> np.nd
     numpy.ndarray, shape (L, L)
         Hermitian, unit diagonal.
     """
-    w = as_finite_array(windows, "windows", dtype=np.complex128)
+    w = as_finite_array(apodizations, "apodizations", dtype=np.complex128)
     if w.ndim != 2:
-        raise ValueError(f"windows must be 2-D (looks, samples), got shape {w.shape}")
+        raise ValueError(f"apodizations must be 2-D (looks, samples), got shape {w.shape}")
     s2 = np.ones(w.shape[1]) if spectrum is None else np.asarray(spectrum, float) ** 2
     if s2.shape != (w.shape[1],):
         raise ValueError(f"spectrum must hold {w.shape[1]} weights, got shape {s2.shape}")
@@ -192,7 +214,7 @@ def split_spectrum_contrast(weights: object, density: float, *, kurtosis: float 
     Parameters
     ----------
     weights : array_like, shape (L, N)
-        Spectral weights of the looks (window times spectrum).
+        Spectral weights of the looks (apodization times spectrum).
     density : float
         Mean scatterers per pixel (> 0; ``inf`` for the dense limit).
     kurtosis : float
@@ -246,8 +268,9 @@ def _field(img: xr.Dataset | xr.DataArray) -> xr.DataArray:
     return f
 
 
-def frequency_looks(img: xr.Dataset | xr.DataArray, windows: object) -> xr.DataArray:
-    """Split-spectrum looks of a complex image: the depth spectrum times each window.
+@renamed_parameters({"windows": "apodizations"})
+def frequency_looks(img: xr.Dataset | xr.DataArray, apodizations: object) -> xr.DataArray:
+    """Split-spectrum looks of a complex image: the depth spectrum times each apodization.
 
     Parameters
     ----------
@@ -255,8 +278,8 @@ def frequency_looks(img: xr.Dataset | xr.DataArray, windows: object) -> xr.DataA
         Complex image (``field``) with a ``depth`` dim of ``N`` pixels, from any imaging
         function of the package (its depth spectrum holds the components ``k_n``,
         ``n = -(N//2) ... N-1-(N//2)``).
-    windows : array_like, shape (L, N)
-        From :func:`subband_windows` (low to high wavenumber).
+    apodizations : array_like, shape (L, N)
+        From :func:`subband_apodizations` (low to high wavenumber).
 
     Returns
     -------
@@ -266,16 +289,19 @@ def frequency_looks(img: xr.Dataset | xr.DataArray, windows: object) -> xr.DataA
     """
     f = _field(img)
     n = f.sizes["depth"]
-    w = as_finite_array(windows, "windows")
+    w = as_finite_array(apodizations, "apodizations")
     if w.ndim != 2 or w.shape[1] != n:
         raise ValueError(
-            f"windows must have shape (looks, {n}) for an image of {n} depth pixels, got {w.shape}"
+            f"apodizations must have shape (looks, {n}) for an image of {n} depth pixels, "
+            f"got {w.shape}"
         )
     if np.any(w < 0):
-        raise ValueError("windows must be non-negative spectral weights (subband_windows)")
+        raise ValueError(
+            "apodizations must be non-negative spectral weights (subband_apodizations)"
+        )
     idx = np.arange(n) - n // 2  # spectral index n of sample position 0 ... N-1
     wrapped = np.zeros_like(w)
-    wrapped[:, idx % n] = w  # window on the FFT's bin order
+    wrapped[:, idx % n] = w  # apodization on the FFT's bin order
 
     def split(a: np.ndarray) -> np.ndarray:
         spec = np.fft.ifft(a, axis=-1)[..., None, :]  # G_n at bin n mod N (A = fft(G))

@@ -20,7 +20,7 @@ Definitions (``<.>`` the pooled average over time pairs and the window):
   velocity is ``phase / (2 k0 lag dt)``;
 * ``speckle_variance`` -- the time variance of the intensity (or of ``10 log10 I``) per pixel;
 * ``ssada`` -- split-spectrum amplitude decorrelation (Jia et al., Opt. Express 20, 4710,
-  2012): the spectrum split into ``n_bands`` sub-bands (:func:`speckle.subband_windows`,
+  2012): the spectrum split into ``n_bands`` sub-bands (:func:`speckle.subband_apodizations`,
   :func:`speckle.frequency_looks`), ``D = 1 - <A_b(t) A_b(t+1) / ((A_b(t)^2 +
   A_b(t+1)^2)/2)>`` over bands and consecutive frames;
 * ``liv`` -- logarithmic intensity variance, ``var_t(10 log10 I)`` in dB^2, and ``ocds`` -- OCT
@@ -45,10 +45,11 @@ import numpy as np
 import scipy.ndimage as ndi
 import xarray as xr
 
+from .._deprecate import renamed_parameters
 from .._validate import check_choice, check_int, check_real
 from ..conventions import attrs, coord, spacing
 from ._common import delay_selection, parse_window
-from .compounding import frequency_looks, subband_windows
+from .compounding import SUBBAND_APODIZATIONS, frequency_looks, subband_apodizations
 from .dynamics_theory import (
     doppler_shift,
     g1_axial_flow,
@@ -670,11 +671,12 @@ def liv(
     return _map(v, da, window, "liv", ("log_variance", "logarithmic intensity variance"))
 
 
+@renamed_parameters({"band_window": "band_apodization"})
 def ssada(
     images: xr.DataArray | xr.Dataset,
     *,
     n_bands: int = 4,
-    band_window: str = "hann",
+    band_apodization: str = "hann",
     overlap: float = 0.5,
     window: object = None,
     stride: int = 1,
@@ -682,8 +684,8 @@ def ssada(
     """Split-spectrum amplitude decorrelation (SSADA, Jia et al., Opt. Express 20, 4710, 2012).
 
     The depth spectrum of each frame is split into ``n_bands`` sub-bands
-    (:func:`speckle.subband_windows`, applied by :func:`speckle.frequency_looks`: exact, as
-    imaging with the windowed spectrum), and the amplitude decorrelation of consecutive frames
+    (:func:`speckle.subband_apodizations`, applied by :func:`speckle.frequency_looks`: exact, as
+    imaging with the apodized spectrum), and the amplitude decorrelation of consecutive frames
     is averaged over bands and frame pairs (:func:`ssada_array`).
 
     Parameters
@@ -692,8 +694,8 @@ def ssada(
         Complex ``field`` with dims ``time`` and ``depth`` (the full A-line of ``N`` pixels).
     n_bands : int
         Sub-bands (>= 1).
-    band_window : {"rectangular", "gaussian", "hann"}
-        Sub-band window shape; ``overlap`` in ``[0, 1)``.
+    band_apodization : {"rectangular", "gaussian", "hann"}
+        Sub-band apodization shape; ``overlap`` in ``[0, 1)``.
     window, stride
         Boxcar on the decorrelation map (None: its mean), frame stride.
 
@@ -713,12 +715,16 @@ def ssada(
     if "depth" not in da.dims:
         raise ValueError("ssada needs a 'depth' dim (the A-line, to split its spectrum)")
     n_bands = check_int(n_bands, "n_bands", low=1)
-    check_choice(band_window, "band_window", ("rectangular", "gaussian", "hann"))
-    w = subband_windows(da.sizes["depth"], n_bands, window=band_window, overlap=overlap)
+    check_choice(band_apodization, "band_apodization", SUBBAND_APODIZATIONS)
+    w = subband_apodizations(
+        da.sizes["depth"], n_bands, apodization=band_apodization, overlap=overlap
+    )
     looks = frequency_looks(da, w)  # (look, time, ...)
     v = ssada_array(np.abs(looks.transpose("look", *da.dims).values), window=window)
     out = _map(v, da, window, "ssada", ("dimensionless", "split-spectrum amplitude decorrelation"))
-    return out.assign_attrs(n_bands=int(n_bands), band_window=band_window, overlap=float(overlap))
+    return out.assign_attrs(
+        n_bands=int(n_bands), band_apodization=band_apodization, overlap=float(overlap)
+    )
 
 
 def ocds(

@@ -27,6 +27,7 @@ kurtosis, an independent check of the explanation.
 from __future__ import annotations
 
 import os
+import warnings
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -34,8 +35,9 @@ import numpy as np
 import xarray as xr
 from scipy import integrate, optimize, special, stats
 
+from .._deprecate import renamed_parameters
 from .._validate import as_finite_array, check_choice, check_int, check_real
-from ..conventions import attrs, coord
+from ..conventions import attrs, canonical_dims, canonical_keys, coord
 
 __all__ = [
     "SCALES",
@@ -73,12 +75,12 @@ def _read(path: str | os.PathLike, *, mmap: bool = False) -> np.ndarray:
         if raw.ndim == 3:
             raw = raw[..., :3].mean(axis=-1)
     if raw.ndim != 2:
-        raise ValueError(f"measured image must be 2-D (depth, aline), got shape {raw.shape}")
+        raise ValueError(f"measured image must be 2-D (depth, x), got shape {raw.shape}")
     return raw
 
 
 def measured_shape(path: str | os.PathLike) -> tuple[int, int]:
-    """Shape ``(depth, aline)`` of a measured image file, without loading a ``.npy`` file.
+    """Shape ``(depth, x)`` of a measured image file, without loading a ``.npy`` file.
 
     Raises
     ------
@@ -92,15 +94,16 @@ def measured_shape(path: str | os.PathLike) -> tuple[int, int]:
 
 
 def roi_slices(roi: Mapping | None, shape: tuple[int, int]) -> dict[str, slice]:
-    """Slices ``{"depth": ..., "aline": ...}`` of a region of interest in an image of ``shape``.
+    """Slices ``{"depth": ..., "x": ...}`` of a region of interest in an image of ``shape``.
 
     Parameters
     ----------
     roi : mapping, optional
-        ``{"depth": [start, stop], "aline": [start, stop]}`` in pixel indices (half-open, either
-        key optional, ``None`` bounds allowed).
+        ``{"depth": [start, stop], "x": [start, stop]}`` in pixel indices (half-open, either
+        key optional, ``None`` bounds allowed; the retired key ``aline`` is read as ``x``,
+        warning).
     shape : (int, int)
-        Image shape ``(depth, aline)``.
+        Image shape ``(depth, x)``.
 
     Raises
     ------
@@ -110,15 +113,16 @@ def roi_slices(roi: Mapping | None, shape: tuple[int, int]) -> dict[str, slice]:
         Naming ``roi[key]``: unknown key, bounds beyond the image (never clipped), start not
         below stop, or fewer than 2 x 2 pixels left.
     """
-    sl = {"depth": slice(None), "aline": slice(None)}
+    sl = {"depth": slice(None), "x": slice(None)}
     if roi is not None and not isinstance(roi, Mapping):
         raise TypeError(
-            "roi must be a mapping {'depth': [start, stop], 'aline': [start, stop]} of pixel "
+            "roi must be a mapping {'depth': [start, stop], 'x': [start, stop]} of pixel "
             f"indices, got {type(roi).__name__} {roi!r}"
         )
+    roi = canonical_keys(roi, "roi")
     for key, value in (roi or {}).items():
         if key not in sl:
-            raise ValueError(f"roi keys must be 'depth' and/or 'aline', got {key!r}")
+            raise ValueError(f"roi keys must be 'depth' and/or 'x', got {key!r}")
         if value is None:
             continue
         if isinstance(value, str) or not hasattr(value, "__len__") or len(value) != 2:
@@ -131,52 +135,65 @@ def roi_slices(roi: Mapping | None, shape: tuple[int, int]) -> dict[str, slice]:
             raise ValueError(f"roi[{key!r}] must have start < stop, got {value!r}")
         sl[key] = slice(lo, hi)
     rows = range(shape[0])[sl["depth"]]
-    cols = range(shape[1])[sl["aline"]]
+    cols = range(shape[1])[sl["x"]]
     if len(rows) < 2 or len(cols) < 2:
         raise ValueError(f"roi {roi!r} leaves fewer than 2x2 pixels of a {tuple(shape)} image")
     return sl
 
 
+@renamed_parameters({"aline_pitch": "pitch"})
 def load_measured(
     path: str | os.PathLike,
     *,
     scale: str = "log",
     roi: dict | None = None,
     pixel_size: float | None = None,
-    aline_pitch: float | None = None,
+    pitch: float | None = None,
 ) -> xr.DataArray:
-    """Load a measured B-scan (``.npy`` or an image file) as a labelled ``(depth, aline)`` array.
+    """Load a measured B-scan (``.npy`` or an image file) as a labelled ``(depth, x)`` array.
+
+    Retired (issue 32): the one loader of measured images is :func:`speckle.io.load_image`
+    (``kind="log"`` for ``scale="log"``, ``dims=("depth", "x")``, then ``.isel`` for a region);
+    this one warns (``FutureWarning``) and keeps working for a release, for PNG files and images
+    of unknown pixel size.
 
     Parameters
     ----------
     path : str or path-like
-        A 2-D ``.npy`` array ordered ``[depth, aline]`` (depth increasing with row index), or an
+        A 2-D ``.npy`` array ordered ``[depth, x]`` (depth increasing with row index), or an
         image file readable by :func:`matplotlib.image.imread` (PNG; RGB is averaged to grey).
     scale : {"linear", "log"}
         ``"log"``: log-compressed data with unknown gain/offset; ``"linear"``: values
         proportional to intensity or amplitude.
     roi : dict, optional
-        Region of interest ``{"depth": [start, stop], "aline": [start, stop]}`` in pixel indices
+        Region of interest ``{"depth": [start, stop], "x": [start, stop]}`` in pixel indices
         (half-open, either key optional, ``null`` bounds allowed). Bounds beyond the image
         (above its number of rows or columns) are refused, never clipped.
     pixel_size : float, optional
         Axial pixel size in µm (> 0); the ``depth`` coordinate is then in µm, else in pixels.
-    aline_pitch : float, optional
-        Lateral A-line spacing in µm (> 0); the ``aline`` coordinate is then in µm.
+    pitch : float, optional
+        Lateral A-line spacing in µm (> 0); the ``x`` coordinate is then in µm.
 
     Returns
     -------
     xarray.DataArray
-        Float64 values, dims ``(depth, aline)``, integer coordinates ``row`` and ``column``
+        Float64 values, dims ``(depth, x)``, integer coordinates ``row`` and ``column``
         (indices in the file). Attributes: ``source`` (path), ``scale``, ``roi``, ``dtype`` of
         the file, and ``clip_low``/``clip_high`` (the dtype's limits for integer data).
     """
+    warnings.warn(
+        "load_measured is retired: read measured images with speckle.io.load_image(path, "
+        "kind=..., dims=('depth', 'x'), pixel_size=..., pitch=...) and select a region with "
+        ".isel; load_measured will be removed in the next release",
+        FutureWarning,
+        stacklevel=3,
+    )
     check_choice(scale, "scale", SCALES)
     raw = _read(path)
     data = as_finite_array(raw, "measured image")
     sl = roi_slices(roi, data.shape)
     rows = np.arange(data.shape[0])[sl["depth"]]
-    cols = np.arange(data.shape[1])[sl["aline"]]
+    cols = np.arange(data.shape[1])[sl["x"]]
     meta = {
         "source": str(path),
         "scale": scale,
@@ -192,19 +209,15 @@ def load_measured(
         if pixel_size is not None
         else rows
     )
-    aline = (
-        cols * check_real(aline_pitch, "aline_pitch", low=0, low_inclusive=False)
-        if aline_pitch is not None
-        else cols
-    )
+    x = cols * check_real(pitch, "pitch", low=0, low_inclusive=False) if pitch is not None else cols
     return xr.DataArray(
-        data[sl["depth"], sl["aline"]],
-        dims=("depth", "aline"),
+        data[sl["depth"], sl["x"]],
+        dims=("depth", "x"),
         coords={
             "depth": _axis_coord("depth", depth, pixel_size),
-            "aline": _axis_coord("aline", aline, aline_pitch),
+            "x": _axis_coord("x", x, pitch),
             "row": ("depth", rows),
-            "column": ("aline", cols),
+            "column": ("x", cols),
         },
         name="measured",
         attrs=meta,
@@ -218,15 +231,34 @@ def _axis_coord(dim: str, values: np.ndarray, step: float | None) -> tuple:
     return coord("pixels", values, f"{dim} in pixels", dims=dim)
 
 
+def _scale_of(image: object) -> str:
+    """``"log"`` or ``"linear"``: attribute ``scale`` (:func:`load_measured`) or ``kind``
+    (:func:`speckle.io.load_image`: ``log``; ``amplitude``/``intensity`` are linear)."""
+    if isinstance(image, xr.DataArray):
+        if "scale" in image.attrs:
+            return str(image.attrs["scale"])
+        kind = image.attrs.get("kind")
+        if kind == "complex":
+            raise TypeError("image is complex: measure its amplitude, abs(image)")
+        if kind in ("log", "amplitude", "intensity"):
+            return "log" if kind == "log" else "linear"
+    raise TypeError(
+        "image must be a DataArray from speckle.io.load_image (attribute 'kind') or "
+        "load_measured (attribute 'scale')"
+    )
+
+
 def log_intensity(image: xr.DataArray) -> xr.DataArray:
     """Log intensity up to an unknown gain and offset.
 
-    Log-compressed data are returned as they are; linear data ``v`` give ``ln v`` (zeros are
-    refused: the log of an exact zero is undefined; crop them out with the ROI).
+    Log-compressed data are returned as they are; linear data ``v`` (amplitude or intensity)
+    give ``ln v`` (zeros are refused: the log of an exact zero is undefined; crop them out with
+    the ROI). Images from :func:`speckle.io.load_image` (``kind``) and the retired
+    :func:`load_measured` (``scale``) are accepted, ``(depth, x)`` (``aline`` warns).
     """
-    if not isinstance(image, xr.DataArray) or "scale" not in image.attrs:
-        raise TypeError("image must be a DataArray from speckle.analysis.measured.load_measured")
-    if image.attrs["scale"] == "log":
+    scale = _scale_of(image)
+    image = canonical_dims(image).assign_attrs(scale=scale)
+    if scale == "log":
         return image
     if np.any(image.values <= 0):
         raise ValueError("linear-scale image must be > 0 everywhere to take its log")
@@ -321,16 +353,13 @@ def log_statistics(image: xr.DataArray, *, n_blocks: int = 16) -> xr.Dataset:
         ``excess_kurtosis_theory``.
     """
     d = log_intensity(image)
-    if "aline" not in d.dims:
-        raise TypeError("image must have an 'aline' dim")
-    nb = check_int(n_blocks, "n_blocks", low=2, high=d.sizes["aline"])
+    if "x" not in d.dims:
+        raise TypeError("image must have an 'x' dim")
+    nb = check_int(n_blocks, "n_blocks", low=2, high=d.sizes["x"])
     x = _sample(d)
-    blocks = np.array_split(np.arange(d.sizes["aline"]), nb)
+    blocks = np.array_split(np.arange(d.sizes["x"]), nb)
     per_block = np.array(
-        [
-            [stats.skew(v), stats.kurtosis(v)]
-            for v in (d.isel(aline=b).values.ravel() for b in blocks)
-        ]
+        [[stats.skew(v), stats.kurtosis(v)] for v in (d.isel(x=b).values.ravel() for b in blocks)]
     )
     se = per_block.std(axis=0, ddof=1) / np.sqrt(nb)
     lo, hi = image.attrs.get("clip_low"), image.attrs.get("clip_high")
@@ -458,14 +487,16 @@ def compare_measured(image: xr.DataArray, *, n_blocks: int = 16) -> xr.Dataset:
     standardised data to the fully developed law (``ks_pure``) and to the fitted floor law
     (``ks_floor``). Variables are prefixed by their origin; attributes say what was compared.
     """
+    scale = _scale_of(image)
+    image = canonical_dims(image)
     st = log_statistics(image, n_blocks=n_blocks)
     fl = fit_floor(image)
     d = log_intensity(image)
-    rows = d.mean("aline").values
+    rows = d.mean("x").values
     t = np.arange(rows.size, dtype=float)
     slope, intercept = np.polyfit(t, rows, 1)
     trend_var = float(np.var(slope * t + intercept))
-    detr = (d - d.mean("aline")).values.ravel()
+    detr = (d - d.mean("x")).values.ravel()
     z = np.sort(standardise(image).values.ravel())
     ecdf_hi = np.arange(1, z.size + 1) / z.size
     ecdf_lo = np.arange(z.size) / z.size
@@ -503,7 +534,7 @@ def compare_measured(image: xr.DataArray, *, n_blocks: int = 16) -> xr.Dataset:
         ),
     }
     lo = image.attrs.get("clip_low")
-    if lo is not None and image.attrs.get("scale") == "log":
+    if lo is not None and scale == "log":
         # pure law fitted by moments: g = std/sqrt(pi^2/6), c = mean + gamma g; pixels whose
         # ln(I/<I>) lies below the lowest level (lo + 1/2) would be clipped to lo
         g_pure = float(st["std"]) / np.sqrt(np.pi**2 / 6.0)
@@ -525,7 +556,7 @@ def compare_measured(image: xr.DataArray, *, n_blocks: int = 16) -> xr.Dataset:
         "(independent of the unknown log gain and offset)",
         "source": image.attrs.get("source", ""),
         "roi": image.attrs.get("roi", ""),
-        "scale": image.attrs.get("scale", ""),
+        "scale": scale,
         "n_blocks": int(n_blocks),
     }
     return out

@@ -80,6 +80,7 @@ import numpy as np
 import xarray as xr
 from scipy import ndimage
 
+from .._deprecate import moved
 from .._validate import check_choice, check_real
 from .._wrap import Out, map_frames, preprocess_and_wrap
 from ..conventions import attrs
@@ -92,7 +93,7 @@ from ._strain_methods import (
     DEFAULT_METHOD,
     DEFAULT_WINDOWS,
     DISPLACEMENT_METHODS,
-    METHODS,
+    STRAIN_METHODS,
     TRACK_FALSE_RATE,
     TRACK_MIN_QUALITY,
     _auto_aligned,
@@ -117,7 +118,7 @@ __all__ = [
     "DEFAULT_METHOD",
     "DEFAULT_WINDOWS",
     "DISPLACEMENT_METHODS",
-    "METHODS",
+    "STRAIN_METHODS",
     "TRACK_FALSE_RATE",
     "TRACK_MIN_QUALITY",
     "accumulate_strain",
@@ -125,6 +126,9 @@ __all__ = [
     "estimate_strain",
     "predicted_strain_std",
 ]
+
+#: ``METHODS`` (retired, :data:`speckle.conventions.RETIRED`) is now ``STRAIN_METHODS``.
+__getattr__ = moved(__name__, __name__, [], {"METHODS": "STRAIN_METHODS"})
 
 
 # --------------------------------------------------------------------------------------------
@@ -241,7 +245,7 @@ def estimate_strain(
     """
     k = check_real(k0, "k0", low=0, low_inclusive=False)
     p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
-    check_choice(method, "method", METHODS)
+    check_choice(method, "method", STRAIN_METHODS)
     if not isinstance(return_quality, (bool, np.bool_)):
         raise TypeError(f"return_quality must be True or False, got {return_quality!r}")
     wz, wx = _check_window(window, DEFAULT_WINDOWS[method], reference.shape[-2:])
@@ -488,7 +492,7 @@ def accumulate_strain(
         )
     p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
     k = check_real(k0, "k0", low=0, low_inclusive=False)
-    check_choice(method, "method", METHODS)
+    check_choice(method, "method", STRAIN_METHODS)
     n_frames, n, m = data.shape
     wz, wx = _check_window(window, DEFAULT_WINDOWS[method], (n, m))
     opts = _options(method, options)  # unknown or malformed options: refused before any work

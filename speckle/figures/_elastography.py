@@ -12,7 +12,7 @@ import xarray as xr
 from ..analysis.strain import estimate_strain
 from ..imaging.bscan import bscan
 from ..scene.deformation import deformable_scene, displace
-from ..scene.mechanics import compress, inclusion_labels
+from ..scene.mechanics import compress_phantom, inclusion_labels
 from ..studies.failure import method_options
 from ..system.noise import add_complex_noise
 from ._config import scene_kwargs, source_spectrum
@@ -40,7 +40,7 @@ def _inclusion_fe(cfg: Mapping, lines: int, strain: float) -> tuple[xr.DataArray
     labels = inclusion_labels(
         depth, x, (float(ic["depth_fraction"]) * n * p, x.mean()), float(ic["radius"])
     )
-    return labels, compress(
+    return labels, compress_phantom(
         labels,
         {0: float(ic["youngs_modulus"][0]), 1: float(ic["youngs_modulus"][1])},
         float(ic["poisson_ratio"]),

@@ -119,7 +119,9 @@ def bscans_data(source: Mapping, beam: Mapping, seed: int) -> xr.Dataset:
         regions, z_range=(0.0, h), x_range=(xs[0] - halo, xs[-1] + halo), seed=seed, tile=64.0
     )
     opts = {"chunk": int(beam["chunk"]), "method": beam["method"], "tol": beam["tol"]}
-    images = [speckle.image(scene, src, waist=r * pitch, x=xs, **opts).field for r in ratios]
+    images = [
+        speckle.scan_image(scene, src, waist=r * pitch, lines=xs, **opts).field for r in ratios
+    ]
     field = xr.concat(images, dim="waist_pitch", combine_attrs="drop").compute()
     field = field.assign_coords(waist_pitch=coord("waist_pitch", ratios))
     lines = speckle.random_scatterers(
@@ -188,7 +190,7 @@ def bscans_data(source: Mapping, beam: Mapping, seed: int) -> xr.Dataset:
 
 def _strain_images(scene, src, strains, nu, xs, w0, opts) -> xr.DataArray:
     strained = speckle.uniaxial_strain(scene, strains, poisson_ratio=nu, x_centre=float(xs.mean()))
-    return speckle.image(strained, src, waist=w0, x=xs, **opts).field.compute()
+    return speckle.scan_image(strained, src, waist=w0, lines=xs, **opts).field.compute()
 
 
 def _compensated_correlations(ref: xr.DataArray, dfm: xr.DataArray) -> dict[str, np.ndarray]:
@@ -227,7 +229,7 @@ def strain_data(source: Mapping, beam: Mapping, seed: int) -> xr.Dataset:
         tile=64.0,
     )
     opts = {"chunk": int(beam["chunk"]), "method": beam["method"], "tol": beam["tol"]}
-    ref = speckle.image(scene, src, waist=w0, x=xs, **opts).field.compute()
+    ref = speckle.scan_image(scene, src, waist=w0, lines=xs, **opts).field.compute()
     ref.attrs.update({"n_pixels": n, "depth_range": h, "k0": float(src.attrs["k0"])})
     data = {}
     for label, ratio in (("beam", 0.0), ("beam_poisson", nu)):
@@ -287,7 +289,7 @@ def volume_data(source: Mapping, beam: Mapping, seed: int) -> xr.Dataset:
         seed=seed,
         tile=cfg["tile"],
         waist=float(cfg["waist_pitch"]) * pitch,
-        x=xs,
+        lines=xs,
         y=xs,
         chunk=int(cfg["chunk"]),
         method=cfg["method"],

@@ -47,7 +47,7 @@ from ..analysis import image_quality as iq
 from ..conventions import attrs, coord
 from ..imaging.aline import ascan
 from ..imaging.bscan import bscan
-from ..imaging.scan import image
+from ..imaging.scan import scan_image
 from ..scene.scatterers import random_scatterers
 from ..studies.looks import angular_looks, polarization_looks, spatial_looks, temporal_looks
 from ..studies.suppression import DB_RANGE, DB_TOP, METRICS, build_phantom, quality
@@ -80,7 +80,7 @@ def _physical_looks(ph: dict, cfg: Mapping, seed: int, snr_db: float) -> dict:
     """Noise-free and noisy looks of every physical family (largest set of each), and the
     time spent processing them: {family: (looks, noisy, process_seconds_per_look_set)}."""
     src, sc, kw = ph["source"], ph["scene"], ph["kw"]
-    single = image(sc, src, **kw).field.values
+    single = scan_image(sc, src, **kw).field.values
     out = {"single": single}
     ref = float(np.mean(np.abs(single) ** 2))
     base = xr.DataArray(single[None], dims=("look", "depth", "x"))
@@ -143,9 +143,9 @@ def _physical_methods(lk: dict, ph: dict, cfg: Mapping):
     fr = phys["frequency"]
     n = ph["geo"]["n_pixels"]
     for nlook in fr["looks"]:
-        for win in fr["windows"]:
+        for win in fr["apodizations"]:
             for ov in fr["overlap"]:
-                w = cp.subband_windows(n, nlook, window=win, overlap=ov)
+                w = cp.subband_apodizations(n, nlook, apodization=win, overlap=ov)
 
                 def fn(noisy, w=w):
                     f = lk["single_noisy" if noisy else "single"]
@@ -156,7 +156,7 @@ def _physical_methods(lk: dict, ph: dict, cfg: Mapping):
                 yield (
                     "frequency",
                     f"L={nlook} {win} overlap={ov:g}",
-                    {"looks": nlook, "window": win, "overlap": ov},
+                    {"looks": nlook, "apodization": win, "overlap": ov},
                     1,
                     fn,
                 )
@@ -534,7 +534,7 @@ def _method_image(spec: Mapping, ph: dict, seed: int, snr_db: float, cache: dict
     """Intensity image of one failure-map method spec on phantom ``ph`` (noisy)."""
     src, sc, kw = ph["source"], ph["scene"], ph["kw"]
     if "single" not in cache:
-        cache["single"] = image(sc, src, **kw).field.values
+        cache["single"] = scan_image(sc, src, **kw).field.values
         cache["ref"] = float(np.mean(np.abs(cache["single"]) ** 2))
     ref = cache["ref"]
     fam = spec["family"]
@@ -547,8 +547,11 @@ def _method_image(spec: Mapping, ph: dict, seed: int, snr_db: float, cache: dict
     if fam == "single":
         return np.abs(noisy(single).values[0]) ** 2
     if fam == "frequency":
-        w = cp.subband_windows(
-            ph["geo"]["n_pixels"], spec["looks"], window=spec["window"], overlap=spec["overlap"]
+        w = cp.subband_apodizations(
+            ph["geo"]["n_pixels"],
+            spec["looks"],
+            apodization=spec["apodization"],
+            overlap=spec["overlap"],
         )
         f = noisy(single).isel(look=0)
         return cp.compound(cp.frequency_looks(f, w), mode).values
@@ -721,7 +724,7 @@ def frequency_compounding_data(cfg: Mapping, seed: int) -> xr.Dataset:
     looks = [int(v) for v in cfg["looks"]]
     c, se, ct, cd, fw, ft = ([] for _ in range(6))
     for nlk in looks:
-        w = cp.subband_windows(n, nlk)
+        w = cp.subband_apodizations(n, nlk)
         comp = cp.compound(cp.frequency_looks(field, w), "intensity").values
         c.append(float(comp.std() / comp.mean()))
         blocks = [b.std() / b.mean() for b in np.array_split(comp, 16, axis=1)]

@@ -129,7 +129,7 @@ def phantom_data(cfg: Mapping, seed: int) -> xr.Dataset:
 
 
 def inclusion_data(cfg: Mapping, seed: int) -> xr.Dataset:
-    """Circular inclusion compressed by a flat probe (:func:`speckle.compress`, plane-strain
+    """Circular inclusion compressed by a flat probe (:func:`speckle.compress_phantom`, plane-strain
     finite elements): modulus, FE strain ``strain_zz`` as the truth, strain and error maps, and
     the truth averaged over each method's window (what a windowed estimator can resolve)."""
     ic = cfg["inclusion"]

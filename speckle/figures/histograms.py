@@ -75,7 +75,7 @@ def simulate_speckle(
     k0_dk, n_pixels, pixel_size, shape, fwhm_fraction
         Source, as the pipeline's ``source`` config (pixel size in µm).
     method : str
-        A-scan method (:data:`speckle.imaging.aline.METHODS`).
+        A-scan method (:data:`speckle.ASCAN_METHODS`).
     normalise : {"none", "density", "expected"}
         See :func:`speckle.imaging.bscan`.
     """

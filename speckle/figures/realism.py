@@ -218,16 +218,16 @@ def showcase_dataset(cfg: Mapping, seed: int) -> xr.Dataset:
         "tol": cfg["tol"],
     }
 
-    def image(sc, **kw):
+    def beam_image(sc, **kw):
         f = beam_scan(sc.z.values, sc.x.values, sc.amplitude.values, **beam, **kw)
         field = xr.DataArray(
             f.T, dims=("depth", "x"), coords={"depth": np.arange(n) * p, "x": lines}
         )
         return xr.Dataset({"field": field, "intensity": abs(field) ** 2})
 
-    pure = image(scene)
+    pure = beam_image(scene)
     sys_scene = rolloff(attenuate_regions(scene, labels, regions), z_max=cfg["rolloff_z_max"])
-    system = image(sys_scene, focus=cfg["focus"])
+    system = beam_image(sys_scene, focus=cfg["focus"])
     tissue = rasterize(regions, pure.depth.values, lines).values >= 0
     ref = float(pure.intensity.where(tissue).mean())
     system = add_noise(system, cfg["snr_db"], seed=seed, signal_intensity=ref)

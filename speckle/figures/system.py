@@ -7,7 +7,7 @@
   through the chain (``measured_db``) against the closed form (``analytic_db``), along ``depth``.
 * :func:`artefact_bscan` / :func:`plot_artefact_bscan`: a layered scene with the zero delay
   inside the sample, imaged by a real camera (DC, autocorrelation, mirror image) and processed
-  (background subtraction, k-linearisation, dispersion compensation, window).
+  (background subtraction, k-linearisation, dispersion compensation, apodization).
 
 Lengths in µm (in the sample), wavenumbers in rad/µm, levels in dB (``20 log10 |A|``).
 """
@@ -195,7 +195,7 @@ def artefact_bscan(
     density: float,
     dispersion: Mapping[int, float],
     reference_power: float,
-    window: str,
+    apodization: str,
     seed: int,
     tilt: float = 0.0,
     scatterer_amplitude: float = 0.1,
@@ -203,9 +203,9 @@ def artefact_bscan(
     """A layered B-scan, raw and processed (``raw_db``, ``processed_db``: depth, aline).
 
     Raw: real camera signal with DC and autocorrelation, transformed as is (no background
-    subtraction, no k-linearisation, no compensation, no window). Processed: subtraction of the
+    subtraction, no k-linearisation, no compensation, no apodization). Processed: subtraction of the
     reference-arm spectrum ``P_r S`` (recorded with the sample arm blocked: removes the DC, not
-    the autocorrelation), cubic k-linearisation, dispersion compensation, ``window``. The depth
+    the autocorrelation), cubic k-linearisation, dispersion compensation, ``apodization``. The depth
     axis runs over ``[-H/2, H/2)`` (the FFT's negative depths hold the mirror image), in dB re. the
     processed image's maximum.
     """
@@ -219,11 +219,11 @@ def artefact_bscan(
         dispersion=dispersion,
     )  # fmt: skip
     grid = sp.grid_wavenumbers(system)
-    raw = sp.process(sig, grid=grid, k0=system.k0)
-    proc = sp.process(
+    raw = sp.process_interferogram(sig, grid=grid, k0=system.k0)
+    proc = sp.process_interferogram(
         sig, grid=grid, k0=system.k0, wavenumber=k, resample="cubic",
         background=reference_power * sp.source_weights(system, k),
-        dispersion=dispersion, window=window,
+        dispersion=dispersion, apodization=apodization,
     )  # fmt: skip
     n = system.n_pixels
     shift = n // 2
@@ -239,7 +239,7 @@ def artefact_bscan(
             "depth": coord("depth", depth, "depth from the zero delay"),
             "aline": ("aline", np.arange(n_alines)),
         },
-        attrs={"surface": surface, "tilt": tilt, "window": window,
+        attrs={"surface": surface, "tilt": tilt, "apodization": apodization,
                "reference_power": reference_power, "imaging_depth": system.imaging_depth},
     ).transpose("depth", "aline")  # fmt: skip
 

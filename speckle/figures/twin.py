@@ -14,7 +14,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from ..analysis.image_files import load_image
+from ..io import load_image
 from ..studies.twin.fit import fit_system
 from ..studies.twin.system_fit import SystemFit
 from .style import ESTIMATOR_NAMES, colorbar, estimator_colour, new_figure, physical_image

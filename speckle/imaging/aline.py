@@ -6,7 +6,7 @@ with ``n = -(N//2) ... N-1-(N//2)`` and pixel ``q`` at depth ``q*H/N`` (µm). Se
 :mod:`speckle.system.source` for the conventions and why the pixel step is ``H/N``.
 
 :func:`ascan` is the stable entry point. ``method`` selects how the double sum is evaluated,
-from the table :data:`METHODS` (:data:`speckle.imaging.methods.ASCAN_METHODS`); ``"direct"``
+from the table :data:`speckle.imaging.methods.ASCAN_METHODS`; ``"direct"``
 is the exact float64 reference (:mod:`speckle.imaging.direct`). :func:`stream_ascans` images a
 random scene too large for memory, a chunk of A-lines at a time.
 """
@@ -15,17 +15,17 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._deprecate import moved
 from .._validate import as_finite_array, check_choice, check_int, check_memory, check_real
 from ..scene.scatterers import random_scatterers
 from ..system.source import check_weights
 from ._rules import check_carrier_phase, check_tol
 from .methods import ASCAN_METHODS
 
-__all__ = ["METHODS", "ascan", "pixel_depths", "stream_ascans"]
+__all__ = ["ascan", "pixel_depths", "stream_ascans"]
 
-#: A-scan synthesis methods: name -> callable(z, a, n_pixels, depth_range, k0, spectrum, tol), the
-#: table :data:`speckle.imaging.methods.ASCAN_METHODS`.
-METHODS = ASCAN_METHODS
+#: ``METHODS`` (retired, :data:`speckle.conventions.RETIRED`) is now ``ASCAN_METHODS``.
+__getattr__ = moved(__name__, "speckle.imaging.methods", [], {"METHODS": "ASCAN_METHODS"})
 
 
 def pixel_depths(n_pixels: int, depth_range: float) -> np.ndarray:
@@ -68,7 +68,8 @@ def ascan(
         ``N`` non-negative weights ``S(k_n)`` ordered ``n = -(N//2) ... N-1-(N//2)``; ``None``
         means rectangular (all ones). A :func:`speckle.system.source.spectrum` DataArray works too.
     method : str
-        Synthesis method, one of :data:`METHODS`: ``"direct"`` (the exact float64 reference),
+        Synthesis method, one of :data:`speckle.ASCAN_METHODS`: ``"direct"`` (the exact float64
+        reference),
         ``"nufft"`` / ``"nufft32"`` (folded type-1 NUFFT in double / single precision,
         :mod:`speckle.imaging.nufft`), ``"finufft"`` (FINUFFT, one plan per call), ``"psf"``
         (truncated point-spread function, :mod:`speckle.imaging.psf`) or ``"auto"`` (the fastest
@@ -102,7 +103,7 @@ def ascan(
     n = check_int(n_pixels, "n_pixels", low=2)
     h = check_real(depth_range, "depth_range", low=0, low_inclusive=False)
     k0v = check_real(k0, "k0", low=0)
-    check_choice(method, "method", METHODS)
+    check_choice(method, "method", ASCAN_METHODS)
     tolv = check_tol(tol)
     zz = as_finite_array(z, "z")
     if zz.ndim == 0:
@@ -129,7 +130,7 @@ def ascan(
         return np.zeros((*batch_shape, n), dtype=np.complex128)
     z2 = np.ascontiguousarray(zz.reshape(-1, m))
     a2 = np.ascontiguousarray(aa.reshape(-1, m))
-    out = METHODS[method](z2, a2, n, h, k0v, s, tolv)
+    out = ASCAN_METHODS[method](z2, a2, n, h, k0v, s, tolv)
     return np.asarray(out, dtype=np.complex128).reshape(*batch_shape, n)
 
 

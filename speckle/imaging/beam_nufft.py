@@ -250,7 +250,7 @@ def _peak_bytes(scene, beam, grid, ln_cut, nf, w, precision, row):
     m = scene.z.size
     n_rows = math.prod(grid.size)
     lines = (
-        "reduce the number of lines per call (scan in parts, e.g. speckle.image with a "
+        "reduce the number of lines per call (scan in parts, e.g. speckle.scan_image with a "
         "smaller chunk) or n_pixels"
     )
     advice = {

@@ -18,7 +18,8 @@ from ..provenance import provenance_attrs
 from ..scene.scatterers import AMPLITUDE_MODELS
 from ..system.source import check_weights
 from ._rules import check_tol
-from .aline import METHODS, ascan, pixel_depths
+from .aline import ascan, pixel_depths
+from .methods import ASCAN_METHODS
 
 __all__ = ["NORMALISATIONS", "bscan", "expected_intensity", "map_lines"]
 
@@ -129,7 +130,7 @@ def bscan(
     n = int(source.attrs["n_pixels"])
     h = depth_range_of(source, "source")
     k0 = float(source.attrs["k0"])
-    check_choice(method, "method", METHODS)
+    check_choice(method, "method", ASCAN_METHODS)
     check_tol(tol)
     for var in ("z", "amplitude"):
         if "scatterer" not in scene[var].dims:

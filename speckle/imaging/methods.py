@@ -99,7 +99,7 @@ def check_beam_call(
 
     The scene-dependent refusals (irregular lines, float32 rounding of a dense scene, memory)
     stay in the methods; this catches at call time what they would refuse on any scene, e.g.
-    when :func:`speckle.image` builds lazy tasks.
+    when :func:`speckle.scan_image` builds lazy tasks.
     """
     check_choice(method, "method", BEAM_METHODS)
     if method in ("nufft", "nufft32", "finufft"):

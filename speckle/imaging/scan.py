@@ -1,6 +1,6 @@
 """The labelled scan API: shared scene + Gaussian beam + scan geometry -> lazy image Dataset.
 
-:func:`image` images a shared scene (:mod:`speckle.scene.shared`) held in memory;
+:func:`scan_image` images a shared scene (:mod:`speckle.scene.shared`) held in memory;
 :func:`image_regions` draws the scene tile by tile inside each chunk, so a scene too large for
 memory (a 3-D volume) is never built whole. Both return a Dataset over ``(depth, x[, y])`` in
 µm whose ``field`` is a Dask array, one task per chunk of lines: a chunk's task gets only the
@@ -23,6 +23,7 @@ import dask.array as da
 import numpy as np
 import xarray as xr
 
+from .._deprecate import moved, renamed_parameters
 from .._validate import as_finite_array, check_int, check_real
 from ..conventions import attrs, coord, depth_range_of, spacing, units_of
 from ..provenance import provenance_attrs
@@ -32,7 +33,10 @@ from .aline import pixel_depths
 from .beam import beam_scan
 from .gaussian_beam import MAX_WAIST
 
-__all__ = ["REACH_EPS", "beam_reach", "image", "image_regions", "scan_kernel", "scan_lines"]
+__all__ = ["REACH_EPS", "beam_reach", "image_regions", "scan_image", "scan_kernel", "scan_lines"]
+
+#: ``image`` (retired, :data:`speckle.conventions.RETIRED`) is now ``scan_image``.
+__getattr__ = moved(__name__, __name__, [], {"image": "scan_image"})
 
 #: Relative double-pass weight below which a scatterer is outside the beam's reach: below
 #: float64 rounding (2^-53 = 1.1e-16), so the halo changes nothing beyond rounding.
@@ -164,7 +168,7 @@ def _dataset(
     return ds
 
 
-def _prepare(source, waist, x, y, chunk, method, tol, wrap, focus, rayleigh_range):
+def _prepare(source, waist, lines, y, chunk, method, tol, wrap, focus, rayleigh_range):
     """Checked arguments, the per-chunk kernel and the attrs shared by both entry points."""
     tol = check_tol(tol)
     src = _source(source)
@@ -180,7 +184,7 @@ def _prepare(source, waist, x, y, chunk, method, tol, wrap, focus, rayleigh_rang
         optics["rayleigh_range"] = check_real(
             rayleigh_range, "rayleigh_range", low=0, low_inclusive=False
         )
-    xs = _lines(x, "x")
+    xs = _lines(lines, "lines")
     ys = None if y is None else _lines(y, "y")
     c = check_int(chunk, "chunk", low=1)
     meta = {
@@ -213,11 +217,12 @@ def _prepare(source, waist, x, y, chunk, method, tol, wrap, focus, rayleigh_rang
     return src, w0, xs, ys, c, meta, kernel, optics
 
 
+@renamed_parameters({"x": "lines"})
 def scan_kernel(
     source: xr.DataArray,
     *,
     waist: float,
-    x: object,
+    lines: object,
     y: object | None = None,
     method: str = "direct",
     tol: float | None = None,
@@ -226,12 +231,12 @@ def scan_kernel(
     rayleigh_range: float | None = None,
     z_bounds: tuple[float, float] | None = None,
 ) -> tuple[Callable, float, np.ndarray, np.ndarray | None, dict]:
-    """The checked imaging kernel of :func:`image`, for callers that pick the scatterers.
+    """The checked imaging kernel of :func:`scan_image`, for callers that pick the scatterers.
 
     Parameters
     ----------
-    source, waist, x, y, method, tol, wrap, focus, rayleigh_range
-        As in :func:`image` (checked here, before any work).
+    source, waist, lines, y, method, tol, wrap, focus, rayleigh_range
+        As in :func:`scan_image` (checked here, before any work).
     z_bounds : (float, float), optional
         Depth range (µm) of the scatterers, for the reach of a focused beam with ``wrap``;
         default ``[0, H)``.
@@ -243,18 +248,18 @@ def scan_kernel(
         field ``(N, Lx[, Ly])`` of lines from those scatterers (:func:`speckle.beam_scan`),
         ``reach`` the lateral distance (µm) beyond which a scatterer adds nothing
         (:func:`beam_reach` of the widest beam), the checked line positions, and the attrs
-        :func:`image` records (with ``n_pixels``, ``depth_range`` and ``k0``).
+        :func:`scan_image` records (with ``n_pixels``, ``depth_range`` and ``k0``).
 
     Examples
     --------
     >>> import numpy as np, speckle
     >>> kernel, reach, xs, ys, meta = scan_kernel(speckle.spectrum(8, 64.0, k0_dk=4),
-    ...                                           waist=4.0, x=[0.0])
+    ...                                           waist=4.0, lines=[0.0])
     >>> kernel((np.array([10.0]), np.array([0.0]), np.array([1.0 + 0j])), xs, ys).shape
     (8, 1)
     """
     src, w0, xs, ys, _, meta, kernel, optics = _prepare(
-        source, waist, x, y, 1, method, tol, bool(wrap), focus, rayleigh_range
+        source, waist, lines, y, 1, method, tol, bool(wrap), focus, rayleigh_range
     )
     lo, hi = (0.0, src["depth_range"]) if z_bounds is None else z_bounds
     reach = beam_reach(w0, widening=_widening(optics, w0, src["k0"], float(lo), float(hi)))
@@ -266,12 +271,13 @@ def _first(ys: np.ndarray | None) -> np.ndarray | None:
     return None if ys is None else ys[:1]
 
 
-def image(
+@renamed_parameters({"x": "lines"})
+def scan_image(
     scene: xr.Dataset,
     source: xr.DataArray,
     *,
     waist: float,
-    x: object,
+    lines: object,
     y: object | None = None,
     chunk: int = 64,
     method: str = "direct",
@@ -292,12 +298,12 @@ def image(
         Spectrum from :func:`speckle.spectrum` (gives ``N``, ``H`` in µm and ``k0`` in rad/µm).
     waist : float
         Beam waist ``w0`` in µm (> 0), as in :func:`speckle.beam_scan`.
-    x : array_like
+    lines : array_like
         Lateral positions of the lines in µm (1-D, increasing, uniform: e.g.
         :func:`scan_lines`).
     y : array_like, optional
         Positions of the lines along ``y`` in µm for a 3-D scene: a C-scan over the grid
-        ``x`` x ``y`` (one ``y`` value: one B-scan at that ``y``).
+        ``lines`` x ``y`` (one ``y`` value: one B-scan at that ``y``).
     chunk : int
         Lines per Dask chunk along each lateral axis (>= 1).
     method, tol
@@ -327,7 +333,7 @@ def image(
     if not isinstance(wrap, bool | np.bool_):  # "False" would be true
         raise TypeError(f"wrap must be True or False, got {wrap!r} ({type(wrap).__name__})")
     src, w0, xs, ys, c, meta, kernel, optics = _prepare(
-        source, waist, x, y, chunk, method, tol, bool(wrap), focus, rayleigh_range
+        source, waist, lines, y, chunk, method, tol, bool(wrap), focus, rayleigh_range
     )
     if not isinstance(scene, xr.Dataset) or "z" not in scene:
         raise TypeError("scene must be a shared scene Dataset (see speckle.shared_scene)")
@@ -335,11 +341,11 @@ def image(
     if extra:
         d = extra[0]
         parts = [
-            image(
+            scan_image(
                 scene.isel({d: i}),
                 source,
                 waist=w0,
-                x=xs,
+                lines=xs,
                 y=ys,
                 chunk=c,
                 method=method,
@@ -379,6 +385,7 @@ def image(
     return _dataset(field, xs, ys, src, meta)
 
 
+@renamed_parameters({"x": "lines"})
 def image_regions(
     regions: xr.Dataset,
     source: xr.DataArray,
@@ -386,7 +393,7 @@ def image_regions(
     seed: int,
     tile: object = 64.0,
     waist: float,
-    x: object,
+    lines: object,
     y: object | None = None,
     chunk: int = 32,
     method: str = "direct",
@@ -394,7 +401,7 @@ def image_regions(
     focus: float | None = None,
     rayleigh_range: float | None = None,
 ) -> xr.Dataset:
-    """Like :func:`image`, drawing the scene of ``regions`` tile by tile inside each chunk.
+    """Like :func:`scan_image`, drawing the scene of ``regions`` tile by tile inside each chunk.
 
     Each chunk's task draws :func:`speckle.scene.shared.shared_scene` over depths ``[0, H)``
     and the lateral window of its lines plus the beam reach, and images it: memory holds one
@@ -407,16 +414,16 @@ def image_regions(
         Regions (:mod:`speckle.scene.regions`); densities per µm^2 (2-D, no ``y``) or per µm^3.
     seed, tile
         As in :func:`speckle.scene.shared.shared_scene`.
-    source, waist, x, y, chunk, method, tol, focus, rayleigh_range
-        As in :func:`image` (``wrap`` is ``False``: the scene is drawn over ``[0, H)`` only).
+    source, waist, lines, y, chunk, method, tol, focus, rayleigh_range
+        As in :func:`scan_image` (``wrap`` is ``False``: the scene is drawn over ``[0, H)`` only).
 
     Returns
     -------
     xarray.Dataset
-        As :func:`image`.
+        As :func:`scan_image`.
     """
     src, w0, xs, ys, c, meta, kernel, optics = _prepare(
-        source, waist, x, y, chunk, method, tol, False, focus, rayleigh_range
+        source, waist, lines, y, chunk, method, tol, False, focus, rayleigh_range
     )
     reach = beam_reach(w0, widening=_widening(optics, w0, src["k0"], 0.0, src["depth_range"]))
     h = src["depth_range"]

@@ -2,7 +2,7 @@
 
 The scene comes from :mod:`speckle.scene.motion`: positions with a ``time`` dim (s). Every
 image here is the project's beam imaging (:func:`speckle.beam_scan` through the chunk kernel of
-:func:`speckle.imaging.scan.image`), evaluated on the positions at the right time:
+:func:`speckle.imaging.scan.scan_image`), evaluated on the positions at the right time:
 
 * :func:`mmode` -- repeated A-lines at one lateral position, one per time of the scene (the
   A-line rate is the scene's time step): ``(time, depth)``;
@@ -23,7 +23,7 @@ lines) or per chunk of times, so memory holds the scene and one task's field at 
 the scheduler: each task images fixed inputs with a deterministic method. M-mode and raster
 series image each A-line from the same scatterers whatever the chunking, so they are
 identical bit for bit under any chunking and scheduler (tested: synchronous, threads,
-processes, streamed to NetCDF); snapshot series are :func:`speckle.image` per time (the same
+processes, streamed to NetCDF); snapshot series are :func:`speckle.scan_image` per time (the same
 under any chunking to rounding). Independent-line scenes (dims ``aline, scatterer``) are
 imaged by :func:`speckle.bscan`, one frame per time.
 """
@@ -35,6 +35,7 @@ import dask.array as da
 import numpy as np
 import xarray as xr
 
+from .._deprecate import renamed_parameters
 from .._validate import check_int, check_real
 from ..conventions import attrs, coord, units_of
 from ..provenance import provenance_attrs
@@ -42,7 +43,7 @@ from ..scene.motion import check_times
 from ..scene.shared import is_shared
 from .aline import pixel_depths
 from .bscan import bscan
-from .scan import image, scan_kernel
+from .scan import scan_image, scan_kernel
 
 __all__ = ["bscan_series", "mmode", "raster_times"]
 
@@ -168,7 +169,7 @@ def mmode(
     time_chunk : int
         A-lines per Dask task (>= 1); the numbers do not depend on it.
     method, tol, wrap, focus, rayleigh_range
-        As in :func:`speckle.imaging.scan.image`.
+        As in :func:`speckle.imaging.scan.scan_image`.
 
     Returns
     -------
@@ -180,7 +181,7 @@ def mmode(
     ------
     ValueError
         A scene without a ``time`` dim (or not shared), ``y`` missing for a 3-D scene or given
-        for a 2-D one, and the checks of :func:`~speckle.imaging.scan.image`.
+        for a 2-D one, and the checks of :func:`~speckle.imaging.scan.scan_image`.
 
     Examples
     --------
@@ -205,7 +206,7 @@ def mmode(
     kernel, reach, xs, ys, meta = scan_kernel(
         source,
         waist=waist,
-        x=[x0],
+        lines=[x0],
         y=None if y0 is None else [y0],
         method=method,
         tol=tol,
@@ -243,12 +244,13 @@ def mmode(
     return _series_dataset(da.concatenate(parts), times, xs, ys, meta, squeeze_x=True)
 
 
+@renamed_parameters({"x": "lines"})
 def bscan_series(
     scene: xr.Dataset,
     source: xr.DataArray,
     *,
     waist: float | None = None,
-    x: object = None,
+    lines: object = None,
     y: float | None = None,
     line_rate: float | None = None,
     chunk: int = 64,
@@ -265,23 +267,23 @@ def bscan_series(
     scene : xarray.Dataset
         Moved scene (:mod:`speckle.scene.motion`): a shared scene over ``(time, scatterer)``,
         or independent lines over ``(time, aline, scatterer)`` (imaged by
-        :func:`speckle.bscan`; ``waist``, ``x``, ``y`` and ``line_rate`` are then not used).
+        :func:`speckle.bscan`; ``waist``, ``lines``, ``y`` and ``line_rate`` are then not used).
     source : xarray.DataArray
         Spectrum (:func:`speckle.spectrum`).
     waist : float
         Beam waist ``w0`` in µm (shared scenes).
-    x : array_like
+    lines : array_like
         Line positions in µm (1-D, increasing, uniform).
     y : float, optional
         The B-scan's ``y`` in µm for a 3-D scene (required there).
     line_rate : float, optional
         A-line rate in Hz. None: one snapshot B-scan per time of the scene. Given: the
-        scene's times are ``n_frames x len(x)`` line times (:func:`raster_times`, checked:
+        scene's times are ``n_frames x len(lines)`` line times (:func:`raster_times`, checked:
         lines of a frame ``1/line_rate`` apart), each line imaged at its own time.
     chunk : int
         Lines per Dask task (>= 1); the numbers do not depend on it.
     method, tol, wrap, focus, rayleigh_range
-        As in :func:`speckle.imaging.scan.image`.
+        As in :func:`speckle.imaging.scan.scan_image`.
 
     Returns
     -------
@@ -293,8 +295,8 @@ def bscan_series(
     Raises
     ------
     ValueError
-        A scene without a ``time`` dim, raster times that do not match ``len(x)`` lines at
-        ``line_rate``, and the checks of :func:`~speckle.imaging.scan.image`.
+        A scene without a ``time`` dim, raster times that do not match ``len(lines)`` lines at
+        ``line_rate``, and the checks of :func:`~speckle.imaging.scan.scan_image`.
 
     Examples
     --------
@@ -306,7 +308,7 @@ def bscan_series(
     >>> t = raster_times(2, 4, line_rate=1e4)
     >>> moved = flow_motion(sc, t, velocity=[0.0, 1000.0])
     >>> src = speckle.spectrum(16, 64.0, k0_dk=5)
-    >>> out = bscan_series(moved, src, waist=8.0, x=[8.0, 16.0, 24.0, 32.0], line_rate=1e4)
+    >>> out = bscan_series(moved, src, waist=8.0, lines=[8.0, 16.0, 24.0, 32.0], line_rate=1e4)
     >>> out.field.dims, out.line_time.dims
     (('time', 'depth', 'x'), ('time', 'x'))
     """
@@ -320,19 +322,19 @@ def bscan_series(
         out = bscan(scene, source, method=method, tol=tol)
         return out.assign_attrs(protocol="repeated B-scans (independent lines)")
     ndim = _timed_scene(scene, "bscan_series")
-    if waist is None or x is None:
-        raise ValueError("bscan_series of a shared scene needs waist= (µm) and x= (µm)")
+    if waist is None or lines is None:
+        raise ValueError("bscan_series of a shared scene needs waist= (µm) and lines= (µm)")
     if (ndim == 3) != (y is not None):
         raise ValueError(
             f"a {ndim}-D scene needs {'y (µm, the B-scan plane)' if ndim == 3 else 'no y'}"
         )
     y0 = None if y is None else [check_real(y, "y")]
     if line_rate is None:
-        out = image(
+        out = scan_image(
             scene,
             source,
             waist=waist,
-            x=x,
+            lines=lines,
             y=y0,
             chunk=chunk,
             method=method,
@@ -351,7 +353,7 @@ def bscan_series(
     kernel, reach, xs, ys, meta = scan_kernel(
         source,
         waist=waist,
-        x=x,
+        lines=lines,
         y=y0,
         method=method,
         tol=tol,

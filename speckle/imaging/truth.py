@@ -17,7 +17,7 @@ the incoherent sum. Both factors of ``|h_j|^2`` are images of the same kind agai
 * laterally: the double-pass beam weight ``W = exp(-2 r^2/w0^2)`` squares to
   ``exp(-4 r^2/w0^2)``, the weight of a beam of waist ``w0/sqrt(2)``.
 
-So the truth is :func:`speckle.imaging.scan.image` (or :func:`speckle.ascan` for independent
+So the truth is :func:`speckle.imaging.scan.scan_image` (or :func:`speckle.ascan` for independent
 A-lines) of the scatterers' intensities ``|a_j|^2`` with the intensity spectrum and the
 narrower beam: the same code, methods and chunking as the speckled image. Effects on the
 scatterers (attenuation, roll-off, backscatter, depolarization channels) are in the ``a_j``
@@ -31,14 +31,16 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from .._deprecate import renamed_parameters
 from .._validate import as_finite_array, check_int, check_real
 from ..conventions import attrs, coord, depth_range_of, units_of
 from ..provenance import provenance_attrs
 from ..system.source import check_weights, spectrum
 from ._rules import check_tol
-from .aline import METHODS, ascan, pixel_depths
+from .aline import ascan, pixel_depths
 from .bscan import map_lines
-from .scan import image
+from .methods import ASCAN_METHODS
+from .scan import scan_image
 
 __all__ = ["intensity_spectrum", "speckle_free_image", "speckle_free_lines"]
 
@@ -105,12 +107,13 @@ def speckle_free_lines(
     return np.ascontiguousarray(out[..., ::2].real)
 
 
+@renamed_parameters({"x": "lines"})
 def speckle_free_image(
     scene: xr.Dataset,
     source: xr.DataArray,
     *,
     waist: float | None = None,
-    x: object | None = None,
+    lines: object | None = None,
     chunk: int = 64,
     method: str = "direct",
     tol: float | None = None,
@@ -122,16 +125,17 @@ def speckle_free_image(
     scene : xarray.Dataset
         Independent A-lines (dims ``(..., aline, scatterer)``, :func:`speckle.random_scatterers`)
         imaged as by :func:`speckle.bscan`; or a shared scene (:func:`speckle.shared_scene`)
-        imaged as by :func:`speckle.image` with ``waist`` and ``x``. Extra dims (``channel``
+        imaged as by :func:`speckle.scan_image` with ``waist`` and ``lines``. Extra dims
+        (``channel``
         of :func:`speckle.depolarize`, ``frame``, ...) are carried through.
     source : xarray.DataArray
         Spectrum from :func:`speckle.spectrum`.
     waist : float, optional
         Beam waist in µm (shared scenes only; required there).
-    x : array_like, optional
+    lines : array_like, optional
         Lateral positions of the lines in µm (shared scenes only; required there).
     chunk, method, tol
-        As in :func:`speckle.image` / :func:`speckle.bscan`.
+        As in :func:`speckle.scan_image` / :func:`speckle.bscan`.
 
     Returns
     -------
@@ -142,7 +146,7 @@ def speckle_free_image(
     Raises
     ------
     TypeError, ValueError
-        On a scene or source of the wrong kind, a shared scene without ``waist``/``x`` (or a
+        On a scene or source of the wrong kind, a shared scene without ``waist``/``lines`` (or a
         line scene with them), and the errors of the imaging functions.
     """
     if not isinstance(source, xr.DataArray) or "n_pixels" not in source.attrs:
@@ -154,20 +158,22 @@ def speckle_free_image(
     r = intensity_spectrum(source.values)
     shared = "x" in scene.data_vars
     if shared:
-        if waist is None or x is None:
-            raise ValueError("a shared scene needs waist= (µm) and x= (line positions, µm)")
+        if waist is None or lines is None:
+            raise ValueError("a shared scene needs waist= (µm) and lines= (line positions, µm)")
         w0 = check_real(waist, "waist", low=0, low_inclusive=False)
         src2 = spectrum(2 * n, h, k0=0.0, shape="array", weights=r)
         sc2 = scene.assign(amplitude=(abs(scene.amplitude) ** 2).astype(np.complex128))
-        img = image(sc2, src2, waist=w0 / np.sqrt(2.0), x=x, chunk=chunk, method=method, tol=tol)
+        img = scan_image(
+            sc2, src2, waist=w0 / np.sqrt(2.0), lines=lines, chunk=chunk, method=method, tol=tol
+        )
         truth = img.field.isel(depth=slice(0, None, 2)).real
         truth = truth.assign_coords(depth=coord("depth", pixel_depths(n, h)))
         lateral = "x"
     else:
-        if waist is not None or x is not None:
-            raise ValueError("waist and x are for shared scenes; independent A-lines take none")
-        if method not in METHODS:
-            raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+        if waist is not None or lines is not None:
+            raise ValueError("waist and lines are for shared scenes; independent A-lines take none")
+        if method not in ASCAN_METHODS:
+            raise ValueError(f"method must be one of {ASCAN_METHODS}, got {method!r}")
         check_tol(tol)
         truth = map_lines(
             speckle_free_lines,

@@ -34,11 +34,12 @@ import xarray as xr
 from .._validate import MAX_BYTES
 from ..analysis import compounding as cp
 from ..analysis import filters as dsp
-from ..analysis.image_files import load_image
 from ..analysis.measured import measured_shape, roi_slices
+from ..conventions import canonical_keys
 from ..figures.despeckle import parameter_grid
 from ..imaging.nufft import NUFFT_TOL_FLOOR, float32_error_estimate
 from ..imaging.scan import beam_reach
+from ..io import load_image
 from ..scene.shared import MAX_TILES
 from .adapters import system_from_config
 from .dynamics_checks import check_dynamics_config
@@ -274,13 +275,13 @@ def _measured_roi(path: str | None, roi: Mapping) -> None:
     if not path or not str(path).endswith(".npy") or not os.path.isfile(path):
         return  # no file: Fig. 4 draws the simulated panels only (README)
     shape = np.load(path, mmap_mode="r").shape
-    for axis, dim in enumerate(("depth", "aline")):
+    for axis, dim in enumerate(("depth", "x")):
         bounds = roi.get(dim) or [None, None]
         for b in bounds:
             if b is not None and len(shape) == 2 and b > shape[axis]:
                 raise ValueError(
                     f"config key fig4.measured.roi.{dim} = {bounds} lies outside the measured "
-                    f"image of shape {tuple(shape)} (depth, aline)"
+                    f"image of shape {tuple(shape)} (depth, x)"
                 )
 
 
@@ -306,7 +307,7 @@ def _image_shape(cfg: Mapping) -> tuple[int, int]:
                 f"config key twin.kind = {kind!r} cannot describe {path}: it holds negative "
                 "values (log-compressed data are kind 'log')"
             )
-        names = ["x" if d == "aline" else d for d in dims]
+        names = list(canonical_keys(dict.fromkeys(dims), "config key twin.dims"))
         if len(names) != len(shape):
             raise ValueError(
                 f"config key twin.dims = {list(dims)} does not name the {len(shape)} axes of "
@@ -566,7 +567,7 @@ def _realism(config: Mapping) -> None:
             except (TypeError, ValueError) as exc:
                 raise ValueError(
                     f"config key {key} = {roi!r} does not fit the measured image {path} of shape "
-                    f"{shape} (depth, aline): {exc}"
+                    f"{shape} (depth, x): {exc}"
                 ) from None
     show = real.get("showcase")
     if show is None:
@@ -693,8 +694,8 @@ def _check_spec(spec: Mapping, geo: Mapping, path: str) -> None:
     if fam == "frequency":
         _key(
             path,
-            lambda: cp.subband_windows(
-                n, spec["looks"], window=spec["window"], overlap=spec["overlap"]
+            lambda: cp.subband_apodizations(
+                n, spec["looks"], apodization=spec["apodization"], overlap=spec["overlap"]
             ),
         )
     elif fam in dsp.FILTERS:
@@ -737,11 +738,13 @@ def check_despeckle(cfg: Mapping) -> None:
     n = int(geo["n_pixels"])
     fr = cfg["physical"]["frequency"]
     for nl in fr["looks"]:
-        for w in fr["windows"]:
+        for w in fr["apodizations"]:
             for ov in fr["overlap"]:
                 _key(
                     "physical.frequency",
-                    lambda nl=nl, w=w, ov=ov: cp.subband_windows(n, nl, window=w, overlap=ov),
+                    lambda nl=nl, w=w, ov=ov: cp.subband_apodizations(
+                        n, nl, apodization=w, overlap=ov
+                    ),
                 )
     phys = cfg["physical"]
     for fam, key in (("angular", "angles"), ("spatial", "offsets")):
@@ -765,7 +768,9 @@ def check_despeckle(cfg: Mapping) -> None:
         _check_spec(spec, fgeo, f"failure.methods.{name}")
     fc = cfg["frequency_compounding"]
     for nl in fc["looks"]:
-        _key("frequency_compounding.looks", lambda nl=nl: cp.subband_windows(fc["n_pixels"], nl))
+        _key(
+            "frequency_compounding.looks", lambda nl=nl: cp.subband_apodizations(fc["n_pixels"], nl)
+        )
         if fc["n_pixels"] % nl:
             raise ValueError(
                 f"config key despeckle.frequency_compounding.looks: {nl} equal sub-bands need "

@@ -8,13 +8,14 @@ displacement field); ``mechanics`` computes such fields with finite elements (sc
 Names load on first use (SPEC 1, ``lazy_loader``).
 """
 
+from .._deprecate import retired_names
 from .._lazy import attach
 
 __getattr__, __dir__, __all__ = attach(
     __name__,
     {
         "deformation": ["deformable_scene", "displace", "translate", "uniaxial_strain"],
-        "layers": ["layers", "region_values"],
+        "layers": ["layer_stack", "region_values"],
         "motion": [
             "ballistic_motion",
             "brownian_motion",
@@ -24,7 +25,7 @@ __getattr__, __dir__, __all__ = attach(
             "poiseuille_velocity",
         ],
         "mechanics": [
-            "compress",
+            "compress_phantom",
             "displacement_at",
             "inclusion_labels",
             "inclusion_strain",
@@ -36,3 +37,4 @@ __getattr__, __dir__, __all__ = attach(
         "shared": ["from_lines", "shared_scene"],
     },
 )
+__getattr__ = retired_names(__name__, __getattr__)

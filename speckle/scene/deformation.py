@@ -343,7 +343,7 @@ def displace(scene: xr.Dataset, displacement: Displacement, *, wrap: bool = Fals
     -----
     A shared scene (:mod:`speckle.scene.shared`, dim ``scatterer`` only) is moved continuously:
     every scatterer keeps its amplitude and region and nothing is re-binned or dropped (the
-    imaging step, :func:`speckle.imaging.scan.image`, decides what the depth window shows).
+    imaging step, :func:`speckle.imaging.scan.scan_image`, decides what the depth window shows).
     Callables get ``(z, x)`` in 2-D and ``(z, x, y)`` in 3-D and return ``u_z`` or a tuple
     ``(u_z, u_x[, u_y])``; xarray fields have dims among ``depth``, ``x`` (and ``y``) in µm,
     e.g. the FEM displacement ``uz``, ``ux`` over ``(depth, x)``.
@@ -515,7 +515,7 @@ def uniaxial_strain(
         The same along ``y`` for 3-D shared scenes (default the middle of the y window).
     wrap : bool
         See :func:`displace` (independent A-lines only; for shared scenes the imaging step
-        decides, :func:`speckle.imaging.scan.image`).
+        decides, :func:`speckle.imaging.scan.scan_image`).
 
     Returns
     -------

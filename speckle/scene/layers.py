@@ -25,20 +25,24 @@ import numbers
 import numpy as np
 import xarray as xr
 
+from .._deprecate import moved
 from .._validate import as_finite_array
 from ..conventions import attrs, labelled, units_of
 
 __all__ = [
     "PROPERTIES",
     "check_property",
+    "layer_stack",
     "layer_values",
-    "layers",
     "path_integral",
     "property_integral",
     "property_profile",
     "region_values",
     "sample_map",
 ]
+
+#: ``layers`` (retired, :data:`speckle.conventions.RETIRED`) is now ``layer_stack``.
+__getattr__ = moved(__name__, __name__, [], {"layers": "layer_stack"})
 
 #: Property name -> (units, allowed interval (low, high), long name); the units are those of
 #: the property's quantity in :data:`speckle.conventions.QUANTITIES`.
@@ -71,7 +75,7 @@ def check_property(name: str, values: object) -> np.ndarray:
     return v
 
 
-def layers(tops: object, **properties: object) -> xr.Dataset:
+def layer_stack(tops: object, **properties: object) -> xr.Dataset:
     """A stack of layers along depth with constant optical properties.
 
     Parameters
@@ -113,7 +117,7 @@ def layers(tops: object, **properties: object) -> xr.Dataset:
 
 def _check_layers(stack: xr.Dataset, name: str) -> np.ndarray:
     if not isinstance(stack, xr.Dataset) or "top" not in stack.coords or name not in stack:
-        raise TypeError(f"layers must be a Dataset from speckle.layers(...) holding {name!r}")
+        raise TypeError(f"layers must be a Dataset from speckle.layer_stack(...) holding {name!r}")
     return check_property(name, stack[name].values)
 
 

@@ -1,7 +1,8 @@
 """Phantoms of known stiffness compressed by a flat probe: 2-D plane-strain finite elements.
 
 A phantom is an integer label image over ``(depth, x)`` (coordinates in µm, pixel centres) with
-a Young's modulus (kPa) and a Poisson ratio per label. :func:`compress` solves 2-D plane-strain
+a Young's modulus (kPa) and a Poisson ratio per label. :func:`compress_phantom` solves 2-D
+plane-strain
 linear elasticity for it with scikit-fem (bilinear quadrilaterals, one or more per label pixel)
 and returns the displacement, strain and stress fields on the label grid, in the project's
 conventions (those of :func:`speckle.uniaxial_strain`):
@@ -17,7 +18,8 @@ conventions (those of :func:`speckle.uniaxial_strain`):
   ``stress_ij = -sigma_ij``, where ``eps``/``sigma`` are the usual tensile-positive small-strain
   and Cauchy stress tensors (``eps_xz`` is the tensor, not the engineering, shear strain).
 
-Boundary conditions (:func:`compress`): lateral sides traction-free; ``contact="bonded"``: the
+Boundary conditions (:func:`compress_phantom`): lateral sides traction-free;
+``contact="bonded"``: the
 probe and base hold both displacement components (no lateral slip); ``contact="sliding"``:
 they prescribe only ``u_z`` (frictionless), and the lateral rigid-body translation is fixed by
 ``u_x = 0`` at the probe centre ``(z, x) = (0, x_centre)``.
@@ -28,7 +30,8 @@ Plane strain (``eps_yy = 0`` out of the image plane): the plane-strain modulus i
 ``lambda = E nu / ((1 + nu)(1 - 2 nu))`` is infinite (a displacement formulation cannot represent
 an incompressible solid). Near 0.5 plain bilinear elements lock (spurious volumetric
 stiffness; for a circular inclusion of radius 16 pixels the strain is 4 % off at nu = 0.499 and
-79 % off at 0.49999). :func:`compress` integrates the volumetric term ``lambda div u div v`` at
+79 % off at 0.49999). :func:`compress_phantom` integrates the volumetric term
+``lambda div u div v`` at
 the element centre (selective reduced integration, the B-bar method on rectangles), which
 removes the locking (0.4 % at both, as at nu = 0.3). Up to 0.49999 is accepted; there the
 stresses (not the strains) show a small checkerboard (the Q1/P0 pressure mode, ~1 % of the
@@ -49,6 +52,7 @@ from scipy.sparse.linalg import splu
 from skfem.helpers import ddot, div, sym_grad
 from skfem.models.elasticity import lame_parameters
 
+from speckle._deprecate import moved
 from speckle._validate import (
     as_finite_array,
     broadcast,
@@ -62,7 +66,7 @@ from speckle.scene.regions import check_modulus, in_ellipse
 
 __all__ = [
     "CONTACTS",
-    "compress",
+    "compress_phantom",
     "displacement_at",
     "fem_bytes",
     "inclusion_labels",
@@ -71,7 +75,10 @@ __all__ = [
     "layered_labels",
 ]
 
-#: Probe/base contact conditions accepted by :func:`compress`.
+#: ``compress`` (retired, :data:`speckle.conventions.RETIRED`) is now ``compress_phantom``.
+__getattr__ = moved(__name__, __name__, [], {"compress": "compress_phantom"})
+
+#: Probe/base contact conditions accepted by :func:`compress_phantom`.
 CONTACTS = ("bonded", "sliding")
 
 #: Names the lateral dim of a label image may have (``x``; ``aline`` for A-line scenes).
@@ -119,7 +126,7 @@ def layered_labels(depth: object, x: object, interfaces: object) -> xr.DataArray
     interfaces : sequence of float
         Depths in µm of the interfaces, strictly increasing. Layer ``k`` (label ``k``) holds the
         pixels with ``interfaces[k-1] <= depth < interfaces[k]`` (label 0 above the first). In
-        :func:`compress` the interface then lies on the pixel edge, midway between the last
+        :func:`compress_phantom` the interface then lies on the pixel edge, midway between the last
         pixel centre above it and the first at or below it (e.g. 97.5 µm for an interface at
         100 µm on 5 µm pixels centred at 0, 5, 10, ... µm).
 
@@ -317,7 +324,7 @@ FILL_EXPONENT = 0.25
 
 
 def fem_bytes(n_nodes: int) -> float:
-    """Estimated peak memory (bytes) of :func:`compress` on a mesh of ``n_nodes`` nodes: the
+    """Estimated peak memory (bytes) of :func:`compress_phantom` on a mesh of ``n_nodes`` nodes: the
     sparse-LU factors (:data:`FILL_COEF`), the stiffness matrix and the FE fields."""
     dofs = 2.0 * n_nodes
     factor = FILL_COEF * dofs ** (1 + FILL_EXPONENT) * 12.0
@@ -341,7 +348,7 @@ def _solver(a, b, **_):
     return lu.solve(b)
 
 
-def compress(
+def compress_phantom(
     labels: xr.DataArray,
     youngs_modulus: Value,
     poisson_ratio: Value,
@@ -412,7 +419,9 @@ def compress(
         depth = np.arange(0.0, scene.attrs["populated_depth"] + 8.0, 8.0)
         x = scene.aline.values  # A-line positions, µm
         labels = speckle.inclusion_labels(depth, x, (1024.0, x.mean()), 160.0)
-        fe = speckle.compress(labels, {0: 10.0, 1: 40.0}, 0.45, strain=0.01, contact="sliding")
+        fe = speckle.compress_phantom(
+            labels, {0: 10.0, 1: 40.0}, 0.45, strain=0.01, contact="sliding"
+        )
         moved = speckle.displace(scene, functools.partial(speckle.displacement_at, fe))
 
     ``fe[["uz", "ux"]].rename(x="aline")`` is also a field :func:`speckle.displace` accepts
@@ -559,7 +568,7 @@ def compress(
 
 
 def displacement_at(result: xr.Dataset, z: object, x: object) -> tuple[np.ndarray, np.ndarray]:
-    """The FE displacement of :func:`compress` at arbitrary material points.
+    """The FE displacement of :func:`compress_phantom` at arbitrary material points.
 
     Bilinear interpolation of ``uz_node``/``ux_node`` on the FE node grid, which *is* the finite
     element solution (bilinear quadrilaterals on a rectangular grid): no error beyond the FE
@@ -570,7 +579,7 @@ def displacement_at(result: xr.Dataset, z: object, x: object) -> tuple[np.ndarra
     Parameters
     ----------
     result : xarray.Dataset
-        Output of :func:`compress` (also after a NetCDF round trip).
+        Output of :func:`compress_phantom` (also after a NetCDF round trip).
     z, x : array_like
         Depths and lateral positions in µm (broadcast together), inside the sample
         ``[0, sample_depth] x lateral_extent``.
@@ -586,7 +595,7 @@ def displacement_at(result: xr.Dataset, z: object, x: object) -> tuple[np.ndarra
         If a point lies outside the sample (beyond a relative rounding margin of 1e-9).
     """
     if not isinstance(result, xr.Dataset) or not {"uz_node", "ux_node"} <= set(result):
-        raise TypeError("result must be the xarray.Dataset returned by speckle.compress")
+        raise TypeError("result must be the xarray.Dataset returned by speckle.compress_phantom")
     zz, xx = broadcast(z=as_finite_array(z, "z"), x=as_finite_array(x, "x"))
     zn, xn = result["node_depth"].values, result["node_x"].values
     pts = np.stack([zz.ravel(), xx.ravel()], axis=-1)

@@ -31,7 +31,7 @@ backscatter       1             mean backscatter E|a|^2 of the region (amplitude
 attenuation       1/um          attenuation coefficient (default 0; used by system effects)
 depolarization    1             cross-polarized fraction in [0, 1] (default 0)
 youngs_modulus    kPa           Young's modulus (default 10, soft tissue; used by mechanics,
-                                whose :func:`~speckle.scene.mechanics.compress` takes kPa);
+                                whose :func:`~speckle.scene.mechanics.compress_phantom` takes kPa);
                                 values above :data:`MAX_MODULUS_KPA` are refused as given in Pa
 poisson_ratio     1             Poisson ratio (default 0.45)
 ================  ============  ===========================================================
@@ -77,7 +77,7 @@ SHAPES = ("background", "layer", "ellipse", "image")
 #: Largest Young's modulus accepted, kPa (1 GPa; soft tissue, cartilage and elastography phantoms
 #: are 0.1-1000 kPa). The package's one unit of modulus is kPa: a Pa value of a stiff material
 #: (above 1 MPa) lands above the cap and is refused; tables carry ``units = "kPa"``, which
-#: :func:`~speckle.scene.mechanics.compress` checks when given a DataArray.
+#: :func:`~speckle.scene.mechanics.compress_phantom` checks when given a DataArray.
 MAX_MODULUS_KPA = 1.0e6
 
 #: Default value of every property column other than density (units as in the module table).

@@ -9,7 +9,7 @@ A shared scene is an ``xarray.Dataset`` with one dim ``scatterer`` holding
 
 sorted by ``x`` (then ``z``, ``y``), so that the scatterers a beam at lateral position ``X``
 reaches are one contiguous slice. Attributes record the window, the tile size, the seed and
-``kind = "shared"``. Any beam position images it (:func:`speckle.imaging.scan.image`); the
+``kind = "shared"``. Any beam position images it (:func:`speckle.imaging.scan.scan_image`); the
 deformation functions of :mod:`speckle.scene.deformation` move its scatterers continuously.
 
 Tiles and reproducibility

@@ -107,7 +107,9 @@ def signal_fraction(snr_db: float) -> float:
 
 def signal_intensity(ph: dict, g: dict, kw: dict) -> float:
     """Expected signal intensity ``E|A|^2`` of the analysed rows (speckle-free image)."""
-    truth = speckle_free_image(ph["scene"], ph["source"], waist=ph["waist"], x=ph["lines"], **kw)
+    truth = speckle_free_image(
+        ph["scene"], ph["source"], waist=ph["waist"], lines=ph["lines"], **kw
+    )
     return float(truth.values[analysed_rows(g)].mean())
 
 

@@ -64,7 +64,7 @@ from ..analysis.dynamics_theory import (
     ssada_expected,
 )
 from ..conventions import attrs, coord, units_of
-from ..imaging.scan import image
+from ..imaging.scan import scan_image
 from ..system.noise import add_noise
 from ._flow import (
     analysed_rows,
@@ -312,7 +312,9 @@ def _frames(ph: dict, shifts: np.ndarray, kw: dict) -> np.ndarray:
     relative positions), exactly.
     """
     out = [
-        image(ph["scene"], ph["source"], waist=ph["waist"], x=ph["lines"] - d, **kw).field.values
+        scan_image(
+            ph["scene"], ph["source"], waist=ph["waist"], lines=ph["lines"] - d, **kw
+        ).field.values
         for d in shifts
     ]
     return np.stack(out)

@@ -50,7 +50,7 @@ __all__ = ["g1_curves", "phantom_series"]
 
 def _series(ph: dict, moved: xr.Dataset, kw: dict, snr_db: float, seed: int) -> xr.Dataset:
     """Snapshot B-scans of a moved scene with receiver noise (one stream per frame and line)."""
-    out = bscan_series(moved, ph["source"], waist=ph["waist"], x=ph["lines"], **kw).compute()
+    out = bscan_series(moved, ph["source"], waist=ph["waist"], lines=ph["lines"], **kw).compute()
     if math.isinf(snr_db):
         return out
     return add_noise(out, snr_db, seed=seed, signal_intensity=ph["signal"])
@@ -261,7 +261,7 @@ def phantom_series(
         tile=float(g.get("tile", 64.0)),
     )
     ph = {"scene": scene, "source": src, "lines": lines, "waist": w0}
-    truth = speckle_free_image(scene, src, waist=w0, x=lines, **kw)
+    truth = speckle_free_image(scene, src, waist=w0, lines=lines, **kw)
     ph["signal"] = float(truth.values.mean())
     vel = poiseuille_velocity(
         scene,

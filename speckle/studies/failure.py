@@ -34,7 +34,7 @@ def method_options(label: str) -> tuple[str, dict]:
     Parameters
     ----------
     label : str
-        An estimator of ``speckle.analysis.strain.METHODS``, optionally with the suffix
+        An estimator of ``speckle.analysis.strain.STRAIN_METHODS``, optionally with the suffix
         ``"_aligned"`` or ``"_unaligned"`` (``align=True`` / ``align=False``).
 
     Returns

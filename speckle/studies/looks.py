@@ -1,9 +1,9 @@
 """Physical compounding looks that image one scene differently: angle, offset, polarization, time.
 
 The looks of :mod:`speckle.analysis.compounding` that form images (they call
-:func:`speckle.image`), moved here from ``analysis`` (issue 32) so that the estimators and theory
-they are measured with import no imaging. Every look function returns a complex ``DataArray``
-with a leading dim ``look`` on the pixel grid of the reference image, ready for
+:func:`speckle.scan_image`), moved here from ``analysis`` (issue 32) so that the estimators and
+theory they are measured with import no imaging. Every look function returns a complex
+``DataArray`` with a leading dim ``look`` on the pixel grid of the reference image, ready for
 :func:`speckle.compound`.
 
 * **angular** (:func:`angular_looks`): the scene is rotated by each angle about the image centre
@@ -24,24 +24,25 @@ import numpy as np
 import scipy.ndimage as ndi
 import xarray as xr
 
+from .._deprecate import renamed_parameters
 from .._validate import as_finite_array
 from ..analysis._common import label_looks
 from ..analysis.compounding import brownian_frames
 from ..conventions import coord, depth_range_of
-from ..imaging.scan import image
+from ..imaging.scan import scan_image
 from ..system.polarization import depolarize
 
 __all__ = ["angular_looks", "polarization_looks", "spatial_looks", "temporal_looks"]
 
 
-def _image_kw(waist, x, method, tol, chunk) -> dict:
-    return {"waist": waist, "x": x, "method": method, "tol": tol, "chunk": chunk}
+def _image_kw(waist, lines, method, tol, chunk) -> dict:
+    return {"waist": waist, "lines": lines, "method": method, "tol": tol, "chunk": chunk}
 
 
 def _moved_field(scene: xr.Dataset, source: xr.DataArray, kw: dict) -> np.ndarray:
     """Complex field of a shared scene whose scatterers moved (sorted by ``x`` again first)."""
     order = np.argsort(scene.x.values, kind="stable")
-    return image(scene.isel(scatterer=order), source, **kw).field.values
+    return scan_image(scene.isel(scatterer=order), source, **kw).field.values
 
 
 def _stacked_looks(
@@ -52,13 +53,14 @@ def _stacked_looks(
     return label_looks(looks, kind, **extra)
 
 
+@renamed_parameters({"x": "lines"})
 def angular_looks(
     scene: xr.Dataset,
     source: xr.DataArray,
     angles: Sequence[float],
     *,
     waist: float,
-    x: object,
+    lines: object,
     method: str = "direct",
     tol: float | None = None,
     chunk: int = 64,
@@ -66,7 +68,7 @@ def angular_looks(
     """Looks at beam angles ``angles`` (degrees): rotated scene, image resampled back.
 
     The scene is rotated by ``-angle`` about the centre of the image (depths ``[0, H)``, the
-    lines ``x``), so the beam crosses it at ``angle`` to the depth axis; the complex image is
+    ``lines``), so the beam crosses it at ``angle`` to the depth axis; the complex image is
     then sampled at the rotated pixel positions (cubic spline of its real and imaginary parts)
     onto the reference grid. Draw the scene with a margin of ``H |sin(angle)|`` in x (and the
     beam reach), or the corners come from empty space.
@@ -81,7 +83,7 @@ def angular_looks(
         raise ValueError("angles must be a non-empty 1-D list of degrees in (-90, 90)")
     n = int(source.attrs["n_pixels"])
     h = depth_range_of(source, "source")
-    xs = np.asarray(x, dtype=float)
+    xs = as_finite_array(lines, "lines")
     p = h / n
     pitch = xs[1] - xs[0] if xs.size > 1 else p
     zc, xc = (n - 1) / 2 * p, (xs[0] + xs[-1]) / 2
@@ -106,18 +108,19 @@ def angular_looks(
     return _stacked_looks(out, "angular", "angle", angle)
 
 
+@renamed_parameters({"x": "lines"})
 def spatial_looks(
     scene: xr.Dataset,
     source: xr.DataArray,
     offsets: Sequence[float],
     *,
     waist: float,
-    x: object,
+    lines: object,
     method: str = "direct",
     tol: float | None = None,
     chunk: int = 64,
 ) -> xr.DataArray:
-    """Looks of A-lines offset laterally by ``offsets`` (µm), kept at the lines ``x``.
+    """Looks of A-lines offset laterally by ``offsets`` (µm), kept at the ``lines``.
 
     The complex correlation of two looks ``d`` apart is ``exp(-d^2/w0^2)`` (dense scene).
 
@@ -129,15 +132,16 @@ def spatial_looks(
     off = as_finite_array(offsets, "offsets")
     if off.ndim != 1 or off.size == 0:
         raise ValueError("offsets must be a non-empty 1-D list of lateral offsets in µm")
-    xs = np.asarray(x, dtype=float)
+    xs = as_finite_array(lines, "lines")
     out = [
-        image(scene, source, **_image_kw(waist, xs + d, method, tol, chunk)).field.values
+        scan_image(scene, source, **_image_kw(waist, xs + d, method, tol, chunk)).field.values
         for d in off
     ]
     offset = coord("length", off, "lateral offset of the lines", dims="look")
     return _stacked_looks(out, "spatial", "offset", offset)
 
 
+@renamed_parameters({"x": "lines"})
 def polarization_looks(
     scene: xr.Dataset,
     source: xr.DataArray,
@@ -145,7 +149,7 @@ def polarization_looks(
     *,
     seed: int,
     waist: float,
-    x: object,
+    lines: object,
     method: str = "direct",
     tol: float | None = None,
     chunk: int = 64,
@@ -156,12 +160,15 @@ def polarization_looks(
     ``sqrt((1 + P^2)/2)``, ``P = |1 - 2 f|`` (dense scene).
     """
     dep = depolarize(scene, depolarization, seed=seed)
-    f = image(dep, source, **_image_kw(waist, np.asarray(x, float), method, tol, chunk)).field
+    f = scan_image(
+        dep, source, **_image_kw(waist, as_finite_array(lines, "lines"), method, tol, chunk)
+    ).field
     looks = f.rename(channel="look").transpose("look", "depth", "x")
     looks = looks.assign_coords(channel=("look", looks.look.values)).drop_vars("look")
     return label_looks(looks, "polarization", depolarization=float(depolarization))
 
 
+@renamed_parameters({"x": "lines"})
 def temporal_looks(
     scene: xr.Dataset,
     source: xr.DataArray,
@@ -171,14 +178,14 @@ def temporal_looks(
     interval: float,
     seed: int,
     waist: float,
-    x: object,
+    lines: object,
     method: str = "direct",
     tol: float | None = None,
     chunk: int = 64,
 ) -> xr.DataArray:
     """Frames of a shared scene in Brownian motion (:func:`brownian_frames`) as looks."""
     frames = brownian_frames(scene, n_frames, diffusion=diffusion, interval=interval, seed=seed)
-    xs = np.asarray(x, dtype=float)
+    xs = as_finite_array(lines, "lines")
     kw = _image_kw(waist, xs, method, tol, chunk)
     out = [
         _moved_field(frames.isel(frame=i).drop_vars("time"), source, kw)

@@ -64,7 +64,7 @@ _PHASE_SEED_STREAM = 7
 
 
 def image_statistics(log_data: xr.DataArray, *, max_lag: int, n_blocks: int) -> xr.Dataset:
-    """The estimator chain of the module docstring for one image of log data ``(depth, aline)``."""
+    """The estimator chain of the module docstring for one image of log data ``(depth, x)``."""
     st = ms.log_statistics(log_data, n_blocks=n_blocks)
     g = float(ms.fit_floor(log_data)["gain"])
     d = log_data - log_data.mean()
@@ -157,7 +157,7 @@ def simulate(
     phase: dict,
     seed: int,
 ) -> xr.DataArray:
-    """Log data ``(depth, aline)`` of a model image with the given effects on."""
+    """Log data ``(depth, x)`` of a model image with the given effects on."""
     for e in effects:
         check_choice(e, "effect", EFFECTS)
     section = {"n_pixels": n_pixels, "pixel_size": pixel_size, "k0_dk": k0_dk}
@@ -184,8 +184,11 @@ def simulate(
         intensity = add_floor(intensity, fit["floor"], mean_intensity=1.0)
     bits = 8 if "quantisation" in effects else None
     d = log_compress(intensity, fit["gain"], fit["offset"], bits=bits)
-    return d.transpose("depth", "aline").assign_attrs(
-        scale="log", effects=",".join(sorted(effects))
+    # the B-scan's lateral dim is still aline (issue 32: scenes and bscan are not renamed yet)
+    return (
+        d.rename(aline="x")
+        .transpose("depth", "x")
+        .assign_attrs(scale="log", effects=",".join(sorted(effects)))
     )
 
 

@@ -102,7 +102,7 @@ def build_phantom(
         combine_attrs="override",
     )
     sc = sc.isel(scatterer=np.argsort(sc.x.values, kind="stable"))
-    kw = {"waist": w0, "x": x, "method": geo["method"], "tol": geo["tol"]}
+    kw = {"waist": w0, "lines": x, "method": geo["method"], "tol": geo["tol"]}
     truth = speckle_free_image(sc, src, **kw).values
     labels = rg.rasterize(regions, np.arange(n) * p, x)
     rows, cols = np.mgrid[0:n, 0:nl]

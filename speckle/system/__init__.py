@@ -7,6 +7,7 @@ processing; ``noise``, ``detection``, ``rolloff``, ``attenuation``, ``backscatte
 image. Names load on first use (SPEC 1, ``lazy_loader``).
 """
 
+from .._deprecate import retired_names
 from .._lazy import attach
 
 __getattr__, __dir__, __all__ = attach(
@@ -25,9 +26,10 @@ __getattr__, __dir__, __all__ = attach(
             "interferogram",
             "interferogram_bytes",
             "interpolation_gain",
-            "process",
+            "process_interferogram",
             "resampling_response",
             "system_ascan",
         ],
     },
 )
+__getattr__ = retired_names(__name__, __getattr__)

@@ -1,5 +1,5 @@
 """Closed forms of the spectrometer chain (private; public through
-:mod:`speckle.system.spectrometer`): dispersion phase, spectral windows, the axial intensity
+:mod:`speckle.system.spectrometer`): dispersion phase, spectral apodizations, the axial intensity
 correlation of speckle and the error of k-linearisation by resampling."""
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ from .._validate import (
     check_real,
 )
 
-#: Spectral windows of :func:`spectral_window`.
-WINDOWS = ("none", "hann", "gaussian")
+#: Spectral apodizations of :func:`spectral_apodization`.
+APODIZATIONS = ("none", "hann", "gaussian")
 #: Largest number of complex phase factors held in memory at once.
 CHUNK_ELEMENTS = 1 << 22
 
@@ -55,18 +55,18 @@ def dispersion_phase(wavenumber: object, k0: float, dispersion: Mapping | None) 
     return sum((c * (k - kc) ** p for p, c in coefs.items()), np.zeros_like(k))
 
 
-def spectral_window(n_pixels: int, window: str = "none", fwhm_fraction: float = 0.5):
-    """Spectral window over the ``N`` grid components, peak 1 at ``n = 0`` (index ``N//2``).
+def spectral_apodization(n_pixels: int, apodization: str = "none", fwhm_fraction: float = 0.5):
+    """Spectral apodization over the ``N`` grid components, peak 1 at ``n = 0`` (index ``N//2``).
 
     ``"hann"``: ``cos^2(pi n/N)`` (zero at ``n = -N/2``); ``"gaussian"``:
     ``exp(-4 ln2 (n/(f N))^2)`` with FWHM ``f N`` components (``fwhm_fraction`` = f > 0).
     """
     n = check_int(n_pixels, "n_pixels", low=2)
-    check_choice(window, "window", WINDOWS)
+    check_choice(apodization, "apodization", APODIZATIONS)
     idx = np.arange(n) - n // 2
-    if window == "none":
+    if apodization == "none":
         return np.ones(n)
-    if window == "hann":
+    if apodization == "hann":
         return np.cos(np.pi * idx / n) ** 2
     f = check_real(fwhm_fraction, "fwhm_fraction", low=0, low_inclusive=False)
     return np.exp(-4 * np.log(2) * (idx / (f * n)) ** 2)

@@ -34,7 +34,7 @@ def optical_depth(z: object, attenuation: float | xr.Dataset) -> np.ndarray:
     z : array_like
         Depths in µm.
     attenuation : float or xarray.Dataset
-        ``mu_t`` in 1/µm (>= 0), or layers from :func:`speckle.layers` with ``attenuation``.
+        ``mu_t`` in 1/µm (>= 0), or layers from :func:`speckle.layer_stack` with ``attenuation``.
     """
     return property_integral(z, attenuation, "attenuation")
 

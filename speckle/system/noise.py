@@ -180,11 +180,11 @@ def add_noise(
 def add_complex_noise(
     field: object, snr_db: float, *, seed: int, signal_intensity: float | None = None
 ) -> np.ndarray:
-    """:func:`add_noise` (white receiver noise) for a plain complex array ``(depth, aline)``.
+    """:func:`add_noise` (white receiver noise) for a plain complex array ``(depth, x)``.
 
     Parameters
     ----------
-    field : array_like of complex, shape (depth, aline)
+    field : array_like of complex, shape (depth, x)
         The noise-free image (axis 0 = depth).
     snr_db : float
         Mean image intensity over noise power, in dB; ``inf`` returns a copy of ``field``.
@@ -205,10 +205,10 @@ def add_complex_noise(
     if not np.iscomplexobj(a):
         raise TypeError("field must be a complex image (e.g. the 'field' of speckle.bscan)")
     if a.ndim != 2:
-        raise ValueError(f"field must be 2-D (depth, aline), got shape {a.shape}")
+        raise ValueError(f"field must be 2-D (depth, x), got shape {a.shape}")
     if isinstance(snr_db, int | float | np.floating) and np.isposinf(snr_db):
         return a.astype(np.complex128, copy=True)
     if min(a.shape) < 1:
         raise ValueError(f"field must hold at least one pixel, got shape {a.shape}")
-    image = xr.Dataset({"field": (("depth", "aline"), a.astype(np.complex128))})
+    image = xr.Dataset({"field": (("depth", "x"), a.astype(np.complex128))})
     return add_noise(image, snr_db, seed=seed, signal_intensity=signal_intensity).field.values

@@ -2,8 +2,8 @@
 
 The paper's model (:func:`speckle.ascan`) treats the ``N`` spectral components as ideal: equally
 spaced in ``k`` and each a delta. Here each step of a real system is optional; with every step
-off (wavenumber-linear sampling, delta pixels, complex detection, no DC, no window) the chain is
-the paper's model to rounding.
+off (wavenumber-linear sampling, delta pixels, complex detection, no DC, no apodization) the chain
+is the paper's model to rounding.
 
 Camera (:func:`interferogram`)
     Each camera pixel ``i`` (centre ``k_i``, width ``w_i`` in rad/µm, a Gaussian spectrometer
@@ -23,17 +23,17 @@ Camera (:func:`interferogram`)
     ``phi(k) = sum_p c_p (k - k0)^p`` (orders ``p >= 2``, ``c_p`` in µm^p) is the dispersion
     mismatch between the arms; it enters the cross term only.
 
-Processing (:func:`process`)
+Processing (:func:`process_interferogram`)
     background subtraction, k-linearisation by resampling (``linear``, ``cubic``; ``exact``
     evaluates the camera model on the grid, see :func:`system_ascan`), numerical dispersion
-    compensation (multiply by ``exp(-i phi)``), a spectral window (none, Hann, Gaussian) and
+    compensation (multiply by ``exp(-i phi)``), a spectral apodization (none, Hann, Gaussian) and
     the DFT ``A(q) = sum_n F_n exp(-2i pi n q/N)`` of the paper's Eq. 4.
 
 Closed forms (tested): roll-off ``|g(z)|^2`` (:func:`rolloff`); a Gaussian spectrum of FWHM
 ``Dk`` with phase ``c_2 (k - k0)^2`` gives a Gaussian PSF broadened by
 ``sqrt(1 + (c_2 Dk^2/(4 ln2))^2)`` (= ``sqrt(1 + (4 ln2 c_2/dz^2)^2)`` with the amplitude-PSF
 FWHM ``dz = 4 ln2/Dk``; the pulse-broadening formula with GDD -> ``c_2``); the axial intensity
-correlation of speckle follows the window-weighted spectrum (:func:`axial_intensity_correlation`).
+correlation of speckle follows the apodized spectrum (:func:`axial_intensity_correlation`).
 """
 
 from __future__ import annotations
@@ -42,6 +42,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from .._deprecate import moved, renamed_parameters
 from .._validate import (
     as_finite_array,
     check_bool,
@@ -51,21 +52,21 @@ from .._validate import (
     check_real,
 )
 from ._closed_forms import (
+    APODIZATIONS,
     CHUNK_ELEMENTS,
-    WINDOWS,
     axial_intensity_correlation,
     check_dispersion,
     dispersion_phase,
     interpolation_gain,
     resampling_error,
-    spectral_window,
+    spectral_apodization,
 )
 from .rolloff import carrier_response, rolloff_power
 
 __all__ = [
+    "APODIZATIONS",
     "DETECTIONS",
     "RESAMPLING",
-    "WINDOWS",
     "axial_intensity_correlation",
     "camera_sampling",
     "camera_signal",
@@ -76,14 +77,27 @@ __all__ = [
     "interferogram_bytes",
     "interpolation_gain",
     "linearize",
-    "process",
+    "process_interferogram",
     "resampling_error",
     "resampling_response",
     "rolloff_power",
-    "spectral_window",
+    "spectral_apodization",
     "system_ascan",
     "to_pixels",
 ]
+
+
+#: Retired names (:data:`speckle.conventions.RETIRED`) resolve to the new ones, warning.
+__getattr__ = moved(
+    __name__,
+    __name__,
+    [],
+    {
+        "process": "process_interferogram",
+        "spectral_window": "spectral_apodization",
+        "WINDOWS": "APODIZATIONS",
+    },
+)
 
 DETECTIONS = ("complex", "real")
 RESAMPLING = ("none", "linear", "cubic", "exact")
@@ -472,7 +486,8 @@ def to_pixels(field: np.ndarray) -> np.ndarray:
     return np.fft.fft(np.fft.ifftshift(field, axes=-1), axis=-1)
 
 
-def process(
+@renamed_parameters({"window": "apodization", "window_fwhm_fraction": "apodization_fwhm_fraction"})
+def process_interferogram(
     signal: object,
     *,
     grid: object,
@@ -481,10 +496,11 @@ def process(
     background: object | str | None = None,
     resample: str = "none",
     dispersion: Mapping | None = None,
-    window: str = "none",
-    window_fwhm_fraction: float = 0.5,
+    apodization: str = "none",
+    apodization_fwhm_fraction: float = 0.5,
 ) -> np.ndarray:
-    """Camera signal -> complex A-scan(s): background, k-linearisation, dispersion, window, DFT.
+    """Camera signal -> complex A-scan(s): background, k-linearisation, dispersion, apodization,
+    DFT.
 
     Parameters
     ----------
@@ -505,10 +521,10 @@ def process(
         broadens the PSF with depth.
     dispersion : mapping, optional
         ``{order: coefficient}`` to compensate: the signal is multiplied by ``exp(-i phi(k_n))``.
-    window : {"none", "hann", "gaussian"}
-        Spectral window (:func:`spectral_window`).
-    window_fwhm_fraction : float
-        FWHM of the Gaussian window as a fraction of ``N``.
+    apodization : {"none", "hann", "gaussian"}
+        Spectral apodization (window over wavenumber, :func:`spectral_apodization`).
+    apodization_fwhm_fraction : float
+        FWHM of the Gaussian apodization as a fraction of ``N``.
 
     Returns
     -------
@@ -517,8 +533,10 @@ def process(
         end (the mirror image of a real signal appears there).
     """
     check_choice(resample, "resample", ("none", "linear", "cubic"))
-    check_choice(window, "window", WINDOWS)
-    fwhm = check_real(window_fwhm_fraction, "window_fwhm_fraction", low=0, low_inclusive=False)
+    check_choice(apodization, "apodization", APODIZATIONS)
+    fwhm = check_real(
+        apodization_fwhm_fraction, "apodization_fwhm_fraction", low=0, low_inclusive=False
+    )
     comp = check_dispersion(dispersion)
     g = as_finite_array(grid, "grid")
     kc = check_real(k0, "k0", low=0)
@@ -548,7 +566,7 @@ def process(
         if wavenumber is None:
             raise ValueError(f"resample={resample!r} needs wavenumber= (camera pixels, rad/µm)")
         y = linearize(y, wavenumber, g, resample)
-    f = y * spectral_window(g.size, window, fwhm)
+    f = y * spectral_apodization(g.size, apodization, fwhm)
     if comp:
         f = f * np.exp(-1j * dispersion_phase(g, kc, comp))
     return to_pixels(f.astype(np.complex128, copy=False))
@@ -657,6 +675,7 @@ def camera_signal(
     return sig, cam["wavenumber"]
 
 
+@renamed_parameters({"window": "apodization", "window_fwhm_fraction": "apodization_fwhm_fraction"})
 def system_ascan(
     system,
     z: object,
@@ -665,8 +684,8 @@ def system_ascan(
     background: object | str | None = None,
     resample: str = "cubic",
     compensate: Mapping | None = None,
-    window: str = "none",
-    window_fwhm_fraction: float = 0.5,
+    apodization: str = "none",
+    apodization_fwhm_fraction: float = 0.5,
     **camera,
 ) -> np.ndarray:
     """A-scans of a scene through a system's camera (:func:`camera_signal`) and processing.
@@ -677,7 +696,7 @@ def system_ascan(
     (the same mapping as ``dispersion`` for perfect compensation). ``camera``: keyword
     arguments of :func:`camera_signal` (``sampling``, ``pixel_width``, ``resolution``,
     ``detection``, ``dc``, ``autocorrelation``, ``reference_power``, ``dispersion``). Other
-    parameters: :func:`process`.
+    parameters: :func:`process_interferogram`.
 
     Returns
     -------
@@ -687,7 +706,7 @@ def system_ascan(
     check_choice(resample, "resample", RESAMPLING)
     sig, k = camera_signal(system, z, amplitude, on_grid=resample == "exact", **camera)
     interpolate = resample in ("linear", "cubic")
-    return process(
+    return process_interferogram(
         sig,
         grid=grid_wavenumbers(system),
         k0=system.k0,
@@ -695,6 +714,6 @@ def system_ascan(
         background=background,
         resample=resample if interpolate else "none",
         dispersion=compensate,
-        window=window,
-        window_fwhm_fraction=window_fwhm_fraction,
+        apodization=apodization,
+        apodization_fwhm_fraction=apodization_fwhm_fraction,
     )

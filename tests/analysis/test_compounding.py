@@ -55,7 +55,7 @@ def test_truth_is_the_incoherent_sum_exactly():
         }
     )
     x = speckle.scan_lines(10, p)
-    truth = speckle_free_image(sc, src, waist=12.0, x=x).values
+    truth = speckle_free_image(sc, src, waist=12.0, lines=x).values
     kw = dict(
         lines=x, waist=12.0, n_pixels=n, depth_range=h, k0=src.attrs["k0"], spectrum=src.values
     )
@@ -107,7 +107,7 @@ def test_truth_is_the_mean_over_phase_realisations():
     )
     sc = speckle.shared_scene(reg, z_range=(0, h), x_range=(-80, 330.0), seed=1)
     x = speckle.scan_lines(32, 8.0)
-    truth = speckle_free_image(sc, src, waist=16.0, x=x, method="finufft", tol=1e-10).values
+    truth = speckle_free_image(sc, src, waist=16.0, lines=x, method="finufft", tol=1e-10).values
     rng = np.random.default_rng(0)
     kw = dict(
         lines=x,
@@ -153,8 +153,8 @@ def test_single_look_statistics(dense):
 @pytest.mark.parametrize("looks", [2, 4, 8])
 def test_uncorrelated_subbands_give_one_over_sqrt_n(dense, looks):
     src, _, img = dense
-    w = cp.subband_windows(N, looks)
-    assert np.allclose(cp.window_correlation(w), np.eye(looks))
+    w = cp.subband_apodizations(N, looks)
+    assert np.allclose(cp.apodization_correlation(w), np.eye(looks))
     comp = cp.compound(cp.frequency_looks(img, w), "intensity").values
     c, se = _blocked(_contrast, comp)
     theory = cp.split_spectrum_contrast(w * src.values, 64.0)
@@ -167,8 +167,8 @@ def test_uncorrelated_subbands_give_one_over_sqrt_n(dense, looks):
 def test_partially_correlated_subbands(dense, window, overlap):
     """C_N = sqrt(sum |mu_ij|^2)/N, mu_ij the overlap of the windows."""
     src, _, img = dense
-    w = cp.subband_windows(N, 4, window=window, overlap=overlap)
-    mu = cp.window_correlation(w)
+    w = cp.subband_apodizations(N, 4, apodization=window, overlap=overlap)
+    mu = cp.apodization_correlation(w)
     dense_c = cp.compounded_contrast(mu)
     # the formula assumes equal look means E_i; with unequal ones (the Gaussian tails cut at
     # the band edges: 5 %) it reads sqrt(sum E_i E_j |mu_ij|^2) / sum E_i
@@ -187,7 +187,7 @@ def test_partially_correlated_subbands(dense, window, overlap):
 
 def test_frequency_looks_equal_imaging_with_the_subband_spectrum(dense):
     src, sc, img = dense
-    w = cp.subband_windows(N, 4, window="hann", overlap=0.25)
+    w = cp.subband_apodizations(N, 4, apodization="hann", overlap=0.25)
     looks = cp.frequency_looks(img.isel(aline=slice(0, 4)), w)
     for i in range(4):
         s_i = speckle.spectrum(N, H, k0_dk=10, shape="array", weights=w[i] * src.values)
@@ -203,7 +203,7 @@ def test_subband_widens_the_axial_psf_n_fold(looks):
 
     n = 256
     a = speckle.ascan([100.37 * 8], [1.0], n_pixels=n, depth_range=n * 8.0, k0=30.0)
-    looks_f = cp.frequency_looks(xr.DataArray(a, dims=["depth"]), cp.subband_windows(n, looks))
+    looks_f = cp.frequency_looks(xr.DataArray(a, dims=["depth"]), cp.subband_apodizations(n, looks))
     fine = bandlimited(looks_f.values, 64)
     fwhm = peak_fwhm((np.abs(fine) ** 2).sum(axis=0), 1 / 64)
     assert fwhm == pytest.approx(cp.subband_fwhm(n, n // looks), rel=1e-3)
@@ -287,20 +287,22 @@ def test_spatial_and_angular_looks_register_a_point():
         }
     )
     x = speckle.scan_lines(64, p)
-    looks = looks_study.angular_looks(sc, src, [-3.0, 0.0, 3.0], waist=16.0, x=x, method="direct")
+    looks = looks_study.angular_looks(
+        sc, src, [-3.0, 0.0, 3.0], waist=16.0, lines=x, method="direct"
+    )
     peaks = [np.unravel_index(np.argmax(np.abs(lk)), lk.shape) for lk in looks.values]
     assert all(pk == (25, 32) for pk in peaks), peaks
-    sp = looks_study.spatial_looks(sc, src, [0.0, 8.0], waist=16.0, x=x)
+    sp = looks_study.spatial_looks(sc, src, [0.0, 8.0], waist=16.0, lines=x)
     assert np.argmax(np.abs(sp.values[1, 25])) == 31
 
 
 @pytest.mark.parametrize(
     "call,name",
     [
-        (lambda: cp.subband_windows(16, 17), "n_looks"),
-        (lambda: cp.subband_windows(16, 4, overlap=1.5), "overlap"),
-        (lambda: cp.subband_windows(16, 4, overlap=1.0), "overlap"),
-        (lambda: cp.subband_windows(16, 4, window="kaiser"), "window"),
+        (lambda: cp.subband_apodizations(16, 17), "n_looks"),
+        (lambda: cp.subband_apodizations(16, 4, overlap=1.5), "overlap"),
+        (lambda: cp.subband_apodizations(16, 4, overlap=1.0), "overlap"),
+        (lambda: cp.subband_apodizations(16, 4, apodization="kaiser"), "apodization"),
         (lambda: cp.brownian_g1(1.0, -1.0, 5.0), "diffusion"),
         (
             lambda: cp.brownian_frames(
@@ -337,4 +339,4 @@ def test_truth_carries_the_polarization_channels():
     np.testing.assert_allclose(both.sel(channel="co"), (1 - f) * total, rtol=1e-10)
     np.testing.assert_allclose(both.sel(channel="cross"), f * total, rtol=1e-10)
     with pytest.raises(ValueError, match="waist"):
-        speckle_free_image(sc, src, waist=10.0, x=[0.0])
+        speckle_free_image(sc, src, waist=10.0, lines=[0.0])

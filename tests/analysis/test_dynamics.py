@@ -156,10 +156,10 @@ def test_ocds_of_a_brownian_region(brownian):
 def test_ssada_of_a_brownian_region(brownian):
     """SSADA against 1 - mean_b (E(m_b) - (1 - m_b) K(m_b))/m_b, m_b = |g1_b(dt)|^2 of each
     sub-band's spectrum S W_b (frequency_looks is exact: imaging with S W_b)."""
-    from speckle.analysis.compounding import subband_windows
+    from speckle.analysis.compounding import subband_apodizations
 
     src, f, d, dt, k0 = brownian
-    windows = subband_windows(N, 4, window="hann", overlap=0.5)
+    windows = subband_apodizations(N, 4, apodization="hann", overlap=0.5)
     bands = [
         th.g1_brownian(dt, diffusion=d, k0=k0, spectrum=src.copy(data=src.values * w))
         for w in windows
@@ -318,7 +318,7 @@ def _beam_g1(moved, *, k0_dk, waist, lags):
     """|g1| at ``lags`` and its SE from K blocks of depth pixels (independent speckle)."""
     src = speckle.spectrum(NS, HS, k0_dk=k0_dk)
     x = speckle.scan_lines(96, PITCH, start=54.0)
-    f = ts.bscan_series(moved, src, waist=waist, x=x, method="finufft", tol=1e-11, wrap=True)
+    f = ts.bscan_series(moved, src, waist=waist, lines=x, method="finufft", tol=1e-11, wrap=True)
     res = dy.g1(f.field, lags=lags, blocks=K, block_dim="depth")
     return np.abs(res.g1.values), res.g1_se.values, src
 
@@ -344,7 +344,7 @@ def test_flow_through_the_imaging_plane():
     v, dt, w0 = 1000.0, 3e-3, 6.0
     moved = mo.flow_motion(sc, np.arange(3) * dt, velocity=[0.0, 0.0, v])
     x = speckle.scan_lines(32, PITCH, start=18.0)
-    f = ts.bscan_series(moved, src, waist=w0, x=x, y=40.0, method="nufft", tol=1e-9, wrap=True)
+    f = ts.bscan_series(moved, src, waist=w0, lines=x, y=40.0, method="nufft", tol=1e-9, wrap=True)
     res = dy.g1(f.field, lags=[1, 2], blocks=K, block_dim="depth")
     expect = th.g1_transverse_flow(np.array([1, 2]) * dt, velocity=v, waist=w0)
     for i in range(2):
@@ -384,7 +384,7 @@ def test_liv_and_ocds_of_a_brownian_layer_in_static_tissue():
     n = 8
     moved = mo.brownian_motion(sc, np.arange(n) * dt, diffusion=d, seed=3, regions=[1])
     x = speckle.scan_lines(96, PITCH, start=54.0)
-    f = ts.bscan_series(moved, src, waist=w0, x=x, method="finufft", tol=1e-11, wrap=True)
+    f = ts.bscan_series(moved, src, waist=w0, lines=x, method="finufft", tol=1e-11, wrap=True)
     intensity = f.intensity.transpose("time", "depth", "x").load()
     rows = np.arange(NS)[
         (np.arange(NS) * 4.0 >= 40.0 + 60.0) & (np.arange(NS) * 4.0 < 216.0 - 60.0)

@@ -399,7 +399,7 @@ def test_bad_inputs_get_clear_errors():
 
 
 def test_fe_inclusion_contrast_matches_window_averaged_truth():
-    """Stiff circular inclusion (4x, plane-strain FE, speckle.compress): the vector method
+    """Stiff circular inclusion (4x, plane-strain FE, speckle.compress_phantom): the vector method
     returns the FE strain averaged over its window (the inclusion, 40 px across, is close to
     the 32 px window, so this average, not the pointwise FE strain, is what it can resolve)."""
     from scipy import ndimage
@@ -409,7 +409,7 @@ def test_fe_inclusion_contrast_matches_window_averaged_truth():
     scene = speckle.deformable_scene(lines, 4.0, n_pixels=N, depth_range=H, seed=7, strain=0.02)
     x = scene.aline.values
     labels = speckle.inclusion_labels(depth, x, (H / 2, x.mean()), 160.0)
-    fe = speckle.compress(labels, {0: 10.0, 1: 40.0}, 0.45, strain=s, contact="sliding")
+    fe = speckle.compress_phantom(labels, {0: 10.0, 1: 40.0}, 0.45, strain=s, contact="sliding")
     disp = fe[["uz", "ux"]].rename(x="aline")
     ref = speckle.bscan(speckle.displace(scene, lambda z, x: 0 * z), source(), method="nufft")
     dfm = speckle.bscan(speckle.displace(scene, disp), source(), method="nufft")

@@ -62,7 +62,7 @@ def test_schema_accepts_either_source_form():
     with pytest.raises(WorkflowError):
         validate(bad_sheet, SCHEMA)
     bad = config()
-    bad["system"]["bscan"]["window"] = "hamming"
+    bad["system"]["bscan"]["apodization"] = "hamming"
     with pytest.raises(WorkflowError):
         validate(bad, SCHEMA)
 
@@ -105,7 +105,7 @@ def test_artefact_bscan_mirror_and_seed():
         surface=-50.0, tilt=5.0, interfaces=[{"depth": 0.0, "amplitude": 1.0},
                                              {"depth": 100.0, "amplitude": 0.5}],
         density=0.2, scatterer_amplitude=0.05, dispersion={2: 20.0}, reference_power=4.0,
-        window="hann", seed=3,
+        apodization="hann", seed=3,
     )  # fmt: skip
     ds = fs.artefact_bscan(system, n_alines=3, **kw)
     assert ds.raw_db.dims == ("depth", "aline") and ds.sizes["depth"] == 256

@@ -121,20 +121,20 @@ def _shared(y_range=None):
 def test_image_refuses_method_tol_pairs_at_call(kw, match):
     """Refused when the lazy image is built, not in the first Dask task."""
     with pytest.raises(ValueError, match=match):
-        speckle.image(_shared(), SRC, waist=4.0, x=speckle.scan_lines(8, 2.0), **kw)
+        speckle.scan_image(_shared(), SRC, waist=4.0, lines=speckle.scan_lines(8, 2.0), **kw)
 
 
 def test_image_refuses_finufft_on_a_3d_scene_at_call():
     scene = _shared(y_range=(-20.0, 30.0))
     with pytest.raises(ValueError, match="2-D scene without focus"):
-        speckle.image(scene, SRC, waist=4.0, x=[0.0, 2.0], y=[0.0, 2.0], method="finufft")
+        speckle.scan_image(scene, SRC, waist=4.0, lines=[0.0, 2.0], y=[0.0, 2.0], method="finufft")
 
 
 @pytest.mark.parametrize("wrap", ["False", "no", 0, 1.0, None])
 def test_image_refuses_a_wrap_that_is_not_a_bool(wrap):
     """``wrap="False"`` was taken as true (a non-empty string)."""
     with pytest.raises(TypeError, match="wrap must be True or False"):
-        speckle.image(_shared(), SRC, waist=4.0, x=speckle.scan_lines(8, 2.0), wrap=wrap)
+        speckle.scan_image(_shared(), SRC, waist=4.0, lines=speckle.scan_lines(8, 2.0), wrap=wrap)
 
 
 # --- property test: malformed inputs -------------------------------------------------------
@@ -145,7 +145,7 @@ BAD_VALUES = st.sampled_from(
 )  # fmt: skip
 BEAM_PARAMS = ("z", "x", "amplitude", "lines", "waist", "n_pixels", "depth_range", "k0", "spectrum",
                "method", "tol", "y", "focus", "rayleigh_range")  # fmt: skip
-IMAGE_PARAMS = ("waist", "x", "y", "chunk", "method", "tol", "wrap", "focus", "rayleigh_range")
+IMAGE_PARAMS = ("waist", "lines", "y", "chunk", "method", "tol", "wrap", "focus", "rayleigh_range")
 METHODS = ("direct", "nufft", "nufft32", "auto", "finufft")
 
 
@@ -159,13 +159,13 @@ def _beam_call(param, value, method):
 
 
 def _image_call(param, value, method):
-    kw = dict(waist=4.0, x=speckle.scan_lines(6, 2.0), chunk=4, method=method, tol=1e-4)
+    kw = dict(waist=4.0, lines=speckle.scan_lines(6, 2.0), chunk=4, method=method, tol=1e-4)
     kw[param] = value
-    return speckle.image(_shared(), SRC, **kw).field.values
+    return speckle.scan_image(_shared(), SRC, **kw).field.values
 
 
 def _named(param: str, message: str) -> bool:
-    names = {param, param.split("_")[0]} | ({"lines"} if param in ("x", "y") else set())
+    names = {param, param.split("_")[0]} | ({"lines"} if param in ("x", "y", "lines") else set())
     return any(n in message for n in names)
 
 

@@ -34,7 +34,7 @@ def _scene(density=0.05, x_range=(-50.0, 200.0), y_range=None, seed=1, z_range=(
 def test_image_equals_beam_scan(chunk):
     scene = _scene()
     xs = speckle.scan_lines(30, 5.0)
-    ds = speckle.image(scene, SRC, waist=9.0, x=xs, chunk=chunk)
+    ds = speckle.scan_image(scene, SRC, waist=9.0, lines=xs, chunk=chunk)
     assert ds.field.dims == ("depth", "x") and ds.x.attrs["units"] == "um"
     assert ds.depth.values[1] == H / N
     ref = speckle.beam_scan(
@@ -50,7 +50,7 @@ def test_wrap_keeps_or_drops_the_tissue_below_the_image():
     z, x, a = scene.z.values, scene.x.values, scene.amplitude.values
     inside = (z >= 0) & (z < H)
     for wrap, keep in ((True, np.ones(z.size, bool)), (False, inside)):
-        ds = speckle.image(scene, SRC, waist=6.0, x=xs, wrap=wrap, chunk=4)
+        ds = speckle.scan_image(scene, SRC, waist=6.0, lines=xs, wrap=wrap, chunk=4)
         ref = speckle.beam_scan(z[keep], x[keep], a[keep], lines=xs, waist=6.0, **ARGS)
         assert _rel(ds.field.values, ref.T) < 1e-13
 
@@ -58,7 +58,7 @@ def test_wrap_keeps_or_drops_the_tissue_below_the_image():
 def test_one_line_on_the_scatterers_is_an_ascan():
     scene = _scene().isel(scatterer=slice(0, 40))
     scene = scene.assign(x=("scatterer", np.full(40, 12.5)))
-    ds = speckle.image(scene, SRC, waist=3.0, x=[12.5])
+    ds = speckle.scan_image(scene, SRC, waist=3.0, lines=[12.5])
     ref = speckle.ascan(scene.z.values, scene.amplitude.values, **ARGS)
     assert _rel(ds.field.values[:, 0], ref) < 1e-13
 
@@ -67,7 +67,7 @@ def test_3d_grid_of_lines_against_the_full_gaussian_weight():
     scene = _scene(density=0.001, x_range=(-36.0, 70.0), y_range=(-36.0, 60.0))
     xs, ys = speckle.scan_lines(5, 6.0), speckle.scan_lines(4, 6.0, start=3.0)
     w0 = 8.0
-    ds = speckle.image(scene, SRC, waist=w0, x=xs, y=ys, chunk=3)
+    ds = speckle.scan_image(scene, SRC, waist=w0, lines=xs, y=ys, chunk=3)
     assert ds.field.dims == ("depth", "x", "y") and ds.field.shape == (N, 5, 4)
     z, x, y, a = (scene[v].values for v in ("z", "x", "y", "amplitude"))
     for i, xi in enumerate(xs):
@@ -88,8 +88,10 @@ def test_lazy_until_computed(monkeypatch):
 
     monkeypatch.setattr(scan, "beam_scan", counting)  # the function the chunks' tasks call
     reg = speckle.make_regions(R.background(density=0.05))
-    ds = speckle.image_regions(reg, SRC, seed=1, waist=6.0, x=speckle.scan_lines(12, 4.0), chunk=4)
-    ds2 = speckle.image(_scene(), SRC, waist=6.0, x=speckle.scan_lines(12, 4.0), chunk=4)
+    ds = speckle.image_regions(
+        reg, SRC, seed=1, waist=6.0, lines=speckle.scan_lines(12, 4.0), chunk=4
+    )
+    ds2 = speckle.scan_image(_scene(), SRC, waist=6.0, lines=speckle.scan_lines(12, 4.0), chunk=4)
     assert calls == [] and ds.field.chunks == ((N,), (4, 4, 4)) and ds2.field.chunks[1] == (4,) * 3
     first = ds.field[:, :4].values
     assert first.shape == (N, 4)
@@ -101,15 +103,15 @@ def test_image_regions_is_the_same_whatever_the_chunking_and_scheduler():
         R.background(density=0.04), R.circle(100.0, 40.0, 20.0, density=0.3, backscatter=2.0)
     )
     xs = speckle.scan_lines(20, 4.0)
-    a = speckle.image_regions(reg, SRC, seed=9, tile=50.0, waist=7.0, x=xs, chunk=3)
-    b = speckle.image_regions(reg, SRC, seed=9, tile=50.0, waist=7.0, x=xs, chunk=20)
+    a = speckle.image_regions(reg, SRC, seed=9, tile=50.0, waist=7.0, lines=xs, chunk=3)
+    b = speckle.image_regions(reg, SRC, seed=9, tile=50.0, waist=7.0, lines=xs, chunk=20)
     with dask.config.set(scheduler="threads", num_workers=2):
         fa = a.field.values
     with dask.config.set(scheduler="synchronous"):
         fb = b.field.values
     assert _rel(fa, fb) < 1e-13
     scene = speckle.shared_scene(reg, z_range=(0.0, H), x_range=(-50.0, 130.0), seed=9, tile=50.0)
-    ref = speckle.image(scene, SRC, waist=7.0, x=xs).field.values
+    ref = speckle.scan_image(scene, SRC, waist=7.0, lines=xs).field.values
     assert _rel(fa, ref) < 1e-13
 
 
@@ -117,9 +119,9 @@ def test_extra_dims_of_a_deformed_scene_are_carried():
     scene = _scene()
     xs = speckle.scan_lines(8, 5.0, start=40.0)
     strained = speckle.uniaxial_strain(scene, [0.0, 0.02], poisson_ratio=0.5)
-    ds = speckle.image(strained, SRC, waist=6.0, x=xs, chunk=4)
+    ds = speckle.scan_image(strained, SRC, waist=6.0, lines=xs, chunk=4)
     assert ds.field.dims == ("strain", "depth", "x")
-    one = speckle.image(strained.isel(strain=1), SRC, waist=6.0, x=xs)
+    one = speckle.scan_image(strained.isel(strain=1), SRC, waist=6.0, lines=xs)
     np.testing.assert_array_equal(ds.field.sel(strain=0.02).values, one.field.values)
 
 
@@ -136,7 +138,7 @@ def test_lateral_correlation_matches_campbell():
     est = {"complex": [], "intensity": []}
     for seed in range(6):
         scene = _scene(density=rho, x_range=(-40.0, 300.0), seed=seed)
-        f = speckle.image(scene, SRC, waist=w0, x=xs, chunk=16).field.values
+        f = speckle.scan_image(scene, SRC, waist=w0, lines=xs, chunk=16).field.values
         i = np.abs(f) ** 2
         for kind, q in (("complex", f), ("intensity", i)):
             row = []
@@ -200,7 +202,7 @@ def test_axial_correlation_of_independent_lines():
 def test_streamed_netcdf_local_atomic(tmp_path):
     reg = speckle.make_regions(R.background(density=R.cell_density(1.0, H / N, 4.0, 3)))
     xs = speckle.scan_lines(6, 4.0)
-    ds = speckle.image_regions(reg, SRC, seed=2, waist=8.0, x=xs, y=xs, chunk=4)
+    ds = speckle.image_regions(reg, SRC, seed=2, waist=8.0, lines=xs, y=xs, chunk=4)
     path = tmp_path / "vol.nc"
     stream_to_netcdf(ds[["field"]], path, progress=False)
     out = open_dataset(path)
@@ -222,7 +224,9 @@ def _fail(block):
 def test_streamed_netcdf_on_a_distributed_cluster(tmp_path):
     distributed = pytest.importorskip("distributed")
     reg = speckle.make_regions(R.background(density=0.05))
-    ds = speckle.image_regions(reg, SRC, seed=4, waist=6.0, x=speckle.scan_lines(10, 4.0), chunk=4)
+    ds = speckle.image_regions(
+        reg, SRC, seed=4, waist=6.0, lines=speckle.scan_lines(10, 4.0), chunk=4
+    )
     with (
         distributed.LocalCluster(
             n_workers=1, threads_per_worker=2, processes=False, dashboard_address=":0"
@@ -239,10 +243,10 @@ def test_streamed_netcdf_on_a_distributed_cluster(tmp_path):
     ("kw", "match"),
     [
         ({"waist": -1.0}, "waist"),
-        ({"x": [[0.0, 1.0]]}, "1-D"),
-        ({"x": [0.0, np.nan]}, "finite"),
-        ({"x": [0.0, 1.0, 3.0]}, "uniformly"),
-        ({"x": []}, "non-empty"),
+        ({"lines": [[0.0, 1.0]]}, "1-D"),
+        ({"lines": [0.0, np.nan]}, "finite"),
+        ({"lines": [0.0, 1.0, 3.0]}, "uniformly"),
+        ({"lines": []}, "non-empty"),
         ({"chunk": 0}, "chunk"),
         ({"y": [0.0, 1.0]}, "needs no y"),
         ({"method": "fastest"}, "method"),
@@ -250,21 +254,21 @@ def test_streamed_netcdf_on_a_distributed_cluster(tmp_path):
     ],
 )
 def test_bad_inputs(kw, match):
-    args = {"waist": 5.0, "x": [0.0, 4.0]}
+    args = {"waist": 5.0, "lines": [0.0, 4.0]}
     with pytest.raises((ValueError, TypeError), match=match):
-        speckle.image(_scene(), SRC, **{**args, **kw})
+        speckle.scan_image(_scene(), SRC, **{**args, **kw})
 
 
 def test_bad_scenes_and_sources():
     empty = _scene(density=0.0)
     with pytest.raises(ValueError, match="no scatterers"):
-        speckle.image(empty, SRC, waist=5.0, x=[0.0])
+        speckle.scan_image(empty, SRC, waist=5.0, lines=[0.0])
     with pytest.raises(TypeError, match="source"):
-        speckle.image(_scene(), SRC.values, waist=5.0, x=[0.0])
+        speckle.scan_image(_scene(), SRC.values, waist=5.0, lines=[0.0])
     with pytest.raises(ValueError, match="needs y"):
-        speckle.image(_scene(y_range=(0.0, 10.0), density=0.001), SRC, waist=5.0, x=[0.0])
+        speckle.scan_image(_scene(y_range=(0.0, 10.0), density=0.001), SRC, waist=5.0, lines=[0.0])
     with pytest.raises(TypeError, match="shared scene"):
-        speckle.image(xr.Dataset(), SRC, waist=5.0, x=[0.0])
+        speckle.scan_image(xr.Dataset(), SRC, waist=5.0, lines=[0.0])
 
 
 @pytest.mark.parametrize("three_d", [False, True])
@@ -275,7 +279,7 @@ def test_focus_is_passed_and_its_halo_is_the_widest_beam(three_d):
     xs = speckle.scan_lines(6, 5.0)
     ys = speckle.scan_lines(3, 5.0) if three_d else None
     kw = {"focus": 60.0, "rayleigh_range": 40.0}  # w(z=H)/w0 = sqrt(1 + (196/40)^2) = 5
-    ds = speckle.image(scene, SRC, waist=4.0, x=xs, y=ys, chunk=2, **kw)
+    ds = speckle.scan_image(scene, SRC, waist=4.0, lines=xs, y=ys, chunk=2, **kw)
     assert ds.attrs["focus"] == 60.0
     extra = {}
     lines = xs
@@ -293,8 +297,8 @@ def test_focus_is_passed_and_its_halo_is_the_widest_beam(three_d):
 def test_fast_method_within_tol():
     scene = _scene(density=0.05)
     xs = speckle.scan_lines(24, 4.0)
-    exact = speckle.image(scene, SRC, waist=8.0, x=xs, chunk=16).field.values
-    fast = speckle.image(scene, SRC, waist=8.0, x=xs, chunk=16, method="auto", tol=1e-6)
+    exact = speckle.scan_image(scene, SRC, waist=8.0, lines=xs, chunk=16).field.values
+    fast = speckle.scan_image(scene, SRC, waist=8.0, lines=xs, chunk=16, method="auto", tol=1e-6)
     assert _rel(fast.field.values, exact) <= 1e-6
 
 
@@ -309,7 +313,7 @@ def test_fast_method_within_tol():
 )
 def test_bad_focus(kw, match):
     with pytest.raises(ValueError, match=match):
-        speckle.image(_scene(), SRC, waist=5.0, x=[0.0, 4.0], **kw)
+        speckle.scan_image(_scene(), SRC, waist=5.0, lines=[0.0, 4.0], **kw)
 
 
 def test_independent_lines_are_a_beam_much_narrower_than_the_pitch():
@@ -320,6 +324,6 @@ def test_independent_lines_are_a_beam_much_narrower_than_the_pitch():
     lines = speckle.random_scatterers(12, 3.0, n_pixels=N, depth_range=H, seed=4, aline_pitch=8.0)
     scene = from_lines(lines)
     assert scene.sizes["scatterer"] == int(lines["count"].sum())
-    ds = speckle.image(scene, SRC, waist=0.8, x=lines.aline.values, chunk=5)
+    ds = speckle.scan_image(scene, SRC, waist=0.8, lines=lines.aline.values, chunk=5)
     ref = speckle.bscan(lines, SRC).field.transpose("depth", "aline").values
     assert _rel(ds.field.values, ref) < 1e-13

@@ -7,8 +7,8 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-import speckle.imaging.aline as aline
-from speckle.imaging.aline import METHODS, ascan, stream_ascans
+from speckle.imaging.aline import ascan, stream_ascans
+from speckle.imaging.methods import ASCAN_METHODS
 from speckle.imaging.nufft import float32_error_estimate, kernel_width
 from speckle.imaging.psf import half_width
 from speckle.imaging.synthesis import (
@@ -130,13 +130,13 @@ def test_loose_nufft_tol_error_is_accounted_for():
 def test_auto_runs_exactly_one_method(monkeypatch):
     calls = []
     for name in AUTO_CANDIDATES:
-        real = METHODS[name]
+        real = ASCAN_METHODS[name]
 
         def spy(*args, _name=name, _real=real):
             calls.append(_name)
             return _real(*args)
 
-        monkeypatch.setitem(aline.METHODS, name, spy)
+        monkeypatch.setitem(ASCAN_METHODS, name, spy)
     ascan(
         np.ones((3, 10)),
         np.ones((3, 10)),
@@ -163,7 +163,7 @@ def test_bad_tol_type_and_unknown_method():
 
 
 def test_registry_holds_every_method():
-    assert {"direct", "nufft", "nufft32", "finufft", "psf", "auto"} <= set(METHODS)
+    assert {"direct", "nufft", "nufft32", "finufft", "psf", "auto"} <= set(ASCAN_METHODS)
 
 
 def test_stream_matches_whole_scene_and_is_chunk_independent():

@@ -35,7 +35,9 @@ def test_mmode_is_the_image_at_each_time(setup):
     assert m.field.dims == ("time", "depth") and m.time.attrs["units"] == "s"
     ref = np.stack(
         [
-            speckle.image(moved.isel(time=i, drop=True), src, waist=W0, x=[48.0]).field.values[:, 0]
+            speckle.scan_image(
+                moved.isel(time=i, drop=True), src, waist=W0, lines=[48.0]
+            ).field.values[:, 0]
             for i in range(t.size)
         ]
     )
@@ -54,10 +56,10 @@ def test_snapshot_series_carries_time(setup):
     t = np.arange(3) * 1e-3
     moved = mo.flow_motion(sc, t, velocity=[0.0, 500.0])
     x = speckle.scan_lines(16, P, start=24.0)
-    out = ts.bscan_series(moved, src, waist=W0, x=x)
+    out = ts.bscan_series(moved, src, waist=W0, lines=x)
     assert out.field.dims == ("time", "depth", "x")
     np.testing.assert_array_equal(out.time.values, t)
-    one = speckle.image(moved.isel(time=2, drop=True), src, waist=W0, x=x).field.values
+    one = speckle.scan_image(moved.isel(time=2, drop=True), src, waist=W0, lines=x).field.values
     np.testing.assert_array_equal(out.field.values[2], one)
 
 
@@ -66,16 +68,16 @@ def test_raster_lines_at_their_own_times(setup):
     x = speckle.scan_lines(8, P, start=30.0)
     t = ts.raster_times(2, x.size, line_rate=2000.0, frame_interval=0.01)
     moved = mo.flow_motion(sc, t, velocity=[0.0, 400.0])
-    out = ts.bscan_series(moved, src, waist=W0, x=x, line_rate=2000.0, chunk=3)
+    out = ts.bscan_series(moved, src, waist=W0, lines=x, line_rate=2000.0, chunk=3)
     assert out.field.dims == ("time", "depth", "x")
     np.testing.assert_allclose(out.time.values, [0.0, 0.01])
     np.testing.assert_allclose(out.line_time.values, t.reshape(2, -1))
     f = out.field.values
     for fr, i in [(0, 0), (0, 5), (1, 7)]:
         pos = moved.isel(time=fr * x.size + i, drop=True)
-        ref = speckle.image(pos, src, waist=W0, x=[x[i]]).field.values[:, 0]
+        ref = speckle.scan_image(pos, src, waist=W0, lines=[x[i]]).field.values[:, 0]
         np.testing.assert_allclose(f[fr, :, i], ref, rtol=0, atol=1e-12 * np.abs(ref).max())
-    again = ts.bscan_series(moved, src, waist=W0, x=x, line_rate=2000.0, chunk=8)
+    again = ts.bscan_series(moved, src, waist=W0, lines=x, line_rate=2000.0, chunk=8)
     np.testing.assert_array_equal(again.field.values, f)
 
 
@@ -91,7 +93,7 @@ def test_independent_lines_series():
     "call,match",
     [
         (lambda sc, src: ts.mmode(sc, src, waist=W0, x=1.0), "time"),
-        (lambda sc, src: ts.bscan_series(sc, src, waist=W0, x=[1.0, 2.0]), "time"),
+        (lambda sc, src: ts.bscan_series(sc, src, waist=W0, lines=[1.0, 2.0]), "time"),
         (lambda sc, src: ts.raster_times(2, 4, line_rate=0.0), "line_rate"),
         (lambda sc, src: ts.raster_times(2, 4, line_rate=10.0, frame_interval=0.1), "scan"),
     ],
@@ -107,9 +109,9 @@ def test_raster_times_must_match(setup):
     x = speckle.scan_lines(4, P, start=30.0)
     moved = mo.flow_motion(sc, np.arange(8) * 1e-3, velocity=[0.0, 1.0])
     with pytest.raises(ValueError, match="line_rate"):
-        ts.bscan_series(moved, src, waist=W0, x=x, line_rate=2000.0)
+        ts.bscan_series(moved, src, waist=W0, lines=x, line_rate=2000.0)
     with pytest.raises(ValueError, match="n_frames"):
-        ts.bscan_series(moved, src, waist=W0, x=speckle.scan_lines(3, P), line_rate=1000.0)
+        ts.bscan_series(moved, src, waist=W0, lines=speckle.scan_lines(3, P), line_rate=1000.0)
 
 
 def test_series_streams_to_netcdf_with_the_same_numbers(setup, tmp_path):
@@ -119,7 +121,7 @@ def test_series_streams_to_netcdf_with_the_same_numbers(setup, tmp_path):
     x = speckle.scan_lines(6, P, start=30.0)
     t = ts.raster_times(3, x.size, line_rate=5000.0)
     moved = mo.brownian_motion(sc, t, diffusion=2.0, seed=3)
-    out = ts.bscan_series(moved, src, waist=W0, x=x, line_rate=5000.0, chunk=4)
+    out = ts.bscan_series(moved, src, waist=W0, lines=x, line_rate=5000.0, chunk=4)
     values = {}
     for sched in ("synchronous", "threads", "processes"):
         with dask.config.set(scheduler=sched):

@@ -17,8 +17,8 @@ import xarray as xr
 import zarr
 from scipy import io as sio
 
-from speckle.analysis import load_image
 from speckle.data import SAMPLES, sample_path
+from speckle.io import load_image
 
 RNG = np.random.default_rng(5)
 NZ, NX = 6, 4
@@ -82,7 +82,19 @@ def test_netcdf_named_dims_and_um_coordinates(tmp_path):
         name="field",
     )
     da0.to_dataset().to_netcdf(tmp_path / "a.nc", engine="netcdf4", auto_complex=True)
-    check(load_image(tmp_path / "a.nc", kind="complex"), FIELD)  # no dims, no sizes needed
+    with pytest.warns(FutureWarning, match="dim 'aline' is now 'x'"):  # a file of old releases
+        check(load_image(tmp_path / "a.nc", kind="complex"), FIELD)  # no dims, no sizes needed
+    da0.rename(aline="x").to_dataset().to_netcdf(
+        tmp_path / "b.nc", engine="netcdf4", auto_complex=True
+    )
+    check(load_image(tmp_path / "b.nc", kind="complex"), FIELD)
+
+
+def test_the_retired_dim_name_in_dims_is_read_as_x(tmp_path):
+    np.save(tmp_path / "a.npy", np.abs(FIELD).T)
+    with pytest.warns(FutureWarning, match="dim 'aline' is now 'x'"):
+        da = load_image(tmp_path / "a.npy", kind="amplitude", dims=("aline", "depth"), **KW)
+    check(da, np.abs(FIELD), "amplitude")
 
 
 def test_zarr_xarray_and_bare_array(tmp_path):

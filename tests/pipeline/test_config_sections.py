@@ -25,7 +25,7 @@ SCHEMA = "workflow/schemas/config.schema.yaml"
 MEASURED = "measured_64x48.npy"
 MEASURED_SHAPE = (64, 48)
 _SHEET = {"wavelength_nm": 840.0, "camera_pixels": 256, "imaging_depth": 500.0}
-_MEAS = {"path": MEASURED, "scale": "linear", "roi": {"depth": [10, 40], "aline": [0, 48]}}
+_MEAS = {"path": MEASURED, "kind": "intensity", "roi": {"depth": [10, 40], "x": [0, 48]}}
 
 #: id -> (key expected in the error, override merged over the CI config)
 BAD = {
@@ -95,7 +95,7 @@ BAD = {
     ),
     "realism.measured.roi outside": (
         "realism.measured.roi",
-        {"realism": {"measured": {**_MEAS, "roi": {"aline": [0, 500]}}}},
+        {"realism": {"measured": {**_MEAS, "roi": {"x": [0, 500]}}}},
     ),
     "realism.measured.air_rows outside": (
         "realism.measured.air_rows",
@@ -188,8 +188,8 @@ def test_schema_enums_match_the_package(schema):
     # every k-linearisation but "none" (no closed-form roll-off for unresampled pixels)
     resample = set(sysp["rolloff"]["properties"]["resample"]["enum"])
     assert resample == set(speckle.system.spectrometer.RESAMPLING) - {"none"}
-    assert set(sysp["bscan"]["properties"]["window"]["enum"]) == set(
-        speckle.system.spectrometer.WINDOWS
+    assert set(sysp["bscan"]["properties"]["apodization"]["enum"]) == set(
+        speckle.system.spectrometer.APODIZATIONS
     )
 
 

@@ -20,7 +20,7 @@ def test_path_integral_equals_the_integral_of_the_lookup(thickness, mu, z):
     """int_0^z of the piecewise-constant profile: the analytic sum over layers vs a midpoint sum
     on a grid whose cells never straddle a layer edge (then the midpoint rule is exact)."""
     tops = np.concatenate([[0.0], np.cumsum(thickness)])
-    stack = speckle.layers(tops, attenuation=mu[: tops.size])
+    stack = speckle.layer_stack(tops, attenuation=mu[: tops.size])
     edges = np.unique(np.concatenate([[0.0, z], tops[(tops > 0) & (tops < z)]]))
     mids = 0.5 * (edges[1:] + edges[:-1])
     exact = float(np.sum(layer_values(mids, stack, "attenuation") * np.diff(edges)))
@@ -28,17 +28,17 @@ def test_path_integral_equals_the_integral_of_the_lookup(thickness, mu, z):
 
 
 def test_first_layer_extends_up_to_the_surface_and_last_to_infinity():
-    stack = speckle.layers([50.0, 80.0], backscatter=[2.0, 3.0])
+    stack = speckle.layer_stack([50.0, 80.0], backscatter=[2.0, 3.0])
     np.testing.assert_array_equal(layer_values([0.0, 79.0, 1e9], stack, "backscatter"), [2, 2, 3])
     assert path_integral(100.0, stack, "backscatter") == pytest.approx(2 * 80 + 3 * 20)
 
 
 def test_layers_refuse_bad_input():
     with pytest.raises(ValueError, match="at least one property"):
-        speckle.layers([0.0])
+        speckle.layer_stack([0.0])
     with pytest.raises(ValueError, match="property must be one of"):
-        speckle.layers([0.0], colour=[1.0])
+        speckle.layer_stack([0.0], colour=[1.0])
     with pytest.raises(ValueError, match="attenuation"):
-        speckle.layers([0.0], attenuation=[-0.1])
+        speckle.layer_stack([0.0], attenuation=[-0.1])
     with pytest.raises(TypeError, match="layers"):
         layer_values([1.0], {"top": [0.0]}, "attenuation")

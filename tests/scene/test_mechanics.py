@@ -38,42 +38,42 @@ def block(n_depth=24, n_x=16, pixel=5.0, first=0.0):
 def test_bad_labels_are_refused():
     lab = block()
     with pytest.raises(TypeError, match=r"labels must be an integer xarray\.DataArray"):
-        speckle.compress(lab.values, E0, NU, strain=S)
+        speckle.compress_phantom(lab.values, E0, NU, strain=S)
     with pytest.raises(ValueError, match=r"dims \(depth, x\) or \(depth, aline\)"):
-        speckle.compress(lab.rename(x="y"), E0, NU, strain=S)
+        speckle.compress_phantom(lab.rename(x="y"), E0, NU, strain=S)
     with pytest.raises(TypeError, match="labels must hold integers"):
-        speckle.compress(lab.astype(float), E0, NU, strain=S)
+        speckle.compress_phantom(lab.astype(float), E0, NU, strain=S)
     with pytest.raises(ValueError, match="strictly increasing"):
-        speckle.compress(lab.isel(x=slice(None, None, -1)), E0, NU, strain=S)
+        speckle.compress_phantom(lab.isel(x=slice(None, None, -1)), E0, NU, strain=S)
     with pytest.raises(ValueError, match="coordinate 'x'"):
-        speckle.compress(lab.drop_vars("x"), E0, NU, strain=S)
+        speckle.compress_phantom(lab.drop_vars("x"), E0, NU, strain=S)
     for first in (-1.0, 6.0):  # above the probe, or more than a step below it
         with pytest.raises(ValueError, match="must start at the probe z = 0"):
-            speckle.compress(block(first=first), E0, NU, strain=S)
+            speckle.compress_phantom(block(first=first), E0, NU, strain=S)
 
 
 def test_bad_materials_and_options_are_refused():
     lab = speckle.layered_labels(*grid(10, 6), [20.0])
     with pytest.raises(ValueError, match=r"youngs_modulus has no value for label\(s\) \[1\]"):
-        speckle.compress(lab, {0: E0}, NU, strain=S)
+        speckle.compress_phantom(lab, {0: E0}, NU, strain=S)
     with pytest.raises(ValueError, match=r"youngs_modulus\[1\] must be in \(0, inf\)"):
-        speckle.compress(lab, {0: E0, 1: 0.0}, NU, strain=S)
+        speckle.compress_phantom(lab, {0: E0, 1: 0.0}, NU, strain=S)
     with pytest.raises(ValueError, match=r"0\.5 \(incompressible\) makes the Lamé parameter"):
-        speckle.compress(lab, E0, 0.5, strain=S)
+        speckle.compress_phantom(lab, E0, 0.5, strain=S)
     with pytest.raises(ValueError, match=r"poisson_ratio\[0\] must be in \[0, inf\)"):
-        speckle.compress(lab, E0, {0: -0.1, 1: 0.3}, strain=S)
+        speckle.compress_phantom(lab, E0, {0: -0.1, 1: 0.3}, strain=S)
     with pytest.raises(ValueError, match=r"strain must be in \(-1, 1\)"):
-        speckle.compress(lab, E0, NU, strain=1.0)
+        speckle.compress_phantom(lab, E0, NU, strain=1.0)
     with pytest.raises(ValueError, match="contact must be one of 'bonded', 'sliding'"):
-        speckle.compress(lab, E0, NU, strain=S, contact="glued")
+        speckle.compress_phantom(lab, E0, NU, strain=S, contact="glued")
     with pytest.raises(ValueError, match=r"mesh_size must be <= the largest label pixel"):
-        speckle.compress(lab, E0, NU, strain=S, mesh_size=6.0)
+        speckle.compress_phantom(lab, E0, NU, strain=S, mesh_size=6.0)
     with pytest.raises(ValueError, match=r"mesh_size must be in \(0, inf\)"):
-        speckle.compress(lab, E0, NU, strain=S, mesh_size=0.0)
+        speckle.compress_phantom(lab, E0, NU, strain=S, mesh_size=0.0)
 
 
 def test_points_outside_the_sample_are_refused():
-    res = speckle.compress(block(), E0, NU, strain=S)
+    res = speckle.compress_phantom(block(), E0, NU, strain=S)
     zmax = res.attrs["sample_depth"]
     with pytest.raises(ValueError, match=r"z must lie inside the sample, \[0, 117.5\] µm"):
         speckle.displacement_at(res, zmax + 1.0, 0.0)
@@ -118,7 +118,7 @@ def test_homogeneous_sliding_block_is_uniform_uniaxial_strain(mesh_size):
     sigma_xx = 0), bilinear, so reproduced to rounding; stress_zz = E s / (1 - nu^2)."""
     d = np.concatenate([[0.0, 3.0], 3.0 + 5.0 * np.arange(1, 20)])  # non-uniform grid
     x = 5.0 * np.arange(12) - 20.0
-    res = speckle.compress(
+    res = speckle.compress_phantom(
         speckle.layered_labels(d, x, []), E0, NU, strain=S, contact="sliding", mesh_size=mesh_size
     )
     lateral = NU / (1 - NU) * S
@@ -155,7 +155,7 @@ def test_tall_bonded_block_is_uniaxial_away_from_the_ends():
     carries a little more than the nominal strain; the total is the nominal one."""
     width, height = 40, 160  # pixels of 1 µm
     d, x = grid(height, width, pixel=1.0, first=0.5)
-    res = speckle.compress(speckle.layered_labels(d, x, []), E0, 0.3, strain=0.01)
+    res = speckle.compress_phantom(speckle.layered_labels(d, x, []), E0, 0.3, strain=0.01)
     centre = res.sel(depth=slice(70, 90))
     ratio = centre.strain_xx / centre.strain_zz
     np.testing.assert_allclose(ratio, -0.3 / 0.7, rtol=2e-3)
@@ -174,7 +174,7 @@ def test_wide_bonded_block_is_confined_at_the_centre():
     At 10 L from the sides any decay rate >= 1/L leaves < e^-10 of the edge perturbation
     (< 0.1 s at the edge): strain_zz = s, strain_xx = 0 to 1e-5 relative."""
     d, x = grid(10, 200, pixel=1.0, first=0.5)
-    res = speckle.compress(speckle.layered_labels(d, x, []), E0, 0.3, strain=0.01)
+    res = speckle.compress_phantom(speckle.layered_labels(d, x, []), E0, 0.3, strain=0.01)
     centre = res.sel(x=slice(-10, 10))
     np.testing.assert_allclose(centre.strain_zz, 0.01, rtol=1e-5)
     np.testing.assert_allclose(centre.strain_xx, 0.0, atol=1e-7)
@@ -189,7 +189,7 @@ def test_layers_without_poisson_effect_strain_inversely_to_modulus():
     d, x = grid(30, 10)
     lab = speckle.layered_labels(d, x, [40.0, 100.0])
     moduli = {0: 5.0, 1: 20.0, 2: 10.0}
-    res = speckle.compress(lab, moduli, 0.0, strain=S, contact="sliding")
+    res = speckle.compress_phantom(lab, moduli, 0.0, strain=S, contact="sliding")
     edges = [0.0, 37.5, 97.5, res.attrs["sample_depth"]]  # interfaces on pixel edges
     t = np.diff(edges)
     e = np.array(list(moduli.values()))
@@ -211,7 +211,7 @@ def test_layers_with_poisson_effect_match_the_interior_solution():
     ratio is below the E' ratio."""
     d, x = grid(12, 240, pixel=1.0, first=0.5)
     lab = speckle.layered_labels(d, x, [4.0])  # interface on the pixel edge at 4 µm
-    res = speckle.compress(lab, {0: 5.0, 1: 20.0}, 0.45, strain=S, contact="sliding")
+    res = speckle.compress_phantom(lab, {0: 5.0, 1: 20.0}, 0.45, strain=S, contact="sliding")
     zz, xx, szz = speckle.layer_strains([4.0, 8.0], [5.0, 20.0], [0.45, 0.45], S)
     centre = res.sel(x=slice(-10, 10))
     np.testing.assert_allclose(centre.strain_zz, zz[centre.label.values], rtol=1e-6)
@@ -262,7 +262,9 @@ def inclusion_error(n_radius, offset, radius=100.0, plate=40.0, nu=0.3, e_ratio=
     depth = axis + size / 2
     centre = np.array([size / 2, 0.0]) + np.asarray(offset) * pixel
     lab = speckle.inclusion_labels(depth, axis, centre, radius)
-    res = speckle.compress(lab, {0: E0, 1: e_ratio * E0}, nu, strain=0.01, contact="sliding")
+    res = speckle.compress_phantom(
+        lab, {0: E0, 1: e_ratio * E0}, nu, strain=0.01, contact="sliding"
+    )
     r2 = (res.depth - centre[0]) ** 2 + (res.x - centre[1]) ** 2
     core = res[["strain_zz", "strain_xx"]].where(r2 <= (radius / 2) ** 2)
     zz, xx = speckle.inclusion_strain(0.01, E0, nu, e_ratio * E0, nu)
@@ -299,7 +301,7 @@ def test_near_incompressible_inclusion_does_not_lock():
 
 def test_displacement_at_is_the_bilinear_fe_field():
     lab = speckle.inclusion_labels(*grid(12, 10), (30.0, 0.0), 12.0)
-    res = speckle.compress(lab, {0: E0, 1: 4 * E0}, 0.3, strain=S)
+    res = speckle.compress_phantom(lab, {0: E0, 1: 4 * E0}, 0.3, strain=S)
     zn, xn = np.meshgrid(res.node_depth, res.node_x, indexing="ij")
     uz, ux = speckle.displacement_at(res, zn, xn)
     np.testing.assert_array_equal(uz, res.uz_node.values)
@@ -325,7 +327,7 @@ def test_displace_with_fe_field_reproduces_uniaxial_strain(tmp_path):
     depth = np.arange(0.0, zmax + pixel, pixel)
     lab = speckle.layered_labels(depth, scene.aline.values, [])
     assert lab.x.values[1] - lab.x.values[0] == pitch
-    res = speckle.compress(lab, E0, NU, strain=s, contact="sliding")
+    res = speckle.compress_phantom(lab, E0, NU, strain=s, contact="sliding")
     path = tmp_path / "phantom.nc"
     speckle.to_netcdf(res, path)
     res = xr.open_dataset(path, engine="netcdf4").load()
@@ -346,7 +348,7 @@ def test_aline_labels_give_a_field_displace_accepts():
     scene = speckle.deformable_scene(6, 2.0, n_pixels=n, depth_range=n * pixel, seed=2, strain=s)
     depth = np.arange(0.0, scene.attrs["populated_depth"] + pixel, pixel)
     lab = speckle.layered_labels(depth, scene.aline.values, []).rename(x="aline")
-    res = speckle.compress(lab, E0, 0.0, strain=s, contact="sliding")
+    res = speckle.compress_phantom(lab, E0, 0.0, strain=s, contact="sliding")
     assert res.uz.dims == ("depth", "aline")
     moved = speckle.displace(scene, res)
     ref = speckle.uniaxial_strain(scene, s).isel(strain=0)
@@ -368,7 +370,7 @@ def test_fe_field_deforms_a_shared_scene_of_regions():
     depth = np.arange(0.0, 128.0, 4.0) + 2.0
     x = np.arange(0.0, 160.0, 4.0) + 2.0
     labels = speckle.rasterize(reg, depth, x)
-    fe = speckle.compress(labels, {0: 10.0, 1: 40.0}, 0.3, strain=0.01, contact="sliding")
+    fe = speckle.compress_phantom(labels, {0: 10.0, 1: 40.0}, 0.3, strain=0.01, contact="sliding")
     scene = speckle.shared_scene(reg, z_range=(8.0, 120.0), x_range=(8.0, 152.0), seed=5)
     exact = speckle.displace(scene, functools.partial(speckle.displacement_at, fe))
     gridded = speckle.displace(scene, fe[["uz", "ux"]])

@@ -16,10 +16,10 @@ import speckle.scene.regions as reg
 DEPTH = np.arange(4.0, 64.0, 8.0)
 X = np.arange(0.0, 48.0, 8.0)
 LABELS = mech.inclusion_labels(DEPTH, X, (32.0, 24.0), 10.0)
-FE = mech.compress(LABELS, {0: 10.0, 1: 40.0}, 0.3, strain=0.01)
+FE = mech.compress_phantom(LABELS, {0: 10.0, 1: 40.0}, 0.3, strain=0.01)
 
 VALID = {
-    "compress": dict(
+    "compress_phantom": dict(
         youngs_modulus={0: 10.0, 1: 40.0},
         poisson_ratio=0.3,
         strain=0.01,
@@ -43,8 +43,8 @@ VALID = {
 
 
 def _call(name: str, kw: dict):
-    if name == "compress":
-        return mech.compress(LABELS, **kw)[["uz", "ux", "strain_zz"]]
+    if name == "compress_phantom":
+        return mech.compress_phantom(LABELS, **kw)[["uz", "ux", "strain_zz"]]
     if name == "inclusion_labels":
         return mech.inclusion_labels(kw["depth"], kw["x"], kw["center"], kw["radii"])
     if name == "layered_labels":
@@ -74,14 +74,14 @@ def test_one_unit_of_youngs_modulus():
         reg.circle(32.0, 24.0, 10.0, density=1.0, youngs_modulus=40.0),
     )
     assert table.youngs_modulus.attrs["units"] == "kPa"
-    fe = mech.compress(LABELS, table.youngs_modulus, 0.3, strain=0.01)
+    fe = mech.compress_phantom(LABELS, table.youngs_modulus, 0.3, strain=0.01)
     np.testing.assert_allclose(fe.stress_zz, FE.stress_zz, rtol=1e-12)
     pa = table.youngs_modulus * 1e3
     pa.attrs["units"] = "Pa"
     with pytest.raises(ValueError, match="youngs_modulus is given in 'Pa'"):
-        mech.compress(LABELS, pa, 0.3, strain=0.01)
+        mech.compress_phantom(LABELS, pa, 0.3, strain=0.01)
     with pytest.raises(ValueError, match="kPa"):
-        mech.compress(LABELS, 2e7, 0.3, strain=0.01)
+        mech.compress_phantom(LABELS, 2e7, 0.3, strain=0.01)
     with pytest.raises(ValueError, match="kPa"):
         reg.background(density=1.0, youngs_modulus=5e9)
 
@@ -89,11 +89,11 @@ def test_one_unit_of_youngs_modulus():
 def test_label_minus_one_is_refused():
     empty = xr.full_like(LABELS, -1)
     with pytest.raises(ValueError, match=r"labels hold 48 of 48 pixel\(s\) with label -1"):
-        mech.compress(empty, 10.0, 0.3, strain=0.01)
+        mech.compress_phantom(empty, 10.0, 0.3, strain=0.01)
 
 
 def test_memory_is_estimated_before_meshing():
     with pytest.raises(ValueError, match=r"mesh_size.*GiB"):
-        mech.compress(LABELS, 10.0, 0.3, strain=0.01, mesh_size=0.01)
+        mech.compress_phantom(LABELS, 10.0, 0.3, strain=0.01, mesh_size=0.01)
     # the estimate's fill model bounds the measured SuperLU fill (16x16 .. 128x128 pixels)
     assert mech.fem_bytes(129 * 129) > 12 * 5_204_623

@@ -43,8 +43,8 @@ import xarray as xr
 from scipy import stats
 
 import speckle
-from speckle.analysis import load_image
 from speckle.data import SAMPLE_PITCH, sample_path
+from speckle.io import load_image
 from speckle.studies import SystemFit, fit_system
 
 PIXEL = 5.75

@@ -40,7 +40,7 @@ def test_amplitudes_scale_by_exp_minus_tau(scene):
 
 
 def test_layers_path_integral_is_exact():
-    stack = speckle.layers([0.0, 100.0, 250.0], attenuation=[1e-3, 5e-3, 0.0])
+    stack = speckle.layer_stack([0.0, 100.0, 250.0], attenuation=[1e-3, 5e-3, 0.0])
     z = np.array([0.0, 50.0, 100.0, 200.0, 250.0, 400.0])
     expected = [0.0, 0.05, 0.1, 0.1 + 0.5, 0.1 + 0.75, 0.85]
     np.testing.assert_allclose(path_integral(z, stack, "attenuation"), expected, atol=1e-15)
@@ -76,9 +76,9 @@ def test_bad_attenuation_inputs(scene):
     with pytest.raises(TypeError, match="scene"):
         speckle.attenuate(scene.z, 1e-3)
     with pytest.raises(ValueError, match="thickness"):
-        speckle.layers([0.0, 100.0, 100.0], attenuation=[1e-3, 1e-3, 1e-3])
+        speckle.layer_stack([0.0, 100.0, 100.0], attenuation=[1e-3, 1e-3, 1e-3])
     with pytest.raises(ValueError, match="one value per layer"):
-        speckle.layers([0.0, 100.0], attenuation=[1e-3])
+        speckle.layer_stack([0.0, 100.0], attenuation=[1e-3])
     labels = xr.DataArray(np.array([[0], [2]]), dims=("depth", "x"), coords={"depth": [0.0, 1.0]})
     props = xr.Dataset({"attenuation": ("region", [1e-3])}, coords={"region": [0]})
     with pytest.raises(ValueError, match=r"labels \[2\]"):
@@ -118,7 +118,7 @@ def test_attenuation_and_backscatter_by_region_on_a_label_image():
 
 
 def test_layered_backscatter_scales_mean_intensity(scene):
-    stack = speckle.layers([0.0, 512.0], backscatter=[1.0, 4.0])
+    stack = speckle.layer_stack([0.0, 512.0], backscatter=[1.0, 4.0])
     out = speckle.backscatter(scene, stack)
     ratio = (abs(out.amplitude) / abs(scene.amplitude)).values
     np.testing.assert_allclose(ratio, np.where(scene.z.values < 512.0, 1.0, 2.0))

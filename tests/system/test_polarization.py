@@ -70,7 +70,7 @@ def test_total_intensity_pdf_is_normalised_with_the_right_moments(p):
 
 def test_layered_depolarization_routes_each_layer():
     scene = speckle.random_scatterers(4, 2.0, n_pixels=N, depth_range=H, seed=1)
-    stack = speckle.layers([0.0, 200.0], depolarization=[0.0, 1.0])
+    stack = speckle.layer_stack([0.0, 200.0], depolarization=[0.0, 1.0])
     out = speckle.depolarize(scene, stack, seed=3)
     top = scene.z < 200.0
     co, x = out.amplitude.sel(channel="co"), out.amplitude.sel(channel="cross")
@@ -85,7 +85,7 @@ def test_bad_depolarization():
         with pytest.raises(ValueError, match="depolarization"):
             speckle.depolarize(scene, bad, seed=1)
     with pytest.raises(ValueError, match="depolarization"):
-        speckle.layers([0.0, 10.0], depolarization=[0.5, 1.5])
+        speckle.layer_stack([0.0, 10.0], depolarization=[0.5, 1.5])
 
 
 def test_depolarization_by_region_label():

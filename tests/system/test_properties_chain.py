@@ -42,15 +42,15 @@ VALID = {
     "camera_signal": dict(
         pixel_width=True, resolution=False, dc=True, on_grid=False, sampling="wavelength"
     ),
-    "process": dict(
+    "process_interferogram": dict(
         signal=np.concatenate([SIGNAL, SIGNAL]),
         k0=SYSTEM.k0,
         resample="cubic",
-        window="hann",
-        window_fwhm_fraction=0.5,
+        apodization="hann",
+        apodization_fwhm_fraction=0.5,
         background="mean",
     ),
-    "system_ascan": dict(resample="linear", window="gaussian", window_fwhm_fraction=0.4),
+    "system_ascan": dict(resample="linear", apodization="gaussian", apodization_fwhm_fraction=0.4),
     "linearize": dict(signal=SIGNAL[0], method="linear"),
     "interpolation_gain": dict(theta=1.0, t=0.3, method="cubic"),
 }
@@ -63,8 +63,8 @@ def _call(name: str, kw: dict):
         return sp.interferogram(kw.pop("z"), kw.pop("amplitude"), K, kw.pop("spectrum"), **kw)
     if name == "camera_signal":
         return sp.camera_signal(SYSTEM, [[100.0]], [[1.0]], **kw)[0]
-    if name == "process":
-        return sp.process(kw.pop("signal"), grid=GRID, wavenumber=K, **kw)
+    if name == "process_interferogram":
+        return sp.process_interferogram(kw.pop("signal"), grid=GRID, wavenumber=K, **kw)
     if name == "system_ascan":
         return sp.system_ascan(SYSTEM, [[100.0]], [[1.0]], **kw)
     if name == "linearize":
@@ -89,7 +89,7 @@ def test_nan_in_the_camera_spectrum_is_refused_with_its_count():
     bad[0, [3, 7]] = np.nan
     for resample in ("cubic", "linear"):
         with pytest.raises(ValueError, match="signal must be finite; it holds 2 NaN"):
-            sp.process(bad, grid=GRID, k0=SYSTEM.k0, wavenumber=K, resample=resample)
+            sp.process_interferogram(bad, grid=GRID, k0=SYSTEM.k0, wavenumber=K, resample=resample)
     with pytest.raises(ValueError, match="spectrum must be finite; it holds 1 NaN"):
         sp.interferogram([[1.0]], [[1.0]], K, np.r_[np.nan, np.ones(K.size - 1)])
 

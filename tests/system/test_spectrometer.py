@@ -17,7 +17,7 @@ def grid_of(src):
 def ideal_chain(z, a, src):
     k, k0 = grid_of(src)
     sig = sp.interferogram(z, a, k, src.values, k0=k0)
-    return sp.process(sig, grid=k, k0=k0)
+    return sp.process_interferogram(sig, grid=k, k0=k0)
 
 
 @pytest.mark.parametrize(
@@ -129,7 +129,7 @@ def test_second_order_dispersion_broadens_as_gaussian_pulse(b):
     z = np.array([[n // 2 * h / n]])
 
     def rms_width(disp):
-        img = sp.process(sp.interferogram(z, np.ones((1, 1)), k, src.values, k0=k0,
+        img = sp.process_interferogram(sp.interferogram(z, np.ones((1, 1)), k, src.values, k0=k0,
                                           dispersion=disp), grid=k, k0=k0)[0]  # fmt: skip
         p = np.abs(img) ** 2
         u = np.arange(n) - n // 2
@@ -152,14 +152,14 @@ def test_dispersion_compensation_restores_eq4():
     disp = {2: 300.0, 3: -2000.0}
     sig = sp.interferogram(z, a, k, src.values, k0=k0, dispersion=disp)
     ref = speckle.ascan(z, a, n_pixels=n, depth_range=h, k0=k0, spectrum=src.values)
-    bad = sp.process(sig, grid=k, k0=k0)
-    good = sp.process(sig, grid=k, k0=k0, dispersion=disp)
+    bad = sp.process_interferogram(sig, grid=k, k0=k0)
+    good = sp.process_interferogram(sig, grid=k, k0=k0, dispersion=disp)
     assert np.max(np.abs(bad - ref)) / np.max(np.abs(ref)) > 0.1
     assert np.max(np.abs(good - ref)) / np.max(np.abs(ref)) < 1e-11
 
 
 @pytest.mark.parametrize("window", ["none", "hann", "gaussian"])
-def test_window_sets_axial_speckle_correlation(window):
+def test_apodization_sets_axial_speckle_correlation(window):
     """Pearson correlation of intensity at depth lags 1-3 px equals the Campbell/Siegert
     prediction from the window-weighted spectrum (Poisson scatterers, equal amplitudes)."""
     n, h, rho, lines = 128, 512.0, 2.0, 600
@@ -170,10 +170,12 @@ def test_window_sets_axial_speckle_correlation(window):
     z = rng.uniform(0, h, (lines, counts.max()))
     a = (np.arange(counts.max()) < counts[:, None]).astype(complex)
     sig = sp.interferogram(z, a, k, src.values, k0=k0)
-    img = sp.process(sig, grid=k, k0=k0, window=window)
+    img = sp.process_interferogram(sig, grid=k, k0=k0, apodization=window)
     intensity = np.abs(img) ** 2
     lags = np.array([1, 2, 3])
-    theory = sp.axial_intensity_correlation(src.values * sp.spectral_window(n, window), lags, rho)
+    theory = sp.axial_intensity_correlation(
+        src.values * sp.spectral_apodization(n, window), lags, rho
+    )
     blocks = intensity.reshape(20, -1, n)
 
     def pearson(x, lag):
@@ -192,7 +194,7 @@ def test_window_sets_axial_speckle_correlation(window):
 
 def test_axial_correlation_dense_limit_is_siegert():
     """rho -> inf: |gamma|^2 with gamma the normalised Fourier transform of |u|^2."""
-    u = speckle.spectrum(64, 64.0, k0_dk=5.0).values * sp.spectral_window(64, "hann")
+    u = speckle.spectrum(64, 64.0, k0_dk=5.0).values * sp.spectral_apodization(64, "hann")
     lags = np.array([0.0, 0.5, 1.0, 2.5])
     n = np.arange(64) - 32
     gamma = (u**2 @ np.exp(-2j * np.pi * np.outer(n, lags) / 64)) / np.sum(u**2)
@@ -251,7 +253,7 @@ def test_real_detection_dc_autocorrelation_mirror():
         reference_power=4.0,
     )  # fmt: skip
     assert np.isrealobj(sig)
-    img = sp.process(sig, grid=k, k0=k0)[0]
+    img = sp.process_interferogram(sig, grid=k, k0=k0)[0]
     total = src.values.sum()  # = N
     assert abs(img[0]) == pytest.approx(total * (4.0 + 0.5**2 + 0.25**2), rel=1e-12)
     for q, amp in ((40, 0.5), (52, 0.25)):
@@ -260,19 +262,19 @@ def test_real_detection_dc_autocorrelation_mirror():
     assert abs(img[12]) == pytest.approx(0.5 * 0.25 * total, rel=1e-12)  # autocorrelation
     rest = np.delete(np.abs(img), [0, 12, n - 12, 40, 52, n - 40, n - 52])
     assert rest.max() < 1e-9 * total
-    clean = sp.process(sig, grid=k, k0=k0, background="mean")[0]
+    clean = sp.process_interferogram(sig, grid=k, k0=k0, background="mean")[0]
     assert abs(clean[0]) < 1e-9 * total and abs(clean[12]) < 1e-9 * total  # identical lines
-    dc_only = sp.process(sig, grid=k, k0=k0, background=4.0 * src.values)[0]
+    dc_only = sp.process_interferogram(sig, grid=k, k0=k0, background=4.0 * src.values)[0]
     assert abs(dc_only[0]) == pytest.approx(total * (0.5**2 + 0.25**2), rel=1e-12)
 
 
-def test_spectral_windows():
+def test_spectral_apodizations():
     np.testing.assert_allclose(
-        sp.spectral_window(8, "hann"), np.cos(np.pi * np.arange(-4, 4) / 8) ** 2
+        sp.spectral_apodization(8, "hann"), np.cos(np.pi * np.arange(-4, 4) / 8) ** 2
     )
-    g = sp.spectral_window(100, "gaussian", 0.2)
+    g = sp.spectral_apodization(100, "gaussian", 0.2)
     assert g[50] == 1.0 and g[50 + 10] == pytest.approx(0.5, rel=1e-12)  # FWHM 0.2 N = 20
-    assert np.all(sp.spectral_window(16) == 1)
+    assert np.all(sp.spectral_apodization(16) == 1)
 
 
 def test_bad_inputs():
@@ -282,11 +284,11 @@ def test_bad_inputs():
     with pytest.raises(ValueError, match="dispersion order must be an integer in \\[2"):
         sp.interferogram(z, a, k, src.values, dispersion={-2: 1.0})
     with pytest.raises(ValueError, match="dispersion order"):
-        sp.process(np.ones(16), grid=k, k0=k0, dispersion={1: 1.0})
-    with pytest.raises(ValueError, match="window must be one of"):
-        sp.process(np.ones(16), grid=k, k0=k0, window="hamming")
+        sp.process_interferogram(np.ones(16), grid=k, k0=k0, dispersion={1: 1.0})
+    with pytest.raises(ValueError, match="apodization must be one of"):
+        sp.process_interferogram(np.ones(16), grid=k, k0=k0, apodization="hamming")
     with pytest.raises(ValueError, match="resample must be one of"):
-        sp.process(np.ones(16), grid=k, k0=k0, resample="sinc")
+        sp.process_interferogram(np.ones(16), grid=k, k0=k0, resample="sinc")
     with pytest.raises(ValueError, match="detection must be one of"):
         sp.interferogram(z, a, k, src.values, detection="balanced")
     with pytest.raises(ValueError, match="spectrum must have the shape"):
@@ -294,17 +296,17 @@ def test_bad_inputs():
     with pytest.raises(ValueError, match="z and amplitude must have the same shape"):
         sp.interferogram(z, np.ones((1, 2)), k, src.values)
     with pytest.raises(ValueError, match="resample='none' needs the signal on the grid"):
-        sp.process(np.ones(15), grid=k, k0=k0)
+        sp.process_interferogram(np.ones(15), grid=k, k0=k0)
     with pytest.raises(ValueError, match="no extrapolation"):
-        sp.process(np.ones(16), grid=k * 1.01, k0=k0, wavenumber=k, resample="linear")
+        sp.process_interferogram(np.ones(16), grid=k * 1.01, k0=k0, wavenumber=k, resample="linear")
     with pytest.raises(ValueError, match="needs wavenumber"):
-        sp.process(np.ones(16), grid=k, k0=k0, resample="cubic")
+        sp.process_interferogram(np.ones(16), grid=k, k0=k0, resample="cubic")
     with pytest.raises(ValueError, match="background must have shape"):
-        sp.process(np.ones((2, 16)), grid=k, k0=k0, background=np.ones(8))
+        sp.process_interferogram(np.ones((2, 16)), grid=k, k0=k0, background=np.ones(8))
     with pytest.raises(ValueError, match="at least 2 A-lines"):
-        sp.process(np.ones(16), grid=k, k0=k0, background="mean")
+        sp.process_interferogram(np.ones(16), grid=k, k0=k0, background="mean")
     with pytest.raises(ValueError, match="at least 2 A-lines"):
-        sp.process(np.ones((1, 16)), grid=k, k0=k0, background="mean")
+        sp.process_interferogram(np.ones((1, 16)), grid=k, k0=k0, background="mean")
     with pytest.raises(TypeError, match="dispersion must be a mapping"):
         sp.dispersion_phase(k, k0, [0.0, 0.0, 1.0])
     with pytest.raises(ValueError, match="sampling must be one of"):

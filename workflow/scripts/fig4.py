@@ -2,9 +2,9 @@
 
 import logging
 
-from speckle.analysis.measured import load_measured
+from speckle.analysis.measured import roi_slices
 from speckle.figures import histograms
-from speckle.io import to_netcdf
+from speckle.io import load_image, to_netcdf
 from speckle.pipeline import adapters
 from speckle.pipeline.outputs import save
 from speckle.pipeline.runner import run
@@ -32,7 +32,15 @@ def main(snakemake) -> None:
     elif not hasattr(snakemake.input, "measured"):
         reason = f"not found at {cfg['path']}"
     else:
-        image = load_measured(snakemake.input.measured, scale=cfg["scale"], roi=cfg.get("roi"))
+        image = load_image(
+            snakemake.input.measured,
+            kind=cfg["kind"],
+            dims=("depth", "x"),
+            pixel_size=cfg["pixel_size"],
+            pitch=cfg["pitch"],
+        )
+        roi = cfg.get("roi") or {}
+        image = image.isel(roi_slices(roi, image.shape)).assign_attrs(roi=repr(roi))
     if image is None:
         logging.getLogger("fig4").warning(
             "measured image %s; drawing simulated panels only", reason

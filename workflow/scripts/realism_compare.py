@@ -2,10 +2,9 @@
 
 import logging
 
-from speckle.analysis.image_files import load_image
-from speckle.analysis.measured import load_measured
+from speckle.analysis.measured import roi_slices
 from speckle.figures import realism
-from speckle.io import to_netcdf
+from speckle.io import load_image, to_netcdf
 from speckle.pipeline.outputs import save
 from speckle.pipeline.runner import run
 from speckle.provenance import provenance_attrs
@@ -24,18 +23,22 @@ def main(snakemake) -> None:
     elif not hasattr(snakemake.input, "measured"):
         reason = f"not found at {meas_cfg['path']}"
     else:
-        path, scale = snakemake.input.measured, meas_cfg["scale"]
-        roi = load_measured(path, scale=scale, roi=meas_cfg["roi"])
-        if meas_cfg.get("air_rows"):
-            air = load_measured(path, scale=scale, roi={"depth": meas_cfg["air_rows"]})
-        # the effect parameters: one use of the twin's fit (speckle.studies.twin)
+        # pitch 1 µm: not recorded for this device, and only the waist/pitch ratio is fitted
         image = load_image(
-            path, kind=scale, pixel_size=cfg["pixel_size"], pitch=1.0, dims=("depth", "x")
+            snakemake.input.measured,
+            kind=meas_cfg["kind"],
+            pixel_size=cfg["pixel_size"],
+            pitch=1.0,
+            dims=("depth", "x"),
         )
         roi_cfg = meas_cfg.get("roi") or {}
+        roi = image.isel(roi_slices(roi_cfg, image.shape)).assign_attrs(roi=repr(roi_cfg))
+        if meas_cfg.get("air_rows"):
+            air = image.isel(roi_slices({"depth": meas_cfg["air_rows"]}, image.shape))
+        # the effect parameters: one use of the twin's fit (speckle.studies.twin)
         fit = fit_system(
             image,
-            region={"depth": roi_cfg.get("depth"), "x": roi_cfg.get("aline")},
+            region={"depth": roi_cfg.get("depth"), "x": roi_cfg.get("x")},
             noise_rows=meas_cfg.get("air_rows"),
             snr_db=None if meas_cfg.get("air_rows") else cfg["fallback"]["snr_db"],
             n_pixels=cfg["n_pixels"],

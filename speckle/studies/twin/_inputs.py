@@ -8,8 +8,8 @@ import numpy as np
 import xarray as xr
 
 from ...analysis import measured as ms
-from ...analysis.image_files import IMAGE_KINDS
 from ...conventions import spacing
+from ...io import IMAGE_KINDS
 from ._estimates import _Data
 from ._theory import MIN_NOISE_ROWS, NOISE_ROW_DB
 

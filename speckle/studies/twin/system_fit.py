@@ -12,8 +12,7 @@ from scipy import optimize, stats
 from ..._validate import check_choice, check_int, check_real
 from ...analysis import autocorrelation as ac
 from ...analysis.phase import DEFAULT_MAX_BIAS
-from ...analysis.strain import METHODS as STRAIN_METHODS
-from ...analysis.strain import estimate_strain
+from ...analysis.strain import STRAIN_METHODS, estimate_strain
 from ...conventions import attrs, coord
 from ...imaging.beam import beam_scan
 from ...system.noise import add_complex_noise
