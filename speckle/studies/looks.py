@@ -28,7 +28,7 @@ from .._deprecate import renamed_parameters
 from .._validate import as_finite_array
 from ..analysis._common import label_looks
 from ..analysis.compounding import brownian_frames
-from ..conventions import coord, depth_range_of
+from ..conventions import coord, grid
 from ..imaging.scan import scan_image
 from ..system.polarization import depolarize
 
@@ -81,10 +81,9 @@ def angular_looks(
     ang = as_finite_array(angles, "angles")
     if ang.ndim != 1 or ang.size == 0 or np.any(np.abs(ang) >= 90):
         raise ValueError("angles must be a non-empty 1-D list of degrees in (-90, 90)")
-    n = int(source.attrs["n_pixels"])
-    h = depth_range_of(source, "source")
+    g = grid(source, need=("n_pixels", "pixel_size"), what="source")  # from its attributes
+    n, p = g.n_pixels, g.pixel_size
     xs = as_finite_array(lines, "lines")
-    p = h / n
     pitch = xs[1] - xs[0] if xs.size > 1 else p
     zc, xc = (n - 1) / 2 * p, (xs[0] + xs[-1]) / 2
     zz, xx = np.meshgrid(np.arange(n) * p - zc, xs - xc, indexing="ij")
