@@ -150,7 +150,7 @@ def test_sequence_pixel_size_from_coordinates_and_frame_stacks_checked_once(pair
         out["accumulated"].values,
         speckle.accumulate_strain(frames.values, **kw)["accumulated"].values,
     )
-    with pytest.raises(ValueError, match="pixel_size=2.0 disagrees with frames's coordinates"):
+    with pytest.raises(ValueError, match=r"pixel_size=2\.0 disagrees with frames's coordinates"):
         speckle.accumulate_strain(frames, k0=kw["k0"], pixel_size=2.0)
     # a stack of pairs: every frame as if alone, the stack checked once (NaN frame named)
     stack = speckle.estimate_strain(frames[:2], frames[1:], k0=kw["k0"])
