@@ -290,10 +290,10 @@ def _fill_grid(bound, from_grid: Mapping[str, str], func_name: str) -> None:
                     f"DataArray whose coordinates give it"
                 )
             continue
-        found = getattr(grid(src), param)
+        found = getattr(grid(src, what=source), param)
         if found is None:
             if given is None:
-                grid(src, need=(param,))  # raises, naming what is missing
+                grid(src, need=(param,), what=source)  # raises, naming what is missing
             continue
         if given is not None and not isinstance(given, bool):
             try:

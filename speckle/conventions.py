@@ -407,7 +407,7 @@ class Grid:
     spectrum: xr.DataArray | None = None  # source spectrum (dim wavenumber)
 
 
-def grid(obj: xr.DataArray | xr.Dataset, *, need: tuple[str, ...] = ()) -> Grid:
+def grid(obj: xr.DataArray | xr.Dataset, *, need: tuple[str, ...] = (), what: str = "obj") -> Grid:
     """Pixel size, line pitch, k0, depth range, pixel count and spectrum of a source or image.
 
     Read from coordinates first (``depth`` step = pixel size, ``aline``/``x`` step = pitch),
@@ -421,6 +421,8 @@ def grid(obj: xr.DataArray | xr.Dataset, *, need: tuple[str, ...] = ()) -> Grid:
         A source spectrum, an image (DataArray or B-scan Dataset) or a coordinate.
     need : tuple of str
         Fields that must be found (else ``ValueError`` naming them and what ``obj`` has).
+    what : str
+        Name of ``obj`` in messages (the caller's parameter, e.g. ``"source"``).
 
     Returns
     -------
@@ -447,11 +449,11 @@ def grid(obj: xr.DataArray | xr.Dataset, *, need: tuple[str, ...] = ()) -> Grid:
     """
     if not isinstance(obj, (xr.DataArray, xr.Dataset)):
         raise TypeError(
-            f"grid needs a labelled DataArray or Dataset (coordinates and attributes), got "
-            f"{type(obj).__name__}"
+            f"{what} must be a labelled DataArray or Dataset (coordinates and attributes give "
+            f"its grid), got {type(obj).__name__}"
         )
     a = obj.attrs
-    h = depth_range_of(obj, required=False)
+    h = depth_range_of(obj, what, required=False)
     n = int(a["n_pixels"]) if "n_pixels" in a else None
     k0 = float(a["k0"]) if "k0" in a else None
     spectrum = None
@@ -473,7 +475,7 @@ def grid(obj: xr.DataArray | xr.Dataset, *, need: tuple[str, ...] = ()) -> Grid:
     missing = [f for f in need if getattr(out, f, None) is None]
     if missing:
         raise ValueError(
-            f"the grid's {missing} cannot be read from this {type(obj).__name__}: it has "
+            f"{what}: the grid's {missing} cannot be read from this {type(obj).__name__}: it has "
             f"coordinates {list(obj.coords)} and attributes {sorted(a)} (pixel_size: a "
             f"'depth' coordinate or n_pixels and depth_range; pitch: an 'aline'/'x' "
             f"coordinate; k0, n_pixels, depth_range: attributes)"

@@ -146,7 +146,7 @@ def grid_spacing(field: xr.DataArray | xr.Dataset) -> tuple[float, float]:
     A-line the pitch defaults to the pixel size.
     """
     dz = spacing(field, "depth")
-    return dz, spacing(field, "x", default=dz)
+    return dz, spacing(field, LATERAL, default=dz)
 
 
 def delay_selection(t: np.ndarray, delays: object) -> np.ndarray:

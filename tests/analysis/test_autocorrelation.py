@@ -90,5 +90,9 @@ def test_bad_autocorrelation_inputs():
         ac.intensity_autocorrelation(img, max_lag=9)
     with pytest.raises(ValueError, match="dims"):
         ac.intensity_autocorrelation(img.rename(x="lateral"))
+    big = xr.DataArray(np.random.default_rng(0).exponential(size=(40, 40)), dims=("depth", "x"))
+    with pytest.warns(FutureWarning, match="dim 'aline' is now 'x'"):
+        old = ac.intensity_autocorrelation(big.rename(x="aline"), n_blocks=4)
+    assert old.equals(ac.intensity_autocorrelation(big, n_blocks=4))
     with pytest.raises(ValueError, match="snr_db"):
         ac.noise_factor(float("nan"))

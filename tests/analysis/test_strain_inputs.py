@@ -135,3 +135,28 @@ def test_single_line_displacement_has_no_answer_on_unrelated_scenes(scenes):
     ok = np.isfinite(u)
     truth = np.broadcast_to((-0.01 * z)[:, None], u.shape)
     assert np.median(np.abs(u[ok] - truth[ok])) < 0.2 * kw["pixel_size"]
+
+
+def test_sequence_pixel_size_from_coordinates_and_frame_stacks_checked_once(pair):
+    ref, dfm, kw = pair
+    p = kw["pixel_size"]
+    frames = xr.DataArray(
+        np.stack([ref, dfm, dfm]),
+        dims=("frame", "depth", "aline"),
+        coords={"depth": np.arange(ref.shape[0]) * p},
+    )
+    out = speckle.accumulate_strain(frames, k0=kw["k0"])
+    np.testing.assert_array_equal(
+        out["accumulated"].values,
+        speckle.accumulate_strain(frames.values, **kw)["accumulated"].values,
+    )
+    with pytest.raises(ValueError, match=r"pixel_size=2\.0 disagrees with frames's coordinates"):
+        speckle.accumulate_strain(frames, k0=kw["k0"], pixel_size=2.0)
+    # a stack of pairs: every frame as if alone, the stack checked once (NaN frame named)
+    stack = speckle.estimate_strain(frames[:2], frames[1:], k0=kw["k0"])
+    alone = speckle.estimate_strain(frames[1], frames[2], k0=kw["k0"])
+    np.testing.assert_array_equal(stack[1].values, alone.values)
+    bad = frames.copy()
+    bad[1, 3, 3] = np.nan
+    with pytest.raises(ValueError, match=r"deformed holds 1 NaN .* in frames \[0\]"):
+        speckle.estimate_strain(frames[:2], bad[1:], k0=kw["k0"])
