@@ -62,13 +62,13 @@ def test_lines_beyond_the_scene_window_warn_that_they_image_empty_space():
     reach = scan.beam_reach(6.0)
     far = np.array([100.0 + reach + 1.0, 100.0 + reach + 5.0])
     with pytest.warns(UserWarning, match="2 of 2 lines .* image empty space"):
-        ds = speckle.image(scene, SRC, waist=6.0, x=far)
+        ds = speckle.scan_image(scene, SRC, waist=6.0, lines=far)
     assert np.all(ds.field.values == 0)
     import warnings
 
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        speckle.image(scene, SRC, waist=6.0, x=np.array([100.0 + reach - 1.0]))
+        speckle.scan_image(scene, SRC, waist=6.0, lines=np.array([100.0 + reach - 1.0]))
 
 
 def test_one_line_on_the_scatterers_is_an_ascan():
