@@ -18,7 +18,7 @@ subpackage lists its own), and loads each on first use (scientific Python's SPEC
 """
 
 from . import analysis, imaging, scene, studies, synthoct, system
-from ._lazy import attach
+from ._lazy import gather
 
 #: Subpackages whose public names the top level gathers, in the order of the flow.
 _GROUPS = {
@@ -33,7 +33,7 @@ _GROUPS = {
 #: module of the Dask sweeps; its function is ``speckle.sweep.sweep``).
 _INFRASTRUCTURE = {"io": ["open_dataset", "stream_to_netcdf", "to_netcdf"]}
 
-_lazy_getattr, _lazy_dir, _names = attach(
+_lazy_getattr, _lazy_dir, _names = gather(
     __name__, {**{name: mod.__all__ for name, mod in _GROUPS.items()}, **_INFRASTRUCTURE}
 )
 #: Functions, classes and constants only (subpackages and modules are reached as attributes).
@@ -53,4 +53,4 @@ def __dir__() -> list[str]:
     return sorted({*__all__, *_lazy_dir()})
 
 
-del analysis, attach, imaging, scene, studies, synthoct, system
+del analysis, gather, imaging, scene, studies, synthoct, system

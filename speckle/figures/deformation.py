@@ -20,7 +20,7 @@ from matplotlib.figure import Figure
 from ..analysis import correlation as corr
 from ..analysis.tracking import interpolate_displacement, track
 from ..conventions import attrs
-from ..imaging.bscan import bscan
+from ..imaging._bscan import bscan
 from ..provenance import config_hash, provenance_attrs
 from ..scene.deformation import deformable_scene, uniaxial_pixel_displacement, uniaxial_strain
 from ..scene.scatterers import amplitude_kurtosis

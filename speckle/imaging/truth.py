@@ -35,9 +35,9 @@ from .._validate import as_finite_array, check_int, check_real
 from ..conventions import attrs, coord, depth_range_of, units_of
 from ..provenance import provenance_attrs
 from ..system.source import check_weights, spectrum
+from ._bscan import map_lines
 from ._rules import check_tol
 from .aline import METHODS, ascan, pixel_depths
-from .bscan import map_lines
 from .scan import image
 
 __all__ = ["intensity_spectrum", "speckle_free_image", "speckle_free_lines"]

@@ -10,29 +10,4 @@ Names load on first use (SPEC 1, ``lazy_loader``).
 
 from .._lazy import attach
 
-__getattr__, __dir__, __all__ = attach(
-    __name__,
-    {
-        "deformation": ["deformable_scene", "displace", "translate", "uniaxial_strain"],
-        "layers": ["layers", "region_values"],
-        "motion": [
-            "ballistic_motion",
-            "brownian_motion",
-            "bulk_motion",
-            "flow_motion",
-            "moving_mask",
-            "poiseuille_velocity",
-        ],
-        "mechanics": [
-            "compress",
-            "displacement_at",
-            "inclusion_labels",
-            "inclusion_strain",
-            "layer_strains",
-            "layered_labels",
-        ],
-        "regions": ["make_regions", "rasterize", "region_label"],
-        "scatterers": ["random_scatterers"],
-        "shared": ["from_lines", "shared_scene"],
-    },
-)
+__getattr__, __dir__, __all__ = attach(__name__, __file__)

@@ -20,7 +20,7 @@ import numpy as np
 import xarray as xr
 
 from ..conventions import attrs, spacing, units_of
-from ..scene.layers import property_integral, region_values, sample_map
+from ..scene._layers import property_integral, region_values, sample_map
 from ._scene import check_scene, lateral_positions, scale_amplitudes
 
 __all__ = ["attenuate", "attenuate_regions", "attenuation_map", "optical_depth"]

@@ -25,7 +25,7 @@ import xarray as xr
 
 from .._validate import as_finite_array, check_int, check_real
 from ..conventions import attrs
-from ..scene.layers import property_profile
+from ..scene._layers import property_profile
 from ._scene import check_scene, line_rng, region_property
 
 __all__ = [

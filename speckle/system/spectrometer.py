@@ -60,7 +60,7 @@ from ._closed_forms import (
     resampling_error,
     spectral_window,
 )
-from .rolloff import carrier_response, rolloff_power
+from ._rolloff import carrier_response, rolloff_power
 
 __all__ = [
     "DETECTIONS",
@@ -110,7 +110,7 @@ def resampling_response(system, z: object, method: str) -> np.ndarray:
 
     Parameters
     ----------
-    system : speckle.system.datasheet.System
+    system : speckle.System
         The system (wavelength-linear camera, processing grid).
     z : array_like
         Reflector depths ``z`` in µm (medium).
@@ -560,7 +560,7 @@ def camera_sampling(system, sampling: str = "wavelength", at: object | None = No
 
     Parameters
     ----------
-    system : speckle.system.datasheet.System
+    system : speckle.System
         The system.
     sampling : {"wavelength", "wavenumber"}
         A camera linear in wavelength (a grating spectrometer; pixel ``i`` spans

@@ -10,7 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from speckle.system import spectrometer as sp
-from speckle.system.datasheet import datasheet
+from speckle.system import datasheet
 
 SHEET = dict(
     wavelength_nm=840.0,

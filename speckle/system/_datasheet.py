@@ -41,7 +41,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import check_choice, check_int, check_memory, check_real
-from .rolloff import rolloff_power
+from ._rolloff import rolloff_power
 from .source import spectrum as _spectrum
 
 __all__ = ["EXAMPLE_SYSTEMS", "TRUNCATION_SHOWN", "System", "datasheet", "example_system"]

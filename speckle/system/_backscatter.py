@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ..scene.layers import property_profile
+from ..scene._layers import property_profile
 from ._scene import check_scene, region_property, scale_amplitudes
 
 __all__ = ["backscatter", "backscatter_regions"]

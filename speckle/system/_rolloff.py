@@ -20,7 +20,7 @@ pixels (see the tests: Eq. 4 integrated over each pixel's width). A measured cur
 instead (``curve``: intensity vs depth, linearly interpolated).
 
 The closed forms in the spectrometer's own units (pixel width and line FWHM in rad/µm, used by
-:mod:`speckle.system.datasheet` and :mod:`speckle.system.spectrometer`) are
+:mod:`speckle.system._datasheet` and :mod:`speckle.system.spectrometer`) are
 :func:`carrier_response` and :func:`rolloff_power`; :func:`rolloff_amplitude` is the same
 function with ``delta = pi/(2 z_max)`` and ``r = w delta``.
 """
