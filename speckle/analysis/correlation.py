@@ -43,6 +43,7 @@ import scipy.fft as sfft
 import xarray as xr
 from scipy import ndimage, special
 
+from .._deprecate import keyword_only
 from .._validate import as_finite_array, check_bool, check_choice, check_int, check_real
 from ..conventions import attrs, coord
 from ..system.source import index_shift_phase, spectral_index
@@ -106,7 +107,8 @@ def sample_field(field: object, positions: object) -> np.ndarray:
     return np.broadcast_to(out, (spec.shape[0], yy.shape[1])).reshape(*batch, y.shape[-1])
 
 
-def oversample_depth(field: np.ndarray, factor: int, axis: int = 0) -> np.ndarray:
+@keyword_only("axis")
+def oversample_depth(field: np.ndarray, factor: int, *, axis: int = 0) -> np.ndarray:
     """Complex A-scans (depth on ``axis``) at ``factor`` samples per pixel, exactly.
 
     ``A(y) = sum_n F_n exp(-2i pi n y/N)`` (``n = -(N//2) ... N-1-N//2``, as
@@ -176,7 +178,9 @@ def resample_depth(field: object, positions: object) -> np.ndarray:
     if y.shape != a.shape:
         raise ValueError(f"positions must have the field's shape {a.shape}, got {y.shape}")
     # single precision: 1e-7 relative, far below the interpolation error
-    fine = oversample_depth(np.ascontiguousarray(a.T, dtype=np.complex64), RESAMPLE_OVERSAMPLE, -1)
+    fine = oversample_depth(
+        np.ascontiguousarray(a.T, dtype=np.complex64), RESAMPLE_OVERSAMPLE, axis=-1
+    )
     out = np.empty(a.shape[::-1], dtype=np.complex128)  # (aline, depth): each A-line contiguous
     positions = np.ascontiguousarray(np.asarray(y, dtype=float).T)  # (aline, depth), as ``fine``
     lagrange_resample(fine, positions, RESAMPLE_OVERSAMPLE, out)

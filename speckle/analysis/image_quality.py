@@ -22,6 +22,7 @@ import numpy as np
 import scipy.optimize as opt
 import scipy.special as sp
 
+from .._deprecate import keyword_only
 from .._validate import as_finite_array, check_int, check_memory, check_real
 
 __all__ = [
@@ -126,7 +127,8 @@ def ssim_db(image_db: object, truth_db: object, *, db_top: float = 10.0, db_rang
     return float(structural_similarity(t, i, data_range=span, win_size=side - (1 - side % 2)))
 
 
-def bandlimited(field: object, factor: int, axis: int = -1) -> np.ndarray:
+@keyword_only("axis")
+def bandlimited(field: object, factor: int, *, axis: int = -1) -> np.ndarray:
     """Exact interpolation of an Eq. 4 field along ``axis`` on a grid ``factor`` times finer.
 
     An ``N``-pixel A-scan is the trigonometric polynomial ``sum_n G_n exp(-2i pi n q/N)``,

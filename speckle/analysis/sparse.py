@@ -33,6 +33,7 @@ from functools import lru_cache
 import numpy as np
 from scipy import optimize, special
 
+from .._deprecate import keyword_only
 from .._validate import check_real
 
 __all__ = ["depth_intensity_psf", "log_intensity_moments", "sparse_inverse_density"]
@@ -94,8 +95,9 @@ def _lambda_cached(weights: tuple, waist_pitch: float) -> tuple[np.ndarray, floa
     return lam, area
 
 
+@keyword_only("inverse_snr")
 def log_intensity_moments(
-    weights: np.ndarray, waist_pitch: float, density: float, inverse_snr: float = 0.0
+    weights: np.ndarray, waist_pitch: float, density: float, *, inverse_snr: float = 0.0
 ) -> tuple[float, float]:
     """Mean and variance of ``ln(I / <I>)`` of sparse speckle (module docstring).
 
@@ -139,8 +141,9 @@ def log_intensity_moments(
     return float(mean - np.log(s2)), float(second - mean**2)
 
 
+@keyword_only("inverse_snr")
 def sparse_inverse_density(
-    log_variance: float, weights: np.ndarray, waist_pitch: float, inverse_snr: float = 0.0
+    log_variance: float, weights: np.ndarray, waist_pitch: float, *, inverse_snr: float = 0.0
 ) -> float:
     """The inverse density ``1/rho`` whose ``var ln I`` (:func:`log_intensity_moments`) is given.
 
@@ -170,7 +173,7 @@ def sparse_inverse_density(
     v = check_real(log_variance, "log_variance", low=0, low_inclusive=False)
 
     def gap(y):
-        return log_intensity_moments(weights, waist_pitch, 1 / y, inverse_snr)[1] - v
+        return log_intensity_moments(weights, waist_pitch, 1 / y, inverse_snr=inverse_snr)[1] - v
 
     lo = 0.01
     g_lo = gap(lo)

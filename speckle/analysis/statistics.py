@@ -47,6 +47,7 @@ import numpy as np
 import xarray as xr
 from scipy import stats
 
+from .._deprecate import keyword_only
 from .._validate import as_finite_array, check_choice, check_int, check_real
 from .._wrap import preprocess_and_wrap
 from ..conventions import attrs, inverse_units, labelled, units_of
@@ -343,6 +344,7 @@ def spectrum_moments(n_pixels: int, spectrum: object | None = None) -> tuple[flo
     return float(np.sum(s**2)), float(np.sum(np.convolve(s, s) ** 2))
 
 
+@keyword_only("amplitude", "count")
 @preprocess_and_wrap(
     arrays=["density", "spectrum"],
     wrap_like="density",
@@ -354,6 +356,7 @@ def contrast_theory(
     density: object,
     n_pixels: int,
     spectrum: object | None = None,
+    *,
     amplitude: str = "equal",
     count: str = "fixed",
 ) -> object:

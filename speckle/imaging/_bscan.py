@@ -12,6 +12,7 @@ from collections.abc import Callable
 import numpy as np
 import xarray as xr
 
+from .._deprecate import keyword_only
 from .._validate import check_choice, check_int, check_real
 from ..conventions import attrs, coord, depth_range_of, units_of
 from ..provenance import provenance_attrs
@@ -27,8 +28,13 @@ __all__ = ["NORMALISATIONS", "bscan", "expected_intensity", "map_lines"]
 NORMALISATIONS = ("none", "density", "expected")
 
 
+@keyword_only("mean_square_amplitude")
 def expected_intensity(
-    density: float, n_pixels: int, spectrum: xr.DataArray | None, mean_square_amplitude: float = 1.0
+    density: float,
+    n_pixels: int,
+    spectrum: xr.DataArray | None,
+    *,
+    mean_square_amplitude: float = 1.0,
 ) -> float:
     """Expected mean pixel intensity ``<|A|^2> = rho * N * <|a|^2> * sum_n S_n^2``.
 

@@ -23,6 +23,7 @@ import dask.array as da
 import numpy as np
 import xarray as xr
 
+from .._deprecate import keyword_only
 from .._validate import as_finite_array, check_int, check_real
 from ..conventions import attrs, coord, depth_range_of, spacing, units_of
 from ..provenance import provenance_attrs
@@ -65,7 +66,8 @@ def _widening(optics: dict, waist: float, k0: float, z_lo: float, z_hi: float) -
     return math.sqrt(1.0 + u * u)
 
 
-def scan_lines(n_lines: int, pitch: float, start: float = 0.0) -> np.ndarray:
+@keyword_only("start")
+def scan_lines(n_lines: int, pitch: float, *, start: float = 0.0) -> np.ndarray:
     """Lateral positions ``start + i*pitch`` (µm) of ``n_lines`` A-lines, ``i = 0 ... n-1``."""
     n = check_int(n_lines, "n_lines", low=1)
     p = check_real(pitch, "pitch", low=0, low_inclusive=False)

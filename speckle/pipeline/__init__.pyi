@@ -2,6 +2,7 @@
 
 from . import adapters as adapters
 from . import checks as checks
+from . import defaults as defaults
 from . import dynamics_checks as dynamics_checks
 from . import outputs as outputs
 from . import runner as runner
@@ -25,6 +26,9 @@ from .checks import (
     figure_bytes,
     tol_floor,
 )
+from .defaults import (
+    default_config,
+)
 from .outputs import (
     save,
 )
@@ -40,6 +44,7 @@ __all__ = [
     "check_sections",
     "check_twin",
     "dask_options",
+    "default_config",
     "figure_bytes",
     "log_to",
     "random_bscan",

@@ -25,6 +25,7 @@ import numbers
 import numpy as np
 import xarray as xr
 
+from .._deprecate import keyword_only
 from .._validate import as_finite_array
 from ..conventions import attrs, labelled, units_of
 
@@ -158,8 +159,9 @@ def property_integral(z: object, value: float | xr.Dataset, name: str) -> np.nda
     return property_profile(z, value, name) * np.asarray(z, dtype=float)
 
 
+@keyword_only("outside")
 def region_values(
-    labels: xr.DataArray, properties: xr.Dataset, name: str, outside: float | None = None
+    labels: xr.DataArray, properties: xr.Dataset, name: str, *, outside: float | None = None
 ) -> xr.DataArray:
     """Map a label image to property ``name`` by region label.
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from .._deprecate import keyword_only
 from .._validate import as_finite_array, check_int, check_real
 from ..conventions import attrs
 
@@ -36,8 +37,9 @@ def _intensity(intensity: object, name: str = "intensity") -> xr.DataArray:
     return intensity
 
 
+@keyword_only("mean_intensity")
 def add_floor(
-    intensity: xr.DataArray, floor: float, mean_intensity: float | None = None
+    intensity: xr.DataArray, floor: float, *, mean_intensity: float | None = None
 ) -> xr.DataArray:
     """Add a constant intensity floor ``floor * <I>`` to speckle intensities.
 
@@ -65,8 +67,9 @@ def add_floor(
     return (intensity + b * mean).assign_attrs(intensity.attrs, floor=b, floor_intensity=b * mean)
 
 
+@keyword_only("bits")
 def log_compress(
-    intensity: xr.DataArray, gain: float, offset: float, bits: int | None = 8
+    intensity: xr.DataArray, gain: float, offset: float, *, bits: int | None = 8
 ) -> xr.DataArray:
     """Log-compress intensities as an OCT engine does: ``D = gain*ln(I) + offset``.
 

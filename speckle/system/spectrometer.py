@@ -42,6 +42,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from .._deprecate import keyword_only
 from .._validate import (
     as_finite_array,
     check_bool,
@@ -239,7 +240,14 @@ def interferogram(
     z2, a2 = zz.reshape(-1, zz.shape[-1]), aa.reshape(-1, zz.shape[-1])
     finite = bool(np.any(w) or np.any(r))
     check_memory(
-        interferogram_bytes(z2.shape[0], z2.shape[1], k.size, method, finite, autocorrelation),
+        interferogram_bytes(
+            z2.shape[0],
+            z2.shape[1],
+            k.size,
+            method=method,
+            finite_pixels=finite,
+            autocorrelation=autocorrelation,
+        ),
         "z (lines x scatterers) or the camera pixels",
         "the camera signal",
     )
@@ -255,10 +263,12 @@ def interferogram(
     return out.reshape(*batch, k.size)
 
 
+@keyword_only("method", "finite_pixels", "autocorrelation")
 def interferogram_bytes(
     lines: int,
     scatterers: int,
     pixels: int,
+    *,
     method: str = "direct",
     finite_pixels: bool = True,
     autocorrelation: bool = False,
