@@ -122,6 +122,16 @@ def to_netcdf(ds: xr.Dataset | xr.DataArray, path: str | os.PathLike) -> None:
     Notes
     -----
     Complex variables of mixed precision are all written as complex128 (module docstring).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import xarray as xr
+    >>> import speckle
+    >>> path = pathlib.Path(tempfile.mkdtemp(), "out.nc")
+    >>> speckle.to_netcdf(xr.Dataset({"a": ("x", [1.0, 2.0])}), path)
+    >>> speckle.open_dataset(path).a.values
+    array([1., 2.])
     """
     if isinstance(ds, xr.DataArray):
         ds = ds.to_dataset(name=ds.name or "data")
@@ -167,6 +177,16 @@ def open_dataset(path: str | os.PathLike, *, load: bool = True) -> xr.Dataset:
         NetCDF file.
     load : bool
         Load into memory and close the file (default); ``False`` keeps it lazy.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import xarray as xr
+    >>> import speckle
+    >>> path = pathlib.Path(tempfile.mkdtemp(), "out.nc")
+    >>> speckle.to_netcdf(xr.Dataset({"a": ("x", [1.0, 2.0])}), path)
+    >>> speckle.open_dataset(path).a.values
+    array([1., 2.])
     """
     check_bool(load, "load")
     if not Path(path).is_file():

@@ -126,6 +126,15 @@ def bscan(
         ``field`` (complex), ``amplitude`` = ``|field|`` and ``intensity`` = ``|field|^2`` with
         dims ``(..., depth, aline)``; coordinate ``depth`` = ``q*H/N`` in µm. Attributes carry
         the source and scene parameters and provenance.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> src = speckle.spectrum(64, 512.0, k0_dk=10.0)
+    >>> scene = speckle.random_scatterers(16, 4.0, n_pixels=64, depth_range=512.0, seed=3)
+    >>> img = speckle.bscan(scene, src, normalise="density")
+    >>> img.field.dims, img.field.shape
+    (('depth', 'aline'), (64, 16))
     """
     check_choice(normalise, "normalise", NORMALISATIONS)
     if not isinstance(scene, xr.Dataset) or not {"z", "amplitude"} <= set(scene.data_vars):

@@ -29,7 +29,14 @@ METHODS = ASCAN_METHODS
 
 
 def pixel_depths(n_pixels: int, depth_range: float) -> np.ndarray:
-    """Pixel-centre depths ``q*H/N`` in µm, ``q = 0 ... N-1``, for ``depth_range`` ``H`` (µm)."""
+    """Pixel-centre depths ``q*H/N`` in µm, ``q = 0 ... N-1``, for ``depth_range`` ``H`` (µm).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> speckle.pixel_depths(4, 32.0)
+    array([ 0.,  8., 16., 24.])
+    """
     n = check_int(n_pixels, "n_pixels", low=2)
     h = check_real(depth_range, "depth_range", low=0, low_inclusive=False)
     return np.arange(n) * (h / n)

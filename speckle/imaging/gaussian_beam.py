@@ -64,6 +64,12 @@ def beam_weight(
     ``exp(-2 r^2/w0^2)`` without focus; ``gamma^2 exp(-2 gamma r^2/w0^2)``,
     ``gamma = 1/(1 + i (z - z_f)/z_R)``, with one (see the module docstring). All lengths in µm;
     arrays broadcast. Returns complex128.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> abs(speckle.beam_weight([0.0, 5.0, 10.0], 100.0, waist=10.0)).round(4)  # exp(-2 dx^2/w^2)
+    array([1.    , 0.6065, 0.1353])
     """
     w0 = check_real(waist, "waist", low=0, high=MAX_WAIST, low_inclusive=False)
     dxa, dya, za = (as_finite_array(v, n) for v, n in ((dx, "dx"), (dy, "dy"), (z, "z")))

@@ -45,6 +45,12 @@ def beam_reach(waist: float, eps: float = REACH_EPS, *, widening: float = 1.0) -
 
     ``w * sqrt(ln(1/eps)/2)`` with ``w = widening * w0`` the widest beam over the imaged depths
     (``widening = 1`` without focus): 4.43 w for the default ``eps = 1e-17``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> round(speckle.beam_reach(10.0), 2)
+    44.24
     """
     w0 = check_real(waist, "waist", low=0, high=MAX_WAIST, low_inclusive=False)
     e = check_real(eps, "eps", low=0, high=1, low_inclusive=False, high_inclusive=False)

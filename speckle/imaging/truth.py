@@ -56,6 +56,13 @@ def intensity_spectrum(weights: object) -> np.ndarray:
     numpy.ndarray, shape (2N,)
         ``R_l`` for ``l = -N ... N-1`` (``R_(-N) = 0``): the spectrum whose Eq. 4 A-scan on
         ``2N`` half pixels is ``|P|^2`` (see the module docstring). Non-negative.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> speckle.intensity_spectrum(np.ones(4))
+    array([0., 1., 2., 3., 4., 3., 2., 1.])
     """
     s = np.asarray(weights, dtype=float)
     s = check_weights(s, s.size)

@@ -24,6 +24,14 @@ def backscatter(scene: xr.Dataset, value: float | xr.Dataset) -> xr.Dataset:
         Scatterer field (``z`` in µm, ``amplitude``).
     value : float or xarray.Dataset
         Relative backscattered intensity (>= 0), or layers with ``backscatter``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> scene = speckle.random_scatterers(4, 2.0, n_pixels=32, depth_range=256.0, seed=1)
+    >>> bright = speckle.backscatter(scene, 4.0)
+    >>> float(abs(bright.amplitude).max() / abs(scene.amplitude).max())
+    2.0
     """
     check_scene(scene)
     try:

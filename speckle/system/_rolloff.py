@@ -128,6 +128,14 @@ def rolloff(
     -------
     xarray.Dataset
         The scene with amplitudes multiplied by the amplitude roll-off.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> scene = speckle.random_scatterers(4, 2.0, n_pixels=32, depth_range=256.0, seed=1)
+    >>> rolled = speckle.rolloff(scene, z_max=256.0, resolution=2.0)
+    >>> bool((abs(rolled.amplitude) <= abs(scene.amplitude) + 1e-12).all())
+    True
     """
     check_scene(scene)
     if curve is not None:

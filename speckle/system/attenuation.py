@@ -35,6 +35,12 @@ def optical_depth(z: object, attenuation: float | xr.Dataset) -> np.ndarray:
         Depths in µm.
     attenuation : float or xarray.Dataset
         ``mu_t`` in 1/µm (>= 0), or layers from :func:`speckle.layers` with ``attenuation``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> speckle.optical_depth([0.0, 100.0, 200.0], 0.002)  # mu z, mu in 1/µm
+    array([0. , 0.2, 0.4])
     """
     return property_integral(z, attenuation, "attenuation")
 
@@ -54,6 +60,14 @@ def attenuate(scene: xr.Dataset, attenuation: float | xr.Dataset) -> xr.Dataset:
     xarray.Dataset
         The scene with amplitudes ``a_j exp(-tau(z_j))`` (intensities ``|a_j|^2 exp(-2 tau)``);
         attribute ``attenuation`` records ``mu_t`` (NaN for layers).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> scene = speckle.random_scatterers(4, 2.0, n_pixels=32, depth_range=256.0, seed=1)
+    >>> dim = speckle.attenuate(scene, 0.002)
+    >>> bool((abs(dim.amplitude) <= abs(scene.amplitude)).all())
+    True
     """
     check_scene(scene)
     tau = xr.apply_ufunc(optical_depth, scene.z, kwargs={"attenuation": attenuation})
