@@ -107,6 +107,13 @@ def subband_windows(
     ValueError
         ``n_looks`` outside ``[1, N]``, ``overlap`` outside ``[0, 1)``, an unknown window, or a
         sub-band narrower than one sample.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> w = speckle.subband_windows(64, 4)
+    >>> w.shape, float(w.sum(axis=0).min())  # rectangular bands tile the spectrum
+    ((4, 64), 1.0)
     """
     n = check_int(n_samples, "n_samples", low=1)
     if isinstance(n_looks, int | np.integer) and not isinstance(n_looks, bool) and n_looks > n:
@@ -155,6 +162,13 @@ def window_correlation(windows: object, spectrum: object | None = None) -> np.nd
     -------
     numpy.ndarray, shape (L, L)
         Hermitian, unit diagonal.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> abs(speckle.window_correlation(speckle.subband_windows(64, 2))).round(6)  # disjoint bands
+    array([[1., 0.],
+           [0., 1.]])
     """
     w = as_finite_array(windows, "windows", dtype=np.complex128)
     if w.ndim != 2:
@@ -172,6 +186,13 @@ def compounded_contrast(mu: object) -> float:
 
     Dense-scene (Gaussian speckle) result; ``mu`` the (L, L) field correlations (identity:
     ``1/sqrt(L)``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> round(speckle.compounded_contrast(np.eye(4)), 6)  # N independent looks: 1/sqrt(N)
+    0.5
     """
     m = as_finite_array(mu, "mu", dtype=np.complex128)
     if m.ndim != 2 or m.shape[0] != m.shape[1]:
@@ -227,6 +248,12 @@ def subband_fwhm(n_pixels: int, n_samples: int) -> float:
 
     The root of ``|sin(pi M x/N) / (M sin(pi x/N))|^2 = 1/2`` (times two); about
     ``0.886 N/M`` pixels (the continuum sinc^2), so ``N/M`` times the full band's.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> round(speckle.subband_fwhm(256, 64), 3)
+    3.544
     """
     n = check_int(n_pixels, "n_pixels", low=1)
     m = check_int(n_samples, "n_samples", low=1, high=n)
@@ -297,6 +324,16 @@ def compound(looks: xr.DataArray, mode: str = "intensity") -> xr.DataArray:
     ``"intensity"``: ``mean |A_i|^2``; ``"magnitude"``: ``(mean |A_i|)^2`` (the squared mean
     amplitude, in intensity units); ``"complex"``: ``|mean A_i|^2`` (removes no speckle of one
     realisation; raises the SNR of noisy looks).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import xarray as xr
+    >>> import speckle
+    >>> looks = xr.DataArray(np.ones((3, 2, 2)), dims=("look", "depth", "x"))
+    >>> speckle.compound(looks).values
+    array([[1., 1.],
+           [1., 1.]])
     """
     check_choice(mode, "mode", AVERAGING)
     if not isinstance(looks, xr.DataArray) or "look" not in looks.dims:
@@ -370,6 +407,13 @@ def brownian_g1(tau: object, diffusion: float, k0: float) -> np.ndarray:
 
     ``tau`` in s (>= 0), ``diffusion`` ``D`` in µm^2/s (>= 0); the one implementation is
     :func:`speckle.analysis.dynamics_theory.g1_brownian`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> speckle.brownian_g1(np.array([0.0, 1e-3]), 1.0, 10.0).round(6)  # exp(-4 k0^2 D tau)
+    array([1.     , 0.67032])
     """
     t = as_finite_array(tau, "tau")  # named as here (g1_brownian calls it lag)
     if np.any(t < 0):

@@ -90,6 +90,14 @@ def sample_field(field: object, positions: object) -> np.ndarray:
     numpy.ndarray, shape (..., P)
         ``A(y) = sum_n F_n exp(-2i pi n y/N)``: equals ``field`` at integer ``y``, and Eq. 4
         evaluated at the pixel depth ``z_q = y H/N`` otherwise.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> field = np.exp(2j * np.pi * np.arange(8) / 8)  # one Fourier component
+    >>> np.allclose(speckle.sample_field(field, np.arange(8.0)), field)
+    True
     """
     a = np.asarray(field, dtype=np.complex128)
     y = as_finite_array(positions, "positions")
@@ -115,6 +123,15 @@ def oversample_depth(field: np.ndarray, factor: int, *, axis: int = 0) -> np.nda
     :func:`sample_field`) at ``y = q/factor``: the spectrum zero-padded to ``factor*N`` points.
     Equals ``field`` at whole pixels. Computed in complex64 for a complex64 ``field``, in
     complex128 otherwise.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> field = np.exp(-2j * np.pi * np.arange(8) / 8)
+    >>> fine = speckle.oversample_depth(field, 2)
+    >>> fine.shape, np.allclose(fine[::2], field)
+    ((16,), True)
     """
     a = np.asarray(field)
     a = a if a.dtype == np.complex64 else a.astype(np.complex128)
@@ -170,6 +187,14 @@ def resample_depth(field: object, positions: object) -> np.ndarray:
     -------
     numpy.ndarray, shape (N, M)
         Pixel ``(q, j)``: A-line ``j`` evaluated at depth ``positions[q, j]``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> field = np.exp(-2j * np.pi * np.arange(8) / 8)[:, None]  # (depth, line)
+    >>> np.allclose(speckle.resample_depth(field, np.arange(8.0)[:, None]), field)
+    True
     """
     a = np.asarray(field)
     if a.ndim != 2 or not np.iscomplexobj(a):
@@ -598,6 +623,13 @@ def amplitude_from_gamma(gamma: object) -> np.ndarray:
 
     ``(pi/4) (2F1(-1/2, -1/2; 1; |gamma|^2) - 1) / (1 - pi/4)``: 0 at ``gamma = 0``, 1 at 1.
     ``|gamma| <= 1`` (Cauchy-Schwarz): a computed value above 1 by rounding counts as 1.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> speckle.amplitude_from_gamma(np.array([0.0, 1.0])).round(6)
+    array([0., 1.])
     """
     g = np.minimum(np.abs(np.asarray(gamma, dtype=float)), 1.0)
     return (np.pi / 4) * (special.hyp2f1(-0.5, -0.5, 1.0, g**2) - 1) / (1 - np.pi / 4)

@@ -171,6 +171,15 @@ def bandlimited(field: object, factor: int, *, axis: int = -1) -> np.ndarray:
     ``n = -(N//2) ... N-1-(N//2)``; its coefficients are the inverse DFT of the samples, and
     zero-padding them (keeping each at its own frequency ``n``) evaluates it at
     ``q = m/factor``, ``m = 0 ... factor N - 1``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> field = np.exp(-2j * np.pi * np.arange(8) / 8)
+    >>> fine = speckle.bandlimited(field, 2)
+    >>> fine.shape, np.allclose(fine[::2], field)
+    ((16,), True)
     """
     f = np.moveaxis(as_finite_array(field, "field", dtype=np.complex128), axis, -1)
     k = check_int(factor, "factor", low=1)

@@ -77,6 +77,14 @@ def depth_intensity_psf(weights: np.ndarray) -> np.ndarray:
     -------
     numpy.ndarray
         ``8 N`` samples, ``u = 0, 1/8, ...`` pixels.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> psf = speckle.depth_intensity_psf(np.ones(8))
+    >>> psf.shape, round(float(psf.max()), 6)  # 8 samples per pixel; (sum S)^2 at the peak
+    ((64,), 64.0)
     """
     w = np.asarray(weights, dtype=float)
     n = w.size

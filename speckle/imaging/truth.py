@@ -95,6 +95,15 @@ def speckle_free_lines(
     -------
     numpy.ndarray
         Float64, shape ``(..., n_pixels)``: the speckle-free intensity (no normalisation).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> z, a = np.array([[64.0]]), np.array([[1.0]])  # one scatterer at 64 µm
+    >>> truth = speckle.speckle_free_lines(z, a, n_pixels=16, depth_range=128.0)
+    >>> truth.shape, int(truth.argmax())
+    ((1, 16), 8)
     """
     n = check_int(n_pixels, "n_pixels", low=1)
     s = np.ones(n) if spectrum is None else check_weights(spectrum, n)

@@ -116,6 +116,14 @@ def deformable_scene(
         scatterer in µm, uniform across the beam width ``aline_pitch`` around its A-line) and
         attrs ``imaged_first``/``imaged_count`` (the A-lines that are imaged), ``max_strain``,
         ``poisson_ratio``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> kw = dict(n_pixels=32, depth_range=256.0, seed=1)
+    >>> scene = speckle.deformable_scene(4, 2.0, strain=0.01, **kw)
+    >>> sorted(scene.data_vars), int(scene.sizes["aline"])
+    (['amplitude', 'count', 'x', 'z'], 4)
     """
     s = check_strain(strain)
     nu = check_real(poisson_ratio, "poisson_ratio", low=0.0, high=0.5)
@@ -529,6 +537,15 @@ def uniaxial_strain(
     ------
     ValueError
         If a strain is outside (-1, 1) or the scene is not populated deep enough for it.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> kw = dict(n_pixels=32, depth_range=256.0, seed=1)
+    >>> scene = speckle.deformable_scene(4, 2.0, strain=0.01, **kw)
+    >>> frames = speckle.uniaxial_strain(scene, [0.0, 0.01])
+    >>> frames.z.dims[0], frames.sizes[frames.z.dims[0]]
+    ('strain', 2)
     """
     check_bool(wrap, "wrap")
     if not is_shared(scene):
@@ -591,6 +608,14 @@ def translate(scene: xr.Dataset, dz: object, dx: float = 0.0, *, wrap: bool = Fa
 
     Returns a dataset with a ``shift`` dim (axial shift in µm) when ``dz`` is a sequence.
     Shared scenes move continuously (``wrap`` is then not used).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> scene = speckle.random_scatterers(2, 2.0, n_pixels=16, depth_range=128.0, seed=1)
+    >>> moved = speckle.translate(scene, 8.0)
+    >>> round(float((moved.z - scene.z).max()), 9)
+    8.0
     """
     check_bool(wrap, "wrap")
     if not is_shared(scene):

@@ -158,6 +158,17 @@ def shared_scene(
     ------
     ValueError
         On an empty or inverted window, a non-positive tile or negative seed.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(
+    ...     R.background(density=0.05), R.layer(100.0, 200.0, density=0.1, attenuation=0.002)
+    ... )
+    >>> scene = speckle.shared_scene(regions, z_range=(0.0, 256.0), x_range=(0.0, 64.0), seed=1)
+    >>> sorted(scene.data_vars)[:3], scene.attrs.get("ndim", 2)
+    (['amplitude', 'region', 'x'], 2)
     """
     compiled = compile_regions(regions)
     sd = check_int(seed, "seed", low=0)

@@ -92,6 +92,18 @@ def attenuation_map(labels: xr.DataArray, properties: xr.Dataset) -> xr.DataArra
     properties : xarray.Dataset
         Per-region table with dim ``region`` holding ``attenuation`` (1/µm); label ``-1`` (no
         region) does not attenuate.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(
+    ...     R.background(density=0.05), R.layer(100.0, 200.0, density=0.1, attenuation=0.002)
+    ... )
+    >>> labels = speckle.rasterize(regions, np.arange(0.0, 300.0, 50.0), np.array([0.0]))
+    >>> speckle.attenuation_map(labels, regions).values[:, 0].round(4)  # exp(-tau), tau = dz sum mu
+    array([1.    , 1.    , 0.9512, 0.8607, 0.8187, 0.8187])
     """
     mu = region_values(labels, properties, "attenuation", outside=0.0)
     dz = spacing(labels, "depth")
