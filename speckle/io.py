@@ -227,6 +227,16 @@ def stream_to_netcdf(
         ``distributed.progress`` on a cluster) on stderr.
     complevel : int
         zlib level, 0-9 (speckle fields barely compress: 1 is a good trade-off).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import xarray as xr
+    >>> import speckle
+    >>> path = pathlib.Path(tempfile.mkdtemp(), "out.nc")
+    >>> speckle.stream_to_netcdf(xr.Dataset({"a": ("x", [1.0, 2.0])}).chunk(), path, progress=False)
+    >>> speckle.open_dataset(path).a.values
+    array([1., 2.])
     """
     import dask
     from dask.diagnostics import ProgressBar

@@ -223,6 +223,14 @@ def split_spectrum_contrast(weights: object, density: float, *, kurtosis: float 
     -------
     float
         The contrast (std / mean) of the intensity averaged over the looks.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> w = speckle.subband_windows(64, 4)
+    >>> round(speckle.split_spectrum_contrast(w, np.inf), 6)  # 4 disjoint bands: 1/sqrt(4)
+    0.5
     """
     g = as_finite_array(weights, "weights", dtype=np.complex128)
     if g.ndim != 2:

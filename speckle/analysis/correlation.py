@@ -338,6 +338,15 @@ def pearson(
         Correlated quantity; ``"complex"`` returns the modulus of the complex coefficient.
     dims : tuple of str
         Dims averaged over; the others (e.g. ``strain``) are kept.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> scene = speckle.random_scatterers(8, 4.0, n_pixels=32, depth_range=256.0, seed=1)
+    >>> img = speckle.bscan(scene, src)
+    >>> float(speckle.pearson(img, img))
+    1.0
     """
     check_choice(kind, "kind", KINDS)
     x = _quantity(field_of(reference), kind)
@@ -388,6 +397,15 @@ def correlation_array(
     numpy.ndarray
         Coefficient at each window centre (pixel ``c`` holds the window starting at
         ``c - w//2``); NaN where the window does not fit or holds a NaN pixel of either array.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> x = np.random.default_rng(0).normal(size=(32, 16))
+    >>> c = speckle.correlation_array(x, x, (8, 4))
+    >>> float(np.nanmax(c)), c.shape
+    (1.0, (32, 16))
     """
     x, y = (_numeric(v, n) for v, n in ((x, "x"), (y, "y")))
     if x.shape != y.shape:
@@ -684,6 +702,13 @@ def expected_gamma(strain: object, *, spectrum: xr.DataArray, oversample: int = 
     ------
     ValueError
         A strain outside (-1, 1) or ``oversample`` below 2.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> src = speckle.spectrum(64, 512.0, k0_dk=10.0)
+    >>> speckle.expected_gamma([0.0, 0.01], spectrum=src).round(3)
+    array([1.   , 0.892])
     """
     s = np.atleast_1d(as_finite_array(strain, "strain")).astype(float)
     if np.any((s <= -1) | (s >= 1)):

@@ -170,6 +170,17 @@ def load_measured(
         Float64 values, dims ``(depth, aline)``, integer coordinates ``row`` and ``column``
         (indices in the file). Attributes: ``source`` (path), ``scale``, ``roi``, ``dtype`` of
         the file, and ``clip_low``/``clip_high`` (the dtype's limits for integer data).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import numpy as np
+    >>> import speckle
+    >>> path = pathlib.Path(tempfile.mkdtemp(), "scan.npy")
+    >>> np.save(path, np.random.default_rng(0).exponential(size=(16, 8)))
+    >>> img = speckle.load_measured(path, scale="linear", pixel_size=5.75)
+    >>> img.dims, img.shape
+    (('depth', 'aline'), (16, 8))
     """
     check_choice(scale, "scale", SCALES)
     raw = _read(path)

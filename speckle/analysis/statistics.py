@@ -406,6 +406,12 @@ def contrast_theory(
     -------
     float, numpy.ndarray or xarray.DataArray
         Contrast, shaped like ``density``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> round(float(speckle.contrast_theory(1000.0, 64)), 3)  # dense limit: 1
+    1.0
     """
     n = check_int(n_pixels, "n_pixels", low=2)
     check_choice(amplitude, "amplitude", AMPLITUDE_MODELS)

@@ -622,6 +622,16 @@ def interpolate_windows(
     -------
     numpy.ndarray
         Shape ``(len(depth), len(aline))``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> values = np.array([[0.0], [1.0]])  # two windows in depth, one column
+    >>> speckle.interpolate_windows(values, [10.0, 20.0], [0.0], [10.0, 15.0, 20.0], [0.0])
+    array([[0. ],
+           [0.5],
+           [1. ]])
     """
     check_choice(outside, "outside", ("linear", "nearest", "nan"))
     v = np.asarray(values)

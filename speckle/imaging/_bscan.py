@@ -41,6 +41,12 @@ def expected_intensity(
     Exact for uniformly distributed scatterers over the full depth ``[0, H)`` when
     ``2*k0*H`` is a multiple of ``2*pi`` (so that the mean field vanishes), and accurate to
     ``O(1/(k0 H))`` otherwise. ``spectrum=None`` means rectangular (``sum S^2 = N``).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> speckle.expected_intensity(4.0, 64, None)  # rho N sum S^2 = 4 * 64 * 64
+    16384.0
     """
     rho = check_real(density, "density", low=0.0)
     n = check_int(n_pixels, "n_pixels", low=1)

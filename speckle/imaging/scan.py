@@ -74,7 +74,14 @@ def _widening(optics: dict, waist: float, k0: float, z_lo: float, z_hi: float) -
 
 @keyword_only("start")
 def scan_lines(n_lines: int, pitch: float, *, start: float = 0.0) -> np.ndarray:
-    """Lateral positions ``start + i*pitch`` (µm) of ``n_lines`` A-lines, ``i = 0 ... n-1``."""
+    """Lateral positions ``start + i*pitch`` (µm) of ``n_lines`` A-lines, ``i = 0 ... n-1``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> speckle.scan_lines(4, 2.5, start=10.0)
+    array([10. , 12.5, 15. , 17.5])
+    """
     n = check_int(n_lines, "n_lines", low=1)
     p = check_real(pitch, "pitch", low=0, low_inclusive=False)
     return check_real(start, "start") + p * np.arange(n)

@@ -88,6 +88,13 @@ def layers(tops: object, **properties: object) -> xr.Dataset:
     -------
     xarray.Dataset
         Dim ``layer``; coordinate ``top`` (µm); one variable per property with ``units``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> stack = speckle.layers([0.0, 100.0], attenuation=[0.001, 0.004], backscatter=[1.0, 2.0])
+    >>> stack.sizes["layer"], stack.top.values
+    (2, array([  0., 100.]))
     """
     t = as_finite_array(tops, "tops")
     if t.ndim != 1 or t.size < 1:
@@ -180,6 +187,18 @@ def region_values(
     ValueError
         If the table has no regions, a label of the image has no row in the table, or values are
         out of range.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(
+    ...     R.background(density=0.05), R.layer(100.0, 200.0, density=0.1, backscatter=4.0)
+    ... )
+    >>> labels = speckle.rasterize(regions, np.array([50.0, 150.0]), np.array([0.0]))
+    >>> speckle.region_values(labels, regions, "backscatter").values[:, 0]
+    array([1., 4.])
     """
     if not isinstance(properties, xr.Dataset) or "region" not in properties.dims:
         raise TypeError("properties must be a Dataset with dim 'region' (labels as coordinate)")

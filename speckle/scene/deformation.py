@@ -355,6 +355,15 @@ def displace(scene: xr.Dataset, displacement: Displacement, *, wrap: bool = Fals
     Callables get ``(z, x)`` in 2-D and ``(z, x, y)`` in 3-D and return ``u_z`` or a tuple
     ``(u_z, u_x[, u_y])``; xarray fields have dims among ``depth``, ``x`` (and ``y``) in µm,
     e.g. the FEM displacement ``uz``, ``ux`` over ``(depth, x)``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> scene = speckle.random_scatterers(8, 4.0, n_pixels=32, depth_range=256.0, seed=1)
+    >>> moved = speckle.displace(scene, lambda z, x: 4.0 + 0 * z)
+    >>> round(float((moved.z - scene.z).max()), 9)
+    4.0
     """
     check_bool(wrap, "wrap")
     if is_shared(scene):

@@ -287,6 +287,15 @@ def from_lines(scene: xr.Dataset) -> xr.Dataset:
     xarray.Dataset
         A 2-D shared scene (``region`` 0). Imaged with a waist ``w0`` much smaller than the line
         pitch ``p`` (a neighbour's weight is ``exp(-2 p^2/w0^2)``), it gives the paper's B-scan.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> scene = speckle.random_scatterers(8, 4.0, n_pixels=32, depth_range=256.0, seed=1)
+    >>> shared = speckle.from_lines(scene)
+    >>> sorted(shared.data_vars)[:3]
+    ['amplitude', 'region', 'x']
     """
     if not isinstance(scene, xr.Dataset) or set(scene.z.dims) != {"aline", "scatterer"}:
         raise TypeError("scene must be an independent-line field with dims (aline, scatterer)")

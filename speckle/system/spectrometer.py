@@ -281,6 +281,12 @@ def interferogram_bytes(
     values and the coefficients), and the pair sources of the autocorrelation of finite pixels
     (``M (M - 1)/2`` pairs of one line: two indices, a depth and a product). The arguments
     are checked as :func:`interferogram` takes them (``ValueError``/``TypeError`` naming one).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> speckle.interferogram_bytes(16, 1000, 1024) > 0
+    True
     """
     lines = check_int(lines, "lines", low=1)
     scatterers = check_int(scatterers, "scatterers", low=0)
