@@ -471,6 +471,19 @@ def correlation_map(
         Coefficient at each window centre (pixel ``c`` holds the window starting at
         ``c - w//2``); NaN where the window does not fit in the image or holds a NaN pixel
         (of either image), and only there.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> src = speckle.spectrum(64, 512.0, k0_dk=10.0)
+    >>> kw = dict(n_pixels=64, depth_range=512.0, seed=1)
+    >>> scene = speckle.deformable_scene(16, 4.0, strain=2e-3, **kw)
+    >>> img = speckle.bscan(speckle.uniaxial_strain(scene, [0.0, 2e-3]), src).field
+    >>> ref, moved = img.isel(strain=0), img.isel(strain=1)
+    >>> k0, pixel = float(src.attrs["k0"]), 8.0
+    >>> c = speckle.correlation_map(img.isel(strain=0), img.isel(strain=0), window=8)
+    >>> float(c.max())
+    1.0
     """
     check_choice(kind, "kind", KINDS)
     wz, wx = parse_window(window)
@@ -583,6 +596,14 @@ def expected_correlation(
         ``(pi/4)(2F1(-1/2,-1/2;1;|gamma|^2) - 1)/(1 - pi/4)``) and ``floor`` (intensity
         correlation left when ``gamma = 0``), over dim ``strain``. Poisson scatterer counts;
         for a fixed count the difference is ``O(1/(density*N))``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> src = speckle.spectrum(64, 512.0, k0_dk=10.0)
+    >>> r = speckle.expected_correlation([0.0, 0.01], spectrum=src, density=4.0)
+    >>> sorted(r.data_vars)
+    ['amplitude', 'complex', 'floor', 'intensity']
     """
     s = np.atleast_1d(as_finite_array(strain, "strain"))
     if np.any((s <= -1) | (s >= 1)):

@@ -468,6 +468,17 @@ def compare_measured(image: xr.DataArray, *, n_blocks: int = 16) -> xr.Dataset:
     each depth row's mean (``*_detrended``), and the Kolmogorov-Smirnov distance of the
     standardised data to the fully developed law (``ks_pure``) and to the fitted floor law
     (``ks_floor``). Variables are prefixed by their origin; attributes say what was compared.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import numpy as np
+    >>> import speckle
+    >>> path = pathlib.Path(tempfile.mkdtemp(), "scan.npy")
+    >>> np.save(path, np.random.default_rng(0).exponential(size=(64, 64)))
+    >>> out = speckle.compare_measured(speckle.load_measured(path, scale="linear"))
+    >>> sorted(out.data_vars)[:2]
+    ['clipped_fraction', 'depth_slope']
     """
     st = log_statistics(image, n_blocks=n_blocks)
     fl = fit_floor(image)

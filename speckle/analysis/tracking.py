@@ -252,6 +252,16 @@ def track_array(
     ------
     TypeError, ValueError
         Real or mismatched images, a window larger than the image, bad parameters.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> rng = np.random.default_rng(0)
+    >>> a = rng.normal(size=(64, 32)) + 1j * rng.normal(size=(64, 32))
+    >>> out = speckle.track_array(a, np.roll(a, 3, axis=0), window=(32, 16), step=(16, 8))
+    >>> round(float(np.median(out["uz"])), 2)  # a shift of 3 pixels in depth
+    3.0
     """
     a, b = _pair(reference, deformed)
     check_choice(quantity, "quantity", ("amplitude", "intensity"))
@@ -339,6 +349,16 @@ def track_axial(
     ------
     TypeError, ValueError
         As :func:`track_array`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> rng = np.random.default_rng(0)
+    >>> a = rng.normal(size=(64, 32)) + 1j * rng.normal(size=(64, 32))
+    >>> out = speckle.track_axial(a, np.roll(a, 3, axis=0), window=(32, 8), step=(16, 8))
+    >>> round(float(np.median(out["uz"])), 2)  # a shift of 3 pixels in depth
+    3.0
     """
     a, b = _pair(reference, deformed)
     wz, wx = parse_window(window, shape=a.shape)

@@ -23,7 +23,14 @@ MAX_WAIST = 1e100
 
 
 class Beam(NamedTuple):
-    """Validated beam: waist ``w0`` (µm), focal depth (µm, or None) and Rayleigh range (µm)."""
+    """Validated beam: waist ``w0`` (µm), focal depth (µm, or None) and Rayleigh range (µm).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> speckle.Beam(8.0, None, None).waist
+    8.0
+    """
 
     waist: float
     focus: float | None
@@ -117,6 +124,18 @@ def beam_problem(
     ------
     TypeError, ValueError
         On invalid input, naming the parameter.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> z, x, a = np.array([100.0]), np.array([0.0]), np.array([1.0 + 0j])
+    >>> lines = speckle.scan_lines(3, 4.0, start=-4.0)
+    >>> scene, beam, tol = speckle.beam_problem(
+    ...     z, x, a, lines=lines, waist=4.0, n_pixels=32, depth_range=256.0, k0=3.0
+    ... )
+    >>> type(scene).__name__, type(beam).__name__, beam.waist
+    ('BeamScene', 'Beam', 4.0)
     """
     zr = rayleigh_range
     n = check_int(n_pixels, "n_pixels", low=2)

@@ -338,6 +338,18 @@ def image(
         one with it), a non-positive waist, lines that are not 1-D, increasing and uniform, a
         ``wrap`` that is not a bool, and a ``method``/``tol`` pair (or geometry) the method
         refuses whatever the scene: at call, not at compute.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(R.background(density=0.05))
+    >>> scene = speckle.shared_scene(regions, z_range=(0.0, 256.0), x_range=(-32.0, 64.0), seed=1)
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> x = speckle.scan_lines(8, 4.0)
+    >>> img = speckle.image(scene, src, waist=4.0, x=x)
+    >>> img.field.dims, img.field.shape
+    (('depth', 'x'), (32, 8))
     """
     if not isinstance(wrap, bool | np.bool_):  # "False" would be true
         raise TypeError(f"wrap must be True or False, got {wrap!r} ({type(wrap).__name__})")

@@ -160,6 +160,18 @@ def speckle_free_image(
     TypeError, ValueError
         On a scene or source of the wrong kind, a shared scene without ``waist``/``x`` (or a
         line scene with them), and the errors of the imaging functions.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(R.background(density=0.05))
+    >>> scene = speckle.shared_scene(regions, z_range=(0.0, 256.0), x_range=(-32.0, 64.0), seed=1)
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> x = speckle.scan_lines(8, 4.0)
+    >>> truth = speckle.speckle_free_image(scene, src, waist=4.0, x=x)
+    >>> truth.dims, truth.shape
+    (('depth', 'x'), (32, 8))
     """
     if not isinstance(source, xr.DataArray) or "n_pixels" not in source.attrs:
         raise TypeError("source must be a DataArray from speckle.spectrum")

@@ -210,6 +210,15 @@ def interferogram(
     -------
     numpy.ndarray
         Shape (..., K); complex128 for ``"complex"``, float64 for ``"real"``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> k = np.linspace(7.0, 8.0, 256)  # camera pixels, rad/µm
+    >>> signal = speckle.interferogram(np.array([100.0]), np.array([1.0 + 0j]), k, np.ones(256))
+    >>> signal.shape
+    (256,)
     """
     check_choice(detection, "detection", DETECTIONS)
     check_bool(dc, "dc")
