@@ -22,29 +22,12 @@ PUBLIC = [
 
 #: Public names with no Examples section yet (shrink-only; issue 32).
 NO_EXAMPLES = {
-    "BeamScene",
     "PhantomFit",
     "SystemFit",
-    "accumulate_strain",
-    "angular_looks",
-    "attenuate_regions",
-    "backscatter_regions",
-    "beam_estimates",
-    "choose_beam_method",
-    "compensate",
     "displacement_at",
     "fit_system",
-    "image_regions",
-    "interpolate_displacement",
     "load_image",
-    "polarization_looks",
     "process",
-    "resampling_response",
-    "spatial_looks",
-    "stream_ascans",
-    "system_ascan",
-    "temporal_looks",
-    "track",
 }
 
 #: Options after the first two parameters that stay positional, and why.

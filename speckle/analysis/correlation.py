@@ -259,6 +259,20 @@ def compensate(
     ValueError
         On a missing or non-uniform ``depth``/``aline`` coordinate (named), a missing ``k0``
         attribute with ``carrier=True``, or a displacement on another grid.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import xarray as xr
+    >>> import speckle
+    >>> src = speckle.spectrum(64, 512.0, k0_dk=10.0)
+    >>> scene = speckle.random_scatterers(8, 4.0, n_pixels=64, depth_range=512.0, seed=1)
+    >>> moved = speckle.bscan(speckle.translate(scene, 3.0, wrap=True), src)
+    >>> uz = xr.DataArray(np.full(64, 3.0), dims="depth", coords={"depth": moved.depth})
+    >>> back = speckle.compensate(moved, xr.Dataset({"uz": uz}))
+    >>> ref = speckle.bscan(scene, src)
+    >>> round(float(speckle.pearson(ref, back, kind="complex")), 3)
+    1.0
     """
     field = field_of(deformed)
     from ..scene.deformation import (

@@ -604,6 +604,19 @@ def accumulate_strain(
     TypeError, ValueError
         Before any work: bad types or dims, real data, chunks splitting depth or aline, frames
         holding NaN (named), bad estimator parameters.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> src = speckle.spectrum(64, 512.0, k0_dk=10.0)
+    >>> kw = dict(n_pixels=64, depth_range=512.0, seed=1)
+    >>> scene = speckle.deformable_scene(16, 4.0, strain=4e-3, **kw)
+    >>> img = speckle.bscan(speckle.uniaxial_strain(scene, [0.0, 2e-3, 4e-3]), src)
+    >>> frames = img.field.rename(strain="frame")
+    >>> total = speckle.accumulate_strain(frames, k0=float(src.attrs["k0"]), pixel_size=8.0)
+    >>> round(float(np.nanmedian(total["cumulative"].isel(frame=-1))), 3)  # 4e-3 after two steps
+    0.004
     """
     data, coords = _frames_input(frames)
     p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)

@@ -180,6 +180,15 @@ def stream_ascans(
     -------
     numpy.ndarray
         complex128 (n_alines, n_pixels), or (len(lines), n_pixels) with ``lines``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> lines = speckle.stream_ascans(
+    ...     16, 4.0, n_pixels=32, depth_range=256.0, k0=3.0, seed=1, chunk_lines=4
+    ... )
+    >>> lines.shape
+    (16, 32)
     """
     nl_total = check_int(n_alines, "n_alines", low=1)
     step = check_int(chunk_lines, "chunk_lines", low=1)

@@ -44,7 +44,20 @@ class Beam(NamedTuple):
 
 
 class BeamScene(NamedTuple):
-    """Validated scene and scan passed to every beam method (float64 / complex128 arrays)."""
+    """Validated scene and scan passed to every beam method (float64 / complex128 arrays).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> z, x, a = np.array([100.0]), np.array([0.0]), np.array([1.0 + 0j])
+    >>> lines = speckle.scan_lines(3, 4.0, start=-4.0)
+    >>> scene, beam, tol = speckle.beam_problem(
+    ...     z, x, a, lines=lines, waist=4.0, n_pixels=32, depth_range=256.0, k0=3.0
+    ... )
+    >>> isinstance(scene, speckle.BeamScene), scene.n_pixels, scene.lines
+    (True, 32, array([-4.,  0.,  4.]))
+    """
 
     z: np.ndarray  # (M,) µm
     x: np.ndarray  # (M,) µm

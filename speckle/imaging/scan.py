@@ -441,6 +441,16 @@ def image_regions(
     -------
     xarray.Dataset
         As :func:`image`.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(R.background(density=0.05))
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> img = speckle.image_regions(regions, src, seed=1, waist=4.0, x=speckle.scan_lines(8, 4.0))
+    >>> img.field.dims, img.field.shape
+    (('depth', 'x'), (32, 8))
     """
     src, w0, xs, ys, c, meta, kernel, optics = _prepare(
         source, waist, x, y, chunk, method, tol, False, focus, rayleigh_range

@@ -75,6 +75,18 @@ def angular_looks(
     -------
     xarray.DataArray
         Complex looks ``(look, depth, x)``; coordinate ``angle`` (degrees) along ``look``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(R.background(density=0.05))
+    >>> scene = speckle.shared_scene(regions, z_range=(0.0, 256.0), x_range=(-32.0, 64.0), seed=1)
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> x = speckle.scan_lines(8, 4.0)
+    >>> looks = speckle.angular_looks(scene, src, [0.0, 5.0], waist=4.0, x=x)
+    >>> looks.dims, looks.sizes["look"]
+    (('look', 'depth', 'x'), 2)
     """
     ang = as_finite_array(angles, "angles")
     if ang.ndim != 1 or ang.size == 0 or np.any(np.abs(ang) >= 90):
@@ -125,6 +137,18 @@ def spatial_looks(
     -------
     xarray.DataArray
         Complex looks ``(look, depth, x)``; coordinate ``offset`` (µm) along ``look``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(R.background(density=0.05))
+    >>> scene = speckle.shared_scene(regions, z_range=(0.0, 256.0), x_range=(-32.0, 64.0), seed=1)
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> x = speckle.scan_lines(8, 4.0)
+    >>> looks = speckle.spatial_looks(scene, src, [0.0, 4.0], waist=4.0, x=x)
+    >>> looks.dims, looks.sizes["look"]
+    (('look', 'depth', 'x'), 2)
     """
     off = as_finite_array(offsets, "offsets")
     if off.ndim != 1 or off.size == 0:
@@ -154,6 +178,18 @@ def polarization_looks(
 
     Intensity-averaged they give the polarization-insensitive image, contrast
     ``sqrt((1 + P^2)/2)``, ``P = |1 - 2 f|`` (dense scene).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(R.background(density=0.05))
+    >>> scene = speckle.shared_scene(regions, z_range=(0.0, 256.0), x_range=(-32.0, 64.0), seed=1)
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> x = speckle.scan_lines(8, 4.0)
+    >>> looks = speckle.polarization_looks(scene, src, 0.5, seed=2, waist=4.0, x=x)
+    >>> looks.dims, looks.sizes["look"]
+    (('look', 'depth', 'x'), 2)
     """
     dep = depolarize(scene, depolarization, seed=seed)
     f = image(dep, source, **_image_kw(waist, np.asarray(x, float), method, tol, chunk)).field
@@ -176,7 +212,22 @@ def temporal_looks(
     tol: float | None = None,
     chunk: int = 64,
 ) -> xr.DataArray:
-    """Frames of a shared scene in Brownian motion (:func:`brownian_frames`) as looks."""
+    """Frames of a shared scene in Brownian motion (:func:`brownian_frames`) as looks.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(R.background(density=0.05))
+    >>> scene = speckle.shared_scene(regions, z_range=(0.0, 256.0), x_range=(-32.0, 64.0), seed=1)
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> x = speckle.scan_lines(8, 4.0)
+    >>> looks = speckle.temporal_looks(
+    ...     scene, src, 3, diffusion=1.0, interval=1e-3, seed=2, waist=4.0, x=x
+    ... )
+    >>> looks.dims, looks.sizes["look"]
+    (('look', 'depth', 'x'), 3)
+    """
     frames = brownian_frames(scene, n_frames, diffusion=diffusion, interval=interval, seed=seed)
     xs = np.asarray(x, dtype=float)
     kw = _image_kw(waist, xs, method, tol, chunk)

@@ -122,6 +122,21 @@ def attenuate_regions(
     The optical depth of :func:`attenuation_map` (a fine label grid makes it exact at region
     boundaries) is interpolated linearly in depth at each scatterer, in the label column nearest
     its lateral position (variable ``x`` of a shared scene, else the ``aline`` coordinate).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(R.background(density=0.05, attenuation=0.001))
+    >>> scene = speckle.shared_scene(regions, z_range=(0.0, 256.0), x_range=(-32.0, 64.0), seed=1)
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> x = speckle.scan_lines(8, 4.0)
+    >>> grid = np.arange(-32.0, 68.0, 4.0)  # label columns over the scene's lateral range
+    >>> labels = speckle.rasterize(regions, speckle.pixel_depths(32, 256.0), grid)
+    >>> dim = speckle.attenuate_regions(scene, labels, regions)
+    >>> bool((abs(dim.amplitude) <= abs(scene.amplitude)).all())
+    True
     """
     check_scene(scene)
     tau = -np.log(attenuation_map(labels, properties))

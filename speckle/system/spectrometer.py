@@ -122,6 +122,15 @@ def resampling_response(system, z: object, method: str) -> np.ndarray:
     -------
     numpy.ndarray
         Complex factor, shape of ``z``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> system = speckle.example_system("840nm")
+    >>> f = speckle.resampling_response(system, np.array([0.0, 500.0]), "exact")
+    >>> abs(f).round(6)  # exact resampling: no loss at any depth
+    array([1., 1.])
     """
     z = as_finite_array(z, "z")
     check_choice(method, "method", ("linear", "cubic", "exact"))
@@ -708,6 +717,15 @@ def system_ascan(
     -------
     numpy.ndarray
         Complex A-scans (..., N), pixel ``q`` at ``q H/N``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> system = speckle.example_system("840nm")
+    >>> img = speckle.system_ascan(system, np.array([[200.0]]), np.array([[1.0 + 0j]]))
+    >>> img.shape  # (lines, pixels)
+    (1, 2048)
     """
     check_choice(resample, "resample", RESAMPLING)
     sig, k = camera_signal(system, z, amplitude, on_grid=resample == "exact", **camera)
