@@ -23,11 +23,6 @@ PUBLIC = [
 #: Public names with no Examples section yet (shrink-only; issue 32).
 NO_EXAMPLES = {
     "PhantomFit",
-    "SystemFit",
-    "displacement_at",
-    "fit_system",
-    "load_image",
-    "process",
 }
 
 #: Options after the first two parameters that stay positional, and why.

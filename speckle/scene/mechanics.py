@@ -606,6 +606,17 @@ def displacement_at(result: xr.Dataset, z: object, x: object) -> tuple[np.ndarra
     ------
     ValueError
         If a point lies outside the sample (beyond a relative rounding margin of 1e-9).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> depth, x = np.arange(4.0, 100.0, 8.0), np.arange(4.0, 100.0, 8.0)
+    >>> labels = speckle.inclusion_labels(depth, x, (50.0, 50.0), 20.0)
+    >>> result = speckle.compress(labels, {0: 10.0, 1: 40.0}, 0.45, strain=0.01, contact="sliding")
+    >>> uz, ux = speckle.displacement_at(result, [0.0, 96.0], [48.0, 48.0])  # sample: 0 to 96 µm
+    >>> np.round(uz, 6)  # the probe holds z = 0; the base moves by -strain * L
+    array([ 0.  , -0.96])
     """
     if not isinstance(result, xr.Dataset) or not {"uz_node", "ux_node"} <= set(result):
         raise TypeError("result must be the xarray.Dataset returned by speckle.compress")

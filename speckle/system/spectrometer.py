@@ -549,6 +549,19 @@ def process(
     numpy.ndarray
         Complex A-scans (..., N); pixel ``q`` at depth ``q H/N``, negative depths wrap to the
         end (the mirror image of a real signal appears there).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> n, depth_range = 64, 512.0
+    >>> k0 = 64 * np.pi / depth_range
+    >>> grid = k0 + (np.arange(n) - n // 2) * np.pi / depth_range  # k_n = k0 + n pi/H
+    >>> z, a = np.array([200.0]), np.array([1.0 + 0j])  # one reflector at 200 µm
+    >>> signal = speckle.interferogram(z, a, grid, np.ones(n), k0=k0)
+    >>> ascan = speckle.process(signal, grid=grid, k0=k0)
+    >>> int(abs(ascan).argmax())  # the reflector's pixel, 200 µm / 8 µm
+    25
     """
     check_choice(resample, "resample", ("none", "linear", "cubic"))
     check_choice(window, "window", WINDOWS)
