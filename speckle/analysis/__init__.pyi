@@ -4,6 +4,7 @@ from . import autocorrelation as autocorrelation
 from . import beam as beam
 from . import compounding as compounding
 from . import correlation as correlation
+from . import correlation_forms as correlation_forms
 from . import dynamics as dynamics
 from . import dynamics_theory as dynamics_theory
 from . import failure as failure
