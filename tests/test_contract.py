@@ -1747,11 +1747,17 @@ ANSWERS: dict[tuple[str, str, str], str] = {
     ("interpolation_gain", "t", "empty"): "pointwise closed form: no point asked, an empty answer",
     ("interpolation_gain", "theta", "empty"): "as t",
     ("resampling_response", "z", "empty"): "pointwise closed form: no depth asked, an empty answer",
-    ("process_interferogram", "signal", "complex"): "documented: a complex camera signal (interferogram's "
-    "complex detection) is processed as is",
+    (
+        "process_interferogram",
+        "signal",
+        "complex",
+    ): "documented: a complex camera signal (interferogram's complex detection) is processed as is",
     **{
-        (n, "apodization_fwhm_fraction", "above_one"): "a Gaussian apodization wider than the band (FWHM "
-        "1.5 N) is a valid, nearly flat window"
+        (
+            n,
+            "apodization_fwhm_fraction",
+            "above_one",
+        ): "a Gaussian apodization wider than the band (FWHM 1.5 N) is a valid, nearly flat window"
         for n in ("process_interferogram", "system_ascan")
     },
     ("add_complex_noise", "field", "one_pixel"): "one pixel: its intensity is the mean, the "

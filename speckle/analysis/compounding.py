@@ -128,6 +128,13 @@ def subband_apodizations(
     ValueError
         ``n_looks`` outside ``[1, N]``, ``overlap`` outside ``[0, 1)``, an unknown apodization, or a
         sub-band narrower than one sample.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> w = speckle.subband_windows(64, 4)
+    >>> w.shape, float(w.sum(axis=0).min())  # rectangular bands tile the spectrum
+    ((4, 64), 1.0)
     """
     n = check_int(n_samples, "n_samples", low=1)
     if isinstance(n_looks, int | np.integer) and not isinstance(n_looks, bool) and n_looks > n:
@@ -177,6 +184,13 @@ def apodization_correlation(apodizations: object, spectrum: object | None = None
     -------
     numpy.ndarray, shape (L, L)
         Hermitian, unit diagonal.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> abs(speckle.window_correlation(speckle.subband_windows(64, 2))).round(6)  # disjoint bands
+    array([[1., 0.],
+           [0., 1.]])
     """
     w = as_finite_array(apodizations, "apodizations", dtype=np.complex128)
     if w.ndim != 2:
@@ -194,6 +208,13 @@ def compounded_contrast(mu: object) -> float:
 
     Dense-scene (Gaussian speckle) result; ``mu`` the (L, L) field correlations (identity:
     ``1/sqrt(L)``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> round(speckle.compounded_contrast(np.eye(4)), 6)  # N independent looks: 1/sqrt(N)
+    0.5
     """
     m = as_finite_array(mu, "mu", dtype=np.complex128)
     if m.ndim != 2 or m.shape[0] != m.shape[1]:
@@ -224,6 +245,14 @@ def split_spectrum_contrast(weights: object, density: float, *, kurtosis: float 
     -------
     float
         The contrast (std / mean) of the intensity averaged over the looks.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> w = speckle.subband_windows(64, 4)
+    >>> round(speckle.split_spectrum_contrast(w, np.inf), 6)  # 4 disjoint bands: 1/sqrt(4)
+    0.5
     """
     g = as_finite_array(weights, "weights", dtype=np.complex128)
     if g.ndim != 2:
@@ -249,6 +278,12 @@ def subband_fwhm(n_pixels: int, n_samples: int) -> float:
 
     The root of ``|sin(pi M x/N) / (M sin(pi x/N))|^2 = 1/2`` (times two); about
     ``0.886 N/M`` pixels (the continuum sinc^2), so ``N/M`` times the full band's.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> round(speckle.subband_fwhm(256, 64), 3)
+    3.544
     """
     n = check_int(n_pixels, "n_pixels", low=1)
     m = check_int(n_samples, "n_samples", low=1, high=n)
@@ -286,6 +321,16 @@ def frequency_looks(img: xr.Dataset | xr.DataArray, apodizations: object) -> xr.
     xarray.DataArray
         Complex looks over ``(look, ...)``; look ``i`` equals the image formed with the spectrum
         ``S W_i`` (exact).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> scene = speckle.random_scatterers(8, 4.0, n_pixels=32, depth_range=256.0, seed=1)
+    >>> img = speckle.bscan(scene, src)
+    >>> looks = speckle.frequency_looks(img, speckle.subband_windows(32, 2))
+    >>> looks.dims, looks.sizes["look"]
+    (('look', 'depth', 'aline'), 2)
     """
     f = _field(img)
     n = f.sizes["depth"]
@@ -323,6 +368,16 @@ def compound(looks: xr.DataArray, mode: str = "intensity") -> xr.DataArray:
     ``"intensity"``: ``mean |A_i|^2``; ``"magnitude"``: ``(mean |A_i|)^2`` (the squared mean
     amplitude, in intensity units); ``"complex"``: ``|mean A_i|^2`` (removes no speckle of one
     realisation; raises the SNR of noisy looks).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import xarray as xr
+    >>> import speckle
+    >>> looks = xr.DataArray(np.ones((3, 2, 2)), dims=("look", "depth", "x"))
+    >>> speckle.compound(looks).values
+    array([[1., 1.],
+           [1., 1.]])
     """
     check_choice(mode, "mode", AVERAGING)
     if not isinstance(looks, xr.DataArray) or "look" not in looks.dims:
@@ -367,6 +422,16 @@ def noisy_looks(
     -------
     xarray.DataArray
         The looks plus noise (attrs ``snr_db``, ``noise_intensity`` of the first look).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import xarray as xr
+    >>> import speckle
+    >>> looks = xr.DataArray(np.ones((2, 32, 32), complex), dims=("look", "depth", "x"))
+    >>> noisy = speckle.noisy_looks(looks, 10.0, seed=1)
+    >>> round(float((abs(noisy - looks) ** 2).mean()), 2)  # noise intensity: 10 dB below 1
+    0.1
     """
     if not isinstance(looks, xr.DataArray) or "look" not in looks.dims:
         raise TypeError("looks must be a DataArray with a 'look' dim")
@@ -396,6 +461,13 @@ def brownian_g1(tau: object, diffusion: float, k0: float) -> np.ndarray:
 
     ``tau`` in s (>= 0), ``diffusion`` ``D`` in µm^2/s (>= 0); the one implementation is
     :func:`speckle.analysis.dynamics_theory.g1_brownian`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> speckle.brownian_g1(np.array([0.0, 1e-3]), 1.0, 10.0).round(6)  # exp(-4 k0^2 D tau)
+    array([1.     , 0.67032])
     """
     t = as_finite_array(tau, "tau")  # named as here (g1_brownian calls it lag)
     if np.any(t < 0):
@@ -428,6 +500,14 @@ def brownian_frames(
     -------
     xarray.Dataset
         The positions with a new leading dim ``frame`` (coordinate ``time`` in s).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> scene = speckle.random_scatterers(4, 2.0, n_pixels=32, depth_range=256.0, seed=1)
+    >>> frames = speckle.brownian_frames(scene, 3, diffusion=1.0, interval=1e-3, seed=2)
+    >>> frames.z.dims[0], frames.sizes[frames.z.dims[0]]
+    ('frame', 3)
     """
     nf = check_int(n_frames, "n_frames", low=1)
     d = check_real(diffusion, "diffusion", low=0)

@@ -225,6 +225,15 @@ class PhantomFit:
         top) and ``window_top_se``, ``criterion``, ``bic`` (per ``K``), ``rows``.
     config : ScannerConfig
         The scanner's configuration.
+
+    Examples
+    --------
+    >>> from importlib import resources
+    >>> import speckle
+    >>> scan = resources.files("speckle.data") / "synthoct" / "Scan_Exp2_Layers_A.png"
+    >>> fit = speckle.fit_phantom(scan, speckle.ScannerConfig())  # the challenge's default scanner
+    >>> fit.layers.sizes["layer"], fit.layers.top.values.round(1)  # boundary near 400 µm
+    (2, array([  0. , 400.1]))
     """
 
     layers: xr.Dataset
