@@ -37,6 +37,10 @@ origin        1           where a SynthOCT scan or score comes from (published, 
 boundary      um          depth of a two-layer phantom's boundary
 energy        percent     backscattered energy of a phantom's scatterers (the file's %)
 layer         1           layer of a fitted phantom, 0 at the top (:mod:`speckle.studies.phantom`)
+inclusion     1           inclusion of a virtual patient or fitted phantom
+case          1           closed-loop case of the phantom fit (its seed)
+thickness     um          layer thickness (the phantom fit's failure map)
+energy_ratio  1           ratio of neighbouring layers' ``rho E`` (the failure map)
 ============  ==========  ===============================================================
 
 Data variables (:data:`QUANTITIES`): ``field``, ``amplitude``, ``weight``, ``correlation``,
@@ -111,6 +115,10 @@ COORDS: dict[str, tuple[str, str]] = {
     "boundary": ("um", "depth of the layer boundary"),
     "energy": ("percent", "backscattered energy per scatterer"),
     "layer": ("1", "layer index from the top"),
+    "inclusion": ("1", "inclusion of a phantom"),
+    "case": ("1", "closed-loop case (its seed)"),
+    "thickness": ("um", "layer thickness"),
+    "energy_ratio": ("1", "ratio of neighbouring layers' rho E"),
 }
 
 #: Data-variable quantity -> (units, long_name); a variable's own long name may be more specific.

@@ -1464,6 +1464,32 @@ ENTRIES: dict[str, Entry] = {
         blocks="count",
         why="config: a ScannerConfig or an INI path (tests/studies/test_phantom.py)",
     ),
+    "virtual_patient": E(
+        lambda: dict(
+            seed=1,
+            config=speckle.ScannerConfig(n_pixels=64, n_lines=16, x_max=96.0, n_scatterers=200),
+            layers=(1, 2),
+        ),
+        config="none",
+        layers="none",
+        shapes="none",
+        energy_range="none",
+        density_range="none",
+        min_contrast="positive",
+        min_thickness="positive_length",
+        max_tilt="nonnegative",
+        max_sag="nonnegative",
+        draw_seed="seed",
+        inclusions="flag",
+        why="config: a name or ScannerConfig; layers, shapes and the ranges: pairs and tuples "
+        "(tests/studies/test_phantom_patients.py)",
+    ),
+    "synthoct_config": E(
+        lambda: dict(name="2025"),
+        name="choice",
+        changes="none",
+        why="changes: ScannerConfig's fields, checked by ScannerConfig (its own entry)",
+    ),
     "PhantomFit": E(
         lambda: dict(layers=xr.Dataset(), config=speckle.ScannerConfig()),
         layers="none",
