@@ -1484,6 +1484,18 @@ ENTRIES: dict[str, Entry] = {
         why="config: a name or ScannerConfig; layers, shapes and the ranges: pairs and tuples "
         "(tests/studies/test_phantom_patients.py)",
     ),
+    "phantom_closed_loop_case": E(
+        lambda: dict(
+            seed=1,
+            config=speckle.ScannerConfig(n_pixels=64, n_lines=64, x_max=384.0, n_scatterers=4000),
+            layers=(1, 1),
+        ),
+        config="none",
+        fit_seed="seed",
+        max_layers="count",
+        patient="none",
+        why="config: a name or ScannerConfig; patient: virtual_patient's options (its entry)",
+    ),
     "synthoct_config": E(
         lambda: dict(name="2025"),
         name="choice",

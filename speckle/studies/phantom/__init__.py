@@ -10,6 +10,7 @@ __getattr__, __dir__, __all__ = attach(
     __name__,
     {
         "_fit": ["PhantomFit", "fit_phantom", "slab_constants"],
+        "loop": ["phantom_closed_loop_case"],
         "patients": ["virtual_patient"],
     },
 )

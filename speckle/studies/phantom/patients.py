@@ -41,7 +41,7 @@ from ...synthoct.configs import synthoct_config
 from ...synthoct.files import ScannerConfig
 from ._fit import slab_constants
 
-__all__ = ["SHAPES", "patient_table", "virtual_patient"]
+__all__ = ["SHAPES", "patient_table", "profiles", "scanner_config_of", "virtual_patient"]
 
 #: Boundary shapes of a virtual patient.
 SHAPES = ("flat", "tilted", "curved")
@@ -51,7 +51,7 @@ VISIBLE_NEPER = 6.0
 _GRID = 8192
 
 
-def _config_of(config: object) -> ScannerConfig:
+def scanner_config_of(config: object) -> ScannerConfig:
     if isinstance(config, ScannerConfig):
         return config
     if isinstance(config, str):
@@ -225,7 +225,7 @@ def virtual_patient(
     for name, value in (("seed", seed), ("draw_seed", seed if draw_seed is None else draw_seed)):
         if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 0:
             raise ValueError(f"{name} must be a non-negative integer, got {value!r}")
-    cfg = _config_of(config)
+    cfg = scanner_config_of(config)
     k_lo, k_hi = _range("layers", layers, 1, 8, integer=True)
     if not isinstance(shapes, tuple | list) or not shapes or any(s not in SHAPES for s in shapes):
         raise ValueError(f"shapes must be a non-empty tuple of {SHAPES}, got {shapes!r}")
