@@ -24,7 +24,13 @@ __getattr__, __dir__, __all__ = attach(
         "dynamics": ["FLOW_CONTRASTS", *functions_of(__name__, "dynamics")],
         "dynamics_series": functions_of(__name__, "dynamics_series"),
         "looks": functions_of(__name__, "looks"),
-        "phantom": ["PhantomFit", "fit_phantom", "phantom_closed_loop_case", "virtual_patient"],
+        "phantom": [
+            "PhantomFit",
+            "fit_phantom",
+            "phantom_closed_loop_case",
+            "phantom_failure_map",
+            "virtual_patient",
+        ],
         "twin": ["SystemFit", "fit_system"],
     },
 )
