@@ -546,9 +546,9 @@ def _fit_levels(lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: in
     psf_area = float(np.sum(depth_intensity_psf(hann)) / 8 * p * r * math.sqrt(math.pi / 2))
     slope_ok = mu > SIGNIFICANCE * mu_se
 
-    def cum_shadow(zz, k):
-        c = sum(mu[j] * (tops[j + 1] - tops[j]) for j in range(k))
-        return c + mu[k] * (zz - tops[k])
+    def cum_shadow(zz, k, mu_, tops_):
+        c = sum(mu_[j] * (tops_[j + 1] - tops_[j]) for j in range(k))
+        return c + mu_[k] * (zz - tops_[k])
 
     def mean_log(k):
         """``E ln(I/<I>)`` of layer ``k`` (fully developed where the density is unknown)."""
@@ -556,34 +556,40 @@ def _fit_levels(lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: in
             return -np.euler_gamma
         return log_intensity_moments(hann, waist, rho[k] * consts["t_eq"] * p * pitch)[0]
 
-    def window_top(mm):
+    def window_top(mm, mu_, tops_):
         offs, wts = [], []
         for k, (a, b) in enumerate(segs):
-            if not slope_ok[k]:
+            if not slope_ok[k] or mu_[k] <= 0:
                 continue
-            rho_e = mu[k] / consts["A2"]
-            mean_rel = mean_log(k)
+            rho_e = mu_[k] / consts["A2"]
             zz = z[a:b]
-            pred = np.log(rho_e * consts["a2_y"] * psf_area) - 2 * cum_shadow(zz, k) + mean_rel
+            pred = (np.log(rho_e * consts["a2_y"] * psf_area) - 2 * cum_shadow(zz, k, mu_, tops_)
+                    + mean_log(k))  # fmt: skip
             offs.append(float(np.mean(pred - mm[a:b])))
             wts.append(b - a)
         return float(np.average(offs, weights=wts)) if offs else np.nan
 
-    wt = window_top(m)
-    wt_se = _jackknife(np.array([window_top(m_jk[j]) for j in range(blocks)]))
+    def brightness(k, mm, mu_, tops_, wt_):
+        """``rho E/100`` of layer ``k`` from its mean level under the window's top ``wt_``."""
+        a, b = segs[k]
+        zz = z[a:b]
+        ln_re = mm[a:b] + wt_ + 2 * cum_shadow(zz, k, mu_, tops_) - mean_log(k)
+        return float(np.exp(np.mean(ln_re))) / (consts["a2_y"] * psf_area)
+
+    # every replicate of the jackknife repeats the whole chain (its slopes, boundaries, window)
+    wt = window_top(m, mu, tops)
+    wt_jk = np.array([window_top(m_jk[j], mu_jk[j], tops_jk[j]) for j in range(blocks)])
+    wt_se = _jackknife(wt_jk)
 
     # rho E/100 per layer: from mu where the slope is significant, else from the brightness
     rho_e = mu / consts["A2"]
     rho_e_se = mu_se / consts["A2"]
-    for k, (a, b) in enumerate(segs):
+    for k in range(n_layers):
         if slope_ok[k] or not np.isfinite(wt):
             continue
-        mean_rel = mean_log(k)
-        zz = z[a:b]
-        ln_re = m[a:b] + wt + 2 * cum_shadow(zz, k) - mean_rel
-        rho_e[k] = float(np.exp(np.mean(ln_re))) / (consts["a2_y"] * psf_area)
-        ln_jk = [np.mean(m_jk[j, a:b]) for j in range(blocks)]
-        rho_e_se[k] = rho_e[k] * math.hypot(_jackknife(np.array(ln_jk)), wt_se)
+        rho_e[k] = brightness(k, m, mu, tops, wt)
+        reps = [brightness(k, m_jk[j], mu_jk[j], tops_jk[j], wt_jk[j]) for j in range(blocks)]
+        rho_e_se[k] = _jackknife(np.log(np.array(reps))) * rho_e[k]
 
     def var(name, values, quantity, long_name, extra=None):
         return (
