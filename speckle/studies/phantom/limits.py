@@ -6,10 +6,10 @@ middle layer of energy ``q E`` and thickness ``T``, and a bottom layer of energy
 ``rho E``, the brightness and the slope ``2 mu``, differ by ``q`` across both boundaries); each
 case is fitted by :func:`speckle.fit_phantom` and succeeds when it gives three layers with both
 boundaries within a pixel on every fitted line. The map is the fraction of ``seeds`` that
-succeed (with the fractions of the two criteria apart). A middle layer thinner than the fit's
-shortest segment (``MIN_ROWS`` fitted rows plus the ``GAP`` rows left out at each boundary)
-cannot be resolved; a contrast too small for the BIC's penalty merges the layers; a ``top_depth``
-near the window's floor leaves too few rows above the floor.
+succeed (with the fractions of the two criteria apart). A middle layer inside the depth PSF's
+main lobe (1 pixel) is never resolved; a contrast too small for the BIC's penalty merges the
+layers (1.5 merges at every thickness of the default map); a ``top_depth`` near the window's
+floor leaves too few rows above the floor (measured in docs/explanation/phantom_fit.md).
 """
 
 from __future__ import annotations
