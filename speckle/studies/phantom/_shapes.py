@@ -186,7 +186,7 @@ def fit_shapes(
     def detect(cur):
         """Each boundary's shape, coefficients and SEs, located around ``cur``'s tops."""
         tops, slope = cur.top.values, -2 * cur.attenuation.values
-        end = (cur.attrs["rows"] + 2) * p  # the last fitted row (rows GAP + 1 ..)
+        end = cur.attrs["last_row"] * p  # the last fitted row
         shape, coef, ses = ["flat"], [np.zeros(3)], [np.full(3, np.nan)]
         for k in range(1, tops.size):
             lo = 0.5 * (tops[k - 1] + tops[k])
