@@ -31,6 +31,9 @@ from .looks import (
 from .phantom import (
     PhantomFit,
     fit_phantom,
+    phantom_closed_loop_case,
+    phantom_failure_map,
+    virtual_patient,
 )
 from .twin import (
     SystemFit,
@@ -50,9 +53,12 @@ __all__ = [
     "fit_system",
     "flow_failure",
     "g1_curves",
+    "phantom_closed_loop_case",
+    "phantom_failure_map",
     "phantom_series",
     "polarization_looks",
     "spatial_looks",
     "temporal_looks",
     "velocity_range",
+    "virtual_patient",
 ]

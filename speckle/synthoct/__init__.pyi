@@ -1,10 +1,14 @@
 """Public names of :mod:`speckle.synthoct` (``lazy_loader.attach_stub``, type checkers)."""
 
 from . import cli as cli
+from . import configs as configs
 from . import files as files
 from . import maps as maps
 from . import metrics as metrics
 from . import scanner as scanner
+from .configs import (
+    synthoct_config,
+)
 from .files import (
     ScannerConfig,
     baseline_phantom,
@@ -47,6 +51,7 @@ __all__ = [
     "read_phantom",
     "read_scan",
     "read_scanner_config",
+    "synthoct_config",
     "synthoct_maps",
     "synthoct_metrics",
     "synthoct_scan",
