@@ -111,6 +111,8 @@ COORDS: dict[str, tuple[str, str]] = {
     "boundary": ("um", "depth of the layer boundary"),
     "energy": ("percent", "backscattered energy per scatterer"),
     "layer": ("1", "layer index from the top"),
+    "seed": ("1", "seed of a phantom's draw"),
+    "pair": ("1", "pair of draws compared (the floor)"),
 }
 
 #: Data-variable quantity -> (units, long_name); a variable's own long name may be more specific.

@@ -1572,6 +1572,8 @@ PENDING: dict[str, str] = {
     "poiseuille_velocity": "speckle.scene.motion",
     "scan_kernel": "speckle.imaging.scan",
     "synthoct_metrics": "speckle.synthoct.metrics",
+    "equivalent_system": "speckle.studies.phantom.real",
+    "real_tissue_phantom": "speckle.studies.phantom.real",
 }
 
 #: (function, parameter, bad value) -> why the call's answer is the right one.

@@ -10,5 +10,6 @@ __getattr__, __dir__, __all__ = attach(
     __name__,
     {
         "_fit": ["PhantomFit", "fit_phantom", "slab_constants"],
+        "real": ["EquivalentSystem", "equivalent_system", "real_tissue_phantom"],
     },
 )
