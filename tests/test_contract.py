@@ -1471,6 +1471,16 @@ ENTRIES: dict[str, Entry] = {
         why="a record built by fit_phantom",
         record="fit_phantom",
     ),
+    "EquivalentSystem": E(
+        lambda: dict(
+            config=speckle.ScannerConfig(), rows=(0, 256), gain=1.0, offset=0.0, noise_log=0.0,
+            kind="intensity", waist=float("nan"), window_top_log=11.74,
+        ),
+        config="none", rows="none", gain="none", offset="none", noise_log="none", kind="none",
+        waist="none", window_top_log="none",
+        why="a record built by equivalent_system",
+        record="equivalent_system",
+    ),  # fmt: skip
     "ScannerConfig": E(
         lambda: dict(n_pixels=16, n_lines=8, x_max=96.0, n_scatterers=50),
         n_pixels="size",
