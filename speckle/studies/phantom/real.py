@@ -17,12 +17,16 @@ maps it onto the scanner's terms, stating each choice:
   bottom above the noise). A pixel at or below the bottom is clipped (as the scanner clips
   below its window), so :func:`speckle.fit_phantom` leaves out the rows where more than 10 %
   of the pixels are (signal less than ~7 dB above the noise's mean ``ln I``) and its fitted
-  ``window_top`` places the phantom's field on the measured scale. The fit does not model
-  the noise: in the rows it keeps, ``ln(S + N)`` exceeds ``ln S`` by up to ``ln(1 + N/S)``
-  (0.17 neper at the last kept row), which flattens the deepest layer's slope;
+  ``window_top`` places the phantom's field on the measured scale;
 * **the noise**: complex Gaussian noise of the measured mean power (``<|n|^2> = exp(<ln I_n>
   + gamma)``, Euler's gamma) added to the fitted phantom's field (:meth:`EquivalentSystem.scan`),
-  so that its scan has the measured floor;
+  so that its scan has the measured floor. Not to count it twice, the fit sees the signal
+  alone (``denoise``): circular Gaussian speckle plus circular Gaussian noise is exponential
+  in intensity with mean ``s + n``, so a row's mean ``ln I`` is ``ln(s + n) - gamma`` and
+  shifting the row by ``ln(1 - n/(s + n))`` (``s + n`` from the row's mean) gives the
+  signal's row, of the same shape; rows with ``s + n <= n`` are clipped. Exact for developed
+  speckle; a measured image whose log statistics are not Gumbel (a floor, multiple
+  scattering) keeps part of the bias;
 * **density**: ``per_cell`` kurtosis-equivalent scatterers per pixel per pitch (default 2, at
   which speckle is within 3 % of fully developed in ``var ln I``): the measured image does not
   identify the density (its log gain is fitted assuming developed speckle), so the phantom's
@@ -98,6 +102,8 @@ class EquivalentSystem:
     window_top_log : float
         ``ln I`` of the 51 dB window's top: the noise floor plus 51 dB, or the brightest pixel
         of the fitted rows if that is higher (the window's bottom is then above the noise).
+    denoise : bool
+        Shift each row's ``ln I`` by ``ln(1 - <N>/<S + N>)`` before the fit (module docstring).
     kind : str
         The image's kind (``load_image``'s).
     waist : float
@@ -113,6 +119,7 @@ class EquivalentSystem:
     waist: float
 
     window_top_log: float
+    denoise: bool = True
 
     def scan_levels(self, image: xr.DataArray) -> xr.DataArray:
         """The measured rows of ``image`` as an 8-bit scan in the system's 51 dB window."""
@@ -129,6 +136,13 @@ class EquivalentSystem:
         li = _log_image(image.isel(depth=slice(a, a + n_rows)))
         if self.kind == "log":
             li = (li - self.offset) / self.gain
+        if self.denoise:
+            # S + N of circular Gaussian speckle and noise is exponential of mean s + n, so a
+            # row's mean ln I is ln(s + n) - gamma; ln(1 - n/(s + n)) takes it to ln s - gamma
+            total = np.exp(li.mean(axis=1, keepdims=True) + np.euler_gamma)
+            frac = 1.0 - math.exp(self.noise_log + np.euler_gamma) / total
+            with np.errstate(divide="ignore"):
+                li = li + np.where(frac > 0, np.log(np.maximum(frac, 0.0)), -np.inf)
         levels = _window_levels(li - self.window_top_log)
         return _labelled(levels, self.config)
 
@@ -177,6 +191,7 @@ def equivalent_system(
     beam_radius: float | None = None,
     per_cell: float = 2.0,
     wavelength: float = 1.3,
+    denoise: bool = True,
 ) -> EquivalentSystem:
     """The SynthOCT scanner equivalent to a measured image (module docstring).
 
@@ -196,6 +211,9 @@ def equivalent_system(
         Kurtosis-equivalent scatterers per pixel per pitch of the phantom (0.1..50).
     wavelength : float
         Central wavelength in µm (> 0); only the phases depend on it.
+    denoise : bool
+        Remove the noise's share of each row's mean before the fit (module docstring), so that
+        the noise added to the fitted phantom's scans is not counted twice.
 
     Returns
     -------
@@ -235,6 +253,8 @@ def equivalent_system(
     nz, nx = image.shape
     a, b = _range(rows, "rows", nz, 32)
     na, nb = _range(noise_rows, "noise_rows", nz, 4)
+    if not isinstance(denoise, bool):
+        raise TypeError(f"denoise must be True or False, got {denoise!r}")
     if isinstance(per_cell, bool) or not isinstance(per_cell, (int, float)):
         raise TypeError(f"per_cell must be a real number, got {per_cell!r}")
     if not 0.1 <= per_cell <= 50:
@@ -289,6 +309,7 @@ def equivalent_system(
         kind=kind,
         waist=waist,
         window_top_log=top_log,
+        denoise=denoise,
     )
 
 
