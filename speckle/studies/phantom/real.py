@@ -394,16 +394,16 @@ def real_tissue_phantom(
     Returns
     -------
     xarray.Dataset
-        ``measured`` ``(depth, x)`` and ``fitted`` ``(seed, depth, x)``: 8-bit scans in the
-        measured window; the maps ``OAC``, ``SC``, ``RSC`` of ``measured`` (``measured_*``) and
-        of the first seed (``fitted_*``); the fitted layers (dim ``layer``, as
-        ``fit_phantom``'s); the metrics ``MS-SSIM``, ``SSIM``, ``PSNR``, ``MSE``, ``VIF`` of
-        measured vs fitted ``(seed, map)``, of the floor (fit vs fit, ``(pair, map)``), their
-        means and the ``gap`` (measured vs fitted minus floor) with its SE; the limits: row-mean
-        ``profile`` of both (dB re the window's top) and its residual in dB and in the
-        measured row means' SE, ``var ln I``, speckle grain (1/e lengths) along depth and x,
-        lateral spread of 16 blocks' mean levels (dB). Attributes: the system's configuration,
-        gain, noise floor and the fit's window top.
+        ``measured`` ``(depth, x)`` (as measured, not denoised) and ``fitted`` ``(seed, depth, x)``
+        (with the measured noise): 8-bit scans in the measured window; the maps ``OAC``, ``SC``,
+        ``RSC`` of ``measured`` (``measured_*``) and of the first seed (``fitted_*``); the fitted
+        layers (dim ``layer``, as ``fit_phantom``'s); the metrics ``MS-SSIM``, ``SSIM``, ``PSNR``,
+        ``MSE``, ``VIF`` of measured vs fitted ``(seed, map)``, of the floor (fit vs fit, ``(pair,
+        map)``), their means and the ``gap`` (measured vs fitted minus floor) with its SE; the
+        limits: row-mean ``profile`` of both (dB re the window's top) and its residual in dB and in
+        the measured row means' SE, ``var ln I``, speckle grain (1/e lengths) along depth and x,
+        lateral spread of 16 blocks' mean levels (dB). Attributes: the system's configuration, gain,
+        noise floor and the fit's window top.
 
     Raises
     ------
@@ -439,7 +439,9 @@ def real_tissue_phantom(
     system = equivalent_system(
         image, rows, noise_rows=noise_rows, beam_radius=beam_radius, per_cell=per_cell
     )
-    measured = system.scan_levels(image)
+    # the measured scan as it is (signal plus noise), beside the fitted phantom's scans plus
+    # the same noise; the fit itself sees the denoised rows
+    measured = dataclasses.replace(system, denoise=False).scan_levels(image)
     fit = fit_phantom(image, system, max_layers=max_layers)
     fitted = [system.scan(fit, s) for s in seeds]
 
