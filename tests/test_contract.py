@@ -1462,7 +1462,62 @@ ENTRIES: dict[str, Entry] = {
         config="none",
         max_layers="count",
         blocks="count",
-        why="config: a ScannerConfig or an INI path (tests/studies/test_phantom.py)",
+        shapes="none",
+        why="config: a ScannerConfig or an INI path (tests/studies/test_phantom.py); shapes: a "
+        "tuple of shape names (tests/studies/test_phantom_shapes.py)",
+    ),
+    "virtual_patient": E(
+        lambda: dict(
+            seed=1,
+            config=speckle.ScannerConfig(n_pixels=64, n_lines=16, x_max=96.0, n_scatterers=200),
+            layers=(1, 2),
+        ),
+        config="none",
+        layers="none",
+        shapes="none",
+        energy_range="none",
+        density_range="none",
+        min_contrast="positive",
+        min_thickness="positive_length",
+        max_tilt="nonnegative",
+        max_sag="nonnegative",
+        draw_seed="seed",
+        inclusions="flag",
+        why="config: a name or ScannerConfig; layers, shapes and the ranges: pairs and tuples "
+        "(tests/studies/test_phantom_patients.py)",
+    ),
+    "phantom_closed_loop_case": E(
+        lambda: dict(
+            seed=1,
+            config=speckle.ScannerConfig(n_pixels=64, n_lines=64, x_max=384.0, n_scatterers=4000),
+            layers=(1, 1),
+        ),
+        config="none",
+        fit_seed="seed",
+        max_layers="count",
+        patient="none",
+        why="config: a name or ScannerConfig; patient: virtual_patient's options (its entry)",
+    ),
+    "phantom_failure_map": E(
+        lambda: dict(
+            config=speckle.ScannerConfig(n_pixels=64, n_lines=64, x_max=384.0, n_scatterers=4000),
+            thickness=[8.0],
+            contrast=[4.0],
+        ),
+        config="none",
+        thickness="real_array",
+        contrast="real_array",
+        seeds="none",
+        energy="positive",
+        depth="positive_length",
+        why="config: a name or ScannerConfig; seeds: a list of seeds (tests/studies/"
+        "test_phantom_limits.py)",
+    ),
+    "synthoct_config": E(
+        lambda: dict(name="2025"),
+        name="choice",
+        changes="none",
+        why="changes: ScannerConfig's fields, checked by ScannerConfig (its own entry)",
     ),
     "PhantomFit": E(
         lambda: dict(layers=xr.Dataset(), config=speckle.ScannerConfig()),

@@ -24,8 +24,16 @@ __getattr__, __dir__, __all__ = attach(
         "dynamics": ["FLOW_CONTRASTS", *functions_of(__name__, "dynamics")],
         "dynamics_series": functions_of(__name__, "dynamics_series"),
         "looks": functions_of(__name__, "looks"),
-        "phantom": ["PhantomFit", "fit_phantom", "EquivalentSystem", "equivalent_system",
-                    "real_tissue_phantom"],
+        "phantom": [
+            "PhantomFit",
+            "fit_phantom",
+            "phantom_closed_loop_case",
+            "phantom_failure_map",
+            "virtual_patient",
+            "EquivalentSystem",
+            "equivalent_system",
+            "real_tissue_phantom",
+        ],
         "twin": ["SystemFit", "fit_system"],
     },
 )

@@ -9,7 +9,7 @@ import pytest
 
 import speckle
 from speckle.data import SAMPLE_PITCH, SAMPLE_PIXEL_SIZE, sample_path
-from speckle.studies.phantom._fit import slab_constants
+from speckle.studies.phantom._slab import slab_constants
 from speckle.synthoct import _scan
 
 NEPER_DB = 10 / math.log(10)

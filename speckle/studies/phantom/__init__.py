@@ -9,7 +9,11 @@ from ..._lazy import attach
 __getattr__, __dir__, __all__ = attach(
     __name__,
     {
-        "_fit": ["PhantomFit", "fit_phantom", "slab_constants"],
+        "_fit": ["PhantomFit", "fit_phantom"],
+        "_slab": ["slab_constants"],
+        "limits": ["phantom_failure_map"],
+        "loop": ["phantom_closed_loop_case"],
+        "patients": ["virtual_patient"],
         "real": ["EquivalentSystem", "equivalent_system", "real_tissue_phantom"],
     },
 )

@@ -50,7 +50,8 @@ import xarray as xr
 from ...conventions import attrs, coord
 from ...synthoct import _scan
 from ...synthoct.files import ScannerConfig
-from ._fit import GAP, PhantomFit, fit_phantom, slab_constants
+from ._fit import GAP, PhantomFit, fit_phantom
+from ._slab import slab_constants
 
 __all__ = ["EquivalentSystem", "equivalent_system", "real_tissue_phantom"]
 
