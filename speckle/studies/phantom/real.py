@@ -240,7 +240,7 @@ def equivalent_system(
     (200, 512, 5.75)
     """
     from ...analysis.measured import fit_floor
-    from ..twin import fit_system
+    from ..twin.fit import fit_system
 
     if not isinstance(image, xr.DataArray) or set(image.dims) != {"depth", "x"}:
         raise TypeError(
