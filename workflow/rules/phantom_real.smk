@@ -25,6 +25,8 @@ rule phantom_real:
         ),
     log:
         f"{RESULTS}/logs/phantom_real_{{name}}.log",
+    wildcard_constraints:
+        name="[^/]+",
     conda:
         "../envs/speckle.yaml"
     threads: 1
