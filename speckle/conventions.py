@@ -43,6 +43,8 @@ inclusion     1           inclusion of a virtual patient or fitted phantom
 case          1           closed-loop case of the phantom fit (its seed)
 thickness     um          layer thickness (the phantom fit's failure map)
 energy_ratio  1           ratio of neighbouring layers' ``rho E`` (the failure map)
+seed          1           seed of a fitted phantom's draw (:mod:`speckle.studies.phantom.real`)
+pair          1           pair of draws compared, the floor (:mod:`speckle.studies.phantom.real`)
 ============  ==========  ===============================================================
 
 Data variables (:data:`QUANTITIES`): ``field``, ``amplitude``, ``weight``, ``correlation``,
@@ -128,6 +130,8 @@ COORDS: dict[str, tuple[str, str]] = {
     "case": ("1", "closed-loop case (its seed)"),
     "thickness": ("um", "layer thickness"),
     "energy_ratio": ("1", "ratio of neighbouring layers' rho E"),
+    "seed": ("1", "seed of a phantom's draw"),
+    "pair": ("1", "pair of draws compared (the floor)"),
 }
 
 #: Data-variable quantity -> (units, long_name); a variable's own long name may be more specific.

@@ -29,10 +29,13 @@ from .looks import (
     temporal_looks,
 )
 from .phantom import (
+    EquivalentSystem,
     PhantomFit,
+    equivalent_system,
     fit_phantom,
     phantom_closed_loop_case,
     phantom_failure_map,
+    real_tissue_phantom,
     virtual_patient,
 )
 from .twin import (
@@ -42,12 +45,14 @@ from .twin import (
 
 __all__ = [
     "FLOW_CONTRASTS",
+    "EquivalentSystem",
     "PhantomFit",
     "SystemFit",
     "angular_looks",
     "contrast_estimates",
     "contrast_floors",
     "decorrelation_calibration",
+    "equivalent_system",
     "expected_contrast",
     "fit_phantom",
     "fit_system",
@@ -57,6 +62,7 @@ __all__ = [
     "phantom_failure_map",
     "phantom_series",
     "polarization_looks",
+    "real_tissue_phantom",
     "spatial_looks",
     "temporal_looks",
     "velocity_range",

@@ -3,6 +3,7 @@
 from . import limits as limits
 from . import loop as loop
 from . import patients as patients
+from . import real as real
 from ._fit import (
     PhantomFit,
     fit_phantom,
@@ -19,12 +20,20 @@ from .loop import (
 from .patients import (
     virtual_patient,
 )
+from .real import (
+    EquivalentSystem,
+    equivalent_system,
+    real_tissue_phantom,
+)
 
 __all__ = [
+    "EquivalentSystem",
     "PhantomFit",
+    "equivalent_system",
     "fit_phantom",
     "phantom_closed_loop_case",
     "phantom_failure_map",
+    "real_tissue_phantom",
     "slab_constants",
     "virtual_patient",
 ]

@@ -343,10 +343,12 @@ def fit_phantom(
     ----------
     scan : str, path-like, numpy.ndarray or xarray.DataArray
         The official 8-bit scan ``(depth, x)``: a PNG file, a uint8 array or
-        :func:`speckle.read_scan`'s DataArray.
-    config : ScannerConfig or path
+        :func:`speckle.read_scan`'s DataArray; or a measured image
+        (:func:`speckle.load_image`) with its :func:`speckle.equivalent_system` as ``config``.
+    config : ScannerConfig, path or EquivalentSystem
         The scanner's configuration or its INI file (refused as
-        :func:`speckle.read_scanner_config` refuses it).
+        :func:`speckle.read_scanner_config` refuses it); an :class:`EquivalentSystem` maps a
+        measured image's rows into its 51 dB window first.
     max_layers : int
         Most layers tried (1..10); the number is chosen by BIC (module docstring).
     blocks : int
@@ -376,6 +378,8 @@ def fit_phantom(
     >>> fit.layers.sizes["layer"], round(float(fit.layers.top[1]))
     (2, 400)
     """
+    if hasattr(config, "scan_levels"):  # a measured image with its equivalent system (real.py)
+        scan, config = config.scan_levels(scan).values, config.config
     cfg = _config(config)
     if isinstance(max_layers, bool) or not isinstance(max_layers, int) or not 1 <= max_layers <= 10:
         raise ValueError(f"max_layers must be an integer in 1..10, got {max_layers!r}")
