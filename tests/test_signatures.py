@@ -27,6 +27,7 @@ NO_EXAMPLES: set[str] = set()
 #: Options after the first two parameters that stay positional, and why.
 POSITIONAL_OPTIONS = {
     "System": "a frozen record built by speckle.datasheet: its fields in order, as a dataclass",
+    "EquivalentSystem": "a frozen record built by speckle.equivalent_system: its fields in order",
     "ScannerConfig": "the challenge's INI file as a frozen record: its keys in the file's order",
     "contrast_theory": "spectrum: the third input of the theory, S(k_n) (docs pass it so)",
     "despeckle": "params: the named filter's own parameters, despeckle(I, 'lee', {'size': 7})",

@@ -109,6 +109,16 @@ class EquivalentSystem:
         The image's kind (``load_image``'s).
     waist : float
         The twin's fitted waist ``w0`` (µm; NaN when ``beam_radius`` was given).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> from speckle.data import SAMPLE_PITCH, SAMPLE_PIXEL_SIZE, sample_path
+    >>> image = speckle.load_image(sample_path("pdms"), kind="log", dims=("depth", "x"),
+    ...                            pixel_size=SAMPLE_PIXEL_SIZE, pitch=SAMPLE_PITCH["pdms"])
+    >>> system = speckle.equivalent_system(image, (90, 290), noise_rows=(5, 40), beam_radius=8.0)
+    >>> type(system).__name__, system.rows, system.kind
+    ('EquivalentSystem', (90, 290), 'log')
     """
 
     config: ScannerConfig
