@@ -47,6 +47,7 @@ import math
 import numpy as np
 import xarray as xr
 
+from ..._validate import check_real
 from ...conventions import attrs, coord
 from ...synthoct import _scan
 from ...synthoct.files import ScannerConfig
@@ -262,6 +263,13 @@ def equivalent_system(
         raise ValueError(f"image must carry load_image's 'kind' attribute, got {kind!r}")
     image = image.transpose("depth", "x")
     nz, nx = image.shape
+    if nz < 2 or nx < 2:
+        raise ValueError(f"image must have at least 2 x 2 pixels (depth, x), got {image.shape}")
+    if np.iscomplexobj(image.values) and kind != "complex":
+        raise TypeError(f"image of kind {kind!r} must be real, got complex values")
+    if not np.isfinite(image.values).all():
+        raise ValueError("image holds NaN or inf: give a measured image of finite values")
+    check_real(wavelength, "wavelength", low=0.0, low_inclusive=False)
     a, b = _range(rows, "rows", nz, 32)
     na, nb = _range(noise_rows, "noise_rows", nz, 4)
     if not isinstance(denoise, bool):
