@@ -81,7 +81,7 @@ def main() -> None:
                 frames, k0=k0, pixel_size=pixel, path=out, progress=True
             )
         t2 = time.perf_counter()
-        last = float(np.nanmedian(res["cumulative"].isel(frame=-1).values))
+        last = float(np.nanmedian(res["accumulated"].isel(frame=-1).values))
         print(f"frames: {args.frames} x {n} x {lines} px, {args.workers} threads")
         print("| stage | wall time |\n|---|---|")
         print(f"| simulate and stream the frames to NetCDF | {t1 - t0:.1f} s |")

@@ -75,6 +75,7 @@ them; docstrings write µm.
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 from collections.abc import Mapping
 
@@ -91,6 +92,7 @@ __all__ = [
     "canonical_keys",
     "coord",
     "depth_range_of",
+    "grid",
     "inverse_units",
     "labelled",
     "spacing",
@@ -390,6 +392,98 @@ def spacing(obj: xr.DataArray | xr.Dataset, dim: str, default: float | None = No
     if step <= 0 or np.max(np.abs(d - step)) > 1e-9 * abs(step):
         raise ValueError(f"coordinate {dim!r} must be increasing and uniformly spaced")
     return step
+
+
+#: Lateral dims whose coordinate gives the line pitch, in the order they are looked for.
+LATERAL_DIMS = ("aline", "x")
+
+
+@dataclasses.dataclass(frozen=True)
+class Grid:
+    """The sampling grid of a source or an image (:func:`grid`); ``None`` where not given."""
+
+    pixel_size: float | None = None  # axial pixel H/N, µm
+    pitch: float | None = None  # line pitch, µm
+    k0: float | None = None  # central wavenumber in the medium, rad/µm
+    depth_range: float | None = None  # unambiguous depth H, µm
+    n_pixels: int | None = None  # pixels per A-scan N
+    spectrum: xr.DataArray | None = None  # source spectrum (dim wavenumber)
+
+
+def grid(obj: xr.DataArray | xr.Dataset, *, need: tuple[str, ...] = (), what: str = "obj") -> Grid:
+    """Pixel size, line pitch, k0, depth range, pixel count and spectrum of a source or image.
+
+    Read from coordinates first (``depth`` step = pixel size, ``aline``/``x`` step = pitch),
+    then from the attributes the package writes (``n_pixels``, ``depth_range``, ``k0``): a
+    spectrum (:func:`speckle.spectrum`, dim ``wavenumber``) gives ``pixel_size = H/N``; a
+    B-scan Dataset holding a ``spectrum`` variable gives it too.
+
+    Parameters
+    ----------
+    obj : xarray.DataArray or xarray.Dataset
+        A source spectrum, an image (DataArray or B-scan Dataset) or a coordinate.
+    need : tuple of str
+        Fields that must be found (else ``ValueError`` naming them and what ``obj`` has).
+    what : str
+        Name of ``obj`` in messages (the caller's parameter, e.g. ``"source"``).
+
+    Returns
+    -------
+    Grid
+        ``pixel_size`` (µm), ``pitch`` (µm), ``k0`` (rad/µm), ``depth_range`` (µm),
+        ``n_pixels`` and ``spectrum``; ``None`` for what ``obj`` does not give.
+
+    Raises
+    ------
+    TypeError
+        ``obj`` is not labelled.
+    ValueError
+        A field of ``need`` is missing, or a coordinate is not uniformly spaced.
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> img = xr.DataArray(np.zeros((4, 3)), dims=("depth", "aline"),
+    ...                    coords={"depth": [0.0, 2.0, 4.0, 6.0], "aline": [0.0, 5.0, 10.0]},
+    ...                    attrs={"k0": 10.0})
+    >>> g = grid(img)
+    >>> g.pixel_size, g.pitch, g.k0
+    (2.0, 5.0, 10.0)
+    """
+    if not isinstance(obj, (xr.DataArray, xr.Dataset)):
+        raise TypeError(
+            f"{what} must be a labelled DataArray or Dataset (coordinates and attributes give "
+            f"its grid), got {type(obj).__name__}"
+        )
+    a = obj.attrs
+    h = depth_range_of(obj, what, required=False)
+    n = int(a["n_pixels"]) if "n_pixels" in a else None
+    k0 = float(a["k0"]) if "k0" in a else None
+    spectrum = None
+    if isinstance(obj, xr.DataArray) and "wavenumber" in obj.dims:
+        spectrum = obj
+    elif isinstance(obj, xr.Dataset) and "spectrum" in obj.data_vars:
+        spectrum = obj["spectrum"]
+    pixel = None
+    if "depth" in obj.coords and obj["depth"].size > 1:
+        pixel = spacing(obj, "depth")
+    elif h is not None and n:
+        pixel = h / n
+    pitch = None
+    for dim in LATERAL_DIMS:
+        if dim in obj.dims and dim in obj.coords and obj[dim].size > 1:
+            pitch = spacing(obj, dim)
+            break
+    out = Grid(pixel, pitch, k0, h, n, spectrum)
+    missing = [f for f in need if getattr(out, f, None) is None]
+    if missing:
+        raise ValueError(
+            f"{what}: the grid's {missing} cannot be read from this {type(obj).__name__}: it has "
+            f"coordinates {list(obj.coords)} and attributes {sorted(a)} (pixel_size: a "
+            f"'depth' coordinate or n_pixels and depth_range; pitch: an 'aline'/'x' "
+            f"coordinate; k0, n_pixels, depth_range: attributes)"
+        )
+    return out
 
 
 def depth_range_of(

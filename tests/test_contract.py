@@ -1910,6 +1910,20 @@ ANSWERS: dict[tuple[str, str, str], str] = {
         "method admissible (the direct sum is chosen)"
         for n in ("choose_method", "method_estimates")
     },
+    ("track_array", "reference", "nan"): "NaN pixels give the windows holding them NaN (docstring)",
+    ("track_array", "deformed", "nan"): "as reference",
+    ("track_axial", "reference", "nan"): "as track_array",
+    ("track_axial", "deformed", "nan"): "as track_array",
+    ("sample_field", "field", "one_pixel"): "N = 1: the band-limited interpolant is the constant "
+    "A_0, exact",
+    ("oversample_depth", "field", "one_pixel"): "as sample_field: the constant A_0",
+    **{
+        (n, "step", "huge"): "a step beyond the image: one window along that axis (the first), "
+        "as a narrow image with the default step has"
+        for n in ("track", "track_array", "track_axial")
+    },
+    ("amplitude_from_gamma", "gamma", "complex"): "a complex coherence: its modulus |gamma| is "
+    "used (docstring)",
 }
 
 

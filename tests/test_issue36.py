@@ -255,8 +255,10 @@ def test_ssim_of_small_images_takes_the_window_that_fits():
         speckle.ssim_db(a[:2], a[:2])
 
 
-def test_sequence_result_says_how_to_read_its_variables():
-    assert 'result["cumulative"]' in speckle.accumulate_strain.__doc__
+def test_sequence_result_variables_are_not_dataset_methods():
+    # the accumulated strain was 'cumulative', which is xarray's Dataset.cumulative method
+    assert not hasattr(xr.Dataset, "accumulated") and hasattr(xr.Dataset, "cumulative")
+    assert "``accumulated``" in speckle.accumulate_strain.__doc__
 
 
 # --- the older features' reproducers -----------------------------------------------------------

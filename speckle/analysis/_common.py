@@ -11,9 +11,13 @@ import numpy as np
 import xarray as xr
 
 from .._validate import check_int, check_real
+from .._wrap import check_same_grid
 from ..conventions import attrs, spacing
 
 __all__ = [
+    "DEPTH",
+    "LATERAL",
+    "X",
     "delay_selection",
     "depth_major",
     "field_of",
@@ -23,6 +27,12 @@ __all__ = [
     "parse_window",
     "same_grid",
 ]
+
+
+#: The image dims of the analysis modules (one place to rename them): the lateral dim is
+#: ``aline`` (``LATERAL``) until the vocabulary step of issue 32 makes it ``x`` (``X``; the
+#: modules already moved, e.g. autocorrelation, use ``X``: ``aline`` input warns there).
+DEPTH, LATERAL, X = "depth", "aline", "x"
 
 
 def field_of(data: xr.Dataset | xr.DataArray) -> xr.DataArray:
@@ -49,24 +59,9 @@ def depth_major(image: object) -> np.ndarray:
 
 
 def same_grid(x: xr.DataArray, y: xr.DataArray, names: tuple[str, str]) -> None:
-    """``ValueError`` unless every dim ``x`` and ``y`` share has the same size and coordinates."""
-    a_name, b_name = names
-    for d in [d for d in x.dims if d in y.dims]:
-        if x.sizes[d] != y.sizes[d]:
-            raise ValueError(
-                f"{a_name} and {b_name} differ along {d!r}: {x.sizes[d]} vs {y.sizes[d]} "
-                f"values; put both on the same grid or select the same region of both "
-                f"(e.g. .isel({d}=slice(...)) on each)"
-            )
-        if d in x.coords and d in y.coords:
-            a, b = np.asarray(x[d].values), np.asarray(y[d].values)
-            if not np.array_equal(a, b):
-                i = int(np.flatnonzero(a != b)[0])
-                raise ValueError(
-                    f"{a_name} and {b_name} have different {d!r} coordinates (first difference "
-                    f"at index {i}: {a[i]!r} vs {b[i]!r}); put both on the same grid or select "
-                    "the same region of both"
-                )
+    """``ValueError`` unless every dim ``x`` and ``y`` share has the same size and coordinates
+    (:func:`speckle._wrap.check_same_grid`, the decorator's check)."""
+    check_same_grid(x, y, names)
 
 
 def matched(x: xr.DataArray, y: xr.DataArray) -> tuple[xr.DataArray, xr.DataArray]:
@@ -84,7 +79,7 @@ def matched(x: xr.DataArray, y: xr.DataArray) -> tuple[xr.DataArray, xr.DataArra
             "select one frame of the series (.isel(time=i))"
         )
     for name, f in (("reference", x), ("deformed", y)):
-        missing = [d for d in ("depth", "aline") if d not in f.dims]
+        missing = [d for d in (DEPTH, LATERAL) if d not in f.dims]
         if missing:
             raise ValueError(f"{name} must have dims 'depth' and 'aline'; got dims {f.dims}")
     same_grid(x, y, ("reference", "deformed"))
@@ -139,7 +134,7 @@ def grid_spacing(field: xr.DataArray | xr.Dataset) -> tuple[float, float]:
     A-line the pitch defaults to the pixel size.
     """
     dz = spacing(field, "depth")
-    return dz, spacing(field, "aline", default=dz)
+    return dz, spacing(field, LATERAL, default=dz)
 
 
 def delay_selection(t: np.ndarray, delays: object) -> np.ndarray:

@@ -7,15 +7,17 @@ alignment of the pair; :mod:`speckle.analysis.strain` documents them and is the 
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 
 import numpy as np
 import xarray as xr
-from scipy import ndimage
+from scipy import ndimage, special
 
 from .._validate import check_int, check_real
+from .._wrap import ArraySpec
 from ..system.source import spectrum
-from ._common import depth_major, parse_window
+from ._common import DEPTH, LATERAL, depth_major, parse_window
 from ._kernels import MARGIN, box_sums, lagrange_resample, vector_phase
 from .correlation import amplitude_from_gamma, correlation_array, expected_gamma, resample_depth
 from .phase import DEFAULT_MAX_BIAS, choose_lag, depth_autocorrelation, lag_and_rho
@@ -30,9 +32,14 @@ DEFAULT_METHOD = "vector"
 #: correlation ``rho`` = 0.44. Measured (issue 36; 256 x 32 pixels, Gaussian spectrum, R = 10):
 #: unrelated scenes give at most 0.042 (99 % below 0.034); 2 % strain at least 0.13 (1st
 #: percentile), 1 % 0.37; at 4 % strain (0.02, as unrelated) the tracked strain is wrong.
-#: Narrower windows have a higher null (single A-line windows: 56 % of unrelated pixels pass
-#: 0.1): raise ``min_quality`` with them.
+#: Narrower windows have a higher null (single A-line windows: 56 % of unrelated pixels passed
+#: 0.1), so a tracked window also needs its chance level (:func:`_chance_quality`, at
+#: :data:`TRACK_FALSE_RATE`): 0.02 for the default (64, 8), 0.13 for (64, 1), 0.24 for (32, 1).
 TRACK_MIN_QUALITY = 0.1
+#: Probability that a tracked window of two unrelated images passes its chance level.
+TRACK_FALSE_RATE = 0.01
+#: Pixels on which the chance level's correlation lengths are measured.
+CHANCE_SAMPLES = 4096
 #: Local amplitude correlation (the correlation method's quality) below which it has no answer:
 #: unrelated scenes reach it by chance. Measured (issue 36; 256 x 32 pixels, R = 10, windows
 #: 32 x 8): unrelated scenes give correlations up to 0.26 (99 % below 0.17; 31 % of the pixels
@@ -82,54 +89,27 @@ ALIGN_TRACKING = {"window": (64, 8), "step": (64, 8), "upsample": 20, "oversampl
 # --------------------------------------------------------------------------------------------
 
 
-def _as_images(reference: object, deformed: object) -> tuple[np.ndarray, np.ndarray, object]:
-    """Both images as complex (depth, aline) arrays, plus the DataArray template (or None)."""
-    arrays, template = [], None
-    kinds = {type(reference) is xr.DataArray, type(deformed) is xr.DataArray}
-    if kinds == {True, False}:
-        raise TypeError("reference and deformed must both be numpy arrays or both DataArrays")
-    for name, img in (("reference", reference), ("deformed", deformed)):
-        if isinstance(img, xr.DataArray):
-            if set(img.dims) != {"depth", "aline"}:
-                raise ValueError(f"{name} must have dims (depth, aline), got {img.dims}")
-            img = img.transpose("depth", "aline")
-            template = img if template is None else template
-            values = img.values
-        elif isinstance(img, np.ndarray):
-            values = img
-        else:
-            raise TypeError(
-                f"{name} must be a complex numpy array or xarray.DataArray (depth, aline), got "
-                f"{type(img).__name__}"
-            )
-        if not np.iscomplexobj(values):
-            raise TypeError(
-                f"{name} must be a complex image (the phase carries the strain), got dtype "
-                f"{values.dtype}"
-            )
-        if values.ndim != 2:
-            raise ValueError(f"{name} must be 2-D (depth, aline), got shape {values.shape}")
-        finite = np.isfinite(values)
-        if not finite.all():
-            raise ValueError(
-                f"{name} holds {int(finite.size - finite.sum())} NaN or infinite pixels of "
-                f"{finite.size}; the phase methods cannot bridge them (crop or fill them first)"
-            )
-        # the input's own layout: the numba kernels handle both (a C-order copy of a transposed
-        # B-scan cost more than it saved once the lag and the sums left numpy)
-        arrays.append(values.astype(np.complex128, copy=False))
-    if arrays[0].shape != arrays[1].shape:
-        raise ValueError(
-            f"reference and deformed must have the same shape, got {arrays[0].shape} and "
-            f"{arrays[1].shape}"
+#: A complex (depth, aline) image of the strain estimators: finite, at least 2 x 1 pixels.
+IMAGE = ArraySpec(kind="complex", dims=(DEPTH, LATERAL), min_shape=(2, 1))
+
+
+def _image_pair(*, lazy: bool = False) -> dict[str, ArraySpec]:
+    """The decorator's checks of ``reference`` and ``deformed``: complex images, same grid."""
+    image = dataclasses.replace(IMAGE, lazy=lazy)
+    return {"reference": image, "deformed": dataclasses.replace(image, same_as="reference")}
+
+
+def _frames_spec() -> dict[str, ArraySpec]:
+    """The decorator's check of a compression sequence: complex (frame >= 2, depth, aline)."""
+    return {
+        "frames": ArraySpec(
+            kind="complex",
+            dims=("frame", DEPTH, LATERAL),
+            min_shape=(2, 2, 1),
+            lazy=True,
+            keep_labels=True,
         )
-    if template is not None:
-        d = deformed.transpose("depth", "aline")
-        for dim in ("depth", "aline"):
-            if dim in template.coords or dim in d.coords:
-                if not np.array_equal(template[dim].values, d[dim].values):
-                    raise ValueError(f"reference and deformed have different {dim} coordinates")
-    return arrays[0], arrays[1], template
+    }
 
 
 def _check_window(window: object, default: tuple[int, int], shape: tuple[int, int]):
@@ -268,7 +248,7 @@ def _unit_weight_slope(y: np.ndarray, wz: int, wx: int) -> np.ndarray:
 
 def _lag(a1: np.ndarray, opts: dict) -> int:
     if opts["lag"] is None:
-        return choose_lag(a1, max_bias=opts["max_bias"])
+        return choose_lag.__wrapped__(a1, max_bias=opts["max_bias"])  # checked image
     return check_int(opts["lag"], "lag", low=1, high=a1.shape[0] - 2)
 
 
@@ -291,13 +271,13 @@ def _four_product_sums(a1, a2, lag, wz, wx, terms=("C", "absC", "R1", "R2")):
 def _vector(a1, a2, k0, p, wz, wx, opts):
     a1 = depth_major(a1)  # once: the lag's pass and the kernel read depth-contiguous A-lines
     if opts["lag"] is None:
-        lag, rho = lag_and_rho(a1, max_bias=opts["max_bias"])
+        lag, rho = lag_and_rho.__wrapped__(a1, max_bias=opts["max_bias"])  # checked image
     else:
         lag, rho = _lag(a1, opts), None
     a2 = _aligned(a1, a2, p, opts)
     wrap = bool(opts["wrap_check"]) and lag > 1
     if wrap and rho is None:
-        rho = depth_autocorrelation(a1, 1)
+        rho = depth_autocorrelation.__wrapped__(a1, 1)  # checked image
     # the lag-1 phase wraps only at 1/(2R); scaled by L and by its known low bias
     # 1 + rho(1)^2 (image autocorrelation) it picks the 2 pi branch of the lag-L phase
     # (multi-lag unwrapping); a branch error needs a predictor error > pi
@@ -400,7 +380,7 @@ def _tracked(a1, a2, window, step, upsample, oversample, lateral=True, outside="
     (:func:`speckle.analysis.tracking.interpolate_windows`); beyond the outer window centres
     NaN (``outside="nan"``) or the nearest centre's value (``"nearest"``).
     """
-    tr = track_array(
+    tr = track_array.__wrapped__(  # the numpy body: the images are checked already
         a1,
         a2,
         window=window,
@@ -413,7 +393,7 @@ def _tracked(a1, a2, window, step, upsample, oversample, lateral=True, outside="
     out = []
     for values in (tr["uz"], 1.0 - tr["error"]):
         out.append(
-            interpolate_windows(
+            interpolate_windows.__wrapped__(  # the numpy body: the centres are the tracker's
                 values, tr["centre_depth"], tr["centre_aline"], qz, qx, outside=outside
             )
         )
@@ -445,12 +425,64 @@ def _track_options(a1, wx, opts):
     }
 
 
+def _coherence_length(a: np.ndarray, width: int) -> float:
+    """``sum_L rho_A(L)^2`` over lags ``|L| < width`` along axis 0 (pixels): the amplitude
+    correlation ``rho_A`` from the field's (:func:`amplitude_from_gamma` of
+    :func:`~speckle.analysis.phase.depth_autocorrelation`); 1 for independent pixels."""
+    m = min(width, a.shape[0]) - 1
+    if m < 1:
+        return 1.0
+    # the numpy bodies (the image is checked); lags until |gamma|^2 <= 0.5 % (rho_A^2 ~
+    # |gamma|^4 <= 3e-5 beyond: the sum is complete), all of them if it stays correlated
+    try:
+        _, gamma = lag_and_rho.__wrapped__(a, max_lag=m)
+    except ValueError:
+        gamma = depth_autocorrelation.__wrapped__(a, m)
+    rho = amplitude_from_gamma.__wrapped__(gamma)
+    return float(1.0 + 2.0 * np.sum(rho[1:] ** 2))
+
+
+def _chance_quality(a1: np.ndarray, window: tuple[int, int]) -> float:
+    """Tracking quality that two unrelated images reach in a window with probability
+    :data:`TRACK_FALSE_RATE`.
+
+    The registration quality is ``1 - sqrt(1 - r^2)`` with ``r`` the peak normalised
+    cross-correlation of the windows' mean-removed amplitudes. For unrelated images the
+    correlation at one lag has (Fisher) ``atanh(r) ~ N(0, 1/(n - 3))`` with ``n = wz wx /
+    (Lz Lx)`` independent speckle cells in the window (``L = sum rho_A^2``, the amplitude
+    correlation length of the reference along depth and along the lines), and the peak is the
+    largest of ``m = (wz/Lz)(wx/Lx)`` independent lags, so ``P(max |atanh r| > t) =
+    TRACK_FALSE_RATE`` at ``t = z / sqrt(n - 3)``, ``z = Phi^-1(1 - rate / (2 m))``.
+    Measured (``tests/analysis/test_strain_inputs.py``): at the 98th-99th percentile of
+    unrelated scenes' quality for windows of 1 to 8 lines. ``Lz``, ``Lx`` are measured on
+    :data:`CHANCE_SAMPLES` pixels of the reference (every k-th line or row).
+    """
+    wz, wx = window
+    # measured on about CHANCE_SAMPLES pixels (every k-th line, or row): Sum rho^2 to ~2 %,
+    # at a fraction of the tracking's cost
+    k = max(1, a1.size // CHANCE_SAMPLES)
+    lz = _coherence_length(a1[:, ::k], wz)
+    lx = _coherence_length(a1[::k].T, wx) if wx > 1 else 1.0
+    n = wz * wx / (lz * lx)
+    m = max(wz / lz, 1.0) * max(wx / lx, 1.0)
+    z = float(special.ndtri(1.0 - TRACK_FALSE_RATE / (2.0 * m)))
+    r = np.tanh(z / np.sqrt(max(n - 3.0, 1.0)))
+    return float(1.0 - np.sqrt(1.0 - r * r))
+
+
+def _track_threshold(a1: np.ndarray, window: tuple[int, int], opts: dict) -> float:
+    """Quality below which a tracked window has no answer: ``min_quality`` or its chance
+    level, the higher."""
+    return max(opts["min_quality"], _chance_quality(a1, window))
+
+
 def _tracking(a1, a2, k0, p, wz, wx, opts):
     kw = _track_options(a1, wx, opts)
     uz, quality, _ = _tracked(a1, a2, **kw)
-    uz = np.where(quality >= opts["min_quality"], uz, np.nan)  # no answer below the threshold
+    threshold = _track_threshold(a1, kw["window"], opts)
+    uz = np.where(quality >= threshold, uz, np.nan)  # no answer below the threshold
     strain = -_pooled_slope(uz, None, wz, 1)
-    return strain, quality, {"track_window": kw["window"][0]}
+    return strain, quality, {"track_window": kw["window"][0], "min_quality": threshold}
 
 
 def _measured_spectrum(a1: np.ndarray, k0: float, p: float) -> xr.DataArray:
@@ -500,7 +532,7 @@ def _resampled(a2, uz_pixels, samples=None):
     """
     q = np.arange(a2.shape[0], dtype=float)[:, None]
     if samples is None:
-        return resample_depth(a2, q + uz_pixels)
+        return resample_depth.__wrapped__(a2, q + uz_pixels)  # the numpy body: checked
     y = np.ascontiguousarray((q + uz_pixels).T)  # (aline, depth), as the samples
     out = np.empty(y.shape, dtype=np.complex128)
     lagrange_resample(samples, y, ALIGN_TRACKING["oversample"], out)
@@ -526,7 +558,8 @@ def _alignment(a1, a2):
     One coarse tracking pass (:data:`ALIGN_TRACKING`: displacement only, no registration
     error), interpolated once, laid out with depth contiguous for the resampling.
     """
-    tr = track_axial(a1, a2, keep_samples=True, **_align_tracking(a1))
+    # the numpy body: the images are checked already
+    tr = track_axial.__wrapped__(a1, a2, keep_samples=True, **_align_tracking(a1))
     qz, qx = np.arange(a1.shape[0], dtype=float), np.arange(a1.shape[1], dtype=float)
     uz = interpolate_windows(  # transposed: (aline, depth), each A-line contiguous
         tr["uz"].T, tr["centre_aline"], tr["centre_depth"], qx, qz, outside="nearest"
@@ -586,7 +619,7 @@ def _correlation(a1, a2, k0, p, wz, wx, opts):
     covered = inside & np.isfinite(uz)
     filled, _ = _alignment_fill(uz)  # failed windows: filled from their neighbours in depth
     comp = _resampled(a2, filled)
-    r = correlation_array(np.abs(a1), np.abs(comp), (wz, wx))
+    r = correlation_array.__wrapped__(np.abs(a1), np.abs(comp), (wz, wx))  # the numpy body
     ts, tv = (x[::-1] for x in correlation_theory(_measured_spectrum(a1, k0, p)))
     strain = np.interp(r, tv, ts, left=np.nan, right=0.0)
     strain = np.where(covered & np.isfinite(r) & (r >= opts["min_quality"]), strain, np.nan)

@@ -21,8 +21,10 @@ import numpy as np
 import xarray as xr
 from scipy import optimize
 
-from .._validate import as_finite_array, check_int, check_real
-from ..conventions import attrs, canonical_dims, coord
+from .._validate import check_int, check_real
+from .._wrap import ArraySpec, preprocess_and_wrap
+from ..conventions import attrs, coord
+from ._common import DEPTH, X
 
 __all__ = [
     "axial_correlation_theory",
@@ -40,6 +42,7 @@ def _pearson(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.sum(a * b) / np.sqrt(np.sum(a * a) * np.sum(b * b)))
 
 
+@preprocess_and_wrap(checks={"intensity": ArraySpec(kind="real", dims=(DEPTH, X), labelled=True)})
 def intensity_autocorrelation(
     intensity: xr.DataArray, *, max_lag: int = 8, n_blocks: int = 16
 ) -> xr.Dataset:
@@ -60,10 +63,7 @@ def intensity_autocorrelation(
         ``autocorrelation`` and ``autocorrelation_se`` with dims ``(axis, lag)``, ``axis`` =
         ``("depth", "lateral")``.
     """
-    intensity = canonical_dims(intensity, "intensity")
-    if not isinstance(intensity, xr.DataArray) or set(intensity.dims) != {"depth", "x"}:
-        raise TypeError("intensity must be a DataArray with dims (depth, x)")
-    x = as_finite_array(intensity.transpose("depth", "x").values, "intensity")
+    x = intensity  # checked: a real, finite (depth, x) DataArray's values ('aline' warns)
     nz, nl = x.shape
     ml = check_int(max_lag, "max_lag", low=1, high=min(nz, nl) - 2)
     nb = check_int(n_blocks, "n_blocks", low=2, high=max(2, nl // (ml + 2)))
@@ -108,11 +108,14 @@ def noise_factor(snr_db: float | None) -> float:
     return (r / (1 + r)) ** 2
 
 
+@preprocess_and_wrap(
+    checks={"lags": ArraySpec(kind="real"), "spectrum": ArraySpec(kind="real", ndim=1)}
+)
 def axial_correlation_theory(
     lags: object, spectrum: object, snr_db: float | None = None
 ) -> np.ndarray:
     """Intensity correlation along depth at integer ``lags`` for spectral weights ``spectrum``."""
-    s2 = as_finite_array(spectrum, "spectrum") ** 2
+    s2 = spectrum**2  # checked: real, finite, 1-D
     n = s2.size
     idx = np.arange(n) - n // 2
     m = np.asarray(lags, dtype=float)
@@ -120,6 +123,7 @@ def axial_correlation_theory(
     return np.where(m == 0, 1.0, np.abs(g) ** 2 * noise_factor(snr_db))
 
 
+@preprocess_and_wrap(checks={"lags": ArraySpec(kind="real")})
 def lateral_correlation_theory(
     lags: object, waist: float, pitch: float = 1.0, snr_db: float | None = None
 ) -> np.ndarray:
@@ -135,6 +139,7 @@ def _fit(residual, x0: float, lo: float, hi: float) -> tuple[float, float]:
     return float(res.x[0]), float(np.sqrt(np.mean(res.fun**2)))
 
 
+@preprocess_and_wrap(checks={"measured": ArraySpec(kind="real", ndim=1, min_shape=(2,))})
 def fit_spectral_width(
     measured: object, n_pixels: int, snr_db: float | None = None
 ) -> tuple[float, float]:
@@ -144,25 +149,29 @@ def fit_spectral_width(
     :func:`axial_correlation_theory` of ``speckle.spectrum(shape="gaussian")`` weights on
     ``n_pixels`` components. Returns ``(fwhm_fraction, rms residual)``.
     """
-    y = as_finite_array(measured, "measured")
+    y = measured  # checked: real, finite, lags 0 and 1 at least
     n = check_int(n_pixels, "n_pixels", low=8)
     lags = np.arange(1, y.size)
     idx = (np.arange(n) - n // 2) / n  # (k - k0)/delta_k
 
     def residual(p):
         s = np.exp(-4 * np.log(2) * (idx / p[0]) ** 2)
-        return axial_correlation_theory(lags, s, snr_db) - y[1:]
+        return axial_correlation_theory.__wrapped__(lags, s, snr_db) - y[1:]  # checked
 
     return _fit(residual, 0.5, 0.02, 5.0)
 
 
+@preprocess_and_wrap(checks={"measured": ArraySpec(kind="real", ndim=1, min_shape=(2,))})
 def fit_waist(measured: object, snr_db: float | None = None) -> tuple[float, float]:
     """Least-squares beam waist in A-line pitches from a lateral autocorrelation (lags 0, 1, ...).
 
     Returns ``(waist / pitch, rms residual)``.
     """
-    y = as_finite_array(measured, "measured")
+    y = measured  # checked: real, finite, lags 0 and 1 at least
     lags = np.arange(1, y.size)
     return _fit(
-        lambda p: lateral_correlation_theory(lags, p[0], 1.0, snr_db) - y[1:], 2.0, 0.05, 100.0
+        lambda p: lateral_correlation_theory.__wrapped__(lags, p[0], 1.0, snr_db) - y[1:],
+        2.0,
+        0.05,
+        100.0,
     )

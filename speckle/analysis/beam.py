@@ -26,22 +26,32 @@ factor (the kernel is separable).
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import xarray as xr
 
 from .._validate import as_finite_array, check_real
+from .._wrap import ArraySpec, preprocess_and_wrap
 from ..conventions import attrs, coord
 
 __all__ = ["axial_correlation", "lateral_correlation", "poisson_lateral_factor"]
 
 
-def _axial_integrals(spectrum: object, pixel_size: float) -> tuple[float, float]:
-    s = as_finite_array(spectrum, "spectrum")
+#: Spectral weights S_n: real, finite, 1-D (a spectrum DataArray also gives its pixel size).
+_WEIGHTS = ArraySpec(kind="real", ndim=1)
+
+
+def _axial_integrals(s: np.ndarray, pixel_size: float) -> tuple[float, float]:
     n = s.size
     c = np.correlate(s, s, mode="full")
     return pixel_size * n * float(np.sum(s**2)), pixel_size * n * float(np.sum(c**2))
 
 
+@preprocess_and_wrap(
+    checks={"dx": ArraySpec(kind="real"), "spectrum": dataclasses.replace(_WEIGHTS, optional=True)},
+    from_grid={"pixel_size": "spectrum"},
+)
 def lateral_correlation(
     dx: object,
     waist: float,
@@ -62,9 +72,11 @@ def lateral_correlation(
     density : float, optional
         Scatterer number density in µm^-2; ``None``: the dense (Gaussian speckle) limit.
     spectrum : array_like, optional
-        Spectral weights ``S_n`` (needed with ``density``).
+        Spectral weights ``S_n`` (needed with ``density``); a spectrum DataArray
+        (:func:`speckle.spectrum`) also gives ``pixel_size``.
     pixel_size : float, optional
-        ``H/N`` in µm (needed with ``density``).
+        ``H/N`` in µm (needed with ``density``; read from a spectrum DataArray, a value given
+        as well must agree with it).
     kurtosis : float
         ``E|a|^4/(E|a|^2)^2`` of the amplitudes (2 for Rayleigh, 1 for equal), >= 1.
 
@@ -73,7 +85,7 @@ def lateral_correlation(
     xarray.Dataset
         ``complex`` (``exp(-dx^2/w0^2)``) and ``intensity`` over dim ``lag`` (µm).
     """
-    d = np.atleast_1d(as_finite_array(dx, "dx"))
+    d = np.atleast_1d(dx).astype(float)  # checked: real, finite
     w0 = check_real(waist, "waist", low=0, low_inclusive=False)
     kappa = check_real(kurtosis, "kurtosis", low=1.0)
     gamma = np.exp(-(d**2) / w0**2)
@@ -101,12 +113,16 @@ def lateral_correlation(
     )
 
 
+@preprocess_and_wrap(
+    checks={"lags": ArraySpec(kind="real"), "spectrum": _WEIGHTS},
+    from_grid={"pixel_size": "spectrum"},
+)
 def axial_correlation(
     lags: object,
     spectrum: object,
     *,
     density: float,
-    pixel_size: float,
+    pixel_size: float | None = None,
     waist: float | None = None,
     kurtosis: float = 2.0,
 ) -> xr.Dataset:
@@ -125,11 +141,13 @@ def axial_correlation(
     lags : array_like
         Depth lags in pixels (integers or not).
     spectrum : array_like
-        Spectral weights ``S_n``.
+        Spectral weights ``S_n``; a spectrum DataArray (:func:`speckle.spectrum`) also gives
+        ``pixel_size``.
     density : float
         Scatterers per µm^2 (beam) or per pixel (independent lines), > 0.
-    pixel_size : float
-        ``H/N`` in µm.
+    pixel_size : float, optional
+        ``H/N`` in µm; read from a spectrum DataArray (a value given as well must agree), else
+        required.
     waist : float, optional
         Beam waist in µm; ``None``: independent lines.
     kurtosis : float
@@ -140,8 +158,8 @@ def axial_correlation(
     xarray.Dataset
         ``complex`` and ``intensity`` over dim ``lag`` (pixels).
     """
-    d = np.atleast_1d(as_finite_array(lags, "lags"))
-    s = as_finite_array(spectrum, "spectrum")
+    d = np.atleast_1d(lags).astype(float)  # checked: real, finite
+    s = spectrum  # checked: real, finite, 1-D
     rho = check_real(density, "density", low=0, low_inclusive=False)
     p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
     kappa = check_real(kurtosis, "kurtosis", low=1.0)
@@ -170,6 +188,7 @@ def axial_correlation(
     )
 
 
+@preprocess_and_wrap(checks={"strain": ArraySpec(kind="real"), "lines": ArraySpec(kind="real")})
 def poisson_lateral_factor(
     strain: object, poisson_ratio: float, lines: object, x_centre: float, waist: float
 ) -> np.ndarray:

@@ -37,6 +37,8 @@ the spectrum autocorrelation (a triangle) at lag ``R s``: monotonic for any unim
 
 from __future__ import annotations
 
+import inspect
+
 import finufft
 import numpy as np
 import scipy.fft as sfft
@@ -44,10 +46,11 @@ import xarray as xr
 from scipy import ndimage, special
 
 from .._deprecate import keyword_only, moved
-from .._validate import as_finite_array, check_bool, check_choice, check_int, check_real
-from ..conventions import attrs, coord
+from .._validate import check_bool, check_choice, check_int, check_real
+from .._wrap import ArraySpec, preprocess_and_wrap
+from ..conventions import attrs, coord, grid
 from ..system.source import index_shift_phase, spectral_index
-from ._common import field_of, grid_spacing, matched, parse_window, same_grid
+from ._common import DEPTH, LATERAL, grid_spacing, matched, parse_window, same_grid
 from ._kernels import lagrange_resample
 
 __all__ = [
@@ -67,10 +70,27 @@ __all__ = [
 
 #: Correlated quantities.
 KINDS = ("intensity", "amplitude", "complex")
+#: A labelled B-scan (a field DataArray or a B-scan Dataset's ``field``), dims (..., depth,
+#: aline), NaN allowed (left out or blanking its windows), passed labelled to the body.
+_SCAN = ArraySpec(
+    dims=(DEPTH, LATERAL),
+    extra_dims=True,
+    labelled=True,
+    variable="field",
+    keep_labels=True,
+    finite=False,
+)
+#: A source spectrum (:func:`speckle.spectrum`), passed labelled (its attrs give ``k0_dk``).
+_SPECTRUM = ArraySpec(kind="real", dims=("wavenumber",), labelled=True, keep_labels=True)
+#: Strains of the theory: real, finite, at least one.
+_STRAIN = ArraySpec(kind="real")
 #: Largest number of complex phase factors held in memory at once by :func:`sample_field`.
 CHUNK_ELEMENTS = 1 << 22
 
 
+@preprocess_and_wrap(
+    checks={"field": ArraySpec(ndim=tuple(range(1, 33))), "positions": ArraySpec(kind="real")}
+)
 def sample_field(field: object, positions: object) -> np.ndarray:
     """Evaluate band-limited A-scans at real pixel positions (exact trigonometric interpolation).
 
@@ -95,8 +115,8 @@ def sample_field(field: object, positions: object) -> np.ndarray:
     >>> speckle.sample_field(field, [0.5]).round(4)  # between pixels: exp(i pi/8)
     array([0.9239+0.3827j])
     """
-    a = np.asarray(field, dtype=np.complex128)
-    y = as_finite_array(positions, "positions")
+    a = np.asarray(field, dtype=np.complex128)  # checked: numeric, finite, not empty
+    y = np.asarray(positions, dtype=float)
     n = a.shape[-1]
     shift = n // 2
     spec = np.fft.ifft(a * index_shift_phase(n, -np.arange(n)), axis=-1)  # F_n, n=-(N//2)...
@@ -112,6 +132,7 @@ def sample_field(field: object, positions: object) -> np.ndarray:
 
 
 @keyword_only("axis")
+@preprocess_and_wrap(checks={"field": ArraySpec(ndim=tuple(range(1, 33)))})
 def oversample_depth(field: np.ndarray, factor: int, *, axis: int = 0) -> np.ndarray:
     """Complex A-scans (depth on ``axis``) at ``factor`` samples per pixel, exactly.
 
@@ -130,7 +151,7 @@ def oversample_depth(field: np.ndarray, factor: int, *, axis: int = 0) -> np.nda
     """
     a = np.asarray(field)
     a = a if a.dtype == np.complex64 else a.astype(np.complex128)
-    f = check_int(factor, "oversample", low=1)
+    f = check_int(factor, "factor", low=1)
     if f == 1:
         return a
     ax = axis % a.ndim
@@ -158,6 +179,12 @@ def oversample_depth(field: np.ndarray, factor: int, *, axis: int = 0) -> np.nda
 RESAMPLE_OVERSAMPLE = 4
 
 
+@preprocess_and_wrap(
+    checks={
+        "field": ArraySpec(kind="complex", ndim=2),
+        "positions": ArraySpec(kind="real", ndim=2),
+    }
+)
 def resample_depth(field: object, positions: object) -> np.ndarray:
     """Complex image ``(depth, aline)`` evaluated at real depth positions, every A-line at once.
 
@@ -190,14 +217,11 @@ def resample_depth(field: object, positions: object) -> np.ndarray:
     >>> np.allclose(speckle.resample_depth(field, np.arange(8.0)[:, None]), field)
     True
     """
-    a = np.asarray(field)
-    if a.ndim != 2 or not np.iscomplexobj(a):
-        raise ValueError(f"field must be a complex (depth, aline) image, got shape {a.shape}")
-    y = as_finite_array(positions, "positions")
+    a, y = field, positions  # checked: complex 2-D image, finite real positions
     if y.shape != a.shape:
         raise ValueError(f"positions must have the field's shape {a.shape}, got {y.shape}")
     # single precision: 1e-7 relative, far below the interpolation error
-    fine = oversample_depth(
+    fine = inspect.unwrap(oversample_depth)(  # the numpy body: the field is checked
         np.ascontiguousarray(a.T, dtype=np.complex64), RESAMPLE_OVERSAMPLE, axis=-1
     )
     out = np.empty(a.shape[::-1], dtype=np.complex128)  # (aline, depth): each A-line contiguous
@@ -218,6 +242,7 @@ def _horner(coef: np.ndarray, w: np.ndarray) -> np.ndarray:
     return acc
 
 
+@preprocess_and_wrap(checks={"deformed": _SCAN})
 def compensate(
     deformed: xr.Dataset | xr.DataArray,
     displacement: xr.Dataset,
@@ -266,7 +291,8 @@ def compensate(
     >>> round(float(speckle.pearson(ref, back, kind="complex")), 3)
     1.0
     """
-    field = field_of(deformed)
+    field = deformed  # the B-scan's field, labelled (the decorator)
+    carrier = check_bool(carrier, "carrier")
     from ..scene.deformation import (
         check_field,  # local import: deformation imports nothing from here
     )
@@ -278,7 +304,8 @@ def compensate(
         )
     check_field(displacement, extra_dims=[d for d in field.dims if d not in ("depth", "aline")])
     pixel, pitch = grid_spacing(field)  # from the coordinates, refused if missing/non-uniform
-    if carrier and "k0" not in field.attrs:
+    k0 = grid(field).k0  # the central wavenumber in the medium (attribute k0), or None
+    if carrier and k0 is None:
         raise ValueError(
             "deformed needs attribute k0 (rad/µm) to remove the carrier phase, as a B-scan "
             "from speckle.bscan has (or pass carrier=False)"
@@ -293,9 +320,8 @@ def compensate(
     other = [d for d in field.dims if d != "depth"]
     f_np = field.transpose(*other, "depth").values
     p_np = pos.transpose(*other, "depth").values
-    out = sample_field(f_np, p_np)
+    out = sample_field.__wrapped__(f_np, p_np)  # the numpy body: both checked
     if carrier:
-        k0 = float(field.attrs["k0"])
         out = out * np.exp(-2j * k0 * uz.transpose(*other, "depth").values)
     result = xr.DataArray(out, dims=(*other, "depth"), coords=field.coords).transpose(*field.dims)
     if "ux" in displacement and np.any(displacement["ux"].values != 0):
@@ -326,6 +352,7 @@ def _quantity(field: xr.DataArray, kind: str) -> xr.DataArray:
     return field
 
 
+@preprocess_and_wrap(checks={"reference": _SCAN, "deformed": _SCAN})
 def pearson(
     reference: xr.Dataset | xr.DataArray,
     deformed: xr.Dataset | xr.DataArray,
@@ -354,9 +381,15 @@ def pearson(
     1.0
     """
     check_choice(kind, "kind", KINDS)
-    x = _quantity(field_of(reference), kind)
-    y = _quantity(field_of(deformed), kind)
+    x = _quantity(reference, kind)
+    y = _quantity(deformed, kind)
     x, y = matched(x, y)
+    names = (dims,) if isinstance(dims, str) else dims
+    if not isinstance(names, (tuple, list)) or not names:
+        raise TypeError(f"dims must be a dim name or a tuple of them, got {dims!r}")
+    unknown = [d for d in names if d not in x.dims]
+    if unknown:
+        raise ValueError(f"dims {unknown} are not dims of the images; they have {x.dims}")
     ok = np.isfinite(abs(x)) & np.isfinite(abs(y))
     x, y = x.where(ok), y.where(ok)
     dx = x - x.mean(dims)
@@ -376,6 +409,9 @@ def _numeric(v: object, name: str) -> np.ndarray:
     return a
 
 
+@preprocess_and_wrap(
+    checks={"x": ArraySpec(finite=False), "y": ArraySpec(finite=False, same_as="x")}
+)
 def correlation_array(
     x: np.ndarray,
     y: np.ndarray,
@@ -450,6 +486,7 @@ def correlation_array(
     return np.where(valid, r, np.nan)
 
 
+@preprocess_and_wrap(checks={"reference": _SCAN, "deformed": _SCAN})
 def correlation_map(
     reference: xr.Dataset | xr.DataArray,
     deformed: xr.Dataset | xr.DataArray,
@@ -487,8 +524,8 @@ def correlation_map(
     """
     check_choice(kind, "kind", KINDS)
     wz, wx = parse_window(window)
-    x = _quantity(field_of(reference), kind)
-    y = _quantity(field_of(deformed), kind)
+    x = _quantity(reference, kind)
+    y = _quantity(deformed, kind)
     x, y = matched(x, y)
     y = y.transpose(*x.dims)
     if x.sizes["depth"] < wz or x.sizes["aline"] < wx:
@@ -496,7 +533,9 @@ def correlation_map(
             f"window {(wz, wx)} is larger than the image {(x.sizes['depth'], x.sizes['aline'])}"
         )
     axes = (x.dims.index("depth"), x.dims.index("aline"))
-    r = correlation_array(x.values, y.values, (wz, wx), axes=axes, modulus=kind == "complex")
+    r = correlation_array.__wrapped__(  # the numpy body: the images are checked
+        x.values, y.values, (wz, wx), axes=axes, modulus=kind == "complex"
+    )
     return xr.DataArray(
         r,
         dims=x.dims,
@@ -515,15 +554,17 @@ def correlation_map(
 # --------------------------------------------------------------------------------------------
 
 
+@preprocess_and_wrap(
+    checks={"x": ArraySpec(kind="real", nonempty=False), "spectrum": ArraySpec(kind="real", ndim=1)}
+)
 def kernel(x: object, spectrum: object) -> np.ndarray:
     """Point-spread kernel ``P(x) = sum_n S_n exp(2i pi n x/N)`` at pixel offsets ``x``.
 
     A scatterer ``x`` pixels below pixel ``q`` contributes ``a exp(2i k0 z) P(x)`` to ``A(q)``.
     """
-    s = as_finite_array(spectrum, "spectrum")
+    s, xx = spectrum, x  # checked: real, finite (spectrum 1-D)
     n = s.size
     idx = spectral_index(n).astype(float)
-    xx = as_finite_array(x, "x")
     w = np.exp(2j * np.pi * np.mod(xx.ravel(), n) / n)[None, :]
     out = _horner(s[None, :].astype(np.complex128), w)[0] * w[0] ** float(idx[0])
     return out.reshape(xx.shape)
@@ -540,8 +581,9 @@ def _integrals(
     n = spectrum.size
     dx = 1.0 / oversample
     x = np.arange(-n, n, dx) + 0.5 * dx  # midpoint rule on band-limited integrands
-    p = kernel(x, spectrum)
-    h = np.exp(-2j * np.pi * phase * x) * kernel(scale * x + offset, spectrum)
+    core = kernel.__wrapped__  # the numpy body: the spectrum is checked
+    p = core(x, spectrum)
+    h = np.exp(-2j * np.pi * phase * x) * core(scale * x + offset, spectrum)
     grid = {
         "C": p * np.conj(h),
         "D": np.abs(p) ** 2 * np.abs(h) ** 2,
@@ -558,6 +600,7 @@ def _integrals(
     return out
 
 
+@preprocess_and_wrap(checks={"strain": _STRAIN, "spectrum": _SPECTRUM})
 def expected_correlation(
     strain: object = 0.0,
     *,
@@ -605,7 +648,7 @@ def expected_correlation(
     >>> sorted(r.data_vars)
     ['amplitude', 'complex', 'floor', 'intensity']
     """
-    s = np.atleast_1d(as_finite_array(strain, "strain"))
+    s = np.atleast_1d(strain).astype(float)  # checked: real, finite, not empty
     if np.any((s <= -1) | (s >= 1)):
         raise ValueError(f"strain must lie in (-1, 1), got {s.tolist()}")
     rho = check_real(density, "density", low=0, low_inclusive=False)
@@ -616,7 +659,7 @@ def expected_correlation(
     if compensation == "none" and np.any(s != 0):
         raise ValueError("compensation='none' is derived for a rigid shift only; use strain=0")
     w = np.asarray(spectrum, float)
-    r_ratio = float(spectrum.attrs["k0_dk"])
+    r_ratio = _k0_dk(spectrum)
     res = {k: [] for k in ("intensity", "complex", "amplitude", "floor")}
     for si in s:
         if compensation == "exact":
@@ -637,7 +680,7 @@ def expected_correlation(
         res["floor"].append(rho * kappa * d / var)
         g = abs(c_mean) / np.sqrt(a * a_def)
         res["complex"].append(g)
-        res["amplitude"].append(amplitude_from_gamma(g))
+        res["amplitude"].append(amplitude_from_gamma.__wrapped__(g))
     coords = {"strain": coord("strain", s, "compressive strain")}
     meta = {
         "density": rho,
@@ -657,6 +700,17 @@ def expected_correlation(
     )
 
 
+def _k0_dk(spectrum: xr.DataArray) -> float:
+    """``R = k0/delta_k`` of a source spectrum (ValueError naming ``spectrum`` without it)."""
+    if "k0_dk" not in spectrum.attrs:
+        raise ValueError(
+            "spectrum needs attribute k0_dk (a spectrum from speckle.spectrum); it has "
+            f"{sorted(spectrum.attrs)}"
+        )
+    return float(spectrum.attrs["k0_dk"])
+
+
+@preprocess_and_wrap(checks={"gamma": ArraySpec()})
 def amplitude_from_gamma(gamma: object) -> np.ndarray:
     """Amplitude correlation of Gaussian speckle whose fields correlate by ``|gamma|``.
 
@@ -669,7 +723,7 @@ def amplitude_from_gamma(gamma: object) -> np.ndarray:
     >>> speckle.amplitude_from_gamma(np.array([0.0, 1.0])).round(6)
     array([0., 1.])
     """
-    g = np.minimum(np.abs(np.asarray(gamma, dtype=float)), 1.0)
+    g = np.minimum(np.abs(gamma), 1.0)  # checked: numbers (|gamma| of complex), finite
     return (np.pi / 4) * (special.hyp2f1(-0.5, -0.5, 1.0, g**2) - 1) / (1 - np.pi / 4)
 
 
@@ -692,6 +746,7 @@ def _kernel_on_grid(weights: np.ndarray, x0: float, oversample: int, count: int)
 GAMMA_EPS = 1e-14
 
 
+@preprocess_and_wrap(checks={"strain": _STRAIN, "spectrum": _SPECTRUM})
 def expected_gamma(strain: object, *, spectrum: xr.DataArray, oversample: int = 8) -> np.ndarray:
     """``|gamma|`` after exact compensation, as ``expected_correlation(...)["complex"]``, fast.
 
@@ -730,12 +785,12 @@ def expected_gamma(strain: object, *, spectrum: xr.DataArray, oversample: int = 
     >>> speckle.expected_gamma([0.0, 0.01], spectrum=src).round(3)
     array([1.   , 0.892])
     """
-    s = np.atleast_1d(as_finite_array(strain, "strain")).astype(float)
+    s = np.atleast_1d(strain).astype(float)  # checked: real, finite, not empty
     if np.any((s <= -1) | (s >= 1)):
         raise ValueError(f"strain must lie in (-1, 1), got {s.tolist()}")
     ov = check_int(oversample, "oversample", low=2)
     w = np.asarray(spectrum, float)
-    r_ratio = float(spectrum.attrs["k0_dk"])
+    r_ratio = _k0_dk(spectrum)
     n = w.size
     dx = 1.0 / ov
     count = 2 * n * ov  # x_j = -N + (j + 1/2) dx, j < count: the grid of _integrals

@@ -11,11 +11,13 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import check_int, check_real
+from .._wrap import ArraySpec, preprocess_and_wrap
 from ..system.source import spectral_index
 
 __all__ = ["carrier_window_factor", "continuum_gamma", "two_peak_weights"]
 
 
+@preprocess_and_wrap(checks={"strain": ArraySpec(kind="real")})
 def continuum_gamma(strain: object, k0_dk: float) -> np.ndarray:
     """Continuum-limit ``|gamma|`` after exact compensation, rectangular spectrum.
 
@@ -52,6 +54,7 @@ def two_peak_weights(n_pixels: int, *, separation: float, fwhm: float) -> np.nda
     return peak(-sep / 2) + peak(sep / 2)
 
 
+@preprocess_and_wrap(checks={"strain": ArraySpec(kind="real")})
 def carrier_window_factor(strain: object, k0_dk: float, window: int) -> np.ndarray:
     """``|sum_{q<W} exp(2i pi R s q)|/W``: a W-pixel window of uncompensated carrier phase.
 

@@ -37,6 +37,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import check_int, check_real
+from .._wrap import ArraySpec, preprocess_and_wrap
 from ._common import depth_major
 from ._kernels import lag_sums
 
@@ -44,14 +45,18 @@ __all__ = ["DEFAULT_MAX_BIAS", "choose_lag", "depth_autocorrelation", "lag_and_r
 
 #: Largest relative low bias ``rho(L)^2`` accepted by :func:`choose_lag` (0.5 %).
 DEFAULT_MAX_BIAS = 0.005
+#: A complex (depth, aline) image, finite, at least two depth pixels.
+_IMAGE = ArraySpec(kind="complex", ndim=2, min_shape=(2, 1))
 
 
+@preprocess_and_wrap(checks={"field": ArraySpec()})
 def noise_power(field: object, snr_db: float) -> float:
     """Noise power ``sigma^2 = mean(|field|^2) / 10^(snr_db/10)`` (:func:`speckle.add_noise`)."""
     snr = check_real(snr_db, "snr_db")
     return float(np.mean(np.abs(np.asarray(field)) ** 2)) / 10 ** (snr / 10)
 
 
+@preprocess_and_wrap(checks={"image": _IMAGE})
 def depth_autocorrelation(image: np.ndarray, max_lag: int) -> np.ndarray:
     """``|rho(L)|``, ``L = 0 ... max_lag``: normalised depth autocorrelation of a complex image.
 
@@ -80,6 +85,7 @@ def _norms(power: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 _LAG_BLOCK = 4
 
 
+@preprocess_and_wrap(checks={"image": _IMAGE})
 def lag_and_rho(
     image: np.ndarray, *, max_bias: float = DEFAULT_MAX_BIAS, max_lag: int = 64
 ) -> tuple[int, np.ndarray]:
@@ -105,6 +111,7 @@ def lag_and_rho(
     )
 
 
+@preprocess_and_wrap(checks={"image": _IMAGE})
 def choose_lag(image: np.ndarray, *, max_bias: float = DEFAULT_MAX_BIAS, max_lag: int = 64) -> int:
     """Smallest depth lag (pixels) whose field autocorrelation obeys ``rho(L)^2 <= max_bias``.
 
@@ -127,4 +134,4 @@ def choose_lag(image: np.ndarray, *, max_bias: float = DEFAULT_MAX_BIAS, max_lag
     ValueError
         If no lag up to the cap decorrelates enough (speckle larger than the image allows).
     """
-    return lag_and_rho(image, max_bias=max_bias, max_lag=max_lag)[0]
+    return lag_and_rho.__wrapped__(image, max_bias=max_bias, max_lag=max_lag)[0]  # checked

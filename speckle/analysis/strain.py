@@ -41,7 +41,10 @@ Methods (``method=``)
     then a least-squares gradient over the window (unit weights: closed form from two running
     sums). Serves supra-pixel displacements; its noise floor is set by the registration error.
     Quality: ``1 - registration error``; NaN below ``min_quality`` (:data:`TRACK_MIN_QUALITY`,
-    0.1: unrelated images stay below it).
+    0.1) or below the window's chance level, whichever is higher: the quality two unrelated
+    images reach in that window with probability :data:`TRACK_FALSE_RATE` (1 %), from the
+    number of independent speckle cells it holds (0.02 for the default 64 x 8 window, 0.13
+    for 64 x 1, 0.24 for 32 x 1; :func:`estimate_displacement` too).
 ``"correlation"``
     Correlation stability: the deformed image is compensated with the tracked displacement
     (:func:`speckle.compensate`, no carrier; tracked every 16 px by default, the displacement
@@ -79,7 +82,9 @@ from scipy import ndimage
 
 from .._deprecate import moved
 from .._validate import check_choice, check_real
+from .._wrap import Out, map_frames, preprocess_and_wrap
 from ..conventions import attrs
+from ._common import DEPTH, LATERAL
 from ._strain_methods import (
     _METHOD_FUNCS,
     ALIGN_TRACKING,
@@ -89,15 +94,18 @@ from ._strain_methods import (
     DEFAULT_WINDOWS,
     DISPLACEMENT_METHODS,
     STRAIN_METHODS,
+    TRACK_FALSE_RATE,
     TRACK_MIN_QUALITY,
-    _as_images,
     _auto_aligned,
     _check_shape_options,
     _check_window,
+    _frames_spec,
+    _image_pair,
     _lag,
     _options,
     _place,
     _track_options,
+    _track_threshold,
     _tracked,
     _unwrapped_phase,
 )
@@ -111,6 +119,7 @@ __all__ = [
     "DEFAULT_WINDOWS",
     "DISPLACEMENT_METHODS",
     "STRAIN_METHODS",
+    "TRACK_FALSE_RATE",
     "TRACK_MIN_QUALITY",
     "accumulate_strain",
     "estimate_displacement",
@@ -133,8 +142,8 @@ def _no_answer_reason(method: str, quality: np.ndarray, opts: dict, window) -> s
     head = f"estimate_strain(method={method!r}) has no answer at any pixel: "
     if "min_quality" in opts and q.size and q.max() < opts["min_quality"]:
         return head + (
-            f"every window's quality is below min_quality={opts['min_quality']:g} (highest "
-            f"{q.max():.3f}); lower min_quality or use a larger window"
+            f"every window's quality is below min_quality={opts['min_quality']:g} (or the "
+            f"window's chance level; highest {q.max():.3f}); use a larger window"
         )
     if not q.size:
         return head + f"no window {tuple(window)} has a finite quality (image too small?)"
@@ -157,18 +166,31 @@ def _strain_attrs(method: str, wz: int, wx: int) -> dict:
     }
 
 
-def _wrap(values: np.ndarray, template, name: str, meta: dict) -> object:
-    if template is None:
-        return values
-    return xr.DataArray(values, dims=("depth", "aline"), coords=template.coords, attrs=meta)
+def _strain_pair(a1, a2, k, p, method, wz, wx, opts):
+    """Strain, quality and attrs of one pair of (depth, aline) numpy images (checked)."""
+    a1, a2 = a1.astype(np.complex128, copy=False), a2.astype(np.complex128, copy=False)
+    if opts.get("align") == "auto":
+        strain, quality, info = _auto_aligned(method, a1, a2, k, p, wz, wx, opts)
+    else:
+        strain, quality, info = _METHOD_FUNCS[method](a1, a2, k, p, wz, wx, opts)
+    if not np.isfinite(strain).any():
+        used = {**opts, **{k: v for k, v in info.items() if k == "min_quality"}}
+        warnings.warn(_no_answer_reason(method, quality, used, (wz, wx)), stacklevel=4)
+    return strain, quality, info
 
 
+@preprocess_and_wrap(
+    checks=_image_pair(lazy=True),
+    stack=("frame",),
+    from_grid={"pixel_size": "reference"},
+    wrap_like="reference",
+)
 def estimate_strain(
     reference: np.ndarray | xr.DataArray,
     deformed: np.ndarray | xr.DataArray,
     *,
     k0: float,
-    pixel_size: float,
+    pixel_size: float | None = None,
     method: str = DEFAULT_METHOD,
     window: int | tuple[int, int] | None = None,
     return_quality: bool = False,
@@ -180,11 +202,16 @@ def estimate_strain(
     ----------
     reference, deformed : numpy.ndarray or xarray.DataArray
         Complex images ``(depth, aline)`` of the same shape (DataArrays: dims ``depth`` and
-        ``aline``, identical coordinates). Axis 0 is depth with pixel size ``pixel_size``.
+        ``aline``, identical coordinates; refused, never aligned, when they differ), all
+        finite. Axis 0 is depth with pixel size ``pixel_size``. DataArrays with a leading
+        ``frame`` dim on both are pairs ``reference[i]``, ``deformed[i]``, checked once and
+        estimated frame by frame (Dask-backed: lazily, one task per frame).
     k0 : float
         Central wavenumber in the medium, rad/µm (> 0), as in :func:`speckle.ascan`.
-    pixel_size : float
-        Axial pixel size in the medium, µm (> 0); ``H/N`` for the model's images.
+    pixel_size : float, optional
+        Axial pixel size in the medium, µm (> 0); ``H/N`` for the model's images. Read from
+        the ``depth`` coordinate of labelled images (a value given as well must agree with
+        it); required for numpy images.
     method : {"vector", "wls", "tracking", "correlation"}
         Estimator (see the module docstring); default ``"vector"``.
     window : int or (int, int), optional
@@ -230,132 +257,44 @@ def estimate_strain(
     >>> round(float(np.nanmedian(strain)), 3)  # the applied 2e-3
     0.002
     """
-    has_frame = [isinstance(x, xr.DataArray) and "frame" in x.dims for x in (reference, deformed)]
-    if any(has_frame):
-        out = _strain_frames(
-            reference, deformed, has_frame, k0, pixel_size, method, window, options
-        )
-        if return_quality:
-            return out, out["quality"].reset_coords(drop=True).rename("quality")
-        return out
-    a1, a2, template = _as_images(reference, deformed)
     k = check_real(k0, "k0", low=0, low_inclusive=False)
     p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
     check_choice(method, "method", STRAIN_METHODS)
-    wz, wx = _check_window(window, DEFAULT_WINDOWS[method], a1.shape)
+    if not isinstance(return_quality, (bool, np.bool_)):
+        raise TypeError(f"return_quality must be True or False, got {return_quality!r}")
+    wz, wx = _check_window(window, DEFAULT_WINDOWS[method], reference.shape[-2:])
     opts = _options(method, options)
-    if opts.get("align") == "auto":
-        strain, quality, info = _auto_aligned(method, a1, a2, k, p, wz, wx, opts)
-    else:
-        strain, quality, info = _METHOD_FUNCS[method](a1, a2, k, p, wz, wx, opts)
-    if not np.isfinite(strain).any():
-        warnings.warn(_no_answer_reason(method, quality, opts, (wz, wx)), stacklevel=2)
-    out = _wrap(strain, template, "strain", {**_strain_attrs(method, wz, wx), **info})
-    if template is not None:
-        out = out.assign_coords(
-            quality=(("depth", "aline"), quality, attrs("dimensionless", "quality"))
+    if reference.ndim == 3:  # a frame stack: pairs reference[i], deformed[i], checked once
+        _check_shape_options(opts, reference.shape[1])
+        strain, quality = map_frames(
+            lambda a1, a2: _strain_pair(a1, a2, k, p, method, wz, wx, opts)[:2],
+            reference,
+            deformed,
+            ndim=2,
+            n_out=2,
         )
+        info = {}
+    else:
+        strain, quality, info = _strain_pair(reference, deformed, k, p, method, wz, wx, opts)
+    q_attrs = attrs("dimensionless", "quality")
+    meta = {**_strain_attrs(method, wz, wx), **info}
+    out = Out(strain, None, meta, coords={"quality": (quality, q_attrs)})
     if return_quality:
-        return out, _wrap(quality, template, "quality", attrs("dimensionless", "quality"))
+        return out, Out(quality, "quality", q_attrs)
     return out
 
 
-def _strain_block(f1, f2, k0, p, method, window, options):
-    s, q = estimate_strain(
-        f1[0],
-        f2[0],
-        k0=k0,
-        pixel_size=p,
-        method=method,
-        window=window,
-        return_quality=True,
-        **options,
-    )
-    return np.stack([s, q])[None]
-
-
-def _strain_frames(reference, deformed, has_frame, k0, pixel_size, method, window, options):
-    """:func:`estimate_strain` frame by frame (pairs ``reference[i]``, ``deformed[i]``), lazily.
-
-    Returns a Dask-backed DataArray (frame, depth, aline) with a lazy ``quality`` coordinate;
-    everything is checked before any work.
-    """
-    if not all(has_frame):
-        which = "reference" if has_frame[0] else "deformed"
-        raise ValueError(
-            f"only {which} has a 'frame' dim: give both inputs a frame dim of the same size "
-            "(pairs reference[i], deformed[i]) or select one frame (.isel(frame=i))"
-        )
-    arrays = []
-    for name, x in (("reference", reference), ("deformed", deformed)):
-        try:
-            data, coords = _frames_input(x)
-        except (TypeError, ValueError) as err:
-            raise type(err)(f"{name}: {err}") from None
-        arrays.append((data, coords))
-    (d1, c1), (d2, c2) = arrays
-    if d1.shape != d2.shape:
-        raise ValueError(
-            f"reference and deformed frames differ in shape: {d1.shape} vs {d2.shape} "
-            "(frame, depth, aline)"
-        )
-    for dim in ("depth", "aline"):
-        if dim in c1 and dim in c2 and not np.array_equal(c1[dim].values, c2[dim].values):
-            raise ValueError(f"reference and deformed have different {dim} coordinates")
-    k = check_real(k0, "k0", low=0, low_inclusive=False)
-    p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
-    check_choice(method, "method", STRAIN_METHODS)
-    n_frames, n, m = d1.shape
-    wz, wx = _check_window(window, DEFAULT_WINDOWS[method], (n, m))
-    _options(method, options)
-    _check_finite_frames(d1)
-    _check_finite_frames(d2)
-    if _is_dask(d1) or _is_dask(d2):
-        if not (_is_dask(d1) and _is_dask(d2)):
-            raise TypeError(
-                "reference and deformed must both be Dask-backed or both in memory (use "
-                ".chunk({'frame': 1}) on both)"
-            )
-        d1 = d1.rechunk({0: 1, 1: -1, 2: -1})
-        d2 = d2.rechunk({0: 1, 1: -1, 2: -1})
-        both = d1.map_blocks(
-            _strain_block,
-            d2,
-            k,
-            p,
-            method,
-            (wz, wx),
-            options,
-            dtype=float,
-            new_axis=1,
-            chunks=((1,) * n_frames, (2,), (n,), (m,)),
-        )
-    else:
-        both = np.concatenate(
-            [
-                _strain_block(d1[i : i + 1], d2[i : i + 1], k, p, method, (wz, wx), options)
-                for i in range(n_frames)
-            ]
-        )
-    frame = reference["frame"] if "frame" in reference.coords else np.arange(n_frames)
-    coords = {"frame": frame, **c1}
-    out = xr.DataArray(
-        both[:, 0],
-        dims=("frame", "depth", "aline"),
-        coords=coords,
-        attrs=_strain_attrs(method, wz, wx),
-    )
-    return out.assign_coords(
-        quality=(("frame", "depth", "aline"), both[:, 1], attrs("dimensionless", "quality"))
-    )
-
-
+@preprocess_and_wrap(
+    checks=_image_pair(),
+    from_grid={"pixel_size": "reference"},
+    wrap_like="reference",
+)
 def estimate_displacement(
     reference: np.ndarray | xr.DataArray,
     deformed: np.ndarray | xr.DataArray,
     *,
     k0: float,
-    pixel_size: float,
+    pixel_size: float | None = None,
     method: str = "tracking",
     window: int | tuple[int, int] | None = None,
     **options,
@@ -397,15 +336,17 @@ def estimate_displacement(
     >>> u.shape == ref.shape
     True
     """
-    a1, a2, template = _as_images(reference, deformed)
+    a1, a2 = reference.astype(np.complex128, copy=False), deformed.astype(np.complex128, copy=False)
     k = check_real(k0, "k0", low=0, low_inclusive=False)
     p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
     check_choice(method, "method", DISPLACEMENT_METHODS)
     _, wx = _check_window(window, (2, 1), a1.shape)
     if method == "tracking":
         opts = _options("tracking", options)
-        uz, quality, _ = _tracked(a1, a2, **_track_options(a1, wx, opts))
-        uz = np.where(quality >= opts["min_quality"], uz, np.nan) * p  # no answer below it
+        kw = _track_options(a1, wx, opts)
+        uz, quality, _ = _tracked(a1, a2, **kw)
+        # no answer below min_quality or the window's chance level (single lines: higher)
+        uz = np.where(quality >= _track_threshold(a1, kw["window"], opts), uz, np.nan) * p
     else:
         allowed = {"lag": None, "max_bias": DEFAULT_MAX_BIAS}
         unknown = set(options) - set(allowed)
@@ -415,16 +356,17 @@ def estimate_displacement(
         phase, _ = _unwrapped_phase(a1, a2, _lag(a1, opts))
         uz = phase / (2 * k)
     meta = attrs("displacement", "axial displacement (+z deeper)", method=method)
-    return _wrap(uz, template, "uz", meta)
+    return Out(uz, None, meta)
 
 
+@preprocess_and_wrap(checks=_image_pair(), from_grid={"pixel_size": "reference"})
 def predicted_strain_std(
     reference: np.ndarray,
     deformed: np.ndarray,
     *,
     noise_power: float,
     k0: float,
-    pixel_size: float,
+    pixel_size: float | None = None,
     window: int | tuple[int, int] | None = None,
     lag: int | None = None,
 ) -> np.ndarray:
@@ -446,7 +388,7 @@ def predicted_strain_std(
         Predicted standard deviation of the strain at each pixel (NaN where the window does not
         fit), same shape and placement as :func:`estimate_strain` with ``method="vector"``.
     """
-    a1, a2, _ = _as_images(reference, deformed)
+    a1, a2 = reference.astype(np.complex128, copy=False), deformed.astype(np.complex128, copy=False)
     k = check_real(k0, "k0", low=0, low_inclusive=False)
     p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
     sigma2 = check_real(noise_power, "noise_power", low=0)
@@ -484,39 +426,6 @@ def predicted_strain_std(
     return _place(std, wz // 2 + big_l // 2, n)
 
 
-def _frames_input(frames: object) -> tuple[object, dict]:
-    """``frames`` as a (frame, depth, aline) array (numpy or Dask) and its coordinates.
-
-    Refused before any work: a wrong type or dims, fewer than two frames, real data, Dask
-    chunks that split depth or aline.
-    """
-    coords: dict = {}
-    if isinstance(frames, xr.DataArray):
-        if set(frames.dims) != {"frame", "depth", "aline"}:
-            raise ValueError(f"frames must have dims (frame, depth, aline), got {frames.dims}")
-        frames = frames.transpose("frame", "depth", "aline")
-        coords = {d: frames[d] for d in ("depth", "aline") if d in frames.coords}
-        data = frames.data
-    elif isinstance(frames, np.ndarray):
-        data = frames
-    else:
-        raise TypeError(f"frames must be a numpy array or DataArray, got {type(frames).__name__}")
-    if data.ndim != 3 or data.shape[0] < 2:
-        raise ValueError(f"frames must be (frame >= 2, depth, aline), got shape {data.shape}")
-    if not np.issubdtype(data.dtype, np.complexfloating):
-        raise TypeError(
-            f"frames must be complex images (the phase carries the strain), got dtype {data.dtype}"
-        )
-    chunks = getattr(data, "chunks", None)
-    if chunks is not None and (len(chunks[1]) > 1 or len(chunks[2]) > 1):
-        raise ValueError(
-            f"frames' Dask chunks split depth or aline (chunks {chunks[1]} x {chunks[2]}): a "
-            "pair needs whole images; rechunk with frames.chunk({'frame': 1, 'depth': -1, "
-            "'aline': -1})"
-        )
-    return data, coords
-
-
 def _pair_fields(f1, f2, k0, p, method, window, options):
     """Interframe strain, its quality and the tracked displacement (µm) of one pair."""
     a1, a2 = np.asarray(f1), np.asarray(f2)
@@ -541,24 +450,12 @@ def _advance(state, fields, p):
     return y + u_at / p, keep * (1 - s_at)
 
 
-def _check_finite_frames(data) -> None:
-    """ValueError naming the frames holding NaN/inf (computed lazily for Dask input)."""
-    finite = np.isfinite(data).all(axis=(1, 2))
-    if hasattr(finite, "compute"):
-        finite = finite.compute()
-    bad = np.flatnonzero(~np.asarray(finite))
-    if bad.size:
-        raise ValueError(
-            f"frames {bad[:10].tolist()}{' ...' if bad.size > 10 else ''} ({bad.size} of "
-            f"{len(finite)}) hold NaN or infinite pixels; drop or repair them first"
-        )
-
-
+@preprocess_and_wrap(checks=_frames_spec(), from_grid={"pixel_size": "frames"})
 def accumulate_strain(
     frames: np.ndarray | xr.DataArray,
     *,
     k0: float,
-    pixel_size: float,
+    pixel_size: float | None = None,
     method: str = DEFAULT_METHOD,
     window: int | tuple[int, int] | None = None,
     path: str | None = None,
@@ -595,13 +492,14 @@ def accumulate_strain(
     -------
     xarray.Dataset
         ``interframe`` (``frame`` = pair index, depth, aline; on each earlier frame's grid),
-        ``quality`` (of each interframe estimate), ``cumulative`` (strain of frame ``i+1``
+        ``quality`` (of each interframe estimate), ``accumulated`` (strain of frame ``i+1``
         relative to frame 0 on frame 0's pixels) and ``position`` (pixel ``y_{i+1}`` of each
         frame-0 pixel in frame ``i+1``). The input's depth and aline coordinates are kept
         (else depth = pixel index times ``pixel_size``). The numbers do not depend on the
-        scheduler or the number of workers. Read the variables by key
-        (``result["cumulative"]``): ``result.cumulative`` is xarray's
-        :meth:`xarray.Dataset.cumulative` method, not the variable.
+        scheduler or the number of workers. The accumulated strain was named ``cumulative``
+        before: that name is :meth:`xarray.Dataset.cumulative`, a method, so
+        ``result.cumulative`` did not give the variable; ``result.accumulated`` does (files
+        written before hold ``cumulative``).
 
     Raises
     ------
@@ -622,7 +520,16 @@ def accumulate_strain(
     >>> round(float(np.nanmedian(total["cumulative"].isel(frame=-1))), 3)  # 4e-3 after two steps
     0.004
     """
-    data, coords = _frames_input(frames)
+    labelled = isinstance(frames, xr.DataArray)  # checked and transposed by the decorator
+    coords = {d: frames[d] for d in (DEPTH, LATERAL) if labelled and d in frames.coords}
+    data = frames.data if labelled else frames  # numpy, or Dask from a lazy DataArray
+    chunks = getattr(data, "chunks", None)
+    if chunks is not None and (len(chunks[1]) > 1 or len(chunks[2]) > 1):
+        raise ValueError(
+            f"frames' Dask chunks split depth or aline (chunks {chunks[1]} x {chunks[2]}): a "
+            "pair needs whole images; rechunk with frames.chunk({'frame': 1, 'depth': -1, "
+            "'aline': -1})"
+        )
     p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
     k = check_real(k0, "k0", low=0, low_inclusive=False)
     check_choice(method, "method", STRAIN_METHODS)
@@ -630,21 +537,20 @@ def accumulate_strain(
     wz, wx = _check_window(window, DEFAULT_WINDOWS[method], (n, m))
     opts = _options(method, options)  # unknown or malformed options: refused before any work
     _check_shape_options(opts, n)  # and those bounded by the image, before a lazy graph
-    _check_finite_frames(data)
     if path is not None and not isinstance(path, (str, bytes)) and not hasattr(path, "__fspath__"):
         raise TypeError(f"path must be a file path, got {type(path).__name__}")
     if not isinstance(progress, (bool, np.bool_)):
         raise TypeError(f"progress must be True or False, got {progress!r}")
     args = (k, p, method, (wz, wx), options)
-    dims = ("frame", "depth", "aline")
-    depth = coords.get("depth", xr.DataArray(np.arange(n) * p, dims="depth"))
-    out_coords = {"frame": np.arange(1, n_frames), "depth": depth}
-    if "aline" in coords:
-        out_coords["aline"] = coords["aline"]
+    dims = ("frame", DEPTH, LATERAL)
+    depth = coords.get(DEPTH, xr.DataArray(np.arange(n) * p, dims=DEPTH))
+    out_coords = {"frame": np.arange(1, n_frames), DEPTH: depth}
+    if LATERAL in coords:
+        out_coords[LATERAL] = coords[LATERAL]
     variables = {
         "interframe": attrs("strain", "interframe strain"),
         "quality": attrs("dimensionless", "interframe quality"),
-        "cumulative": attrs("strain", "strain to frame 0"),
+        "accumulated": attrs("strain", "strain to frame 0"),
         "position": attrs("pixels", "position in frame"),
     }
     meta = {
@@ -720,7 +626,7 @@ def _frame(fields, state) -> dict:
     return {
         "interframe": fields[0],
         "quality": fields[1],
-        "cumulative": 1 - state[1],
+        "accumulated": 1 - state[1],
         "position": state[0],
     }
 

@@ -32,15 +32,15 @@ import xarray as xr
 from skimage.registration import phase_cross_correlation
 
 from .._validate import (
-    as_finite_array,
     check_bool,
     check_choice,
     check_int,
     check_memory,
     check_real,
 )
+from .._wrap import ArraySpec, preprocess_and_wrap
 from ..conventions import attrs, coord
-from ._common import field_of, grid_spacing, matched, parse_window
+from ._common import DEPTH, LATERAL, grid_spacing, parse_window
 from ._kernels import refine_shifts, window_moments
 from .correlation import oversample_depth, sample_field
 
@@ -52,6 +52,24 @@ __all__ = [
     "track_array",
     "track_axial",
 ]
+
+#: The images of :func:`track_array` and :func:`track_axial`: complex (depth, aline), NaN
+#: allowed (their windows get NaN).
+_IMAGES = {
+    "reference": ArraySpec(kind="complex", dims=(DEPTH, LATERAL), finite=False),
+    "deformed": ArraySpec(kind="complex", dims=(DEPTH, LATERAL), finite=False, same_as="reference"),
+}
+#: The B-scans of :func:`track`: labelled (a field DataArray or a B-scan Dataset), finite.
+_SCANS = {
+    name: ArraySpec(
+        dims=(DEPTH, LATERAL),
+        labelled=True,
+        variable="field",
+        keep_labels=True,
+        same_as=None if name == "reference" else "reference",
+    )
+    for name in ("reference", "deformed")
+}
 
 #: Tracking methods: the vectorised pass and the per-window skimage reference.
 TRACK_METHODS = ("fft", "reference")
@@ -197,6 +215,7 @@ def _reference_shifts(pa: np.ndarray, pb: np.ndarray, up: int):
     return out[:, 0], out[:, 1], out[:, 2]
 
 
+@preprocess_and_wrap(checks=_IMAGES)
 def track_array(
     reference: np.ndarray,
     deformed: np.ndarray,
@@ -263,7 +282,7 @@ def track_array(
     >>> round(float(np.median(out["uz"])), 2)  # a shift of 3 pixels in depth
     3.0
     """
-    a, b = _pair(reference, deformed)
+    a, b = reference, deformed  # checked by the decorator
     check_choice(quantity, "quantity", ("amplitude", "intensity"))
     check_choice(method, "method", TRACK_METHODS)
     for name, flag in (("lateral", lateral), ("error", error)):
@@ -277,7 +296,8 @@ def track_array(
     a, b, bad = _zero_bad(a, b)
     if method == "reference":  # today's path: per-sample trigonometric interpolation
         fine = np.arange(0, a.shape[0], 1 / ov)
-        ha, hb = np.abs(sample_field(a.T, fine)), np.abs(sample_field(b.T, fine))
+        sample = sample_field.__wrapped__  # the numpy body: the images are checked
+        ha, hb = np.abs(sample(a.T, fine)), np.abs(sample(b.T, fine))
     else:
         ha, hb, _ = _amplitudes(a, b, ov)
     if quantity == "intensity":
@@ -306,6 +326,7 @@ def track_array(
     }
 
 
+@preprocess_and_wrap(checks=_IMAGES)
 def track_axial(
     reference: np.ndarray,
     deformed: np.ndarray,
@@ -360,7 +381,7 @@ def track_axial(
     >>> round(float(np.median(out["uz"])), 2)  # a shift of 3 pixels in depth
     3.0
     """
-    a, b = _pair(reference, deformed)
+    a, b = reference, deformed  # checked by the decorator
     wz, wx = parse_window(window, shape=a.shape)
     stz, stx = parse_window(step, "step", low=1)
     up = check_int(upsample, "upsample", low=1)
@@ -421,20 +442,6 @@ def track_axial(
     return out
 
 
-def _pair(reference, deformed) -> tuple[np.ndarray, np.ndarray]:
-    """Both images as 2-D complex arrays of the same shape (else TypeError/ValueError)."""
-    a = np.asarray(reference)
-    b = np.asarray(deformed)
-    for name, x in (("reference", a), ("deformed", b)):
-        if x.ndim != 2:
-            raise ValueError(f"{name} must be a 2-D (depth, aline) array, got shape {x.shape}")
-        if not np.issubdtype(x.dtype, np.complexfloating):
-            raise TypeError(f"{name} must be a complex image, got dtype {x.dtype}")
-    if a.shape != b.shape:
-        raise ValueError(f"reference and deformed differ in shape: {a.shape} vs {b.shape}")
-    return a, b
-
-
 def _zero_bad(a, b):
     """NaN/inf pixels of either image zeroed in both, and their mask (None when all finite:
     a finite sum means every pixel is, one pass without a mask)."""
@@ -457,7 +464,7 @@ def _amplitudes(a, b, ov: int, keep: bool = False):
     for x, want in ((a, False), (b, keep)):
         lines = np.ascontiguousarray(x.T, dtype=np.complex64)
         if ov != 2:
-            fine = oversample_depth(lines, ov, axis=-1)
+            fine = oversample_depth.__wrapped__(lines, ov, axis=-1)  # checked images
             out.append((np.abs(fine), fine if want else None))
             continue
         n = lines.shape[1]
@@ -504,6 +511,7 @@ def _textured(ha, hb, ov, bad, shape, window, step) -> np.ndarray:
     return ok
 
 
+@preprocess_and_wrap(checks=_SCANS)
 def track(
     reference: xr.Dataset | xr.DataArray,
     deformed: xr.Dataset | xr.DataArray,
@@ -552,22 +560,14 @@ def track(
     16.0
     """
     tol = check_real(max_error, "max_error", low=0, low_inclusive=False)
-    ref = field_of(reference)
-    dfm = field_of(deformed)
-    for name, f in (("reference", ref), ("deformed", dfm)):
-        if set(f.dims) != {"depth", "aline"}:
-            raise ValueError(f"{name} must have dims exactly (depth, aline), got {f.dims}")
-    ref, dfm = matched(ref, dfm)
-    ref, dfm = ref.transpose("depth", "aline"), dfm.transpose("depth", "aline")
-    for name, f in (("reference", ref), ("deformed", dfm)):
-        bad = int(np.size(f) - np.count_nonzero(np.isfinite(f.values)))
-        if bad:
-            raise ValueError(
-                f"{name} must be finite: {bad} NaN or infinite pixels of {f.size} (crop them, "
-                "or use speckle.analysis.track_array, which gives the windows holding them NaN)"
-            )
+    if truth is not None and not (isinstance(truth, xr.Dataset) and "uz" in truth):
+        raise TypeError(
+            f"truth must be an xarray.Dataset with 'uz' (µm) on the pixel grid, got "
+            f"{type(truth).__name__}"
+        )
+    ref, dfm = reference, deformed  # fields (depth, aline), finite, same grid: the decorator
     pixel, pitch = grid_spacing(ref)
-    res = track_array(
+    res = track_array.__wrapped__(  # the numpy body: checked by track's decorator
         ref.values,
         dfm.values,
         window=window,
@@ -579,9 +579,9 @@ def track(
     )
     wz, wx = parse_window(window)
     sz, sx = parse_window(step, "step", low=1)
-    cz = ref.depth.values[0] + res["centre_depth"] * pixel
-    cx = ref.aline.values[0] + res["centre_aline"] * pitch
-    dims = ("depth", "aline")
+    cz = ref[DEPTH].values[0] + res["centre_depth"] * pixel
+    cx = ref[LATERAL].values[0] + res["centre_aline"] * pitch
+    dims = (DEPTH, LATERAL)
     out = xr.Dataset(
         {
             "uz": (dims, res["uz"] * pixel, attrs("depth", "tracked axial displacement")),
@@ -622,6 +622,19 @@ def track(
     return out
 
 
+#: A pixel grid (µm): real, finite, 1-D; empty allowed (no pixel asked).
+_GRID = ArraySpec(kind="real", ndim=1, nonempty=False)
+
+
+@preprocess_and_wrap(
+    checks={
+        "values": ArraySpec(kind="real", ndim=2, finite=False, nonempty=False),
+        "centre_depth": ArraySpec(kind="real", ndim=1),
+        "centre_aline": ArraySpec(kind="real", ndim=1),
+        "depth": _GRID,
+        "aline": _GRID,
+    }
+)
 def interpolate_windows(
     values: np.ndarray,
     centre_depth: np.ndarray,
@@ -665,13 +678,10 @@ def interpolate_windows(
            [1. ]])
     """
     check_choice(outside, "outside", ("linear", "nearest", "nan"))
-    v = np.asarray(values)
-    if v.dtype.kind not in "fiu":
-        raise TypeError(f"values must be real numbers (NaN allowed), got dtype {v.dtype}")
+    v, z, x = values, depth, aline  # checked: real, finite grids (values: NaN allowed)
     cz, cx = (
         _axis(c, n) for c, n in ((centre_depth, "centre_depth"), (centre_aline, "centre_aline"))
     )
-    z, x = as_finite_array(depth, "depth"), as_finite_array(aline, "aline")
     if v.shape != (cz.size, cx.size):
         raise ValueError(
             f"values must have shape (centre_depth, centre_aline) = {(cz.size, cx.size)}, got "
@@ -683,10 +693,9 @@ def interpolate_windows(
     return _interp_axis(out, cx, x, 1, outside)
 
 
-def _axis(c: object, name: str) -> np.ndarray:
-    """Window centres: a finite, increasing 1-D array of at least one value."""
-    a = as_finite_array(c, name)
-    if a.ndim != 1 or a.size < 1 or np.any(np.diff(a) <= 0):
+def _axis(a: np.ndarray, name: str) -> np.ndarray:
+    """Window centres (finite, 1-D, checked): increasing, else ValueError."""
+    if np.any(np.diff(a) <= 0):
         raise ValueError(f"{name} must be an increasing 1-D array of window centres, got {a}")
     return a
 
@@ -709,6 +718,7 @@ def _interp_axis(v: np.ndarray, xp: np.ndarray, x: np.ndarray, axis: int, outsid
     return out
 
 
+@preprocess_and_wrap(checks={"depth": _GRID, "aline": _GRID})
 def interpolate_displacement(
     tracked: xr.Dataset, depth: np.ndarray, aline: np.ndarray, *, axial_only: bool = True
 ) -> xr.Dataset:
@@ -751,9 +761,9 @@ def interpolate_displacement(
     axial_only = check_bool(axial_only, "axial_only")
     names = ("uz",) if axial_only else ("uz", "ux")
     for name in names:
-        vals = tracked[name].transpose("depth", "aline").values
+        vals = tracked[name].transpose(DEPTH, LATERAL).values
         grid = interpolate_windows(
-            vals, tracked.depth.values, tracked.aline.values, np.asarray(depth), np.asarray(aline)
+            vals, tracked[DEPTH].values, tracked[LATERAL].values, depth, aline
         )
-        out[name] = (("depth", "aline"), grid, dict(tracked[name].attrs))
-    return xr.Dataset(out, coords={"depth": coord("depth", depth), "aline": coord("aline", aline)})
+        out[name] = ((DEPTH, LATERAL), grid, dict(tracked[name].attrs))
+    return xr.Dataset(out, coords={DEPTH: coord(DEPTH, depth), LATERAL: coord(LATERAL, aline)})

@@ -652,7 +652,7 @@ def sequence_data(cfg: Mapping, seed: int) -> xr.Dataset:
         window=_window(cfg),
     )
     truth = np.array(totals[1:])
-    cum = out["cumulative"].values
+    cum = out["accumulated"].values
     med = np.array([np.nanmedian(c) for c in cum])
     rms = np.array([np.sqrt(np.nanmean((c - t) ** 2)) for c, t in zip(cum, truth, strict=True)])
     out["true_cumulative"] = ("frame", truth, STRAIN)
@@ -751,13 +751,14 @@ def plot_sequence_large(ds: xr.Dataset, per_frame: float) -> Figure:
     """Cumulative strain of the last frame (physical aspect ratio), and its median per frame
     against the nominal ``1 - (1 - s)^k``."""
     fig, axes = new_figure(1, 2, width=7.0, height=3.6, width_ratios=[1, 1.4])
-    last = ds["cumulative"].isel(frame=-1)
+    last = ds["accumulated"].isel(frame=-1)
     im = physical_image(axes[0, 0], last.values, ds.depth.values, ds.aline.values, cmap="viridis")
     axes[0, 0].xaxis.set_major_locator(MaxNLocator(2))
     colorbar(fig, im, axes[0, 0], "cumulative axial strain")
     axes[0, 0].set_title(f"frame {int(ds.frame[-1])} against frame 0")
     med = [
-        float(np.nanmedian(ds["cumulative"].isel(frame=i).values)) for i in range(ds.sizes["frame"])
+        float(np.nanmedian(ds["accumulated"].isel(frame=i).values))
+        for i in range(ds.sizes["frame"])
     ]
     f = ds.frame.values
     axes[0, 1].plot(f, med, "o", label="accumulated (median)")

@@ -28,7 +28,7 @@ from .._deprecate import renamed_parameters
 from .._validate import as_finite_array, check_int, check_memory
 from ..analysis._common import label_looks
 from ..analysis.compounding import brownian_frames
-from ..conventions import coord
+from ..conventions import coord, grid
 from ..imaging.scan import scan_image
 from ..scene.shared import check_scene
 from ..system.polarization import depolarize
@@ -102,12 +102,12 @@ def angular_looks(
     >>> looks.dims, looks.sizes["look"]
     (('look', 'depth', 'x'), 2)
     """
-    xs, src = _inputs(scene, source, lines)
+    xs, _ = _inputs(scene, source, lines)
     ang = as_finite_array(angles, "angles")
     if ang.ndim != 1 or ang.size == 0 or np.any(np.abs(ang) >= 90):
         raise ValueError("angles must be a non-empty 1-D list of degrees in (-90, 90)")
-    n, h = src["n_pixels"], src["depth_range"]
-    p = h / n
+    g = grid(source, need=("n_pixels", "pixel_size"), what="source")  # from its attributes
+    n, p = g.n_pixels, g.pixel_size
     pitch = xs[1] - xs[0] if xs.size > 1 else p
     zc, xc = (n - 1) / 2 * p, (xs[0] + xs[-1]) / 2
     zz, xx = np.meshgrid(np.arange(n) * p - zc, xs - xc, indexing="ij")

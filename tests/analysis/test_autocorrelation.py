@@ -88,7 +88,11 @@ def test_bad_autocorrelation_inputs():
     img = xr.DataArray(np.ones((10, 40)), dims=("depth", "aline"))
     with pytest.raises(ValueError, match="max_lag"):
         ac.intensity_autocorrelation(img, max_lag=9)
-    with pytest.raises(TypeError, match="dims"):
-        ac.intensity_autocorrelation(img.rename(aline="x"))
+    with pytest.raises(ValueError, match="dims"):
+        ac.intensity_autocorrelation(img.rename(aline="lateral"))
+    big = xr.DataArray(np.random.default_rng(0).exponential(size=(40, 40)), dims=("depth", "x"))
+    with pytest.warns(FutureWarning, match="dim 'aline' is now 'x'"):
+        old = ac.intensity_autocorrelation(big.rename(x="aline"), n_blocks=4)
+    assert old.equals(ac.intensity_autocorrelation(big, n_blocks=4))
     with pytest.raises(ValueError, match="snr_db"):
         ac.noise_factor(float("nan"))

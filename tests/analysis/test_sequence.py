@@ -46,7 +46,7 @@ def test_coordinates_are_kept(frames):
 
 def test_cumulative_follows_the_composed_truth(in_memory):
     truth = [1 - (1 - S) ** k for k in (1, 2, 3)]
-    med = [float(np.nanmedian(c)) for c in in_memory["cumulative"].values]
+    med = [float(np.nanmedian(c)) for c in in_memory["accumulated"].values]
     np.testing.assert_allclose(med, truth, rtol=0.05)
 
 
@@ -67,9 +67,9 @@ def test_lazy_streamed_identical_under_schedulers(frames, in_memory, tmp_path, s
     with dask.config.set(scheduler=scheduler, num_workers=2):
         out = speckle.accumulate_strain(lazy, path=tmp_path / "seq.nc", **kw(frames))
     # one NetCDF chunk per frame, opened lazily (nothing loaded until asked)
-    assert out["cumulative"].encoding["chunksizes"] == (1, N, LINES)
-    assert not out["cumulative"].variable._in_memory
-    for name in ("interframe", "quality", "cumulative", "position"):
+    assert out["accumulated"].encoding["chunksizes"] == (1, N, LINES)
+    assert not out["accumulated"].variable._in_memory
+    for name in ("interframe", "quality", "accumulated", "position"):
         np.testing.assert_array_equal(out[name].values, in_memory[name].values)
 
 
@@ -84,8 +84,8 @@ def test_distributed_cluster_gives_the_same_numbers(frames, in_memory, tmp_path)
         out = speckle.accumulate_strain(
             frames.chunk({"frame": 1}), path=tmp_path / "seq.nc", **kw(frames)
         )
-        values = out["cumulative"].values
-    np.testing.assert_array_equal(values, in_memory["cumulative"].values)
+        values = out["accumulated"].values
+    np.testing.assert_array_equal(values, in_memory["accumulated"].values)
 
 
 def test_estimate_strain_over_frames_is_lazy_and_equals_the_loop(frames):

@@ -306,7 +306,7 @@ def test_sequence_accumulates_to_total_strain():
     ref, dfm = pair(totals)
     frames = np.concatenate([ref[None], dfm])
     out = speckle.accumulate_strain(frames, k0=k0(), pixel_size=PIXEL, window=(32, 4))
-    cum = out["cumulative"].values
+    cum = out["accumulated"].values
     for i, total in enumerate(totals):
         assert np.nanmedian(cum[i, 20:200]) == pytest.approx(total, rel=0.01)
         assert np.nanmedian(out["interframe"].values[i]) == pytest.approx(s, rel=0.02)
@@ -380,7 +380,7 @@ def test_bad_inputs_get_clear_errors():
         speckle.estimate_strain(ref[None], dfm[0][None], **kw)
     a = xr.DataArray(ref, dims=("depth", "aline"), coords={"aline": np.arange(32.0)})
     b = xr.DataArray(dfm[0], dims=("depth", "aline"), coords={"aline": np.arange(32.0) + 1})
-    with pytest.raises(ValueError, match="aline coordinates"):
+    with pytest.raises(ValueError, match="'aline' coordinates"):
         speckle.estimate_strain(a, b, **kw)
     with pytest.raises(TypeError, match="both"):
         speckle.estimate_strain(a, dfm[0], **kw)

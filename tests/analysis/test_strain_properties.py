@@ -94,4 +94,4 @@ def test_accumulate_strain_refuses_or_answers(pair, window, path, progress):
     except (TypeError, ValueError) as err:
         assert any(n in str(err) for n in ("window", "path", "progress")), str(err)
         return
-    assert out["cumulative"].shape == (1, N, LINES)
+    assert out["accumulated"].shape == (1, N, LINES)

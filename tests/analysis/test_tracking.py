@@ -75,7 +75,7 @@ def test_failures_are_reported(scene):
 def test_bad_tracking_input(scene):
     src = speckle.spectrum(N, H, k0_dk=10)
     b = speckle.bscan(D.uniaxial_strain(scene, [0.0, 0.01]), src)
-    with pytest.raises(ValueError, match=r"dims exactly \(depth, aline\)"):
+    with pytest.raises(ValueError, match=r"must have dims \('depth', 'aline'\), got \('strain'"):
         T.track(b, b)
     ref = b.isel(strain=0)
     with pytest.raises(ValueError, match="larger than the image"):

@@ -517,7 +517,7 @@ def _elastography():
     )
     large = _fake(
         {"frame": [1, 2], "depth": np.arange(32) * 8.0, "aline": np.arange(8) * 8.0},
-        {"cumulative": ("frame", "depth", "aline")},
+        {"accumulated": ("frame", "depth", "aline")},
         {"pixel_size": 8.0},
     )
     return {

@@ -57,9 +57,9 @@ def reference(repo) -> Path:
 
 def test_target_is_chunked_per_frame_and_follows_the_compression(reference):
     ds = open_dataset(reference / TARGET, load=False)
-    assert ds["cumulative"].encoding["chunksizes"][0] == 1
+    assert ds["accumulated"].encoding["chunksizes"][0] == 1
     assert (reference / TARGET.replace(".nc", ".png")).stat().st_size > 0
-    med = [float(np.nanmedian(ds["cumulative"].isel(frame=i).values)) for i in range(2)]
+    med = [float(np.nanmedian(ds["accumulated"].isel(frame=i).values)) for i in range(2)]
     assert med[1] > med[0] > 0  # compression accumulates
 
 
@@ -67,5 +67,5 @@ def test_target_is_chunked_per_frame_and_follows_the_compression(reference):
 def test_same_numbers_under_every_scheduler(repo, reference, name):
     results = build(repo, name, SCHEDULERS[name])
     a, b = open_dataset(results / TARGET), open_dataset(reference / TARGET)
-    for var in ("interframe", "quality", "cumulative", "position"):
+    for var in ("interframe", "quality", "accumulated", "position"):
         np.testing.assert_array_equal(a[var].values, b[var].values)
