@@ -251,6 +251,8 @@ def load_image(
     (('depth', 'x'), (16, 8), 10.0)
     """
     check_choice(kind, "kind", IMAGE_KINDS)
+    if not isinstance(path, str | os.PathLike):
+        raise TypeError(f"path must be a str or path-like, got {type(path).__name__} {path!r}")
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(f"image not found: {p}")

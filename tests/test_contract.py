@@ -1119,7 +1119,7 @@ ENTRIES: dict[str, Entry] = {
         why="path: a file to stream to; **options: estimate_strain's",
     ),
     "compound": E(lambda: dict(looks=F.looks), looks="dataset"),
-    "compounded_contrast": E(lambda: dict(mu=np.eye(2)), mu="image"),
+    "compounded_contrast": E(lambda: dict(mu=np.eye(2)), mu="complex_image"),
     "frequency_looks": E(
         lambda: dict(img=F.img, apodizations=speckle.subband_apodizations(16, 2)),
         img="dataset",
@@ -1131,11 +1131,13 @@ ENTRIES: dict[str, Entry] = {
     "subband_fwhm": E(lambda: dict(n_pixels=16, n_samples=8)),
     "apodization_correlation": E(
         lambda: dict(apodizations=speckle.subband_apodizations(16, 2)),
-        apodizations="image",
+        apodizations="complex_image",
         spectrum="real_array",
     ),
     "split_spectrum_contrast": E(
-        lambda: dict(weights=np.ones((2, 16)), density=4.0), weights="image", kurtosis="positive"
+        lambda: dict(weights=np.ones((2, 16)), density=4.0),
+        weights="complex_image",
+        kurtosis="positive",
     ),
     "noisy_looks": E(
         lambda: dict(looks=F.looks, snr_db=10.0, seed=3),
@@ -1190,9 +1192,14 @@ ENTRIES: dict[str, Entry] = {
         )
     ),
     "brownian_frames": E(
-        lambda: dict(scene=F.shared, n_frames=2, diffusion=1.0, interval=0.01, seed=1)
+        lambda: dict(scene=F.shared, n_frames=2, diffusion=1.0, interval=0.01, seed=1),
+        diffusion="nonnegative",  # D = 0: a static scene (docstring)
     ),
-    "brownian_g1": E(lambda: dict(tau=[0.0, 0.01], diffusion=1.0, k0=5.0), tau="real_array"),
+    "brownian_g1": E(
+        lambda: dict(tau=[0.0, 0.01], diffusion=1.0, k0=5.0),
+        tau="real_array",
+        diffusion="nonnegative",  # D = 0: g1 = 1 (docstring)
+    ),
     "despeckle": E(
         lambda: dict(intensity=F.speckled, name="median"), name="choice", params="mapping"
     ),
@@ -1340,17 +1347,17 @@ ENTRIES: dict[str, Entry] = {
     "g1_transverse_flow": E(
         lambda: dict(lag=[0.0, 1e-3], velocity=100.0, waist=6.0), lag="real_array", velocity="real"
     ),
-    "liv_expected": E(lambda: dict(g1=[1.0, 0.5, 0.2]), g1="real_array", ddof="count0"),
-    "log_intensity_correlation": E(lambda: dict(g1=[1.0, 0.5, 0.2]), g1="real_array"),
-    "siegert_g2": E(lambda: dict(g1=[1.0, 0.5, 0.2]), g1="real_array", beta="probability"),
+    "liv_expected": E(lambda: dict(g1=[1.0, 0.5, 0.2]), g1="complex_array", ddof="count0"),
+    "log_intensity_correlation": E(lambda: dict(g1=[1.0, 0.5, 0.2]), g1="complex_array"),
+    "siegert_g2": E(lambda: dict(g1=[1.0, 0.5, 0.2]), g1="complex_array", beta="probability"),
     "speckle_variance_expected": E(
-        lambda: dict(g1=[1.0, 0.5, 0.2]), g1="real_array", ddof="count0"
+        lambda: dict(g1=[1.0, 0.5, 0.2]), g1="complex_array", ddof="count0"
     ),
-    "ssada_expected": E(lambda: dict(g1_bands=[0.5, 0.6]), g1_bands="real_array"),
-    "ssada_ratio": E(lambda: dict(g1=[0.5]), g1="real_array"),
+    "ssada_expected": E(lambda: dict(g1_bands=[0.5, 0.6]), g1_bands="complex_array"),
+    "ssada_ratio": E(lambda: dict(g1=[0.5]), g1="complex_array"),
     "ocds_expected": E(
         lambda: dict(g1=[1.0, 0.8, 0.6, 0.4], lags=[0, 1, 2, 3], delays=(1, 2)),
-        g1="real_array",
+        g1="complex_array",  # a complex correlation: |g1| is used (docstring)
         lags="real_array",
         delays="none",
         why="delays: a pair, tests/analysis/test_dynamics*",
@@ -1825,6 +1832,16 @@ PENDING: dict[str, str] = {}
 #: (function, parameter, bad value) -> why the call's answer is the right one.
 ANSWERS: dict[tuple[str, str, str], str] = {
     ("velocity_range", "snr_db", "inf"): "no noise: the noise floor is the static one",
+    ("compounded_contrast", "mu", "one_pixel"): "one look: the contrast of one look (1)",
+    ("apodization_correlation", "apodizations", "one_pixel"): "one look of one sample: [[1]]",
+    ("split_spectrum_contrast", "weights", "one_pixel"): "one look of one spectral sample: "
+    "sqrt(1 + kurtosis/density), the random walk of a Poisson number of phasors",
+    ("split_spectrum_contrast", "density", "inf"): "the dense limit (docstring): "
+    "compounded_contrast of the windows' correlations",
+    ("subband_fwhm", "n_pixels", "huge"): "a scalar root (brentq): nothing is allocated",
+    ("bandlimited", "field", "one_pixel"): "one sample: the constant polynomial, exact",
+    ("contrast_theory", "n_pixels", "huge"): "a rectangular spectrum's moments are closed "
+    "forms (speckle.analysis.statistics.spectrum_moments): nothing is allocated",
     **{
         (n, "intensity", "complex"): "a complex field is taken as its intensity |A|^2 "
         "(speckle.analysis.dynamics._series)"

@@ -42,7 +42,8 @@ import scipy.optimize as opt
 import xarray as xr
 
 from .._deprecate import moved, renamed_parameters
-from .._validate import as_finite_array, check_choice, check_int, check_real
+from .._validate import check_choice, check_int, check_memory, check_real
+from .._wrap import ArraySpec, preprocess_and_wrap
 from ..conventions import attrs, coord, units_of
 from ..scene.motion import brownian_motion
 from ._common import label_looks
@@ -132,7 +133,7 @@ def subband_apodizations(
     Examples
     --------
     >>> import speckle
-    >>> w = speckle.subband_windows(64, 4)
+    >>> w = speckle.subband_apodizations(64, 4)
     >>> w.shape, float(w.sum(axis=0).min())  # rectangular bands tile the spectrum
     ((4, 64), 1.0)
     """
@@ -145,6 +146,7 @@ def subband_apodizations(
     nl = check_int(n_looks, "n_looks", low=1, high=n)
     ov = check_real(overlap, "overlap", low=0.0, high=1.0, high_inclusive=False)
     check_choice(apodization, "apodization", SUBBAND_APODIZATIONS)
+    check_memory(3 * 8.0 * nl * n, "n_samples", f"{nl} apodizations of {n} samples")
     w = n / (nl - (nl - 1) * ov)
     if w < 1.0:
         raise ValueError(
@@ -165,7 +167,14 @@ def subband_apodizations(
     return win
 
 
+#: A finite non-empty (looks, samples) matrix, real or complex (the decorator's checks).
+_MATRIX = ArraySpec(kind="number", ndim=2)
+
+
 @renamed_parameters({"windows": "apodizations"})
+@preprocess_and_wrap(
+    checks={"apodizations": _MATRIX, "spectrum": ArraySpec(kind="real", optional=True)}
+)
 def apodization_correlation(apodizations: object, spectrum: object | None = None) -> np.ndarray:
     """Field correlation ``mu_ij`` of split-spectrum looks: the apodizations' weighted overlap.
 
@@ -185,29 +194,40 @@ def apodization_correlation(apodizations: object, spectrum: object | None = None
     numpy.ndarray, shape (L, L)
         Hermitian, unit diagonal.
 
+    Raises
+    ------
+    TypeError, ValueError
+        ``apodizations`` not a finite non-empty 2-D array, ``spectrum`` not ``N`` finite real
+        weights, or an apodization with no power under the spectrum (its correlation is
+        undefined).
+
     Examples
     --------
     >>> import speckle
-    >>> abs(speckle.window_correlation(speckle.subband_windows(64, 2))).round(6)  # disjoint bands
+    >>> abs(speckle.apodization_correlation(speckle.subband_apodizations(64, 2))).round(6)
     array([[1., 0.],
            [0., 1.]])
     """
-    w = as_finite_array(apodizations, "apodizations", dtype=np.complex128)
-    if w.ndim != 2:
-        raise ValueError(f"apodizations must be 2-D (looks, samples), got shape {w.shape}")
-    s2 = np.ones(w.shape[1]) if spectrum is None else np.asarray(spectrum, float) ** 2
+    w = np.asarray(apodizations, dtype=np.complex128)
+    s2 = np.ones(w.shape[1]) if spectrum is None else np.asarray(spectrum, dtype=float) ** 2
     if s2.shape != (w.shape[1],):
         raise ValueError(f"spectrum must hold {w.shape[1]} weights, got shape {s2.shape}")
     g = (w * s2) @ w.conj().T
     d = np.sqrt(np.real(np.diag(g)))
+    if not np.all(d > 0):
+        raise ValueError(
+            f"apodizations {np.flatnonzero(~(d > 0)).tolist()} have no power under the spectrum: "
+            "their correlation is undefined"
+        )
     return g / np.outer(d, d)
 
 
+@preprocess_and_wrap(checks={"mu": _MATRIX})
 def compounded_contrast(mu: object) -> float:
     """Contrast of the intensity average of ``L`` looks of equal mean: ``sqrt(sum |mu_ij|^2)/L``.
 
-    Dense-scene (Gaussian speckle) result; ``mu`` the (L, L) field correlations (identity:
-    ``1/sqrt(L)``).
+    Dense-scene (Gaussian speckle) result; ``mu`` the (L, L) complex field correlations
+    (identity: ``1/sqrt(L)``; one look, ``[[1]]``: 1).
 
     Examples
     --------
@@ -216,12 +236,17 @@ def compounded_contrast(mu: object) -> float:
     >>> round(speckle.compounded_contrast(np.eye(4)), 6)  # N independent looks: 1/sqrt(N)
     0.5
     """
-    m = as_finite_array(mu, "mu", dtype=np.complex128)
-    if m.ndim != 2 or m.shape[0] != m.shape[1]:
+    m = np.asarray(mu, dtype=np.complex128)
+    if m.shape[0] != m.shape[1]:
         raise ValueError(f"mu must be a square (L, L) matrix, got shape {m.shape}")
+    if not (np.allclose(np.diag(m), 1.0, rtol=0, atol=1e-6) and np.all(np.abs(m) <= 1 + 1e-6)):
+        raise ValueError(
+            "mu must be field correlations: unit diagonal and |mu_ij| <= 1 (window_correlation)"
+        )
     return float(np.sqrt(np.sum(np.abs(m) ** 2)) / m.shape[0])
 
 
+@preprocess_and_wrap(checks={"weights": _MATRIX})
 def split_spectrum_contrast(weights: object, density: float, *, kurtosis: float = 1.0) -> float:
     """Exact contrast of intensity-averaged looks of independent A-lines, Poisson scatterers.
 
@@ -246,21 +271,27 @@ def split_spectrum_contrast(weights: object, density: float, *, kurtosis: float 
     float
         The contrast (std / mean) of the intensity averaged over the looks.
 
+    Raises
+    ------
+    TypeError, ValueError
+        ``weights`` not a finite non-empty 2-D array or without power; ``density`` not a
+        positive real (``inf`` allowed); ``kurtosis`` below 1 (``E|a|^4 >= (E|a|^2)^2``,
+        Cauchy-Schwarz) or not finite.
+
     Examples
     --------
     >>> import numpy as np
     >>> import speckle
-    >>> w = speckle.subband_windows(64, 4)
+    >>> w = speckle.subband_apodizations(64, 4)
     >>> round(speckle.split_spectrum_contrast(w, np.inf), 6)  # 4 disjoint bands: 1/sqrt(4)
     0.5
     """
-    g = as_finite_array(weights, "weights", dtype=np.complex128)
-    if g.ndim != 2:
-        raise ValueError(f"weights must be 2-D (looks, samples), got shape {g.shape}")
-    rho = float(density)
-    if not rho > 0 or np.isnan(rho):
-        raise ValueError(f"density must be > 0 scatterers per pixel, got {density!r}")
-    kap = check_real(kurtosis, "kurtosis", low=0)
+    g = np.asarray(weights, dtype=np.complex128)
+    dense = isinstance(density, float | np.floating) and density == np.inf
+    rho = np.inf if dense else check_real(density, "density", low=0, low_inclusive=False)
+    kap = check_real(kurtosis, "kurtosis", low=1)
+    if not np.any(g):
+        raise ValueError("weights must not all be zero (no signal: the contrast is undefined)")
     n = g.shape[1]
     cross = g @ g.conj().T  # sum_n G_i G_j*
     mean = np.real(np.diag(cross))
@@ -296,14 +327,20 @@ def subband_fwhm(n_pixels: int, n_samples: int) -> float:
     return 2.0 * opt.brentq(f, 1e-9, n / m)
 
 
-def _field(img: xr.Dataset | xr.DataArray) -> xr.DataArray:
-    f = img.field if isinstance(img, xr.Dataset) else img
-    if not isinstance(f, xr.DataArray) or not np.iscomplexobj(f) or "depth" not in f.dims:
-        raise TypeError("image must be a complex field DataArray (or Dataset 'field') with 'depth'")
-    return f
-
-
 @renamed_parameters({"windows": "apodizations"})
+@preprocess_and_wrap(
+    checks={
+        "img": ArraySpec(
+            kind="complex",
+            labelled=True,
+            keep_labels=True,
+            variable="field",
+            dims=("depth",),
+            extra_dims=True,
+        ),
+        "apodizations": ArraySpec(kind="real", ndim=2),
+    }
+)
 def frequency_looks(img: xr.Dataset | xr.DataArray, apodizations: object) -> xr.DataArray:
     """Split-spectrum looks of a complex image: the depth spectrum times each apodization.
 
@@ -328,14 +365,14 @@ def frequency_looks(img: xr.Dataset | xr.DataArray, apodizations: object) -> xr.
     >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
     >>> scene = speckle.random_scatterers(8, 4.0, n_pixels=32, depth_range=256.0, seed=1)
     >>> img = speckle.bscan(scene, src)
-    >>> looks = speckle.frequency_looks(img, speckle.subband_windows(32, 2))
+    >>> looks = speckle.frequency_looks(img, speckle.subband_apodizations(32, 2))
     >>> looks.dims, looks.sizes["look"]
     (('look', 'depth', 'aline'), 2)
     """
-    f = _field(img)
+    f = img  # the complex field (a Dataset's 'field'), checked by the decorator
     n = f.sizes["depth"]
-    w = as_finite_array(apodizations, "apodizations")
-    if w.ndim != 2 or w.shape[1] != n:
+    w = np.asarray(apodizations, dtype=float)
+    if w.shape[1] != n:
         raise ValueError(
             f"apodizations must have shape (looks, {n}) for an image of {n} depth pixels, "
             f"got {w.shape}"
@@ -362,6 +399,11 @@ def frequency_looks(img: xr.Dataset | xr.DataArray, apodizations: object) -> xr.
     return label_looks(looks.transpose("look", *f.dims), "frequency")
 
 
+#: Looks: a labelled, finite, non-empty DataArray with a ``look`` dim (the decorator's checks).
+_LOOKS = {"looks": ArraySpec(labelled=True, keep_labels=True, dims=("look",), extra_dims=True)}
+
+
+@preprocess_and_wrap(checks=_LOOKS)
 def compound(looks: xr.DataArray, mode: str = "intensity") -> xr.DataArray:
     """Average looks (dim ``look``) into one intensity image.
 
@@ -380,8 +422,6 @@ def compound(looks: xr.DataArray, mode: str = "intensity") -> xr.DataArray:
            [1., 1.]])
     """
     check_choice(mode, "mode", AVERAGING)
-    if not isinstance(looks, xr.DataArray) or "look" not in looks.dims:
-        raise TypeError("looks must be a DataArray with a 'look' dim (see frequency_looks)")
     if mode == "intensity":
         out = (abs(looks) ** 2).mean("look")
     elif mode == "magnitude":
@@ -397,6 +437,7 @@ def compound(looks: xr.DataArray, mode: str = "intensity") -> xr.DataArray:
     )
 
 
+@preprocess_and_wrap(checks=_LOOKS)
 def noisy_looks(
     looks: xr.DataArray,
     snr_db: float,
@@ -433,8 +474,6 @@ def noisy_looks(
     >>> round(float((abs(noisy - looks) ** 2).mean()), 2)  # noise intensity: 10 dB below 1
     0.1
     """
-    if not isinstance(looks, xr.DataArray) or "look" not in looks.dims:
-        raise TypeError("looks must be a DataArray with a 'look' dim")
     snr = check_real(snr_db, "snr_db")
     sd = check_int(seed, "seed", low=0)
     ref = (
@@ -456,6 +495,7 @@ def noisy_looks(
     return res.assign_attrs(looks.attrs, snr_db=snr, noise_intensity=sigma2[0])
 
 
+@preprocess_and_wrap(checks={"tau": ArraySpec(kind="real")})
 def brownian_g1(tau: object, diffusion: float, k0: float) -> np.ndarray:
     """Field autocorrelation ``exp(-q^2 D tau)``, ``q = 2 k0`` (rad/µm, in the medium).
 
@@ -469,10 +509,10 @@ def brownian_g1(tau: object, diffusion: float, k0: float) -> np.ndarray:
     >>> speckle.brownian_g1(np.array([0.0, 1e-3]), 1.0, 10.0).round(6)  # exp(-4 k0^2 D tau)
     array([1.     , 0.67032])
     """
-    t = as_finite_array(tau, "tau")  # named as here (g1_brownian calls it lag)
+    t = np.asarray(tau, dtype=float)  # named as here (g1_brownian calls it lag)
     if np.any(t < 0):
         raise ValueError("tau must be >= 0 (s)")
-    return g1_brownian(t, diffusion=diffusion, k0=k0)
+    return g1_brownian.__wrapped__(t, diffusion=diffusion, k0=k0)  # tau checked once, here
 
 
 def brownian_frames(
@@ -515,6 +555,10 @@ def brownian_frames(
     sd = check_int(seed, "seed", low=0)
     if not isinstance(scene, xr.Dataset) or "z" not in scene:
         raise TypeError("scene must be a scatterer Dataset with a variable 'z'")
+    if scene.z.size == 0:
+        raise ValueError("scene must hold at least one scatterer, got none")
+    axes = sum(a in scene for a in ("z", "x", "y"))
+    check_memory(2 * 8.0 * nf * scene.z.size * axes, "n_frames", f"{nf} frames of the scene")
     # one implementation: the scene layer's Brownian motion, its time dim named frame here
     out = brownian_motion(scene, np.arange(nf) * dt, diffusion=d, seed=sd)
     out = out.rename_dims(time="frame").assign_coords(

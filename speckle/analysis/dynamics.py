@@ -47,6 +47,7 @@ import xarray as xr
 
 from .._deprecate import renamed_parameters
 from .._validate import check_choice, check_int, check_real
+from .._wrap import ArraySpec, preprocess_and_wrap
 from ..conventions import attrs, coord, spacing
 from ._common import delay_selection, parse_window
 from .compounding import SUBBAND_APODIZATIONS, frequency_looks, subband_apodizations
@@ -101,6 +102,16 @@ _THEORY = (
 # ------------------------------------------------------------------------------------------
 
 
+#: A series (time on axis 0): finite, non-empty numbers; the field complex (the decorator's
+#: checks). :func:`_series` adds the frame count and the intensity's sign.
+_INTENSITY = ArraySpec(kind="number")
+_FIELD = ArraySpec(kind="complex")
+#: A labelled complex series (a DataArray with a time dim, or a Dataset's field).
+_FIELD_SERIES = {
+    "images": ArraySpec(kind="complex", labelled=True, keep_labels=True, variable="field")
+}
+
+
 def _series(a: object, name: str, *, complex_: bool = False, min_frames: int = 2) -> np.ndarray:
     arr = np.asarray(a)
     if arr.ndim < 1 or arr.shape[0] < min_frames:
@@ -111,8 +122,6 @@ def _series(a: object, name: str, *, complex_: bool = False, min_frames: int = 2
         raise TypeError(f"{name} must be the complex field (phase needed), got dtype {arr.dtype}")
     if not complex_ and np.iscomplexobj(arr):
         arr = np.abs(arr) ** 2  # a field given where an intensity is used
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must be finite")
     if not complex_ and np.any(arr < 0):
         raise ValueError(f"{name} intensities must be >= 0")
     return arr
@@ -170,6 +179,7 @@ def _ratio(num: np.ndarray, den: np.ndarray, what: str, why: str) -> np.ndarray:
 # ------------------------------------------------------------------------------------------
 
 
+@preprocess_and_wrap(checks={"field": _FIELD})
 def g1_array(field: object, lags: object, *, window: object = None) -> np.ndarray:
     """Complex field autocorrelation at integer frame ``lags`` (module docstring).
 
@@ -209,6 +219,7 @@ def g1_array(field: object, lags: object, *, window: object = None) -> np.ndarra
     return np.stack(out)
 
 
+@preprocess_and_wrap(checks={"intensity": _INTENSITY})
 def g2_array(intensity: object, lags: object, *, window: object = None) -> np.ndarray:
     """Intensity autocorrelation ``<I(t) I(t+tau)> / (<I(t)> <I(t+tau)>)`` at frame ``lags``.
 
@@ -234,6 +245,7 @@ def g2_array(intensity: object, lags: object, *, window: object = None) -> np.nd
     return np.stack(out)
 
 
+@preprocess_and_wrap(checks={"field": _FIELD})
 def doppler_phase_array(field: object, *, lag: int = 1, window: object = None) -> np.ndarray:
     """Kasai's phase estimator ``arg <A*(t) A(t+lag)>`` in rad, in ``(-pi, pi]``.
 
@@ -261,6 +273,7 @@ def _db(i: np.ndarray, what: str) -> np.ndarray:
         return np.where(bad, np.nan, 10.0 * np.log10(np.where(bad, 1.0, i)))
 
 
+@preprocess_and_wrap(checks={"intensity": _INTENSITY})
 def speckle_variance_array(
     intensity: object, *, ddof: int = 0, log: bool = False, window: object = None
 ) -> np.ndarray:
@@ -283,6 +296,7 @@ def speckle_variance_array(
     return _pool(np.var(x, axis=0, ddof=d), _window(window, i.ndim - 1))
 
 
+@preprocess_and_wrap(checks={"intensity": _INTENSITY})
 def liv_array(intensity: object, *, ddof: int = 0, window: object = None) -> np.ndarray:
     """Logarithmic intensity variance ``var_t(10 log10 I)`` (dB^2) per pixel.
 
@@ -299,6 +313,7 @@ def liv_array(intensity: object, *, ddof: int = 0, window: object = None) -> np.
     return _pool(np.var(_db(i, "liv"), axis=0, ddof=d), _window(window, i.ndim - 1))
 
 
+@preprocess_and_wrap(checks={"amplitudes": ArraySpec(kind="number", ndim=tuple(range(2, 8)))})
 def ssada_array(amplitudes: object, *, window: object = None) -> np.ndarray:
     """Split-spectrum amplitude decorrelation from sub-band amplitudes ``(band, time, ...)``.
 
@@ -313,16 +328,11 @@ def ssada_array(amplitudes: object, *, window: object = None) -> np.ndarray:
     >>> float(ssada_array(np.ones((2, 3, 4))))
     0.0
     """
-    a = np.asarray(amplitudes)
-    if a.dtype.kind not in "fciu":
-        raise TypeError(f"amplitudes must be numbers (complex: |A| is used), got dtype {a.dtype}")
-    a = np.abs(a)
-    if a.ndim < 2 or a.shape[1] < 2:
+    a = np.abs(np.asarray(amplitudes))
+    if a.shape[1] < 2:
         raise ValueError(
             f"amplitudes must be (band, time, ...) with at least 2 frames, got {a.shape}"
         )
-    if not np.all(np.isfinite(a)):
-        raise ValueError("amplitudes must be finite")
     num = a[:, :-1] * a[:, 1:]
     den = 0.5 * (a[:, :-1] ** 2 + a[:, 1:] ** 2)
     r = _ratio(num, den, "ssada", "zero amplitude in both frames of a band")
@@ -330,6 +340,7 @@ def ssada_array(amplitudes: object, *, window: object = None) -> np.ndarray:
     return _pool(d, _window(window, a.ndim - 2))
 
 
+@preprocess_and_wrap(checks={"intensity": _INTENSITY})
 def ocds_array(
     intensity: object,
     lags: object,
@@ -412,6 +423,11 @@ def _timed(images: object, what: str, *, complex_: bool, uniform: bool, stride: 
         )
     st = check_int(stride, "stride", low=1)
     da = images.transpose("time", ...).isel(time=slice(None, None, st))
+    if da.sizes["time"] < 2 or da.size == 0:
+        raise ValueError(
+            f"images must hold at least 2 frames along 'time' (every {st}-th taken) and a "
+            f"pixel ({what}), got sizes {dict(images.sizes)}"
+        )
     dt = None
     if uniform:
         if "time" not in da.coords:
@@ -446,6 +462,7 @@ def _lag_da(values, m, dt, da, window, name, quantity) -> xr.DataArray:
     return xr.DataArray(values, dims=dims, coords=coords, name=name, attrs=attrs(*quantity))
 
 
+@preprocess_and_wrap(checks=_FIELD_SERIES)
 def g1(
     images: xr.DataArray | xr.Dataset,
     *,
@@ -475,7 +492,7 @@ def g1(
         Dataset. Valid when the blocks' speckle is independent: blocks of depth pixels (a
         rectangular spectrum's pixels are uncorrelated) or of lines much wider than the beam.
     block_dim : str, optional
-        The spatial dim split into blocks (default: the last).
+        The spatial dim split into blocks (default: the last); only with ``blocks``.
 
     Returns
     -------
@@ -497,10 +514,17 @@ def g1(
     [0.0, 0.1, 0.2]
     """
     da, dt = _timed(images, "g1", complex_=True, uniform=True, stride=stride)
+    if block_dim is not None:
+        if not isinstance(block_dim, str):
+            raise TypeError(f"block_dim must be a dim name, got {block_dim!r}")
+        if block_dim not in da.dims[1:]:
+            raise ValueError(f"block_dim must be a spatial dim of {da.dims[1:]}, got {block_dim!r}")
+        if blocks is None:
+            raise ValueError("block_dim is used only with blocks (the standard error)")
     n = da.sizes["time"]
     m = np.arange(n) if lags is None else _lags_of(lags, n)
     arr = da.values  # computed once (a Dask series is not recomputed per block)
-    values = g1_array(arr, m, window=window)
+    values = g1_array.__wrapped__(arr, m, window=window)  # checked here once
     out = _lag_da(values, m, dt, da, window, "g1", ("correlation", "field autocorrelation g1"))
     if blocks is None:
         return out
@@ -508,13 +532,11 @@ def g1(
     if window is not None or da.ndim < 2:
         raise ValueError("blocks needs window=None and a spatial dim to split")
     last = da.dims[-1] if block_dim is None else block_dim
-    if last not in da.dims[1:]:
-        raise ValueError(f"block_dim must be a spatial dim of {da.dims[1:]}, got {last!r}")
     if da.sizes[last] < k:
         raise ValueError(f"blocks={k} exceeds the {da.sizes[last]} elements along {last!r}")
     axis = da.dims.index(last)
     parts = np.array_split(np.arange(da.sizes[last]), k)
-    est = np.stack([np.abs(g1_array(np.take(arr, p, axis=axis), m)) for p in parts])
+    est = np.stack([np.abs(g1_array.__wrapped__(np.take(arr, p, axis=axis), m)) for p in parts])
     se = est.std(axis=0, ddof=1) / np.sqrt(k)
     se_da = out.copy(data=se).rename("g1_se")
     se_da.attrs = attrs("correlation", f"standard error of |g1| from {k} blocks along {last}")
@@ -551,6 +573,7 @@ def g2(
     return _lag_da(values, m, dt, da, window, "g2", ("correlation", "intensity autocorrelation"))
 
 
+@preprocess_and_wrap(checks=_FIELD_SERIES)
 def doppler_phase(
     images: xr.DataArray | xr.Dataset,
     *,
@@ -586,7 +609,7 @@ def doppler_phase(
     0.2
     """
     da, dt = _timed(images, "doppler_phase", complex_=True, uniform=True, stride=stride)
-    v = doppler_phase_array(da.values, lag=lag, window=window)
+    v = doppler_phase_array.__wrapped__(da.values, lag=lag, window=window)
     out = _map(v, da, window, "doppler_phase", ("phase", "Doppler phase shift (Kasai)"))
     return out.assign_attrs(interval=float(lag * dt))
 
@@ -672,6 +695,7 @@ def liv(
 
 
 @renamed_parameters({"band_window": "band_apodization"})
+@preprocess_and_wrap(checks=_FIELD_SERIES)
 def ssada(
     images: xr.DataArray | xr.Dataset,
     *,
@@ -714,13 +738,13 @@ def ssada(
     da, _ = _timed(images, "ssada", complex_=True, uniform=False, stride=stride)
     if "depth" not in da.dims:
         raise ValueError("ssada needs a 'depth' dim (the A-line, to split its spectrum)")
-    n_bands = check_int(n_bands, "n_bands", low=1)
+    n_bands = check_int(n_bands, "n_bands", low=1, high=da.sizes["depth"])
     check_choice(band_apodization, "band_apodization", SUBBAND_APODIZATIONS)
     w = subband_apodizations(
         da.sizes["depth"], n_bands, apodization=band_apodization, overlap=overlap
     )
     looks = frequency_looks(da, w)  # (look, time, ...)
-    v = ssada_array(np.abs(looks.transpose("look", *da.dims).values), window=window)
+    v = ssada_array.__wrapped__(np.abs(looks.transpose("look", *da.dims).values), window=window)
     out = _map(v, da, window, "ssada", ("dimensionless", "split-spectrum amplitude decorrelation"))
     return out.assign_attrs(
         n_bands=int(n_bands), band_apodization=band_apodization, overlap=float(overlap)

@@ -44,6 +44,7 @@ import xarray as xr
 from scipy.special import ellipe, ellipk, spence
 
 from .._validate import as_finite_array, check_choice, check_int, check_real
+from .._wrap import ArraySpec, preprocess_and_wrap
 from ._common import delay_selection
 
 __all__ = [
@@ -65,10 +66,17 @@ __all__ = [
 DB2 = float((10.0 / np.log(10.0)) ** 2)
 
 
-def _lags(lag: object) -> np.ndarray:
-    t = as_finite_array(lag, "lag")
+#: Lags in s (real, finite, non-empty; the sign is checked by :func:`_lags`) and
+#: correlations (real or complex: ``|g1|`` is used), checked by the decorator.
+_LAG = ArraySpec(kind="real")
+_G1 = ArraySpec(kind="number")
+
+
+def _lags(lag: np.ndarray, name: str = "lag") -> np.ndarray:
+    """The decorator-checked lags as floats, refused by ``name`` when negative."""
+    t = np.asarray(lag, dtype=float)
     if np.any(t < 0):
-        raise ValueError("lag must be >= 0 s")
+        raise ValueError(f"{name} must be >= 0 s")
     return t
 
 
@@ -78,10 +86,14 @@ def _band(spectrum: xr.DataArray | None, k0: float) -> tuple[np.ndarray, np.ndar
         return np.array([k0]), np.array([1.0])
     if not isinstance(spectrum, xr.DataArray) or "wavenumber" not in spectrum.coords:
         raise TypeError("spectrum must be a DataArray from speckle.spectrum")
+    if spectrum.size == 0:
+        raise ValueError("spectrum must hold at least one wavenumber, got an empty spectrum")
     k0s = float(spectrum.attrs.get("k0", np.nan))
     if not np.isclose(k0s, k0, rtol=1e-9):
         raise ValueError(f"k0 = {k0:g} rad/µm differs from the spectrum's k0 = {k0s:g} rad/µm")
-    w = np.asarray(spectrum.values, float) ** 2
+    w = as_finite_array(spectrum.values, "spectrum") ** 2
+    if not w.sum() > 0:
+        raise ValueError("spectrum must have some power (all its weights are zero)")
     return np.asarray(spectrum.wavenumber.values, float), w / w.sum()
 
 
@@ -93,6 +105,7 @@ def _lateral(var: np.ndarray, waist: float | None, axes: int) -> np.ndarray:
     return (1.0 + 2.0 * var / w0**2) ** (-axes / 2.0)
 
 
+@preprocess_and_wrap(checks={"lag": _LAG})
 def g1_brownian(
     lag: object,
     *,
@@ -140,6 +153,7 @@ def g1_brownian(
     return axial * _lateral(2.0 * d * t, waist, ax)
 
 
+@preprocess_and_wrap(checks={"g1": _G1})
 def siegert_g2(g1: object, *, beta: float = 1.0) -> np.ndarray:
     """Intensity autocorrelation of circular Gaussian speckle, ``1 + beta |g1|^2``.
 
@@ -150,13 +164,12 @@ def siegert_g2(g1: object, *, beta: float = 1.0) -> np.ndarray:
     >>> float(siegert_g2(0.5))
     1.25
     """
-    g = np.asarray(g1)
-    if not np.all(np.isfinite(g)):
-        raise ValueError("g1 must be finite")
+    g = np.abs(g1)
     b = check_real(beta, "beta", low=0, high=1)
-    return 1.0 + b * np.abs(g) ** 2
+    return 1.0 + b * g**2
 
 
+@preprocess_and_wrap(checks={"lag": _LAG})
 def g1_ballistic(
     lag: object,
     *,
@@ -227,6 +240,7 @@ def g1_ballistic(
     )
 
 
+@preprocess_and_wrap(checks={"lag": _LAG})
 def g1_transverse_flow(lag: object, *, velocity: float, waist: float) -> np.ndarray:
     """Field autocorrelation of uniform flow across the beam, ``exp(-(v tau)^2/w0^2)``.
 
@@ -245,6 +259,7 @@ def g1_transverse_flow(lag: object, *, velocity: float, waist: float) -> np.ndar
     return np.exp(-((v * t) ** 2) / w0**2)
 
 
+@preprocess_and_wrap(checks={"lag": _LAG})
 def g1_axial_flow(lag: object, *, velocity: float, spectrum: xr.DataArray) -> np.ndarray:
     """Complex field autocorrelation of uniform axial flow through the coherence gate.
 
@@ -268,6 +283,7 @@ def g1_axial_flow(lag: object, *, velocity: float, spectrum: xr.DataArray) -> np
     return np.tensordot(np.exp(2j * np.multiply.outer(t * v, kn)), w, axes=([-1], [0]))
 
 
+@preprocess_and_wrap(checks={"lag": _LAG})
 def doppler_shift(lag: object, *, velocity: float, k0: float) -> np.ndarray:
     """Doppler phase shift ``2 k0 v_z tau`` in rad (not wrapped; ``v_z > 0`` deeper).
 
@@ -283,8 +299,8 @@ def doppler_shift(lag: object, *, velocity: float, k0: float) -> np.ndarray:
 
 
 def _g1_series(g1: object) -> np.ndarray:
-    g = np.abs(np.asarray(g1))
-    if g.ndim != 1 or g.size < 2 or not np.all(np.isfinite(g)):
+    g = np.abs(g1)
+    if g.ndim != 1 or g.size < 2:
         raise ValueError(
             "g1 must be a finite 1-D sequence of |g1| at lags 0, dt, ..., (N-1) dt (N >= 2)"
         )
@@ -302,6 +318,7 @@ def _time_variance(cov: np.ndarray, ddof: int) -> float:
     return float(e * n / (n - d))
 
 
+@preprocess_and_wrap(checks={"g1": _G1})
 def log_intensity_correlation(g1: object) -> np.ndarray:
     """Correlation of ``ln I`` (or ``I`` in dB) of developed speckle, ``Li2(|g1|^2)/Li2(1)``.
 
@@ -310,10 +327,11 @@ def log_intensity_correlation(g1: object) -> np.ndarray:
     >>> float(log_intensity_correlation(1.0))
     1.0
     """
-    g = np.abs(np.asarray(g1, dtype=complex))
+    g = np.abs(g1)
     return spence(1.0 - np.minimum(g, 1.0) ** 2) / (np.pi**2 / 6.0)
 
 
+@preprocess_and_wrap(checks={"g1": _G1})
 def speckle_variance_expected(g1: object, *, ddof: int = 0) -> float:
     """Expected speckle variance over ``N`` frames, in units of ``<I>^2``.
 
@@ -330,6 +348,7 @@ def speckle_variance_expected(g1: object, *, ddof: int = 0) -> float:
     return _time_variance(g**2, ddof)
 
 
+@preprocess_and_wrap(checks={"g1": _G1})
 def liv_expected(g1: object, *, ddof: int = 0) -> float:
     """Expected LIV (dB^2) of developed speckle over ``N`` frames from ``|g1|`` at its lags.
 
@@ -345,6 +364,7 @@ def liv_expected(g1: object, *, ddof: int = 0) -> float:
     return DB2 * _time_variance(spence(1.0 - g**2), ddof)
 
 
+@preprocess_and_wrap(checks={"g1": _G1, "lags": _LAG})
 def ocds_expected(g1: object, lags: object, *, delays: tuple[float, float]) -> float:
     """Expected OCDS (1/s): minus the least-squares slope of ``Li2(|g1|^2)/Li2(1)`` on ``tau``.
 
@@ -365,8 +385,8 @@ def ocds_expected(g1: object, lags: object, *, delays: tuple[float, float]) -> f
     >>> abs(ocds_expected(np.ones(4), t, delays=(0.01, 0.03))) < 1e-9  # no decay
     True
     """
-    g = np.abs(np.asarray(g1, dtype=complex))
-    t = _lags(lags)
+    g = np.abs(g1)
+    t = _lags(lags, "lags")
     if g.shape != t.shape or g.ndim != 1:
         raise ValueError(f"g1 and lags must be 1-D of one shape, got {g.shape}, {t.shape}")
     sel = delay_selection(t, delays)
@@ -374,6 +394,7 @@ def ocds_expected(g1: object, lags: object, *, delays: tuple[float, float]) -> f
     return -float(np.polyfit(t[sel], rho, 1)[0])
 
 
+@preprocess_and_wrap(checks={"g1": _G1})
 def ssada_ratio(g1: object) -> np.ndarray:
     """``E[2 A1 A2/(A1^2 + A2^2)]`` of two developed speckle amplitudes of field correlation
     ``g1``: ``(E(m) - (1 - m) K(m))/m``, ``m = |g1|^2`` (``pi/4`` at 0, 1 at ``|g1| = 1``).
@@ -383,7 +404,7 @@ def ssada_ratio(g1: object) -> np.ndarray:
     >>> round(float(ssada_ratio(0.0)), 6)
     0.785398
     """
-    m = np.minimum(np.abs(np.asarray(g1, dtype=complex)) ** 2, 1.0)
+    m = np.minimum(np.abs(g1) ** 2, 1.0)
     small = m < 1e-8
     mm = np.where(small, 0.5, m)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -392,6 +413,7 @@ def ssada_ratio(g1: object) -> np.ndarray:
     return np.where(small, np.pi / 4 * (1 + m / 8), r)
 
 
+@preprocess_and_wrap(checks={"g1_bands": _G1})
 def ssada_expected(g1_bands: object) -> float:
     """Expected SSADA decorrelation of developed speckle from each sub-band's ``|g1|``.
 
@@ -412,7 +434,7 @@ def ssada_expected(g1_bands: object) -> float:
     >>> ssada_expected([1.0])
     0.0
     """
-    g = np.abs(np.atleast_1d(np.asarray(g1_bands, dtype=complex)))
-    if g.ndim != 1 or g.size == 0 or np.any(g > 1 + 1e-12):
+    g = np.atleast_1d(np.abs(g1_bands))
+    if g.ndim != 1 or np.any(g > 1 + 1e-12):
         raise ValueError("g1_bands must be a non-empty 1-D sequence of |g1| <= 1, one per band")
     return float(1.0 - np.mean(ssada_ratio(g)))

@@ -42,8 +42,8 @@ from collections.abc import Callable, Mapping
 import numpy as np
 import scipy.ndimage as ndi
 
-from .._validate import as_finite_array, check_bool, check_choice, check_int, check_real
-from .._wrap import preprocess_and_wrap
+from .._validate import check_bool, check_choice, check_int, check_real
+from .._wrap import ArraySpec, preprocess_and_wrap
 
 __all__ = ["DOMAINS", "FILTERS", "despeckle", "filter_available", "frost", "kuan", "lee"]
 
@@ -60,13 +60,15 @@ def _odd(value: object, name: str) -> int:
     return v
 
 
-def _image(img: object, log: object) -> tuple[np.ndarray, bool]:
-    """The checked image of the local-statistics filters (2-D, real, finite; non-negative
+#: A 2-D real finite image of at least 2 x 2 pixels (the decorator's checks).
+_IMAGE = ArraySpec(kind="real", ndim=2, min_shape=(2, 2))
+
+
+def _image(img: np.ndarray, log: object) -> tuple[np.ndarray, bool]:
+    """The decorator-checked image of the local-statistics filters as floats (non-negative
     intensities unless ``log``) and ``log`` as a bool (the front door's checks)."""
     log = check_bool(log, "log")
-    a = as_finite_array(img, "img")
-    if a.ndim != 2 or min(a.shape) < 2:
-        raise ValueError(f"img must be a 2-D image of at least 2 x 2 pixels, got shape {a.shape}")
+    a = np.asarray(img, dtype=float)
     if not log and np.any(a < 0):
         raise ValueError("img must hold non-negative intensities (or pass log=True for dB data)")
     return a, log
@@ -92,6 +94,7 @@ def _noise_ratio(img: np.ndarray, m: np.ndarray, v: np.ndarray, looks: float, lo
     return cu2 / np.maximum(ci2, tiny)
 
 
+@preprocess_and_wrap(checks={"img": _IMAGE})
 def lee(img: np.ndarray, *, size: int = 7, looks: float = 1.0, log: bool = False) -> np.ndarray:
     """Lee filter: ``m + k (I - m)``, ``k = max(0, 1 - C_u^2/C_I^2)`` (see module docstring).
 
@@ -114,6 +117,7 @@ def lee(img: np.ndarray, *, size: int = 7, looks: float = 1.0, log: bool = False
     return m + k * (a - m)
 
 
+@preprocess_and_wrap(checks={"img": _IMAGE})
 def kuan(img: np.ndarray, *, size: int = 7, looks: float = 1.0, log: bool = False) -> np.ndarray:
     """Kuan filter: ``k = max(0, (1 - C_u^2/C_I^2)/(1 + C_u^2))`` (linear data); parameters
     and checks as :func:`lee`.
@@ -136,6 +140,7 @@ def kuan(img: np.ndarray, *, size: int = 7, looks: float = 1.0, log: bool = Fals
     return m + k * (a - m)
 
 
+@preprocess_and_wrap(checks={"img": _IMAGE})
 def frost(img: np.ndarray, *, size: int = 7, damping: float = 2.0, log: bool = False) -> np.ndarray:
     """Frost filter: weights ``exp(-damping C_I^2 |r|)`` over a ``size`` x ``size`` window.
 
@@ -284,11 +289,10 @@ def filter_available(name: str) -> bool:
 
     Examples
     --------
-    >>> import speckle
-    >>> speckle.filter_available("lee")
+    >>> filter_available("median")
     True
     """
-    check_choice(name, "filter", FILTERS)
+    check_choice(name, "filter name", FILTERS)
     if name != "bm3d":
         return True
     try:
@@ -300,9 +304,13 @@ def filter_available(name: str) -> bool:
 
 def check_filter(name: str, params: Mapping | None = None, domain: str = "linear") -> dict:
     """Checked parameters of filter ``name`` (``ValueError`` naming the bad one)."""
-    check_choice(name, "filter", FILTERS)
+    check_choice(name, "filter name", FILTERS)
     check_choice(domain, "domain", DOMAINS)
     allowed = FILTERS[name][1]
+    if params is not None and not isinstance(params, Mapping):
+        raise TypeError(
+            f"params must be a mapping of filter parameters (or None), got {type(params).__name__}"
+        )
     params = dict(params or {})
     unknown = set(params) - set(allowed)
     if unknown:
@@ -314,7 +322,9 @@ def check_filter(name: str, params: Mapping | None = None, domain: str = "linear
 
 
 @preprocess_and_wrap(
-    arrays=["intensity"], wrap_like="intensity", attrs_from={"filter": "name", "domain": "domain"}
+    checks={"intensity": _IMAGE},
+    wrap_like="intensity",
+    attrs_from={"filter": "name", "domain": "domain"},
 )
 def despeckle(
     intensity: object, name: str, params: Mapping | None = None, *, domain: str = "linear"
@@ -360,9 +370,7 @@ def despeckle(
             "filter 'bm3d' needs the optional package: pip install bm3d "
             "(licence: non-commercial use only)"
         )
-    a = as_finite_array(intensity, "intensity")
-    if a.ndim != 2 or min(a.shape) < 2:
-        raise ValueError(f"intensity must be a 2-D image of at least 2 x 2 pixels, got {a.shape}")
+    a = np.asarray(intensity, dtype=float)
     if np.any(a < 0):
         raise ValueError("intensity must be non-negative")
     log = domain == "log"
@@ -370,5 +378,6 @@ def despeckle(
         return np.zeros_like(a)
     floor = a.max() * 1e-10  # 100 dB below the maximum
     data = 10 * np.log10(np.maximum(a, floor)) if log else a
-    out = FILTERS[name][0](data, log=log, **p)
+    run = FILTERS[name][0]
+    out = getattr(run, "__wrapped__", run)(data, log=log, **p)  # the image was checked once
     return 10 ** (out / 10) if log else np.maximum(out, 0.0)  # labelled like intensity

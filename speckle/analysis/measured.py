@@ -63,6 +63,8 @@ _BLOCKS = "from A-line blocks"
 
 def _read(path: str | os.PathLike, *, mmap: bool = False) -> np.ndarray:
     """The 2-D array of a ``.npy`` or image file (memory-mapped ``.npy`` if ``mmap``)."""
+    if not isinstance(path, str | os.PathLike):
+        raise TypeError(f"path must be a str or path-like, got {type(path).__name__} {path!r}")
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"measured image not found: {p}")
@@ -339,6 +341,16 @@ def standardised_log_pdf(z: object, floor: float = 0.0) -> object:
     return xr.apply_ufunc(pdf, z)
 
 
+def _checked(image: object) -> xr.DataArray:
+    """A measured image (:func:`speckle.io.load_image` or :func:`load_measured`): real,
+    finite, at least 8 pixels, refused naming ``image`` before any statistic."""
+    _scale_of(image)  # a DataArray with attribute 'kind' or 'scale' (TypeError otherwise)
+    as_finite_array(image.values, "image")
+    if image.size < 8:
+        raise ValueError(f"image must hold at least 8 pixels, got sizes {dict(image.sizes)}")
+    return image
+
+
 def _sample(values: object) -> np.ndarray:
     data = values.values if isinstance(values, xr.DataArray) else values
     x = as_finite_array(data, "values").ravel()
@@ -363,7 +375,7 @@ def log_statistics(image: xr.DataArray, *, n_blocks: int = 16) -> xr.Dataset:
         steps) and, with theory for fully developed speckle, ``skewness_theory`` and
         ``excess_kurtosis_theory``.
     """
-    d = log_intensity(image)
+    d = log_intensity(_checked(image))
     if "x" not in d.dims:
         raise TypeError("image must have an 'x' dim")
     nb = check_int(n_blocks, "n_blocks", low=2, high=d.sizes["x"])
@@ -432,7 +444,7 @@ def fit_floor(image: xr.DataArray) -> xr.Dataset:
         and ``skewness_model``. ``floor`` is 0 when the data are at least as skewed as fully
         developed speckle.
     """
-    d = log_intensity(image)
+    d = log_intensity(_checked(image))
     x = _sample(d)
     target = float(stats.skew(x))
     if target <= GUMBEL_SKEWNESS:
@@ -510,7 +522,7 @@ def compare_measured(image: xr.DataArray, *, n_blocks: int = 16) -> xr.Dataset:
     ['clipped_fraction', 'depth_slope']
     """
     scale = _scale_of(image)
-    image = canonical_dims(image)
+    image = canonical_dims(_checked(image))
     st = log_statistics(image, n_blocks=n_blocks)
     fl = fit_floor(image)
     d = log_intensity(image)

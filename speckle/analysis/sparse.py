@@ -28,6 +28,7 @@ g(a)``, ``g`` tabulated once; the depth integral is a sum over 8 samples per pix
 
 from __future__ import annotations
 
+import inspect
 from functools import lru_cache
 
 import numpy as np
@@ -35,6 +36,7 @@ from scipy import optimize, special
 
 from .._deprecate import keyword_only
 from .._validate import check_real
+from .._wrap import ArraySpec, preprocess_and_wrap
 
 __all__ = ["depth_intensity_psf", "log_intensity_moments", "sparse_inverse_density"]
 
@@ -65,18 +67,37 @@ def _lateral(a: np.ndarray) -> np.ndarray:
     return np.where(lna < la[0], -(a**2) * np.sqrt(np.pi) / 8, -np.exp(np.interp(lna, la, g)))
 
 
+#: Spectral weights: finite, real, 1-D, non-empty (the decorator's checks).
+_WEIGHTS = {"weights": ArraySpec(kind="real", ndim=1)}
+
+
+def _weights(weights: np.ndarray) -> np.ndarray:
+    """The decorator-checked weights as floats, refused when all zero."""
+    w = np.asarray(weights, dtype=float)
+    if not np.any(w):
+        raise ValueError("weights must not all be zero (no power: the PSF is undefined)")
+    return w
+
+
+@preprocess_and_wrap(checks=_WEIGHTS)
 def depth_intensity_psf(weights: np.ndarray) -> np.ndarray:
     """``|P(u)|^2`` of the model's depth PSF over one period, 8 samples per pixel.
 
     Parameters
     ----------
     weights : numpy.ndarray
-        Spectral weights of the ``N`` components, centred on ``N // 2``.
+        Spectral weights of the ``N`` components, centred on ``N // 2`` (finite, real,
+        1-D, not all zero).
 
     Returns
     -------
     numpy.ndarray
         ``8 N`` samples, ``u = 0, 1/8, ...`` pixels.
+
+    Raises
+    ------
+    TypeError, ValueError
+        ``weights`` not a finite real non-empty 1-D array, or all zero.
 
     Examples
     --------
@@ -86,7 +107,7 @@ def depth_intensity_psf(weights: np.ndarray) -> np.ndarray:
     >>> psf.shape, round(float(psf.max()), 6)  # 8 samples per pixel; (sum S)^2 at the peak
     ((64,), 64.0)
     """
-    w = np.asarray(weights, dtype=float)
+    w = _weights(weights)
     n = w.size
     # P(k/8) = sum_n w_n exp(2 pi i k (n - N//2) / (8 N)): a zero-padded inverse FFT
     padded = np.zeros(8 * n, complex)
@@ -104,6 +125,7 @@ def _lambda_cached(weights: tuple, waist_pitch: float) -> tuple[np.ndarray, floa
 
 
 @keyword_only("inverse_snr")
+@preprocess_and_wrap(checks=_WEIGHTS)
 def log_intensity_moments(
     weights: np.ndarray, waist_pitch: float, density: float, *, inverse_snr: float = 0.0
 ) -> tuple[float, float]:
@@ -128,8 +150,9 @@ def log_intensity_moments(
 
     Raises
     ------
-    ValueError
-        A non-positive waist or density, or a negative ``inverse_snr``.
+    TypeError, ValueError
+        A non-positive waist or density, a negative ``inverse_snr``, or ``weights`` as
+        :func:`depth_intensity_psf` refuses them.
 
     Examples
     --------
@@ -139,13 +162,14 @@ def log_intensity_moments(
     >>> round(var, 3), round(np.pi**2 / 6, 3)  # dense speckle: var ln I = pi^2/6
     (1.645, 1.645)
     """
+    wts = _weights(weights)
     w = check_real(waist_pitch, "waist_pitch", low=0, low_inclusive=False)
     rho = check_real(density, "density", low=0, low_inclusive=False)
     n = check_real(inverse_snr, "inverse_snr", low=0)
     g = np.euler_gamma
     if not np.isfinite(rho):
         return -g, np.pi**2 / 6
-    lam, area = _lambda_cached(tuple(np.asarray(weights, dtype=float)), w)
+    lam, area = _lambda_cached(tuple(wts), w)
     t = np.exp(_TAU) / np.sqrt(area)
     s2 = rho * area * (1 + n)
     dphi = np.exp(rho * lam - rho * area * n * t**2 / 4) - np.exp(-s2 * t**2 / 4)
@@ -158,6 +182,7 @@ def log_intensity_moments(
 
 
 @keyword_only("inverse_snr")
+@preprocess_and_wrap(checks=_WEIGHTS)
 def sparse_inverse_density(
     log_variance: float, weights: np.ndarray, waist_pitch: float, *, inverse_snr: float = 0.0
 ) -> float:
@@ -196,9 +221,12 @@ def sparse_inverse_density(
     2.0
     """
     v = check_real(log_variance, "log_variance", low=0, low_inclusive=False)
+    log_intensity_moments(weights, waist_pitch, 1.0, inverse_snr)  # checks every argument first
 
     def gap(y):
-        return log_intensity_moments(weights, waist_pitch, 1 / y, inverse_snr=inverse_snr)[1] - v
+        # the body: the arguments were checked once, just above
+        body = inspect.unwrap(log_intensity_moments)
+        return body(weights, waist_pitch, 1 / y, inverse_snr=inverse_snr)[1] - v
 
     lo = 0.01
     g_lo = gap(lo)

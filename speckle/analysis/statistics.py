@@ -43,13 +43,15 @@ Rectangular spectrum: ``mu4/mu2^2 = (2 N^2 + 1) / (3 N)``. Contrast does not dep
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import xarray as xr
 from scipy import stats
 
 from .._deprecate import keyword_only
 from .._validate import as_finite_array, check_choice, check_int, check_real
-from .._wrap import preprocess_and_wrap
+from .._wrap import ArraySpec, preprocess_and_wrap
 from ..conventions import attrs, inverse_units, labelled, units_of
 from ..scene.scatterers import AMPLITUDE_MODELS, COUNT_MODELS, amplitude_kurtosis
 from ..system.source import check_weights
@@ -70,18 +72,21 @@ __all__ = [
 MIN_EXPECTED = 5.0
 
 
-def _values(values: object, name: str) -> np.ndarray:
-    """Flattened finite float values of an array or DataArray (at least two)."""
-    data = values.values if isinstance(values, xr.DataArray) else values
-    arr = as_finite_array(data, name).ravel()
+#: Samples: finite real numbers, the DataArray kept for its units (the decorator's checks).
+_SAMPLES = ArraySpec(kind="real", keep_labels=True)
+
+
+def _flat(values: object, name: str) -> np.ndarray:
+    """The decorator-checked samples, flattened floats (at least two)."""
+    arr = np.asarray(values, dtype=float).ravel()
     if arr.size < 2:
         raise ValueError(f"{name} must hold at least 2 values, got {arr.size}")
     return arr
 
 
 def _units(values: object) -> str:
-    one = units_of("dimensionless")
-    return str(values.attrs.get("units", one)) if isinstance(values, xr.DataArray) else one
+    """The samples' units attribute (dimensionless for plain numpy)."""
+    return str(getattr(values, "attrs", {}).get("units", units_of("dimensionless")))
 
 
 def _usable(edges: np.ndarray) -> bool:
@@ -91,6 +96,7 @@ def _usable(edges: np.ndarray) -> bool:
         return bool(np.all(widths > 0) and np.all(np.isfinite(1.0 / widths)))
 
 
+@preprocess_and_wrap(checks={"values": _SAMPLES})
 def histogram(
     values: object, bins: int | object = 50, range: tuple[float, float] | None = None
 ) -> xr.DataArray:
@@ -113,7 +119,7 @@ def histogram(
         samples), ``outside`` (samples outside the edges, not counted), ``units`` (1/units of
         values). The density integrates to ``(count - outside)/count``.
     """
-    x = _values(values, "values")
+    x = _flat(values, "values")
     if isinstance(bins, int | np.integer) and not isinstance(bins, bool):
         nb = check_int(bins, "bins", low=1)
         if range is None:
@@ -138,7 +144,7 @@ def histogram(
     counts, _ = np.histogram(x, bins=edges)
     density = counts / (x.size * np.diff(edges))
     units = _units(values)
-    name = values.name if isinstance(values, xr.DataArray) and values.name else "values"
+    name = getattr(values, "name", None) or "values"
     return xr.DataArray(
         density,
         dims=("bin",),
@@ -178,6 +184,13 @@ def _chi_square(x: np.ndarray, dist, bins: int) -> tuple[float, int]:
     number of bins is reduced until each expects at least :data:`MIN_EXPECTED`.
     """
     nb = int(max(2, min(bins, x.size // MIN_EXPECTED)))
+    if nb < 3:
+        warnings.warn(
+            f"chi-square: {x.size} samples give {nb} bins of {MIN_EXPECTED:g} expected counts, "
+            "0 degrees of freedom: chi2_pvalue is NaN (use >= 15 samples)",
+            RuntimeWarning,
+            stacklevel=5,
+        )
     edges = dist.ppf(np.linspace(0.0, 1.0, nb + 1))
     edges[0], edges[-1] = -np.inf, np.inf
     observed, _ = np.histogram(x, bins=edges)
@@ -188,11 +201,17 @@ def _chi_square(x: np.ndarray, dist, bins: int) -> tuple[float, int]:
 
 def _fit(values: object, name: str, family, parameter: str, chi2_bins: int) -> xr.Dataset:
     """Maximum-likelihood fit (loc 0) of a one-parameter scipy family, with goodness of fit."""
-    x = _values(values, name)
+    x = _flat(values, name)
     check_int(chi2_bins, "chi2_bins", low=3)
     if np.any(x < 0):
         raise ValueError(f"{name} must be non-negative")
-    _, scale = family.fit(x, floc=0.0)
+    if not np.any(x > 0):
+        raise ValueError(
+            f"{name} must hold a positive value: all zero, the fitted law is degenerate"
+        )
+    # the maximum-likelihood scale in closed form (scipy's fit gives the same numbers, but
+    # refuses a Rayleigh sample holding an exact zero, e.g. from 8-bit data)
+    scale = np.sqrt(np.mean(x**2) / 2) if family.name == "rayleigh" else np.mean(x)
     model = {"rayleigh": "rayleigh", "expon": "exponential"}[family.name]
     return _fit_result(
         x, family(scale=scale), parameter, float(scale), _units(values), model, chi2_bins
@@ -242,6 +261,7 @@ def _fit_result(
     )
 
 
+@preprocess_and_wrap(checks={"amplitude": _SAMPLES})
 def fit_rayleigh(amplitude: object, *, chi2_bins: int = 50) -> xr.Dataset:
     """Maximum-likelihood Rayleigh fit of speckle amplitudes (``scipy.stats.rayleigh``, loc 0).
 
@@ -272,6 +292,7 @@ def fit_rayleigh(amplitude: object, *, chi2_bins: int = 50) -> xr.Dataset:
     return _fit(amplitude, "amplitude", stats.rayleigh, "sigma", chi2_bins)
 
 
+@preprocess_and_wrap(checks={"intensity": _SAMPLES})
 def fit_exponential(intensity: object, *, chi2_bins: int = 50) -> xr.Dataset:
     """Maximum-likelihood exponential fit of speckle intensities (``scipy.stats.expon``, loc 0).
 
@@ -290,13 +311,27 @@ def fit_exponential(intensity: object, *, chi2_bins: int = 50) -> xr.Dataset:
     return _fit(intensity, "intensity", stats.expon, "mean", chi2_bins)
 
 
+def _reduced_dims(data: xr.DataArray, dim: object) -> tuple[str, ...]:
+    """The dims ``dim`` names (all when None), refused by name when unknown."""
+    if dim is None:
+        return tuple(data.dims)
+    names = [dim] if isinstance(dim, str) else dim
+    if not isinstance(names, list | tuple) or not all(isinstance(d, str) for d in names):
+        raise TypeError(f"dim must be a dim name or a list of them, got {dim!r}")
+    unknown = [d for d in names if d not in data.dims]
+    if unknown:
+        raise ValueError(f"dim {unknown} not among intensity's dims {tuple(data.dims)}")
+    return tuple(names)
+
+
+@preprocess_and_wrap(checks={"intensity": _SAMPLES})
 def speckle_contrast(intensity: object, dim: str | list[str] | None = None) -> object:
     """Speckle contrast ``C = std(I)/mean(I)`` (population std, ``ddof=0``).
 
     Parameters
     ----------
     intensity : array_like or xarray.DataArray
-        Pixel intensities ``|A|^2``.
+        Pixel intensities ``|A|^2`` (finite; at least 2 values per contrast).
     dim : str or list of str, optional
         Dims to reduce over (DataArray only); default all.
 
@@ -304,25 +339,50 @@ def speckle_contrast(intensity: object, dim: str | list[str] | None = None) -> o
     -------
     float or xarray.DataArray
         The contrast (dimensionless); a DataArray over the remaining dims if ``dim`` is given.
+        NaN, with a ``RuntimeWarning`` saying so, where the mean intensity is zero (no
+        contrast is defined).
+
+    Raises
+    ------
+    TypeError, ValueError
+        ``intensity`` not finite numbers or with fewer than 2 values per contrast; ``dim`` not
+        a dim of ``intensity`` (or given with a plain array).
 
     Examples
     --------
-    >>> import numpy as np
-    >>> import speckle
-    >>> intensity = np.random.default_rng(0).exponential(size=100_000)
-    >>> round(float(speckle.speckle_contrast(intensity)), 2)
-    1.0
+    >>> speckle_contrast([1.0, 3.0])  # std 1, mean 2
+    0.5
     """
     if isinstance(intensity, xr.DataArray):
-        as_finite_array(intensity.values, "intensity")
-        c = intensity.std(dim=dim) / intensity.mean(dim=dim)
+        dims = _reduced_dims(intensity, dim)
+        n = int(np.prod([intensity.sizes[d] for d in dims]))
+        if n < 2:
+            raise ValueError(f"intensity must hold at least 2 values over {dims}, got {n}")
+        mean = intensity.mean(dim=dim)
+        zero = mean == 0
+        if bool(zero.any()):
+            _warn_zero_mean(int(zero.sum()))
+        c = intensity.std(dim=dim) / mean.where(~zero)
         return c.rename("contrast").assign_attrs(attrs("contrast", "speckle contrast std/mean"))
     if dim is not None:
         raise TypeError("dim needs intensity as an xarray.DataArray")
-    x = _values(intensity, "intensity")
-    return float(x.std() / x.mean())
+    x = _flat(intensity, "intensity")
+    mean = x.mean()
+    if mean == 0:
+        _warn_zero_mean(1)
+        return float("nan")
+    return float(x.std() / mean)
 
 
+def _warn_zero_mean(count: int) -> None:
+    warnings.warn(
+        f"speckle_contrast: the mean intensity is zero in {count} place(s): no contrast, NaN",
+        RuntimeWarning,
+        stacklevel=3,
+    )
+
+
+@preprocess_and_wrap(checks={"intensity": ArraySpec(kind="real", labelled=True, keep_labels=True)})
 def contrast_standard_error(
     intensity: xr.DataArray, sample_dim: str = "aline"
 ) -> tuple[float, float]:
@@ -338,18 +398,33 @@ def contrast_standard_error(
     Returns
     -------
     (float, float)
-        ``(C, SE(C))``.
+        ``(C, SE(C))``; ``(NaN, NaN)`` at zero mean intensity and ``(0, NaN)`` for a constant
+        one (each with a ``RuntimeWarning``).
     """
-    if not isinstance(intensity, xr.DataArray) or sample_dim not in intensity.dims:
-        raise TypeError(f"intensity must be a DataArray with a {sample_dim!r} dim")
+    if sample_dim not in intensity.dims:
+        raise TypeError(
+            f"intensity must be a DataArray with a {sample_dim!r} dim (sample_dim), got "
+            f"dims {intensity.dims}"
+        )
     n_lines = intensity.sizes[sample_dim]
     if n_lines < 3:
         raise ValueError(f"need >= 3 independent samples along {sample_dim!r}, got {n_lines}")
-    x = as_finite_array(intensity.transpose(sample_dim, ...).values, "intensity")
+    x = np.asarray(intensity.transpose(sample_dim, ...).values, dtype=float)
     x = x.reshape(n_lines, -1)
     m1, m2 = x.mean(axis=1), (x**2).mean(axis=1)
     big1, big2 = m1.mean(), m2.mean()
+    if big1 == 0:
+        _warn_zero_mean(1)
+        return float("nan"), float("nan")
     c2 = big2 / big1**2 - 1.0
+    if c2 == 0:
+        warnings.warn(
+            "contrast_standard_error: the intensity is constant (contrast 0): the delta "
+            "method's standard error (SE(C^2)/2C) is undefined, NaN",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+        return 0.0, float("nan")
     grad = np.array([-2.0 * big2 / big1**3, 1.0 / big1**2])
     var_c2 = float(grad @ np.cov(np.vstack([m1, m2])) @ grad) / n_lines
     c = float(np.sqrt(c2))
@@ -363,10 +438,9 @@ def spectrum_moments(n_pixels: int, spectrum: object | None = None) -> tuple[flo
     ``spectrum=None`` is the rectangular spectrum (``mu2 = N``, ``mu4 = (2N^3 + N)/3``).
     """
     n = check_int(n_pixels, "n_pixels", low=2)
-    if spectrum is None:
-        s = np.ones(n)
-    else:
-        s = check_weights(spectrum, n)
+    if spectrum is None:  # closed form: no allocation for any N (exact integers to 2^53)
+        return float(n), (2.0 * n**3 + n) / 3.0
+    s = check_weights(spectrum, n)
     return float(np.sum(s**2)), float(np.sum(np.convolve(s, s) ** 2))
 
 
