@@ -192,7 +192,7 @@ def load_measured(
     >>> np.save(path, np.random.default_rng(0).exponential(size=(16, 8)))
     >>> img = speckle.load_measured(path, scale="linear", pixel_size=5.75)
     >>> img.dims, img.shape
-    (('depth', 'aline'), (16, 8))
+    (('depth', 'x'), (16, 8))
     """
     warnings.warn(
         "load_measured is retired: read measured images with speckle.io.load_image(path, "

@@ -221,7 +221,9 @@ def sparse_inverse_density(
     2.0
     """
     v = check_real(log_variance, "log_variance", low=0, low_inclusive=False)
-    log_intensity_moments(weights, waist_pitch, 1.0, inverse_snr)  # checks every argument first
+    log_intensity_moments(
+        weights, waist_pitch, 1.0, inverse_snr=inverse_snr
+    )  # checks every argument first
 
     def gap(y):
         # the body: the arguments were checked once, just above

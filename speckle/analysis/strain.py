@@ -517,7 +517,7 @@ def accumulate_strain(
     >>> img = speckle.bscan(speckle.uniaxial_strain(scene, [0.0, 2e-3, 4e-3]), src)
     >>> frames = img.field.rename(strain="frame")
     >>> total = speckle.accumulate_strain(frames, k0=float(src.attrs["k0"]), pixel_size=8.0)
-    >>> round(float(np.nanmedian(total["cumulative"].isel(frame=-1))), 3)  # 4e-3 after two steps
+    >>> round(float(np.nanmedian(total["accumulated"].isel(frame=-1))), 3)  # 4e-3 after two steps
     0.004
     """
     labelled = isinstance(frames, xr.DataArray)  # checked and transposed by the decorator

@@ -347,7 +347,7 @@ def scan_image(
     >>> scene = speckle.shared_scene(regions, z_range=(0.0, 256.0), x_range=(-32.0, 64.0), seed=1)
     >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
     >>> x = speckle.scan_lines(8, 4.0)
-    >>> img = speckle.image(scene, src, waist=4.0, x=x)
+    >>> img = speckle.scan_image(scene, src, waist=4.0, lines=x)
     >>> img.field.dims, img.field.shape
     (('depth', 'x'), (32, 8))
     """

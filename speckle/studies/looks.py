@@ -98,7 +98,7 @@ def angular_looks(
     >>> scene = speckle.shared_scene(regions, z_range=(0.0, 256.0), x_range=(-32.0, 64.0), seed=1)
     >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
     >>> x = speckle.scan_lines(8, 4.0)
-    >>> looks = speckle.angular_looks(scene, src, [0.0, 5.0], waist=4.0, x=x)
+    >>> looks = speckle.angular_looks(scene, src, [0.0, 5.0], waist=4.0, lines=x)
     >>> looks.dims, looks.sizes["look"]
     (('look', 'depth', 'x'), 2)
     """
@@ -160,7 +160,7 @@ def spatial_looks(
     >>> scene = speckle.shared_scene(regions, z_range=(0.0, 256.0), x_range=(-32.0, 64.0), seed=1)
     >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
     >>> x = speckle.scan_lines(8, 4.0)
-    >>> looks = speckle.spatial_looks(scene, src, [0.0, 4.0], waist=4.0, x=x)
+    >>> looks = speckle.spatial_looks(scene, src, [0.0, 4.0], waist=4.0, lines=x)
     >>> looks.dims, looks.sizes["look"]
     (('look', 'depth', 'x'), 2)
     """
@@ -202,7 +202,7 @@ def polarization_looks(
     >>> scene = speckle.shared_scene(regions, z_range=(0.0, 256.0), x_range=(-32.0, 64.0), seed=1)
     >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
     >>> x = speckle.scan_lines(8, 4.0)
-    >>> looks = speckle.polarization_looks(scene, src, 0.5, seed=2, waist=4.0, x=x)
+    >>> looks = speckle.polarization_looks(scene, src, 0.5, seed=2, waist=4.0, lines=x)
     >>> looks.dims, looks.sizes["look"]
     (('look', 'depth', 'x'), 2)
     """

@@ -574,7 +574,7 @@ def process_interferogram(
     >>> grid = k0 + (np.arange(n) - n // 2) * np.pi / depth_range  # k_n = k0 + n pi/H
     >>> z, a = np.array([200.0]), np.array([1.0 + 0j])  # one reflector at 200 µm
     >>> signal = speckle.interferogram(z, a, grid, np.ones(n), k0=k0)
-    >>> ascan = speckle.process(signal, grid=grid, k0=k0)
+    >>> ascan = speckle.process_interferogram(signal, grid=grid, k0=k0)
     >>> int(abs(ascan).argmax())  # the reflector's pixel, 200 µm / 8 µm
     25
     """
