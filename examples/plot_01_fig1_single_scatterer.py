@@ -9,15 +9,10 @@ formal Fourier transform of the paper's Fig. 1, k0/Δk = 10 a real SD-OCT source
 target is ``results/fig1/fig1.png``.
 """
 
-from pathlib import Path
-
-import yaml
-
-import speckle
 from speckle.figures import static
+from speckle.pipeline import default_config
 
-ROOT = Path(speckle.__file__).resolve().parents[1]  # the repository (editable install)
-config = yaml.safe_load((ROOT / "workflow/config/config.yaml").read_text())
+config = default_config()  # the pipeline's default config, shipped with the package
 fig1, source = config["fig1"], config["source"]
 
 ds = static.single_scatterer(

@@ -8,15 +8,10 @@ about one per pixel the speckle is developed. Reduced here to 12 A-lines; the pi
 is ``results/fig2/fig2.png``.
 """
 
-from pathlib import Path
-
-import yaml
-
-import speckle
 from speckle.figures import static
+from speckle.pipeline import default_config
 
-ROOT = Path(speckle.__file__).resolve().parents[1]  # the repository (editable install)
-config = yaml.safe_load((ROOT / "workflow/config/config.yaml").read_text())
+config = default_config()  # the pipeline's default config, shipped with the package
 fig2, source = config["fig2"], config["source"]
 
 ds = static.density_sweep(

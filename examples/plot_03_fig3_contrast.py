@@ -8,15 +8,10 @@ fully developed speckle, as the density grows. Reduced here to four densities an
 each; the pipeline target is ``results/fig3/fig3.png``.
 """
 
-from pathlib import Path
-
-import yaml
-
-import speckle
 from speckle.figures import histograms, static
+from speckle.pipeline import default_config
 
-ROOT = Path(speckle.__file__).resolve().parents[1]  # the repository (editable install)
-config = yaml.safe_load((ROOT / "workflow/config/config.yaml").read_text())
+config = default_config()  # the pipeline's default config, shipped with the package
 fig3, source = config["fig3"], config["source"]
 
 ds = histograms.density_histograms(

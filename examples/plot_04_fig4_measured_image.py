@@ -15,13 +15,12 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 import speckle
 from speckle.figures import histograms, static
+from speckle.pipeline import default_config
 
-ROOT = Path(speckle.__file__).resolve().parents[1]  # the repository (editable install)
-config = yaml.safe_load((ROOT / "workflow/config/config.yaml").read_text())
+config = default_config()  # the pipeline's default config, shipped with the package
 fig4, source = config["fig4"], config["source"]
 options = {"k0_dk": source["k0_dk"], "seed": config["seed"], **static.source_options(source)}
 

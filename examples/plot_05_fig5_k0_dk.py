@@ -8,15 +8,10 @@ histograms follow the same Rayleigh law). Reduced here to 16 A-lines; the pipeli
 ``results/fig5/fig5.png``.
 """
 
-from pathlib import Path
-
-import yaml
-
-import speckle
 from speckle.figures import static
+from speckle.pipeline import default_config
 
-ROOT = Path(speckle.__file__).resolve().parents[1]  # the repository (editable install)
-config = yaml.safe_load((ROOT / "workflow/config/config.yaml").read_text())
+config = default_config()  # the pipeline's default config, shipped with the package
 fig5, source = config["fig5"], config["source"]
 
 ds = static.k0_sweep(

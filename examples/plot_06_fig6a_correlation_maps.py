@@ -9,15 +9,10 @@ remains after compensation is the decorrelation caused by strain itself. Reduced
 A-lines; the pipeline target is ``results/fig6/fig6a.png``.
 """
 
-from pathlib import Path
-
-import yaml
-
-import speckle
 from speckle.figures import deformation
+from speckle.pipeline import default_config
 
-ROOT = Path(speckle.__file__).resolve().parents[1]  # the repository (editable install)
-config = yaml.safe_load((ROOT / "workflow/config/config.yaml").read_text())
+config = default_config()  # the pipeline's default config, shipped with the package
 fig6 = config["fig6"]
 fig6 = {**fig6, "panel_a": {**fig6["panel_a"], "n_alines": 64}}
 

@@ -9,15 +9,10 @@ same strain. Reduced here to 16 A-lines and 4 strains; the pipeline target is
 ``results/fig6/fig6b.png``.
 """
 
-from pathlib import Path
-
-import yaml
-
-import speckle
 from speckle.figures import deformation
+from speckle.pipeline import default_config
 
-ROOT = Path(speckle.__file__).resolve().parents[1]  # the repository (editable install)
-config = yaml.safe_load((ROOT / "workflow/config/config.yaml").read_text())
+config = default_config()  # the pipeline's default config, shipped with the package
 fig6 = config["fig6"]
 strain = {"start": 0.0, "stop": 0.03, "num": 4}
 fig6 = {**fig6, "n_alines": 16, "panel_b": {**fig6["panel_b"], "strain": strain}}

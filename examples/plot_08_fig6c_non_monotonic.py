@@ -10,15 +10,10 @@ phase (a window artefact). Reduced here to 16 A-lines and 9 strains; the pipelin
 ``results/fig6/fig6c.png``.
 """
 
-from pathlib import Path
-
-import yaml
-
-import speckle
 from speckle.figures import deformation
+from speckle.pipeline import default_config
 
-ROOT = Path(speckle.__file__).resolve().parents[1]  # the repository (editable install)
-config = yaml.safe_load((ROOT / "workflow/config/config.yaml").read_text())
+config = default_config()  # the pipeline's default config, shipped with the package
 fig6 = config["fig6"]
 strain = {"start": 0.0, "stop": 0.10, "num": 9}
 fig6 = {**fig6, "n_alines": 16, "panel_c": {**fig6["panel_c"], "strain": strain}}

@@ -9,15 +9,10 @@ widen laterally, and the lateral correlation of lines ``dx`` apart follows
 the pipeline target is ``results/beam/bscans.png``.
 """
 
-from pathlib import Path
-
-import yaml
-
-import speckle
 from speckle.figures import beam
+from speckle.pipeline import default_config
 
-ROOT = Path(speckle.__file__).resolve().parents[1]  # the repository (editable install)
-config = yaml.safe_load((ROOT / "workflow/config/config.yaml").read_text())
+config = default_config()  # the pipeline's default config, shipped with the package
 section = {**config["beam"], "n_pixels": 64, "waist_pitch": [1.0, 2.0], "n_lines": 24}
 section.update(lags=3, chunk=12)
 

@@ -9,15 +9,10 @@ of the scene, so a volume is never held whole. Reduced here to 16 x 16 lines x 6
 pipeline streams 128 x 128 lines x 512 pixels to ``results/beam/volume.nc``.
 """
 
-from pathlib import Path
-
-import yaml
-
-import speckle
 from speckle.figures import beam
+from speckle.pipeline import default_config
 
-ROOT = Path(speckle.__file__).resolve().parents[1]  # the repository (editable install)
-config = yaml.safe_load((ROOT / "workflow/config/config.yaml").read_text())
+config = default_config()  # the pipeline's default config, shipped with the package
 volume = {**config["beam"]["volume"], "n_lines": 16, "n_pixels": 64, "chunk": 8}
 section = {**config["beam"], "volume": {**volume, "tile": [512.0, 64.0, 64.0]}}
 

@@ -9,15 +9,10 @@ spectrometer chain (cubic k-linearisation, and exact linearisation) against the 
 pipeline target is ``results/system/rolloff.png``.
 """
 
-from pathlib import Path
-
-import yaml
-
-import speckle
 from speckle.figures import system
+from speckle.pipeline import default_config
 
-ROOT = Path(speckle.__file__).resolve().parents[1]  # the repository (editable install)
-config = yaml.safe_load((ROOT / "workflow/config/config.yaml").read_text())
+config = default_config()  # the pipeline's default config, shipped with the package
 sheet = {**config["system"]["datasheet"], "camera_pixels": 512}
 
 oct_system = system.system_from_config(sheet)

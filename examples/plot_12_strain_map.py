@@ -10,15 +10,10 @@ Reduced here to 128 pixels x 32 A-lines (x: A-line index, 8 µm apart; radius 80
 two estimators; the pipeline target is ``results/elastography/inclusion.png``.
 """
 
-from pathlib import Path
-
-import yaml
-
-import speckle
 from speckle.figures import elastography
+from speckle.pipeline import default_config
 
-ROOT = Path(speckle.__file__).resolve().parents[1]  # the repository (editable install)
-config = yaml.safe_load((ROOT / "workflow/config/config.yaml").read_text())
+config = default_config()  # the pipeline's default config, shipped with the package
 cfg = {**config["elastography"], "n_pixels": 128, "methods": ["vector", "wls"]}
 cfg["inclusion"] = {**cfg["inclusion"], "n_alines": 32, "radius": 80.0}
 

@@ -11,15 +11,10 @@ here to 128 pixels x 16 A-lines, two seeds, two estimators and short sweeps;
 the pipeline target is ``results/elastography/failure_maps.png``.
 """
 
-from pathlib import Path
-
-import yaml
-
-import speckle
 from speckle.figures import elastography
+from speckle.pipeline import default_config
 
-ROOT = Path(speckle.__file__).resolve().parents[1]  # the repository (editable install)
-config = yaml.safe_load((ROOT / "workflow/config/config.yaml").read_text())
+config = default_config()  # the pipeline's default config, shipped with the package
 cfg = {**config["elastography"], "n_pixels": 128, "n_alines": 16, "methods": ["vector", "wls"]}
 cfg["failure"] = {
     **cfg["failure"],

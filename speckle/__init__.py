@@ -19,7 +19,7 @@ subpackage lists its own), and loads each on first use (scientific Python's SPEC
 
 from . import analysis, imaging, scene, studies, synthoct, system
 from ._deprecate import retired_names
-from ._lazy import attach
+from ._lazy import gather
 
 #: Subpackages whose public names the top level gathers, in the order of the flow.
 _GROUPS = {
@@ -36,7 +36,7 @@ _INFRASTRUCTURE = {
     "io": ["IMAGE_KINDS", "load_image", "open_dataset", "stream_to_netcdf", "to_netcdf"]
 }
 
-_lazy_getattr, _lazy_dir, _names = attach(
+_lazy_getattr, _lazy_dir, _names = gather(
     __name__, {**{name: mod.__all__ for name, mod in _GROUPS.items()}, **_INFRASTRUCTURE}
 )
 #: Retired names (``speckle.METHODS``, ``speckle.image``, ...) warn and resolve to the new ones.
@@ -58,4 +58,4 @@ def __dir__() -> list[str]:
     return sorted({*__all__, *_lazy_dir()})
 
 
-del analysis, attach, imaging, retired_names, scene, studies, synthoct, system
+del analysis, gather, imaging, retired_names, scene, studies, synthoct, system

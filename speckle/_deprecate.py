@@ -16,7 +16,7 @@ import types
 import warnings
 from collections.abc import Callable, Iterable, Mapping
 
-__all__ = ["moved", "renamed_parameters", "retired_names"]
+__all__ = ["keyword_only", "moved", "renamed_parameters", "retired_names"]
 
 
 def moved(
@@ -187,3 +187,69 @@ def renamed_parameters(renames: Mapping[str, str]) -> Callable[[Callable], Calla
         return wrapper
 
     return decorator
+
+
+def keyword_only(*names: str) -> Callable[[Callable], Callable]:
+    """Decorator: options ``names`` became keyword-only; positional use warns for a release.
+
+    The decorated function declares ``names`` after ``*``; a call that still passes them by
+    position (in the old order, ``names``) gets a ``FutureWarning`` naming the keywords, then
+    runs as if they were passed by keyword. ``inspect.signature`` shows the new signature.
+
+    Parameters
+    ----------
+    *names : str
+        The options, in their old positional order.
+
+    Returns
+    -------
+    callable
+        The decorator.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> @keyword_only("scale")
+    ... def area(width, height, *, scale=1.0):
+    ...     return width * height * scale
+    >>> area(2.0, 3.0, scale=2.0)
+    12.0
+    >>> with warnings.catch_warnings(record=True) as seen:
+    ...     warnings.simplefilter("always")
+    ...     value = area(2.0, 3.0, 2.0)
+    >>> value, str(seen[0].message)
+    (12.0, 'area(): pass scale= by keyword; positional use will be an error in the next release')
+    """
+
+    def decorate(func: Callable) -> Callable:
+        params = inspect.signature(func).parameters.values()
+        n_positional = sum(p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD) for p in params)
+        keyword = {p.name for p in params if p.kind is p.KEYWORD_ONLY}
+        if not set(names) <= keyword:
+            raise TypeError(f"{func.__qualname__}: {sorted(set(names) - keyword)} not keyword-only")
+
+        @functools.wraps(func)
+        def wrapper(*args, **kwargs):
+            if len(args) > n_positional:
+                extra = args[n_positional:]
+                if len(extra) > len(names):
+                    raise TypeError(
+                        f"{func.__qualname__}() takes at most {n_positional + len(names)} "
+                        f"positional arguments ({len(args)} given)"
+                    )
+                given = dict(zip(names, extra, strict=False))
+                twice = sorted(given.keys() & kwargs.keys())
+                if twice:
+                    raise TypeError(f"{func.__qualname__}() got multiple values for {twice}")
+                warnings.warn(
+                    f"{func.__qualname__}(): pass {', '.join(f'{n}=' for n in given)} by "
+                    "keyword; positional use will be an error in the next release",
+                    FutureWarning,
+                    stacklevel=2,
+                )
+                args, kwargs = args[:n_positional], {**kwargs, **given}
+            return func(*args, **kwargs)
+
+        return wrapper
+
+    return decorate

@@ -236,6 +236,19 @@ def load_image(
         fewer than 2 x 2 pixels.
     TypeError
         Values that do not match ``kind`` (complex for a real kind, or the reverse).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import numpy as np
+    >>> import speckle
+    >>> path = pathlib.Path(tempfile.mkdtemp(), "scan.npy")
+    >>> np.save(path, np.random.default_rng(0).exponential(size=(16, 8)))
+    >>> img = speckle.load_image(
+    ...     path, kind="intensity", pixel_size=5.0, pitch=10.0, dims=("depth", "x")
+    ... )
+    >>> img.dims, img.shape, float(img.x[1] - img.x[0])
+    (('depth', 'x'), (16, 8), 10.0)
     """
     check_choice(kind, "kind", IMAGE_KINDS)
     if not isinstance(path, str | os.PathLike):

@@ -39,6 +39,12 @@ origin        1           where a SynthOCT scan or score comes from (published, 
 boundary      um          depth of a two-layer phantom's boundary
 energy        percent     backscattered energy of a phantom's scatterers (the file's %)
 layer         1           layer of a fitted phantom, 0 at the top (:mod:`speckle.studies.phantom`)
+inclusion     1           inclusion of a virtual patient or fitted phantom
+case          1           closed-loop case of the phantom fit (its seed)
+thickness     um          layer thickness (the phantom fit's failure map)
+energy_ratio  1           ratio of neighbouring layers' ``rho E`` (the failure map)
+seed          1           seed of a fitted phantom's draw (:mod:`speckle.studies.phantom.real`)
+pair          1           pair of draws compared, the floor (:mod:`speckle.studies.phantom.real`)
 ============  ==========  ===============================================================
 
 Data variables (:data:`QUANTITIES`): ``field``, ``amplitude``, ``weight``, ``correlation``,
@@ -48,7 +54,8 @@ Data variables (:data:`QUANTITIES`): ``field``, ``amplitude``, ``weight``, ``cor
 per µm^2 or µm^3 of a 2-D or 3-D scene); ``level`` (dB,
 ``20 log10 |A|``); ``pixels`` (pixel); ``line_density`` (1/pixel) and ``beam_density``
 (1/(pixel line)); ``modulus``, ``stress`` (kPa); ``attenuation`` (1/um); ``diffusion``
-(um^2/s); ``time`` (s); ``rate`` (1/s); ``velocity`` (um/s); ``line_rate`` (Hz);
+(um^2/s); ``curvature`` (1/um); ``time`` (s); ``rate`` (1/s); ``velocity`` (um/s);
+``line_rate`` (Hz);
 ``phase`` (rad); ``log_variance`` (dB^2); ``decay_speed`` (1/s); ``angle`` (degree); and, for
 measured images of
 unknown calibration, ``data``, ``data_slope``, ``mean_intensity`` and ``log_data``.
@@ -125,6 +132,12 @@ COORDS: dict[str, tuple[str, str]] = {
     "boundary": ("um", "depth of the layer boundary"),
     "energy": ("percent", "backscattered energy per scatterer"),
     "layer": ("1", "layer index from the top"),
+    "inclusion": ("1", "inclusion of a phantom"),
+    "case": ("1", "closed-loop case (its seed)"),
+    "thickness": ("um", "layer thickness"),
+    "energy_ratio": ("1", "ratio of neighbouring layers' rho E"),
+    "seed": ("1", "seed of a phantom's draw"),
+    "pair": ("1", "pair of draws compared (the floor)"),
 }
 
 #: Data-variable quantity -> (units, long_name); a variable's own long name may be more specific.
@@ -152,6 +165,7 @@ QUANTITIES: dict[str, tuple[str, str]] = {
     "modulus": ("kPa", "modulus"),
     "stress": ("kPa", "stress"),
     "attenuation": ("1/um", "intensity attenuation coefficient mu_t"),
+    "curvature": ("1/um", "curvature of a boundary z(x) (half its second derivative)"),
     "time": ("s", "time"),
     "rate": ("1/s", "scatterers per second"),
     "angle": ("degree", "angle"),

@@ -127,6 +127,16 @@ def to_netcdf(ds: xr.Dataset | xr.DataArray, path: str | os.PathLike) -> None:
     Notes
     -----
     Complex variables of mixed precision are all written as complex128 (module docstring).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import xarray as xr
+    >>> import speckle
+    >>> path = pathlib.Path(tempfile.mkdtemp(), "out.nc")
+    >>> speckle.to_netcdf(xr.Dataset({"a": ("x", [1.0, 2.0])}), path)
+    >>> speckle.open_dataset(path).a.values
+    array([1., 2.])
     """
     if isinstance(ds, xr.DataArray):
         ds = ds.to_dataset(name=ds.name or "data")
@@ -172,6 +182,16 @@ def open_dataset(path: str | os.PathLike, *, load: bool = True) -> xr.Dataset:
         NetCDF file.
     load : bool
         Load into memory and close the file (default); ``False`` keeps it lazy.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import xarray as xr
+    >>> import speckle
+    >>> path = pathlib.Path(tempfile.mkdtemp(), "out.nc")
+    >>> speckle.to_netcdf(xr.Dataset({"a": ("x", [1.0, 2.0])}), path)
+    >>> speckle.open_dataset(path).a.values
+    array([1., 2.])
     """
     check_bool(load, "load")
     check_path(path)
@@ -215,6 +235,16 @@ def stream_to_netcdf(
         ``distributed.progress`` on a cluster) on stderr.
     complevel : int
         zlib level, 0-9 (speckle fields barely compress: 1 is a good trade-off).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import xarray as xr
+    >>> import speckle
+    >>> path = pathlib.Path(tempfile.mkdtemp(), "out.nc")
+    >>> speckle.stream_to_netcdf(xr.Dataset({"a": ("x", [1.0, 2.0])}).chunk(), path, progress=False)
+    >>> speckle.open_dataset(path).a.values
+    array([1., 2.])
     """
     import dask
     from dask.diagnostics import ProgressBar

@@ -90,10 +90,10 @@ def test_distribution_name_is_not_the_index_speckle():
     assert speckle.__version__ == project["version"]
 
 
-def test_function_wins_over_its_same_named_module_whatever_the_import_order():
-    """``speckle.system.rolloff`` is the function even after its module was imported first."""
+def test_a_function_stays_a_function_whatever_the_import_order():
+    """``speckle.system.rolloff`` is the function even after its (private) module was imported."""
     out = _run(
-        "import speckle.system.rolloff, speckle.imaging.bscan, speckle.scene.layers\n"
+        "import speckle.system._rolloff, speckle.imaging._bscan, speckle.scene._layers\n"
         "import speckle\n"
         "print(callable(speckle.system.rolloff), callable(speckle.rolloff),"
         " callable(speckle.imaging.bscan), callable(speckle.layer_stack))"
@@ -101,11 +101,49 @@ def test_function_wins_over_its_same_named_module_whatever_the_import_order():
     assert out.split() == ["True"] * 4
 
 
-def test_a_module_table_read_from_its_source_lists_its_functions():
-    from speckle._lazy import functions_of  # private: the helper lazy __init__ files use
-    from speckle.analysis import compounding
+def _stub(package: str) -> tuple[set[str], dict[str, list[str]], list[str]]:
+    """(modules, module -> names, ``__all__``) declared by a package's ``__init__.pyi``."""
+    import ast
 
-    expected = [n for n in compounding.__all__ if callable(getattr(compounding, n))]
-    assert functions_of("speckle.analysis", "compounding") == expected
-    assert set(expected) <= set(speckle.analysis.__all__)
-    assert "WINDOWS" not in speckle.analysis.__all__  # a constant: spectrometer has one too
+    path = Path(importlib.import_module(package).__file__).with_suffix(".pyi")
+    tree = ast.parse(path.read_text())
+    modules = {
+        a.name for n in tree.body if isinstance(n, ast.ImportFrom) and not n.module for a in n.names
+    }
+    names: dict[str, list[str]] = {}
+    for node in tree.body:
+        if isinstance(node, ast.ImportFrom) and node.module:
+            names.setdefault(node.module, []).extend(a.name for a in node.names)
+    (all_,) = [
+        ast.literal_eval(n.value)
+        for n in tree.body
+        if isinstance(n, ast.Assign) and [t.id for t in n.targets] == ["__all__"]
+    ]
+    return modules, names, all_
+
+
+STUBBED = [f"speckle.{g}" for g in [*SUBPACKAGES, "synthoct", "pipeline", "studies.twin"]]
+
+
+@pytest.mark.parametrize("package", STUBBED)
+def test_each_stub_lists_exactly_its_public_names_and_modules(package):
+    """The ``__init__.pyi`` stub is the one list: public names, their modules, public modules."""
+    module = importlib.import_module(package)
+    modules, names, all_ = _stub(package)
+    on_disk = {m.name for m in pkgutil.iter_modules(module.__path__) if not m.name.startswith("_")}
+    assert modules == on_disk, f"{package}.__init__.pyi: modules {modules ^ on_disk}"
+    listed = [n for group in names.values() for n in group]
+    assert sorted(listed) == sorted(set(listed)) == sorted(all_) == sorted(module.__all__)
+    for mod, group in names.items():
+        source = importlib.import_module(f"{package}.{mod}")
+        exported = getattr(source, "__all__", None)  # a private module may have none
+        missing = [n for n in group if n not in (exported or vars(source))]
+        assert not missing, f"{package}.{mod} does not export {missing}"
+
+
+@pytest.mark.parametrize("package", ["speckle", *STUBBED])
+def test_no_public_name_is_also_a_module(package):
+    """Importing a module binds it on its package: a same-named function would be replaced."""
+    module = importlib.import_module(package)
+    on_disk = {m.name for m in pkgutil.iter_modules(module.__path__)}
+    assert not set(module.__all__) & on_disk, f"{package}: rename the module private"

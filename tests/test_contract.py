@@ -489,7 +489,52 @@ def _bscan_like(**kw):
     return lambda: dict(scene=F.scene, source=F.src, **kw)
 
 
+@functools.cache
+def _pdms_crop() -> xr.DataArray:
+    """The shipped PDMS image's first 160 rows and 64 lines (log data, as load_image reads it)."""
+    from speckle.data import SAMPLE_PITCH, SAMPLE_PIXEL_SIZE, sample_path
+
+    image = speckle.load_image(
+        sample_path("pdms"),
+        kind="log",
+        dims=("depth", "x"),
+        pixel_size=SAMPLE_PIXEL_SIZE,
+        pitch=SAMPLE_PITCH["pdms"],
+    )
+    return image[:160, :64]
+
+
+_REAL_WHY = (
+    "rows, noise_rows: (start, stop) row pairs, checked against the image "
+    "(tests/studies/test_phantom_real.py)"
+)
+
 ENTRIES: dict[str, Entry] = {
+    "equivalent_system": E(
+        lambda: dict(image=_pdms_crop(), rows=(90, 150), noise_rows=(5, 40), beam_radius=8.0),
+        image="image",
+        rows="none",
+        noise_rows="none",
+        beam_radius="positive_length",
+        per_cell="positive",
+        wavelength="positive_length",
+        denoise="flag",
+        why=_REAL_WHY,
+    ),
+    "real_tissue_phantom": E(
+        lambda: dict(
+            image=_pdms_crop(), rows=(90, 150), noise_rows=(5, 40), seeds=(1, 2), beam_radius=8.0
+        ),
+        image="image",
+        rows="none",
+        noise_rows="none",
+        seeds="none",
+        beam_radius="positive_length",
+        per_cell="positive",
+        max_layers="count",
+        variant="choice",
+        why=_REAL_WHY + "; seeds: 2..16 distinct seeds (the same tests)",
+    ),
     # --- scene -------------------------------------------------------------------------------
     "random_scatterers": E(
         lambda: dict(n_alines=2, density=1.0, n_pixels=8, depth_range=64.0, seed=0),
@@ -1506,7 +1551,63 @@ ENTRIES: dict[str, Entry] = {
         config="none",
         max_layers="count",
         blocks="count",
-        why="config: a ScannerConfig or an INI path (tests/studies/test_phantom.py)",
+        shapes="none",
+        why="config: a ScannerConfig or an INI path (tests/studies/test_phantom.py); shapes: a "
+        "tuple of shape names (tests/studies/test_phantom_shapes.py)",
+    ),
+    "virtual_patient": E(
+        lambda: dict(
+            seed=1,
+            config=speckle.ScannerConfig(n_pixels=64, n_lines=16, x_max=96.0, n_scatterers=200),
+            layers=(1, 2),
+        ),
+        config="none",
+        layers="none",
+        shapes="none",
+        energy_range="none",
+        density_range="none",
+        min_contrast="positive",
+        min_thickness="positive_length",
+        max_tilt="nonnegative",
+        max_sag="nonnegative",
+        visible="positive",
+        draw_seed="seed",
+        inclusions="flag",
+        why="config: a name or ScannerConfig; layers, shapes and the ranges: pairs and tuples "
+        "(tests/studies/test_phantom_patients.py)",
+    ),
+    "phantom_closed_loop_case": E(
+        lambda: dict(
+            seed=1,
+            config=speckle.ScannerConfig(n_pixels=64, n_lines=64, x_max=384.0, n_scatterers=4000),
+            layers=(1, 1),
+        ),
+        config="none",
+        fit_seed="seed",
+        max_layers="count",
+        patient="none",
+        why="config: a name or ScannerConfig; patient: virtual_patient's options (its entry)",
+    ),
+    "phantom_failure_map": E(
+        lambda: dict(
+            config=speckle.ScannerConfig(n_pixels=64, n_lines=64, x_max=384.0, n_scatterers=4000),
+            thickness=[8.0],
+            contrast=[4.0],
+        ),
+        config="none",
+        thickness="real_array",
+        contrast="real_array",
+        seeds="none",
+        energy="positive",
+        top_depth="positive_length",
+        why="config: a name or ScannerConfig; seeds: a list of seeds (tests/studies/"
+        "test_phantom_limits.py)",
+    ),
+    "synthoct_config": E(
+        lambda: dict(name="2025"),
+        name="choice",
+        changes="none",
+        why="changes: ScannerConfig's fields, checked by ScannerConfig (its own entry)",
     ),
     "PhantomFit": E(
         lambda: dict(layers=xr.Dataset(), config=speckle.ScannerConfig()),
@@ -1514,6 +1615,30 @@ ENTRIES: dict[str, Entry] = {
         config="none",
         why="a record built by fit_phantom",
         record="fit_phantom",
+    ),
+    "EquivalentSystem": E(
+        lambda: dict(
+            config=speckle.ScannerConfig(),
+            rows=(0, 256),
+            gain=1.0,
+            offset=0.0,
+            noise_log=0.0,
+            kind="intensity",
+            waist=float("nan"),
+            window_top_log=11.74,
+            denoise=True,
+        ),
+        config="none",
+        rows="none",
+        gain="none",
+        offset="none",
+        noise_log="none",
+        kind="none",
+        waist="none",
+        window_top_log="none",
+        denoise="none",
+        why="a record built by equivalent_system",
+        record="equivalent_system",
     ),
     "ScannerConfig": E(
         lambda: dict(n_pixels=16, n_lines=8, x_max=96.0, n_scatterers=50),

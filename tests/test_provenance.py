@@ -17,8 +17,8 @@ def test_config_hash_ignores_key_order():
 
 
 def test_module_sources_follow_package_imports_only():
-    names = {Path(p).name for p in module_sources("speckle.imaging.bscan")}
-    assert {"bscan.py", "aline.py", "scatterers.py", "source.py", "_validate.py"} <= names
+    names = {Path(p).name for p in module_sources("speckle.imaging._bscan")}
+    assert {"_bscan.py", "aline.py", "scatterers.py", "source.py", "_validate.py"} <= names
     assert "sweep.py" not in names  # __init__ re-exports are not followed
     names = {Path(p).name for p in module_sources("speckle.sweep")}
     assert "aline.py" not in names
@@ -35,7 +35,7 @@ def test_unknown_module_raises():
         ("import speckle\nspeckle.ascan(z)", "speckle.imaging.aline"),
         ("import speckle\nspeckle.imaging.beam_scan(s)", "speckle.imaging.beam"),
         ("from speckle import estimate_strain", "speckle.analysis.strain"),
-        ("import speckle.system as sy\nsy.rolloff(x)", "speckle.system.rolloff"),
+        ("import speckle.system as sy\nsy.rolloff(x)", "speckle.system._rolloff"),
         ("from speckle.scene import make_regions as mr", "speckle.scene.regions"),
     ],
 )

@@ -15,43 +15,9 @@ Names load on first use (SPEC 1, ``lazy_loader``).
 """
 
 from .._deprecate import moved, retired_names
-from .._lazy import attach, functions_of
+from .._lazy import attach
 
-_lazy_getattr, __dir__, __all__ = attach(
-    __name__,
-    {
-        "compounding": functions_of(__name__, "compounding"),
-        "correlation": [
-            "amplitude_from_gamma",
-            "compensate",
-            "correlation_array",
-            "correlation_map",
-            "expected_correlation",
-            "expected_gamma",
-            "oversample_depth",
-            "pearson",
-            "resample_depth",
-            "sample_field",
-        ],
-        "dynamics": functions_of(__name__, "dynamics"),
-        "dynamics_theory": functions_of(__name__, "dynamics_theory"),
-        "filters": ["FILTERS", "despeckle", "filter_available", "frost", "kuan", "lee"],
-        "image_quality": [
-            "bandlimited",
-            "cnr",
-            "edge_width",
-            "enl",
-            "peak_fwhm",
-            "psnr_db",
-            "ssim_db",
-        ],
-        "measured": ["compare_measured", "load_measured"],
-        "sparse": ["depth_intensity_psf", "log_intensity_moments", "sparse_inverse_density"],
-        "statistics": ["contrast_theory", "fit_exponential", "fit_rayleigh", "speckle_contrast"],
-        "strain": ["accumulate_strain", "estimate_displacement", "estimate_strain"],
-        "tracking": ["TRACK_METHODS", *functions_of(__name__, "tracking")],
-    },
-)
+_lazy_getattr, __dir__, __all__ = attach(__name__, __file__)
 #: Retired names (:data:`speckle.conventions.RETIRED`) warn and resolve to the new ones.
 _retired = retired_names(__name__, _lazy_getattr)
 #: Names that moved to :mod:`speckle.studies` (issue 32): they warn for a release.

@@ -2,40 +2,27 @@
 
 Compensation
 ------------
-An A-scan of Eq. 4 is a trigonometric polynomial in continuous depth: with spectral field
-``F_n = S_n sum_j a_j exp(2i k_n z_j)`` (recovered exactly from the ``N`` pixels by an inverse
-DFT), ``A(y) = sum_n F_n exp(-2i pi n y/N)`` at any real pixel position ``y``. *Exact
-compensation* evaluates the deformed A-scan where each reference pixel's material point went,
-``y = q + u_z(z_q)/p`` (``p = H/N``), and removes the carrier ``exp(2i k0 u_z)`` that a moved
-scatterer carries (for a rigid shift the compensated field then equals the reference exactly).
+An A-scan of Eq. 4 is a trigonometric polynomial in depth, ``A(y) = sum_n F_n exp(-2i pi n
+y/N)`` (``F_n`` exactly from the ``N`` pixels by an inverse DFT). *Exact compensation*
+evaluates the deformed A-scan where each reference pixel's material point went, ``y = q +
+u_z(z_q)/p`` (``p = H/N``), and removes the carrier ``exp(2i k0 u_z)`` of a moved scatterer
+(a rigid shift then gives back the reference exactly).
 
 Correlation
 -----------
-Pearson correlation of intensity ``|A|^2``, amplitude ``|A|`` or the complex field (modulus of
-the complex Pearson coefficient), either over the whole area (:func:`pearson`) or in sliding
-windows of ``(depth, x)`` pixels (:func:`correlation_map`).
+Pearson correlation of ``|A|^2``, ``|A|`` or the complex field (modulus), over the whole area
+(:func:`pearson`) or in sliding ``(depth, x)`` windows (:func:`correlation_map`).
 
 Theory (:func:`expected_correlation`)
 -------------------------------------
-For a Poisson field of point scatterers (density ``rho`` per pixel, amplitude kurtosis
-``kappa``) imaged with the kernel ``P(x) = sum_n S_n exp(2i pi n x/N)`` (``x`` in pixels), a
-pixel of the reference sees ``P(x)`` and the compensated deformed image ``h(x)`` per scatterer
-at relative position ``x``. Campbell's theorem with the uniform random carrier phases gives
-
-    Cov(I, I') = rho^2 |C|^2 + rho kappa D,   Var(I) = rho^2 A^2 + rho kappa A4,
-
-with ``C = int P h*``, ``D = int |P|^2 |h|^2``, ``A = int |P|^2``, ``A4 = int |P|^4``. The first
-term is the Gaussian-speckle (Siegert) part ``|gamma|^2``; the second is the *incoherent floor*:
-each scatterer's own intensity ``|a|^2 |P|^2`` survives any phase change. For uniaxial strain
-``s`` after exact compensation, ``h(x) = exp(-2i pi R s x) P((1-s) x)`` with ``R = k0/delta_k``,
-so in the continuum limit (rectangular spectrum, ``P ~ N sinc x``)
-
-    gamma(s) = max(0, 1 - s/2 - R s) / sqrt(1 - s),
-
-the spectrum autocorrelation (a triangle) at lag ``R s``: monotonic for any unimodal spectrum.
+Campbell's theorem for Poisson scatterers: the Siegert part ``|gamma|^2`` plus an incoherent
+floor (docs/explanation/correlation.md); rectangular spectrum, exact compensation of strain
+``s``: ``gamma(s) = max(0, 1 - s/2 - R s) / sqrt(1 - s)`` (``R = k0/delta_k``).
 """
 
 from __future__ import annotations
+
+import inspect
 
 import finufft
 import numpy as np
@@ -43,6 +30,7 @@ import scipy.fft as sfft
 import xarray as xr
 from scipy import ndimage, special
 
+from .._deprecate import keyword_only, moved
 from .._validate import check_bool, check_choice, check_int, check_real
 from .._wrap import ArraySpec, preprocess_and_wrap
 from ..conventions import attrs, coord, grid
@@ -53,9 +41,7 @@ from ._kernels import lagrange_resample
 __all__ = [
     "KINDS",
     "amplitude_from_gamma",
-    "carrier_window_factor",
     "compensate",
-    "continuum_gamma",
     "correlation_array",
     "correlation_map",
     "expected_correlation",
@@ -65,13 +51,11 @@ __all__ = [
     "pearson",
     "resample_depth",
     "sample_field",
-    "two_peak_weights",
 ]
 
 #: Correlated quantities.
 KINDS = ("intensity", "amplitude", "complex")
-#: A labelled B-scan (a field DataArray or a B-scan Dataset's ``field``), dims (..., depth,
-#: aline), NaN allowed (left out or blanking its windows), passed labelled to the body.
+#: A labelled B-scan (field or a B-scan's ``field``), (..., depth, x), NaN allowed, labelled.
 _SCAN = ArraySpec(
     dims=(DEPTH, LATERAL),
     extra_dims=True,
@@ -107,6 +91,13 @@ def sample_field(field: object, positions: object) -> np.ndarray:
     numpy.ndarray, shape (..., P)
         ``A(y) = sum_n F_n exp(-2i pi n y/N)``: equals ``field`` at integer ``y``, and Eq. 4
         evaluated at the pixel depth ``z_q = y H/N`` otherwise.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> field = np.exp(2j * np.pi * np.arange(8) / 8)  # A(y) = exp(2i pi y/8), one component
+    >>> speckle.sample_field(field, [0.5]).round(4)  # between pixels: exp(i pi/8)
+    array([0.9239+0.3827j])
     """
     a = np.asarray(field, dtype=np.complex128)  # checked: numeric, finite, not empty
     y = np.asarray(positions, dtype=float)
@@ -124,14 +115,23 @@ def sample_field(field: object, positions: object) -> np.ndarray:
     return np.broadcast_to(out, (spec.shape[0], yy.shape[1])).reshape(*batch, y.shape[-1])
 
 
+@keyword_only("axis")
 @preprocess_and_wrap(checks={"field": ArraySpec(ndim=tuple(range(1, 33)))})
-def oversample_depth(field: np.ndarray, factor: int, axis: int = 0) -> np.ndarray:
+def oversample_depth(field: np.ndarray, factor: int, *, axis: int = 0) -> np.ndarray:
     """Complex A-scans (depth on ``axis``) at ``factor`` samples per pixel, exactly.
 
     ``A(y) = sum_n F_n exp(-2i pi n y/N)`` (``n = -(N//2) ... N-1-N//2``, as
     :func:`sample_field`) at ``y = q/factor``: the spectrum zero-padded to ``factor*N`` points.
     Equals ``field`` at whole pixels. Computed in complex64 for a complex64 ``field``, in
     complex128 otherwise.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> field = np.exp(-2j * np.pi * np.arange(8) / 8)
+    >>> fine = speckle.oversample_depth(field, 2)
+    >>> fine.shape, np.allclose(fine[::2], field)
+    ((16,), True)
     """
     a = np.asarray(field)
     a = a if a.dtype == np.complex64 else a.astype(np.complex128)
@@ -193,13 +193,20 @@ def resample_depth(field: object, positions: object) -> np.ndarray:
     -------
     numpy.ndarray, shape (N, M)
         Pixel ``(q, j)``: A-line ``j`` evaluated at depth ``positions[q, j]``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> field = np.exp(-2j * np.pi * np.arange(8) / 8)[:, None]  # (depth, line)
+    >>> np.allclose(speckle.resample_depth(field, np.arange(8.0)[:, None]), field)
+    True
     """
     a, y = field, positions  # checked: complex 2-D image, finite real positions
     if y.shape != a.shape:
         raise ValueError(f"positions must have the field's shape {a.shape}, got {y.shape}")
     # single precision: 1e-7 relative, far below the interpolation error
-    fine = oversample_depth.__wrapped__(  # the numpy body: the field is checked
-        np.ascontiguousarray(a.T, dtype=np.complex64), RESAMPLE_OVERSAMPLE, -1
+    fine = inspect.unwrap(oversample_depth)(  # the numpy body: the field is checked
+        np.ascontiguousarray(a.T, dtype=np.complex64), RESAMPLE_OVERSAMPLE, axis=-1
     )
     out = np.empty(a.shape[::-1], dtype=np.complex128)  # (aline, depth): each A-line contiguous
     positions = np.ascontiguousarray(np.asarray(y, dtype=float).T)  # (aline, depth), as ``fine``
@@ -235,32 +242,38 @@ def compensate(
         pixel size and A-line pitch are read from its ``depth`` and ``x`` coordinates
         (uniform, µm; never from attributes), the carrier from attribute ``k0`` (rad/µm).
     displacement : xarray.Dataset
-        ``uz`` (and optionally ``ux``) in µm at the reference pixel centres, dims among
-        ``depth``, ``x`` and any extra dims of ``deformed`` (e.g. ``strain``), e.g. from
-        :func:`speckle.scene.deformation.pixel_displacement` or :func:`speckle.track`, on
-        the pixel grid of ``deformed`` (same ``depth``/``x`` coordinates, else
-        ``ValueError``).
+        ``uz`` (optionally ``ux``), µm, on the pixel grid of ``deformed`` (dims ``depth``, ``x``
+        or the scene's ``aline``, and extra dims of ``deformed``), e.g. from
+        :func:`speckle.scene.deformation.pixel_displacement` or :func:`speckle.track`.
     carrier : bool
-        Remove the carrier phase ``exp(2i k0 u_z)`` of moved scatterers (default). Needed for
-        complex correlation; intensity and amplitude are unaffected.
+        Remove the carrier ``exp(2i k0 u_z)`` of moved scatterers (complex correlation).
 
     Returns
     -------
     xarray.DataArray
-        Complex field ``A'(q + u_z/p)`` (times ``exp(-2i k0 u_z)``); with a lateral displacement
-        each pixel is taken from the A-line nearest to ``x + u_x`` (NaN beyond the scan).
+        ``A'(q + u_z/p) exp(-2i k0 u_z)``; ``ux``: from the line nearest ``x + u_x`` (or NaN).
 
     Raises
     ------
     ValueError
-        On a missing or non-uniform ``depth``/``x`` coordinate (named), a missing ``k0``
-        attribute with ``carrier=True``, or a displacement on another grid.
+        A missing or non-uniform ``depth``/``x`` coordinate, no ``k0`` with ``carrier=True``,
+        a displacement on another grid.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> src = speckle.spectrum(64, 512.0, k0_dk=10.0)
+    >>> scene = speckle.random_scatterers(8, 4.0, n_pixels=64, depth_range=512.0, seed=1)
+    >>> moved = speckle.bscan(speckle.translate(scene, 3.0, wrap=True), src)
+    >>> uz = xr.DataArray(np.full(64, 3.0), dims="depth", coords={"depth": moved.depth})
+    >>> back = speckle.compensate(moved, xr.Dataset({"uz": uz}))
+    >>> ref = speckle.bscan(scene, src)
+    >>> round(float(speckle.pearson(ref, back, kind="complex")), 3)
+    1.0
     """
     field = deformed  # the B-scan's field, labelled (the decorator)
     carrier = check_bool(carrier, "carrier")
-    from ..scene.deformation import (
-        check_field,  # local import: deformation imports nothing from here
-    )
+    from ..scene.deformation import check_field  # local: deformation imports nothing here
 
     if not isinstance(displacement, xr.Dataset):
         raise TypeError(
@@ -337,6 +350,14 @@ def pearson(
         Correlated quantity; ``"complex"`` returns the modulus of the complex coefficient.
     dims : tuple of str
         Dims averaged over; the others (e.g. ``strain``) are kept.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> scene = speckle.random_scatterers(8, 4.0, n_pixels=32, depth_range=256.0, seed=1)
+    >>> img = speckle.bscan(scene, speckle.spectrum(32, 256.0, k0_dk=10.0))
+    >>> float(speckle.pearson(img, img))
+    1.0
     """
     check_choice(kind, "kind", KINDS)
     x = _quantity(reference, kind)
@@ -396,6 +417,14 @@ def correlation_array(
     numpy.ndarray
         Coefficient at each window centre (pixel ``c`` holds the window starting at
         ``c - w//2``); NaN where the window does not fit or holds a NaN pixel of either array.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> x = np.random.default_rng(0).normal(size=(32, 16))
+    >>> c = speckle.correlation_array(x, x, (8, 4))
+    >>> float(np.nanmax(c)), c.shape
+    (1.0, (32, 16))
     """
     x, y = (_numeric(v, n) for v, n in ((x, "x"), (y, "y")))
     if x.shape != y.shape:
@@ -462,6 +491,15 @@ def correlation_map(
         Coefficient at each window centre (pixel ``c`` holds the window starting at
         ``c - w//2``); NaN where the window does not fit in the image or holds a NaN pixel
         (of either image), and only there.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> scene = speckle.random_scatterers(8, 4.0, n_pixels=32, depth_range=256.0, seed=1)
+    >>> img = speckle.bscan(scene, speckle.spectrum(32, 256.0, k0_dk=10.0))
+    >>> c = speckle.correlation_map(img, img, window=8)
+    >>> c.dims, float(c.max())
+    (('depth', 'x'), 1.0)
     """
     check_choice(kind, "kind", KINDS)
     wz, wx = parse_window(window)
@@ -575,11 +613,18 @@ def expected_correlation(
     Returns
     -------
     xarray.Dataset
-        ``intensity`` (Pearson of ``|A|^2`` including the finite-density floor),
-        ``complex`` (``|gamma|``), ``amplitude`` (Gaussian-speckle limit,
-        ``(pi/4)(2F1(-1/2,-1/2;1;|gamma|^2) - 1)/(1 - pi/4)``) and ``floor`` (intensity
-        correlation left when ``gamma = 0``), over dim ``strain``. Poisson scatterer counts;
-        for a fixed count the difference is ``O(1/(density*N))``.
+        ``intensity`` (Pearson of ``|A|^2`` with the finite-density floor), ``complex``
+        (``|gamma|``), ``amplitude`` (``(pi/4)(2F1(-1/2,-1/2;1;|gamma|^2) - 1)/(1 - pi/4)``)
+        and ``floor`` (intensity correlation at ``gamma = 0``), over dim ``strain``; Poisson
+        counts (a fixed count differs by ``O(1/(density*N))``).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> src = speckle.spectrum(64, 512.0, k0_dk=10.0)
+    >>> r = speckle.expected_correlation([0.0, 0.01], spectrum=src, density=4.0)
+    >>> sorted(r.data_vars)
+    ['amplitude', 'complex', 'floor', 'intensity']
     """
     s = np.atleast_1d(strain).astype(float)  # checked: real, finite, not empty
     if np.any((s <= -1) | (s >= 1)):
@@ -649,6 +694,12 @@ def amplitude_from_gamma(gamma: object) -> np.ndarray:
 
     ``(pi/4) (2F1(-1/2, -1/2; 1; |gamma|^2) - 1) / (1 - pi/4)``: 0 at ``gamma = 0``, 1 at 1.
     ``|gamma| <= 1`` (Cauchy-Schwarz): a computed value above 1 by rounding counts as 1.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> speckle.amplitude_from_gamma(np.array([0.0, 1.0])).round(6)
+    array([0., 1.])
     """
     g = np.minimum(np.abs(gamma), 1.0)  # checked: numbers (|gamma| of complex), finite
     return (np.pi / 4) * (special.hyp2f1(-0.5, -0.5, 1.0, g**2) - 1) / (1 - np.pi / 4)
@@ -704,6 +755,13 @@ def expected_gamma(strain: object, *, spectrum: xr.DataArray, oversample: int = 
     ------
     ValueError
         A strain outside (-1, 1) or ``oversample`` below 2.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> src = speckle.spectrum(64, 512.0, k0_dk=10.0)
+    >>> speckle.expected_gamma([0.0, 0.01], spectrum=src).round(3)
+    array([1.   , 0.892])
     """
     s = np.atleast_1d(strain).astype(float)  # checked: real, finite, not empty
     if np.any((s <= -1) | (s >= 1)):
@@ -734,55 +792,9 @@ def expected_gamma(strain: object, *, spectrum: xr.DataArray, oversample: int = 
     return np.abs(c_mean) / np.sqrt(a * a / (1 - s))
 
 
-@preprocess_and_wrap(checks={"strain": _STRAIN})
-def continuum_gamma(strain: object, k0_dk: float) -> np.ndarray:
-    """Continuum-limit ``|gamma|`` after exact compensation, rectangular spectrum.
-
-    ``max(0, 1 - s/2 - R s)/sqrt(1 - s)`` for ``R >= 1/2`` (overlap of the spectrum with its
-    copy shifted by ``R s`` and scaled by ``1 - s``).
-    """
-    s = np.asarray(strain, float)
-    r = check_real(k0_dk, "k0_dk", low=0.5)
-    return np.maximum(0.0, 1 - s / 2 - r * s) / np.sqrt(1 - s)
-
-
-def two_peak_weights(n_pixels: int, *, separation: float, fwhm: float) -> np.ndarray:
-    """Two equal Gaussian peaks at ``k0 -/+ separation/2`` (a two-SLD source), as weights.
-
-    Parameters
-    ----------
-    n_pixels : int
-        Number of spectral components ``N``.
-    separation, fwhm : float
-        Peak separation and each peak's FWHM as fractions of ``delta_k`` (> 0).
-
-    Returns
-    -------
-    numpy.ndarray
-        ``N`` weights for ``speckle.system.source.spectrum(..., shape="array", weights=...)``. Its
-        autocorrelation has a side peak at lag ``separation``: after exact compensation the
-        correlation revives near ``k0_dk * strain = separation``.
-    """
-    n = check_int(n_pixels, "n_pixels", low=2)
-    sep = check_real(separation, "separation", low=0, low_inclusive=False)
-    width = check_real(fwhm, "fwhm", low=0, low_inclusive=False)
-    nu = spectral_index(n) / n  # offset from k0 in units of delta_k
-    peak = lambda c: np.exp(-4 * np.log(2) * ((nu - c) / width) ** 2)  # noqa: E731
-    return peak(-sep / 2) + peak(sep / 2)
-
-
-@preprocess_and_wrap(checks={"strain": _STRAIN})
-def carrier_window_factor(strain: object, k0_dk: float, window: int) -> np.ndarray:
-    """``|sum_{q<W} exp(2i pi R s q)|/W``: a W-pixel window of uncompensated carrier phase.
-
-    Without removing ``exp(2i k0 u_z)`` the compensated field's phase turns by ``2 pi R s`` per
-    pixel of depth, so a complex correlation over ``W`` pixels of depth is multiplied by this
-    Dirichlet factor, zero at ``R s W = 1, 2, ...``: minima and revivals set by the window.
-    """
-    s = np.asarray(strain, float)
-    w = check_int(window, "window", low=1)
-    r = check_real(k0_dk, "k0_dk", low=0)
-    phase = np.pi * r * s
-    with np.errstate(invalid="ignore", divide="ignore"):
-        f = np.abs(np.sin(w * phase) / (w * np.sin(phase)))
-    return np.where(np.abs(np.sin(phase)) < 1e-12, 1.0, f)
+#: Closed forms that moved to :mod:`speckle.analysis.correlation_forms` (they warn for a release).
+__getattr__ = moved(
+    __name__,
+    "speckle.analysis.correlation_forms",
+    ["carrier_window_factor", "continuum_gamma", "two_peak_weights"],
+)

@@ -100,6 +100,15 @@ def lee(img: np.ndarray, *, size: int = 7, looks: float = 1.0, log: bool = False
 
     ``size``: odd window side in [3, 31] pixels; ``looks`` in (0, 1000]; ``img`` 2-D, finite,
     non-negative unless ``log`` (the checks of :func:`despeckle`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> img = np.random.default_rng(0).exponential(size=(64, 64))
+    >>> out = speckle.lee(img, size=7)
+    >>> out.shape, bool(out.std() < img.std())
+    ((64, 64), True)
     """
     a, log = _image(img, log)
     size, looks = _odd(size, "size"), _looks(looks)
@@ -111,7 +120,17 @@ def lee(img: np.ndarray, *, size: int = 7, looks: float = 1.0, log: bool = False
 @preprocess_and_wrap(checks={"img": _IMAGE})
 def kuan(img: np.ndarray, *, size: int = 7, looks: float = 1.0, log: bool = False) -> np.ndarray:
     """Kuan filter: ``k = max(0, (1 - C_u^2/C_I^2)/(1 + C_u^2))`` (linear data); parameters
-    and checks as :func:`lee`."""
+    and checks as :func:`lee`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> img = np.random.default_rng(0).exponential(size=(64, 64))
+    >>> out = speckle.kuan(img, size=7)
+    >>> out.shape, bool(out.std() < img.std())
+    ((64, 64), True)
+    """
     a, log = _image(img, log)
     size, looks = _odd(size, "size"), _looks(looks)
     m, v = _local(a, size)
@@ -126,6 +145,15 @@ def frost(img: np.ndarray, *, size: int = 7, damping: float = 2.0, log: bool = F
     """Frost filter: weights ``exp(-damping C_I^2 |r|)`` over a ``size`` x ``size`` window.
 
     ``size``: odd in [3, 31]; ``damping`` in (0, 100]; ``img`` as :func:`lee`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> img = np.random.default_rng(0).exponential(size=(64, 64))
+    >>> out = speckle.frost(img, size=7)
+    >>> out.shape, bool(out.std() < img.std())
+    ((64, 64), True)
     """
     a, log = _image(img, log)
     size = _odd(size, "size")
@@ -326,6 +354,15 @@ def despeckle(
         non-finite image, or an image that is not 2-D.
     ImportError
         ``bm3d`` without the optional package.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> img = np.random.default_rng(0).exponential(size=(64, 64))
+    >>> out = speckle.despeckle(img, "lee", {"size": 7})
+    >>> out.shape, bool(out.std() < img.std())
+    ((64, 64), True)
     """
     p = check_filter(name, params, domain)
     if name == "bm3d" and not filter_available("bm3d"):

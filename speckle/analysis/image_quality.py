@@ -22,6 +22,7 @@ import numpy as np
 import scipy.optimize as opt
 import scipy.special as sp
 
+from .._deprecate import keyword_only
 from .._validate import check_int, check_memory, check_real
 from .._wrap import ArraySpec, preprocess_and_wrap
 
@@ -158,6 +159,14 @@ def psnr_db(image_db: object, truth_db: object, *, db_top: float = 10.0, db_rang
 
     ``db_range`` > 0 (dB) is the displayed window and the PSNR's data range; infinite when the
     clipped images are equal.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> truth = np.zeros((32, 32))
+    >>> round(speckle.psnr_db(truth + 1.0, truth), 2)  # 20 log10(40 dB range / 1 dB error)
+    32.04
     """
     from skimage.metrics import peak_signal_noise_ratio
 
@@ -172,6 +181,14 @@ def ssim_db(image_db: object, truth_db: object, *, db_top: float = 10.0, db_rang
 
     The SSIM window is skimage's 7 x 7, or the largest odd size that fits an image smaller
     than that (at least 3 x 3 pixels).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> truth = np.linspace(-30, 10, 32 * 32).reshape(32, 32)
+    >>> round(speckle.ssim_db(truth, truth), 3)
+    1.0
     """
     from skimage.metrics import structural_similarity
 
@@ -180,14 +197,24 @@ def ssim_db(image_db: object, truth_db: object, *, db_top: float = 10.0, db_rang
     return float(structural_similarity(t, i, data_range=span, win_size=side - (1 - side % 2)))
 
 
+@keyword_only("axis")
 @preprocess_and_wrap(checks={"field": ArraySpec(kind="number")})
-def bandlimited(field: object, factor: int, axis: int = -1) -> np.ndarray:
+def bandlimited(field: object, factor: int, *, axis: int = -1) -> np.ndarray:
     """Exact interpolation of an Eq. 4 field along ``axis`` on a grid ``factor`` times finer.
 
     An ``N``-pixel A-scan is the trigonometric polynomial ``sum_n G_n exp(-2i pi n q/N)``,
     ``n = -(N//2) ... N-1-(N//2)``; its coefficients are the inverse DFT of the samples, and
     zero-padding them (keeping each at its own frequency ``n``) evaluates it at
     ``q = m/factor``, ``m = 0 ... factor N - 1``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> field = np.exp(-2j * np.pi * np.arange(8) / 8)
+    >>> fine = speckle.bandlimited(field, 2)
+    >>> fine.shape, np.allclose(fine[::2], field)
+    ((16,), True)
     """
     nd = np.ndim(field)
     ax = check_int(axis, "axis", low=-max(nd, 1), high=max(nd, 1) - 1)
@@ -255,6 +282,15 @@ def edge_width(profile: object, spacing: float = 1.0) -> float:
     ``profile`` is the edge profile averaged along the edge (``a + b Phi((x - x0)/sigma)``
     is fitted by least squares, starting at the steepest point). NaN, with a warning, where
     there is no edge: a flat profile, a fit that fails or leaves the width undetermined.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> from scipy.special import ndtr
+    >>> x = np.arange(-20.0, 21.0)
+    >>> round(speckle.edge_width(ndtr(x / 3.0)), 2)  # 2 * 1.2816 * sigma for sigma = 3
+    7.69
     """
     y = np.asarray(profile, dtype=float)
     if y.ndim != 1 or y.size < 5:

@@ -182,6 +182,17 @@ def load_measured(
         Float64 values, dims ``(depth, x)``, integer coordinates ``row`` and ``column``
         (indices in the file). Attributes: ``source`` (path), ``scale``, ``roi``, ``dtype`` of
         the file, and ``clip_low``/``clip_high`` (the dtype's limits for integer data).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import numpy as np
+    >>> import speckle
+    >>> path = pathlib.Path(tempfile.mkdtemp(), "scan.npy")
+    >>> np.save(path, np.random.default_rng(0).exponential(size=(16, 8)))
+    >>> img = speckle.load_measured(path, scale="linear", pixel_size=5.75)
+    >>> img.dims, img.shape
+    (('depth', 'x'), (16, 8))
     """
     warnings.warn(
         "load_measured is retired: read measured images with speckle.io.load_image(path, "
@@ -498,6 +509,17 @@ def compare_measured(image: xr.DataArray, *, n_blocks: int = 16) -> xr.Dataset:
     each depth row's mean (``*_detrended``), and the Kolmogorov-Smirnov distance of the
     standardised data to the fully developed law (``ks_pure``) and to the fitted floor law
     (``ks_floor``). Variables are prefixed by their origin; attributes say what was compared.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import numpy as np
+    >>> import speckle
+    >>> path = pathlib.Path(tempfile.mkdtemp(), "scan.npy")
+    >>> np.save(path, np.random.default_rng(0).exponential(size=(64, 64)))
+    >>> out = speckle.compare_measured(speckle.load_measured(path, scale="linear"))
+    >>> sorted(out.data_vars)[:2]
+    ['clipped_fraction', 'depth_slope']
     """
     scale = _scale_of(image)
     image = canonical_dims(_checked(image))

@@ -28,11 +28,13 @@ g(a)``, ``g`` tabulated once; the depth integral is a sum over 8 samples per pix
 
 from __future__ import annotations
 
+import inspect
 from functools import lru_cache
 
 import numpy as np
 from scipy import optimize, special
 
+from .._deprecate import keyword_only
 from .._validate import check_real
 from .._wrap import ArraySpec, preprocess_and_wrap
 
@@ -96,6 +98,14 @@ def depth_intensity_psf(weights: np.ndarray) -> np.ndarray:
     ------
     TypeError, ValueError
         ``weights`` not a finite real non-empty 1-D array, or all zero.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> psf = speckle.depth_intensity_psf(np.ones(8))
+    >>> psf.shape, round(float(psf.max()), 6)  # 8 samples per pixel; (sum S)^2 at the peak
+    ((64,), 64.0)
     """
     w = _weights(weights)
     n = w.size
@@ -114,9 +124,10 @@ def _lambda_cached(weights: tuple, waist_pitch: float) -> tuple[np.ndarray, floa
     return lam, area
 
 
+@keyword_only("inverse_snr")
 @preprocess_and_wrap(checks=_WEIGHTS)
 def log_intensity_moments(
-    weights: np.ndarray, waist_pitch: float, density: float, inverse_snr: float = 0.0
+    weights: np.ndarray, waist_pitch: float, density: float, *, inverse_snr: float = 0.0
 ) -> tuple[float, float]:
     """Mean and variance of ``ln(I / <I>)`` of sparse speckle (module docstring).
 
@@ -142,6 +153,14 @@ def log_intensity_moments(
     TypeError, ValueError
         A non-positive waist or density, a negative ``inverse_snr``, or ``weights`` as
         :func:`depth_intensity_psf` refuses them.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> mean, var = speckle.log_intensity_moments(np.ones(64), 2.0, 1e4)
+    >>> round(var, 3), round(np.pi**2 / 6, 3)  # dense speckle: var ln I = pi^2/6
+    (1.645, 1.645)
     """
     wts = _weights(weights)
     w = check_real(waist_pitch, "waist_pitch", low=0, low_inclusive=False)
@@ -162,9 +181,10 @@ def log_intensity_moments(
     return float(mean - np.log(s2)), float(second - mean**2)
 
 
+@keyword_only("inverse_snr")
 @preprocess_and_wrap(checks=_WEIGHTS)
 def sparse_inverse_density(
-    log_variance: float, weights: np.ndarray, waist_pitch: float, inverse_snr: float = 0.0
+    log_variance: float, weights: np.ndarray, waist_pitch: float, *, inverse_snr: float = 0.0
 ) -> float:
     """The inverse density ``1/rho`` whose ``var ln I`` (:func:`log_intensity_moments`) is given.
 
@@ -190,13 +210,25 @@ def sparse_inverse_density(
     ------
     ValueError
         A non-positive ``log_variance`` (and as :func:`log_intensity_moments`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> w = np.ones(64)
+    >>> _, var = speckle.log_intensity_moments(w, 2.0, 0.5)
+    >>> round(speckle.sparse_inverse_density(var, w, 2.0), 4)  # back to 1/rho = 2
+    2.0
     """
     v = check_real(log_variance, "log_variance", low=0, low_inclusive=False)
-    log_intensity_moments(weights, waist_pitch, 1.0, inverse_snr)  # checks every argument first
+    log_intensity_moments(
+        weights, waist_pitch, 1.0, inverse_snr=inverse_snr
+    )  # checks every argument first
 
     def gap(y):
         # the body: the arguments were checked once, just above
-        return log_intensity_moments.__wrapped__(weights, waist_pitch, 1 / y, inverse_snr)[1] - v
+        body = inspect.unwrap(log_intensity_moments)
+        return body(weights, waist_pitch, 1 / y, inverse_snr=inverse_snr)[1] - v
 
     lo = 0.01
     g_lo = gap(lo)

@@ -49,6 +49,7 @@ import numpy as np
 import xarray as xr
 from scipy import stats
 
+from .._deprecate import keyword_only
 from .._validate import as_finite_array, check_choice, check_int, check_real
 from .._wrap import ArraySpec, preprocess_and_wrap
 from ..conventions import attrs, inverse_units, labelled, units_of
@@ -278,6 +279,15 @@ def fit_rayleigh(amplitude: object, *, chi2_bins: int = 50) -> xr.Dataset:
     xarray.Dataset
         Scalars ``sigma`` (units of ``amplitude``), ``ks_statistic``, ``ks_pvalue``, ``chi2``,
         ``chi2_dof``, ``chi2_pvalue``, ``n`` (see the module docstring for caveats).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> amplitude = np.random.default_rng(0).rayleigh(1.0, size=10_000)
+    >>> fit = speckle.fit_rayleigh(amplitude)
+    >>> sorted(fit.data_vars)[:3]
+    ['chi2', 'chi2_dof', 'chi2_pvalue']
     """
     return _fit(amplitude, "amplitude", stats.rayleigh, "sigma", chi2_bins)
 
@@ -288,6 +298,15 @@ def fit_exponential(intensity: object, *, chi2_bins: int = 50) -> xr.Dataset:
 
     The MLE of the mean is the sample mean. Returns the same variables as :func:`fit_rayleigh`
     with ``mean`` in place of ``sigma``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> intensity = np.random.default_rng(0).exponential(2.0, size=10_000)
+    >>> fit = speckle.fit_exponential(intensity)
+    >>> sorted(fit.data_vars)[:3]
+    ['chi2', 'chi2_dof', 'chi2_pvalue']
     """
     return _fit(intensity, "intensity", stats.expon, "mean", chi2_bins)
 
@@ -423,6 +442,7 @@ def spectrum_moments(n_pixels: int, spectrum: object | None = None) -> tuple[flo
     return float(np.sum(s**2)), float(np.sum(np.convolve(s, s) ** 2))
 
 
+@keyword_only("amplitude", "count")
 @preprocess_and_wrap(
     arrays=["density", "spectrum"],
     wrap_like="density",
@@ -434,6 +454,7 @@ def contrast_theory(
     density: object,
     n_pixels: int,
     spectrum: object | None = None,
+    *,
     amplitude: str = "equal",
     count: str = "fixed",
 ) -> object:
@@ -457,6 +478,12 @@ def contrast_theory(
     -------
     float, numpy.ndarray or xarray.DataArray
         Contrast, shaped like ``density``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> round(float(speckle.contrast_theory(1000.0, 64)), 3)  # dense limit: 1
+    1.0
     """
     n = check_int(n_pixels, "n_pixels", low=2)
     check_choice(amplitude, "amplitude", AMPLITUDE_MODELS)

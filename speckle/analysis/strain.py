@@ -242,6 +242,20 @@ def estimate_strain(
     ValueError
         Shapes or coordinates that differ, non-positive ``k0`` or ``pixel_size``, a window
         larger than the image, an unknown method.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> src = speckle.spectrum(64, 512.0, k0_dk=10.0)
+    >>> kw = dict(n_pixels=64, depth_range=512.0, seed=1)
+    >>> scene = speckle.deformable_scene(16, 4.0, strain=2e-3, **kw)
+    >>> img = speckle.bscan(speckle.uniaxial_strain(scene, [0.0, 2e-3]), src).field
+    >>> ref, moved = img.isel(strain=0), img.isel(strain=1)
+    >>> k0, pixel = float(src.attrs["k0"]), 8.0
+    >>> strain = speckle.estimate_strain(ref, moved, k0=k0, pixel_size=pixel, window=(16, 4))
+    >>> round(float(np.nanmedian(strain)), 3)  # the applied 2e-3
+    0.002
     """
     k = check_real(k0, "k0", low=0, low_inclusive=False)
     p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
@@ -308,6 +322,19 @@ def estimate_displacement(
     -------
     numpy.ndarray or xarray.DataArray
         Displacement in µm, the input's shape.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> src = speckle.spectrum(64, 512.0, k0_dk=10.0)
+    >>> kw = dict(n_pixels=64, depth_range=512.0, seed=1)
+    >>> scene = speckle.deformable_scene(16, 4.0, strain=2e-3, **kw)
+    >>> img = speckle.bscan(speckle.uniaxial_strain(scene, [0.0, 2e-3]), src).field
+    >>> ref, moved = img.isel(strain=0), img.isel(strain=1)
+    >>> k0, pixel = float(src.attrs["k0"]), 8.0
+    >>> u = speckle.estimate_displacement(ref, moved, k0=k0, pixel_size=pixel, method="phase")
+    >>> u.shape == ref.shape
+    True
     """
     a1, a2 = reference.astype(np.complex128, copy=False), deformed.astype(np.complex128, copy=False)
     k = check_real(k0, "k0", low=0, low_inclusive=False)
@@ -479,6 +506,19 @@ def accumulate_strain(
     TypeError, ValueError
         Before any work: bad types or dims, real data, chunks splitting depth or aline, frames
         holding NaN (named), bad estimator parameters.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> src = speckle.spectrum(64, 512.0, k0_dk=10.0)
+    >>> kw = dict(n_pixels=64, depth_range=512.0, seed=1)
+    >>> scene = speckle.deformable_scene(16, 4.0, strain=4e-3, **kw)
+    >>> img = speckle.bscan(speckle.uniaxial_strain(scene, [0.0, 2e-3, 4e-3]), src)
+    >>> frames = img.field.rename(strain="frame")
+    >>> total = speckle.accumulate_strain(frames, k0=float(src.attrs["k0"]), pixel_size=8.0)
+    >>> round(float(np.nanmedian(total["accumulated"].isel(frame=-1))), 3)  # 4e-3 after two steps
+    0.004
     """
     labelled = isinstance(frames, xr.DataArray)  # checked and transposed by the decorator
     coords = {d: frames[d] for d in (DEPTH, LATERAL) if labelled and d in frames.coords}

@@ -272,6 +272,16 @@ def track_array(
     ------
     TypeError, ValueError
         Real or mismatched images, a window larger than the image, bad parameters.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> rng = np.random.default_rng(0)
+    >>> a = rng.normal(size=(64, 32)) + 1j * rng.normal(size=(64, 32))
+    >>> out = speckle.track_array(a, np.roll(a, 3, axis=0), window=(32, 16), step=(16, 8))
+    >>> round(float(np.median(out["uz"])), 2)  # a shift of 3 pixels in depth
+    3.0
     """
     a, b = reference, deformed  # checked by the decorator
     check_choice(quantity, "quantity", ("amplitude", "intensity"))
@@ -361,6 +371,16 @@ def track_axial(
     ------
     TypeError, ValueError
         As :func:`track_array`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> rng = np.random.default_rng(0)
+    >>> a = rng.normal(size=(64, 32)) + 1j * rng.normal(size=(64, 32))
+    >>> out = speckle.track_axial(a, np.roll(a, 3, axis=0), window=(32, 8), step=(16, 8))
+    >>> round(float(np.median(out["uz"])), 2)  # a shift of 3 pixels in depth
+    3.0
     """
     a, b = reference, deformed  # checked by the decorator
     wz, wx = parse_window(window, shape=a.shape)
@@ -528,6 +548,17 @@ def track(
         On window centres (dims ``depth``, ``x`` with µm coordinates): ``uz`` and ``ux``
         (µm), ``uz_pixels``, ``registration_error`` (normalised RMS error) and, with ``truth``,
         ``uz_residual`` (pixels) and ``failed`` (bool).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> src = speckle.spectrum(64, 512.0, k0_dk=10.0)
+    >>> scene = speckle.random_scatterers(32, 4.0, n_pixels=64, depth_range=512.0, seed=1)
+    >>> ref = speckle.bscan(scene, src).field
+    >>> moved = speckle.bscan(speckle.translate(scene, 16.0), src).field
+    >>> out = speckle.track(ref, moved, window=(32, 16), step=(16, 8))
+    >>> round(float(out.uz.median()), 1)  # µm: the scene moved 16 µm deeper
+    16.0
     """
     tol = check_real(max_error, "max_error", low=0, low_inclusive=False)
     if truth is not None and not (isinstance(truth, xr.Dataset) and "uz" in truth):
@@ -637,6 +668,16 @@ def interpolate_windows(
     -------
     numpy.ndarray
         Shape ``(len(depth), len(x))``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> values = np.array([[0.0], [1.0]])  # two windows in depth, one column
+    >>> speckle.interpolate_windows(values, [10.0, 20.0], [0.0], [10.0, 15.0, 20.0], [0.0])
+    array([[0. ],
+           [0.5],
+           [1. ]])
     """
     check_choice(outside, "outside", ("linear", "nearest", "nan"))
     v, z = values, depth  # checked: real, finite grids (values: NaN allowed)
@@ -697,6 +738,17 @@ def interpolate_displacement(
     -------
     xarray.Dataset
         ``uz`` (and ``ux``) over ``(depth, x)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import xarray as xr
+    >>> import speckle
+    >>> uz = xr.DataArray([[1.0], [2.0]], dims=("depth", "x"))
+    >>> tracked = xr.Dataset({"uz": uz}, coords={"depth": [10.0, 20.0], "x": [0.0]})  # windows
+    >>> out = speckle.interpolate_displacement(tracked, np.array([10.0, 15.0, 20.0]), np.zeros(1))
+    >>> out.uz.values[:, 0]
+    array([1. , 1.5, 2. ])
     """
     out = {}
     if not isinstance(tracked, xr.Dataset) or "uz" not in tracked:

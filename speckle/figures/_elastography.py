@@ -10,7 +10,7 @@ import numpy as np
 import xarray as xr
 
 from ..analysis.strain import estimate_strain
-from ..imaging.bscan import bscan
+from ..imaging._bscan import bscan
 from ..scene.deformation import deformable_scene, displace
 from ..scene.mechanics import compress_phantom, inclusion_labels
 from ..studies.failure import method_options

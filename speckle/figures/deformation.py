@@ -18,9 +18,10 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from ..analysis import correlation as corr
+from ..analysis import correlation_forms as forms
 from ..analysis.tracking import interpolate_displacement, track
 from ..conventions import attrs
-from ..imaging.bscan import bscan
+from ..imaging._bscan import bscan
 from ..provenance import config_hash, provenance_attrs
 from ..scene.deformation import deformable_scene, uniaxial_pixel_displacement, uniaxial_strain
 from ..scene.scatterers import amplitude_kurtosis
@@ -67,7 +68,7 @@ def make_source(
         options = {"shape": shape, "fwhm_fraction": float(frac)}
     elif shape == "two_peak":
         tp = panel["two_peak"]
-        w = corr.two_peak_weights(
+        w = forms.two_peak_weights(
             int(source["n_pixels"]),
             separation=float(tp["separation_fraction"]),
             fwhm=float(tp["fwhm_fraction"]),
@@ -343,7 +344,7 @@ def fig6c_data(source: Mapping, fig6: Mapping, dask: Mapping, seed: int) -> xr.D
         carrier_window=int(panel["carrier_window"]),
     )
     w = int(panel["carrier_window"])
-    factor = corr.carrier_window_factor(ds.strain.values, k0_dk, w)
+    factor = forms.carrier_window_factor(ds.strain.values, k0_dk, w)
     ds["complex_correlation_no_carrier_theory"] = (
         ds["complex_correlation_theory"] * xr.DataArray(factor, dims="strain")
     ).assign_attrs(

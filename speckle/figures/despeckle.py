@@ -45,8 +45,8 @@ from ..analysis import compounding as cp
 from ..analysis import filters as dsp
 from ..analysis import image_quality as iq
 from ..conventions import attrs, coord
+from ..imaging._bscan import bscan
 from ..imaging.aline import ascan
-from ..imaging.bscan import bscan
 from ..imaging.scan import scan_image
 from ..scene.scatterers import random_scatterers
 from ..studies.looks import angular_looks, polarization_looks, spatial_looks, temporal_looks

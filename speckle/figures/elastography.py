@@ -26,7 +26,7 @@ from ..analysis.correlation import expected_correlation
 from ..analysis.phase import choose_lag, depth_autocorrelation, noise_power
 from ..analysis.strain import accumulate_strain, predicted_strain_std
 from ..conventions import attrs, coord
-from ..imaging.bscan import bscan
+from ..imaging._bscan import bscan
 from ..provenance import provenance_attrs
 from ..scene.deformation import displace
 from ..studies.failure import mean_and_se, method_options, strain_scores

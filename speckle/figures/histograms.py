@@ -27,7 +27,7 @@ from ..analysis.statistics import (
     rayleigh_pdf,
 )
 from ..conventions import attrs
-from ..imaging.bscan import expected_intensity
+from ..imaging._bscan import expected_intensity
 from ..sweep import sweep
 from ..system.detection import add_floor
 from ._config import random_bscan

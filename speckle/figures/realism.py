@@ -21,9 +21,9 @@ from ..scene.regions import cell_density, ellipse, layer, make_regions, rasteriz
 from ..scene.shared import shared_scene
 from ..studies.realism import EFFECTS, realism_study
 from ..studies.twin.system_fit import SystemFit
+from ..system._rolloff import rolloff
 from ..system.attenuation import attenuate_regions
 from ..system.noise import add_noise
-from ..system.rolloff import rolloff
 from ._config import scene_kwargs, source_spectrum
 from .style import colorbar, legend_outside, new_figure, physical_image
 

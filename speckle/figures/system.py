@@ -22,7 +22,7 @@ from matplotlib.figure import Figure
 
 from ..conventions import attrs, coord
 from ..system import spectrometer as sp
-from ..system.datasheet import System
+from ..system._datasheet import System
 from ._config import system_from_config
 from .style import colorbar, legend_outside, new_figure
 

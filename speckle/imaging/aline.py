@@ -36,7 +36,14 @@ __getattr__ = moved(__name__, "speckle.imaging.methods", [], {"METHODS": "ASCAN_
 
 
 def pixel_depths(n_pixels: int, depth_range: float) -> np.ndarray:
-    """Pixel-centre depths ``q*H/N`` in µm, ``q = 0 ... N-1``, for ``depth_range`` ``H`` (µm)."""
+    """Pixel-centre depths ``q*H/N`` in µm, ``q = 0 ... N-1``, for ``depth_range`` ``H`` (µm).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> speckle.pixel_depths(4, 32.0)
+    array([ 0.,  8., 16., 24.])
+    """
     n = check_size(n_pixels, "n_pixels", low=2)
     h = check_real(depth_range, "depth_range", low=0, low_inclusive=False)
     return np.arange(n) * (h / n)
@@ -181,6 +188,15 @@ def stream_ascans(
     -------
     numpy.ndarray
         complex128 (n_alines, n_pixels), or (len(lines), n_pixels) with ``lines``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> lines = speckle.stream_ascans(
+    ...     16, 4.0, n_pixels=32, depth_range=256.0, k0=3.0, seed=1, chunk_lines=4
+    ... )
+    >>> lines.shape
+    (16, 32)
     """
     nl_total = check_int(n_alines, "n_alines", low=1)
     n = check_int(n_pixels, "n_pixels", low=2)

@@ -130,6 +130,18 @@ def beam_scan(
         method cannot reach whatever the scene, and a result above
         :data:`speckle._validate.MAX_BYTES` (the methods estimate their own peak memory too,
         naming the parameter to change).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> z, x, a = np.array([100.0]), np.array([0.0]), np.array([1.0 + 0j])  # one scatterer
+    >>> lines = speckle.scan_lines(3, 4.0, start=-4.0)
+    >>> img = speckle.beam_scan(
+    ...     z, x, a, lines=lines, waist=4.0, n_pixels=32, depth_range=256.0, k0=3.0
+    ... )
+    >>> img.shape, int(abs(img).max(axis=1).argmax())  # (lines, pixels); brightest on x = 0
+    ((3, 32), 1)
     """
     check_choice(method, "method", BEAM_METHODS)
     scene, beam, tolv = beam_problem(

@@ -487,13 +487,40 @@ def _estimator(scene: BeamScene, beam: Beam, tol: float):
 
 def beam_estimates(scene: BeamScene, beam: Beam, tol: float | None) -> dict[str, dict]:
     """Predicted relative error and time (ns) of every ``auto`` candidate on a scene:
-    ``{method: {"error": e, "cost_ns": t, "admissible": e <= tol}}``."""
+    ``{method: {"error": e, "cost_ns": t, "admissible": e <= tol}}``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> z, x, a = np.array([100.0]), np.array([0.0]), np.array([1.0 + 0j])
+    >>> lines = speckle.scan_lines(3, 4.0, start=-4.0)
+    >>> scene, beam, tol = speckle.beam_problem(
+    ...     z, x, a, lines=lines, waist=4.0, n_pixels=32, depth_range=256.0, k0=3.0, tol=1e-6
+    ... )
+    >>> estimates = speckle.beam_estimates(scene, beam, tol)
+    >>> sorted(next(iter(estimates.values())))
+    ['admissible', 'cost_ns', 'error']
+    """
     tolv = resolve_tol(tol)
     return estimate_table(BEAM_AUTO_CANDIDATES, _estimator(scene, beam, tolv), tolv)
 
 
 def choose_beam_method(scene: BeamScene, beam: Beam, tol: float | None) -> str:
-    """Name of the fastest admissible beam method (:func:`beam_estimates`); never runs one."""
+    """Name of the fastest admissible beam method (:func:`beam_estimates`); never runs one.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> z, x, a = np.array([100.0]), np.array([0.0]), np.array([1.0 + 0j])
+    >>> lines = speckle.scan_lines(3, 4.0, start=-4.0)
+    >>> scene, beam, tol = speckle.beam_problem(
+    ...     z, x, a, lines=lines, waist=4.0, n_pixels=32, depth_range=256.0, k0=3.0, tol=1e-6
+    ... )
+    >>> speckle.choose_beam_method(scene, beam, tol) in speckle.imaging.BEAM_METHODS
+    True
+    """
     tolv = resolve_tol(tol)
     return choose(BEAM_AUTO_CANDIDATES, _estimator(scene, beam, tolv), tolv)
 

@@ -23,7 +23,14 @@ MAX_WAIST = 1e100
 
 
 class Beam(NamedTuple):
-    """Validated beam: waist ``w0`` (µm), focal depth (µm, or None) and Rayleigh range (µm)."""
+    """Validated beam: waist ``w0`` (µm), focal depth (µm, or None) and Rayleigh range (µm).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> speckle.Beam(8.0, None, None).waist
+    8.0
+    """
 
     waist: float
     focus: float | None
@@ -37,7 +44,20 @@ class Beam(NamedTuple):
 
 
 class BeamScene(NamedTuple):
-    """Validated scene and scan passed to every beam method (float64 / complex128 arrays)."""
+    """Validated scene and scan passed to every beam method (float64 / complex128 arrays).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> z, x, a = np.array([100.0]), np.array([0.0]), np.array([1.0 + 0j])
+    >>> lines = speckle.scan_lines(3, 4.0, start=-4.0)
+    >>> scene, beam, tol = speckle.beam_problem(
+    ...     z, x, a, lines=lines, waist=4.0, n_pixels=32, depth_range=256.0, k0=3.0
+    ... )
+    >>> isinstance(scene, speckle.BeamScene), scene.n_pixels, scene.lines
+    (True, 32, array([-4.,  0.,  4.]))
+    """
 
     z: np.ndarray  # (M,) µm
     x: np.ndarray  # (M,) µm
@@ -64,6 +84,12 @@ def beam_weight(
     ``exp(-2 r^2/w0^2)`` without focus; ``gamma^2 exp(-2 gamma r^2/w0^2)``,
     ``gamma = 1/(1 + i (z - z_f)/z_R)``, with one (see the module docstring). All lengths in µm;
     arrays broadcast. Returns complex128.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> abs(speckle.beam_weight([0.0, 5.0, 10.0], 100.0, waist=10.0)).round(4)  # exp(-2 dx^2/w^2)
+    array([1.    , 0.6065, 0.1353])
     """
     w0 = check_real(waist, "waist", low=0, high=MAX_WAIST, low_inclusive=False)
     dxa, dya, za = (as_finite_array(v, n) for v, n in ((dx, "dx"), (dy, "dy"), (z, "z")))
@@ -111,6 +137,18 @@ def beam_problem(
     ------
     TypeError, ValueError
         On invalid input, naming the parameter.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> z, x, a = np.array([100.0]), np.array([0.0]), np.array([1.0 + 0j])
+    >>> lines = speckle.scan_lines(3, 4.0, start=-4.0)
+    >>> scene, beam, tol = speckle.beam_problem(
+    ...     z, x, a, lines=lines, waist=4.0, n_pixels=32, depth_range=256.0, k0=3.0
+    ... )
+    >>> type(scene).__name__, type(beam).__name__, beam.waist
+    ('BeamScene', 'Beam', 4.0)
     """
     zr = rayleigh_range
     n = check_size(n_pixels, "n_pixels", low=2, bytes_per=64.0)

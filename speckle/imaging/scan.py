@@ -24,7 +24,7 @@ import dask.array as da
 import numpy as np
 import xarray as xr
 
-from .._deprecate import moved, renamed_parameters
+from .._deprecate import keyword_only, moved, renamed_parameters
 from .._validate import as_finite_array, check_bool, check_int, check_real, check_size
 from ..conventions import attrs, coord, spacing, units_of
 from ..provenance import provenance_attrs
@@ -50,6 +50,12 @@ def beam_reach(waist: float, eps: float = REACH_EPS, *, widening: float = 1.0) -
 
     ``w * sqrt(ln(1/eps)/2)`` with ``w = widening * w0`` the widest beam over the imaged depths
     (``widening = 1`` without focus): 4.43 w for the default ``eps = 1e-17``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> round(speckle.beam_reach(10.0), 2)
+    44.24
     """
     w0 = check_real(waist, "waist", low=0, high=MAX_WAIST, low_inclusive=False)
     e = check_real(eps, "eps", low=0, high=1, low_inclusive=False, high_inclusive=False)
@@ -71,8 +77,16 @@ def _widening(optics: dict, waist: float, k0: float, z_lo: float, z_hi: float) -
     return math.sqrt(1.0 + u * u)
 
 
-def scan_lines(n_lines: int, pitch: float, start: float = 0.0) -> np.ndarray:
-    """Lateral positions ``start + i*pitch`` (µm) of ``n_lines`` A-lines, ``i = 0 ... n-1``."""
+@keyword_only("start")
+def scan_lines(n_lines: int, pitch: float, *, start: float = 0.0) -> np.ndarray:
+    """Lateral positions ``start + i*pitch`` (µm) of ``n_lines`` A-lines, ``i = 0 ... n-1``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> speckle.scan_lines(4, 2.5, start=10.0)
+    array([10. , 12.5, 15. , 17.5])
+    """
     n = check_size(n_lines, "n_lines", low=1)
     p = check_real(pitch, "pitch", low=0, low_inclusive=False)
     return check_real(start, "start") + p * np.arange(n)
@@ -324,6 +338,18 @@ def scan_image(
         one with it), a non-positive waist, lines that are not 1-D, increasing and uniform, a
         ``wrap`` that is not a bool, and a ``method``/``tol`` pair (or geometry) the method
         refuses whatever the scene: at call, not at compute.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(R.background(density=0.05))
+    >>> scene = speckle.shared_scene(regions, z_range=(0.0, 256.0), x_range=(-32.0, 64.0), seed=1)
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> x = speckle.scan_lines(8, 4.0)
+    >>> img = speckle.scan_image(scene, src, waist=4.0, lines=x)
+    >>> img.field.dims, img.field.shape
+    (('depth', 'x'), (32, 8))
     """
     if not isinstance(wrap, bool | np.bool_):  # "False" would be true
         raise TypeError(f"wrap must be True or False, got {wrap!r} ({type(wrap).__name__})")
@@ -433,6 +459,17 @@ def image_regions(
     -------
     xarray.Dataset
         As :func:`scan_image`.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(R.background(density=0.05))
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> lines = speckle.scan_lines(8, 4.0)
+    >>> img = speckle.image_regions(regions, src, seed=1, waist=4.0, lines=lines)
+    >>> img.field.dims, img.field.shape
+    (('depth', 'x'), (32, 8))
     """
     src, w0, xs, ys, c, meta, kernel, optics = _prepare(
         source, waist, lines, y, chunk, method, tol, False, focus, rayleigh_range

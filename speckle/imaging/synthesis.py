@@ -152,6 +152,12 @@ def method_estimates(
     -------
     dict
         ``{method: {"error": e, "cost_ns": t, "admissible": e <= tol}}``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> sorted(speckle.method_estimates(64, 1000, 256, None, None))
+    ['direct', 'nufft', 'nufft32', 'psf']
     """
     tolv, estimate = _estimator(n_lines, n_scatterers, n_pixels, spectrum, tol, float64_error)
     return estimate_table(AUTO_CANDIDATES, estimate, tolv)
@@ -171,7 +177,14 @@ def choose_method(
     *,
     float64_error: float = 0.0,
 ) -> str:
-    """Name of the fastest admissible method (see :func:`method_estimates`); never runs one."""
+    """Name of the fastest admissible method (see :func:`method_estimates`); never runs one.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> speckle.choose_method(64, 1000, 256, None, None)
+    'nufft'
+    """
     tolv, estimate = _estimator(n_lines, n_scatterers, n_pixels, spectrum, tol, float64_error)
     # psf cannot win when its floor (one slot per scatterer) is beaten: not estimated then
     floor = {"psf": _psf_floor_ns(n_lines, n_scatterers, n_pixels)}

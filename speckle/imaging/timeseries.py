@@ -41,8 +41,8 @@ from ..conventions import attrs, coord, units_of
 from ..provenance import provenance_attrs
 from ..scene.motion import check_times
 from ..scene.shared import is_shared
+from ._bscan import bscan
 from .aline import pixel_depths
-from .bscan import bscan
 from .scan import scan_image, scan_kernel
 
 __all__ = ["bscan_series", "mmode", "raster_times"]

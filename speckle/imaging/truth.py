@@ -37,9 +37,9 @@ from ..conventions import attrs, coord, units_of
 from ..provenance import provenance_attrs
 from ..scene.shared import check_not_empty
 from ..system.source import check_source, check_weights, spectrum
+from ._bscan import map_lines
 from ._rules import check_tol
 from .aline import ascan, pixel_depths
-from .bscan import map_lines
 from .methods import ASCAN_METHODS
 from .scan import scan_image
 
@@ -59,6 +59,13 @@ def intensity_spectrum(weights: object) -> np.ndarray:
     numpy.ndarray, shape (2N,)
         ``R_l`` for ``l = -N ... N-1`` (``R_(-N) = 0``): the spectrum whose Eq. 4 A-scan on
         ``2N`` half pixels is ``|P|^2`` (see the module docstring). Non-negative.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> speckle.intensity_spectrum(np.ones(4))
+    array([0., 1., 2., 3., 4., 3., 2., 1.])
     """
     s = as_finite_array(weights, "weights")
     s = check_weights(s, s.size, "weights")
@@ -91,6 +98,15 @@ def speckle_free_lines(
     -------
     numpy.ndarray
         Float64, shape ``(..., n_pixels)``: the speckle-free intensity (no normalisation).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> z, a = np.array([[64.0]]), np.array([[1.0]])  # one scatterer at 64 µm
+    >>> truth = speckle.speckle_free_lines(z, a, n_pixels=16, depth_range=128.0)
+    >>> truth.shape, int(truth.argmax())
+    ((1, 16), 8)
     """
     n = check_size(n_pixels, "n_pixels", low=1, bytes_per=64.0)
     s = np.ones(n) if spectrum is None else check_weights(spectrum, n)
@@ -149,6 +165,18 @@ def speckle_free_image(
     TypeError, ValueError
         On a scene or source of the wrong kind, a shared scene without ``waist``/``lines`` (or a
         line scene with them), and the errors of the imaging functions.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(R.background(density=0.05))
+    >>> scene = speckle.shared_scene(regions, z_range=(0.0, 256.0), x_range=(-32.0, 64.0), seed=1)
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> x = speckle.scan_lines(8, 4.0)
+    >>> truth = speckle.speckle_free_image(scene, src, waist=4.0, lines=x)
+    >>> truth.dims, truth.shape
+    (('depth', 'x'), (32, 8))
     """
     src = check_source(source)
     check_int(chunk, "chunk", low=1)

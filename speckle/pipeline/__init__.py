@@ -8,14 +8,6 @@ the top level and from the figure modules. Names load on first use (SPEC 1, ``la
 they stay out of the top level (``speckle.run`` would say nothing there).
 """
 
-from .._lazy import attach, functions_of
+from .._lazy import attach
 
-__getattr__, __dir__, __all__ = attach(
-    __name__,
-    {
-        "adapters": [*functions_of(__name__, "adapters"), "scene_kwargs", "spectrum_kwargs"],
-        "checks": functions_of(__name__, "checks"),
-        "outputs": functions_of(__name__, "outputs"),
-        "runner": functions_of(__name__, "runner"),
-    },
-)
+__getattr__, __dir__, __all__ = attach(__name__, __file__)

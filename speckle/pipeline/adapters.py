@@ -15,9 +15,9 @@ from collections.abc import Mapping
 import xarray as xr
 
 from .._adapters import scene_kwargs, spectrum_kwargs
-from ..imaging.bscan import bscan
+from ..imaging._bscan import bscan
 from ..scene.scatterers import random_scatterers
-from ..system.datasheet import datasheet
+from ..system._datasheet import datasheet
 from ..system.source import spectrum
 
 __all__ = [

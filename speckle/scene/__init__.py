@@ -11,30 +11,5 @@ Names load on first use (SPEC 1, ``lazy_loader``).
 from .._deprecate import retired_names
 from .._lazy import attach
 
-__getattr__, __dir__, __all__ = attach(
-    __name__,
-    {
-        "deformation": ["deformable_scene", "displace", "translate", "uniaxial_strain"],
-        "layers": ["layer_stack", "region_values"],
-        "motion": [
-            "ballistic_motion",
-            "brownian_motion",
-            "bulk_motion",
-            "flow_motion",
-            "moving_mask",
-            "poiseuille_velocity",
-        ],
-        "mechanics": [
-            "compress_phantom",
-            "displacement_at",
-            "inclusion_labels",
-            "inclusion_strain",
-            "layer_strains",
-            "layered_labels",
-        ],
-        "regions": ["make_regions", "rasterize", "region_label"],
-        "scatterers": ["random_scatterers"],
-        "shared": ["from_lines", "shared_scene"],
-    },
-)
+__getattr__, __dir__, __all__ = attach(__name__, __file__)
 __getattr__ = retired_names(__name__, __getattr__)

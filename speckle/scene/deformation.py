@@ -116,6 +116,14 @@ def deformable_scene(
         scatterer in µm, uniform across the beam width ``aline_pitch`` around its A-line) and
         attrs ``imaged_first``/``imaged_count`` (the A-lines that are imaged), ``max_strain``,
         ``poisson_ratio``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> kw = dict(n_pixels=32, depth_range=256.0, seed=1)
+    >>> scene = speckle.deformable_scene(4, 2.0, strain=0.01, **kw)
+    >>> sorted(scene.data_vars), int(scene.sizes["aline"])
+    (['amplitude', 'count', 'x', 'z'], 4)
     """
     n_alines = check_int(n_alines, "n_alines", low=1)
     s = check_strain(strain)
@@ -349,6 +357,15 @@ def displace(scene: xr.Dataset, displacement: Displacement, *, wrap: bool = Fals
     Callables get ``(z, x)`` in 2-D and ``(z, x, y)`` in 3-D and return ``u_z`` or a tuple
     ``(u_z, u_x[, u_y])``; xarray fields have dims among ``depth``, ``x`` (and ``y``) in µm,
     e.g. the FEM displacement ``uz``, ``ux`` over ``(depth, x)``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> scene = speckle.random_scatterers(8, 4.0, n_pixels=32, depth_range=256.0, seed=1)
+    >>> moved = speckle.displace(scene, lambda z, x: 4.0 + 0 * z)
+    >>> round(float((moved.z - scene.z).max()), 9)
+    4.0
     """
     check_bool(wrap, "wrap")
     if is_shared(scene):
@@ -531,6 +548,15 @@ def uniaxial_strain(
     ------
     ValueError
         If a strain is outside (-1, 1) or the scene is not populated deep enough for it.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> kw = dict(n_pixels=32, depth_range=256.0, seed=1)
+    >>> scene = speckle.deformable_scene(4, 2.0, strain=0.01, **kw)
+    >>> frames = speckle.uniaxial_strain(scene, [0.0, 0.01])
+    >>> frames.z.dims[0], frames.sizes[frames.z.dims[0]]
+    ('strain', 2)
     """
     check_bool(wrap, "wrap")
     if not is_shared(scene):
@@ -598,6 +624,14 @@ def translate(scene: xr.Dataset, dz: object, dx: float = 0.0, *, wrap: bool = Fa
 
     Returns a dataset with a ``shift`` dim (axial shift in µm) when ``dz`` is a sequence.
     Shared scenes move continuously (``wrap`` is then not used).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> scene = speckle.random_scatterers(2, 2.0, n_pixels=16, depth_range=128.0, seed=1)
+    >>> moved = speckle.translate(scene, 8.0)
+    >>> round(float((moved.z - scene.z).max()), 9)
+    8.0
     """
     check_bool(wrap, "wrap")
     if not is_shared(scene):

@@ -134,6 +134,15 @@ def layered_labels(depth: object, x: object, interfaces: object) -> xr.DataArray
     -------
     xarray.DataArray
         Integer labels with dims ``(depth, x)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> depth, x = np.arange(0.0, 50.0, 10.0), np.array([0.0, 10.0])
+    >>> labels = speckle.layered_labels(depth, x, [15.0, 35.0])  # interfaces at 15 and 35 µm
+    >>> labels.values[:, 0]
+    array([0, 0, 1, 1, 2])
     """
     d, xx = _axis(depth, "depth"), _axis(x, "x")
     zi = as_finite_array(interfaces, "interfaces")
@@ -173,6 +182,19 @@ def inclusion_labels(
     -------
     xarray.DataArray
         Integer labels with dims ``(depth, x)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> grid = np.arange(0.0, 50.0, 10.0)  # depth and x (µm)
+    >>> labels = speckle.inclusion_labels(grid, grid, (20.0, 20.0), 10.0)
+    >>> labels.values
+    array([[0, 0, 0, 0, 0],
+           [0, 0, 1, 0, 0],
+           [0, 1, 1, 1, 0],
+           [0, 0, 1, 0, 0],
+           [0, 0, 0, 0, 0]])
     """
     d, xx = _axis(depth, "depth"), _axis(x, "x")
     c = as_finite_array(center, "center")
@@ -593,6 +615,17 @@ def displacement_at(result: xr.Dataset, z: object, x: object) -> tuple[np.ndarra
     ------
     ValueError
         If a point lies outside the sample (beyond a relative rounding margin of 1e-9).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> depth, x = np.arange(4.0, 100.0, 8.0), np.arange(4.0, 100.0, 8.0)
+    >>> labels = speckle.inclusion_labels(depth, x, (50.0, 50.0), 20.0)
+    >>> result = speckle.compress_phantom(labels, {0: 10.0, 1: 40.0}, 0.45, strain=0.01, contact="sliding")
+    >>> uz, ux = speckle.displacement_at(result, [0.0, 96.0], [48.0, 48.0])  # sample: 0 to 96 µm
+    >>> np.round(uz, 6)  # the probe holds z = 0; the base moves by -strain * L
+    array([ 0.  , -0.96])
     """
     if not isinstance(result, xr.Dataset) or not {"uz_node", "ux_node"} <= set(result):
         raise TypeError("result must be the xarray.Dataset returned by speckle.compress_phantom")
@@ -656,6 +689,13 @@ def layer_strains(
     (numpy.ndarray, float, float)
         ``strain_zz`` per layer and the common ``strain_xx`` (compression positive, ``-eps``),
         and the axial stress ``stress_zz`` in kPa (compression positive).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> strains, *_ = speckle.layer_strains([1.0, 1.0], [10.0, 30.0], [0.0, 0.0], -0.01)
+    >>> strains.round(6)  # series springs: strain inversely proportional to modulus
+    array([-0.015, -0.005])
     """
     t = as_finite_array(thickness, "thickness")
     e_mod = as_finite_array(youngs_modulus, "youngs_modulus")
@@ -712,6 +752,13 @@ def inclusion_strain(
     -------
     (float, float)
         ``strain_zz`` and ``strain_xx`` inside the inclusion (compression positive).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> zz, xx = speckle.inclusion_strain(0.01, 10.0, 0.25, 10.0, 0.25)  # the matrix's own material
+    >>> round(zz, 6), round(xx, 6)  # the far field: strain and -nu/(1 - nu) strain
+    (0.01, -0.003333)
     """
     s = check_real(strain, "strain", low=-1.0, high=1.0, low_inclusive=False, high_inclusive=False)
     # only the ratio E_1/E enters: the rigid (1e12 x) and hole (1e-12 x) limits are allowed

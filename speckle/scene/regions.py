@@ -286,6 +286,16 @@ def make_regions(*shapes: Mapping) -> xr.Dataset:
     ------
     ValueError
         If no shape is given or a shape is not one made by this module.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(
+    ...     R.background(density=0.05), R.circle(100.0, 50.0, 20.0, density=0.2)
+    ... )
+    >>> regions.sizes["region"], [float(d) for d in regions.density.values]
+    (2, [0.05, 0.2])
     """
     if not shapes:
         raise ValueError("regions need at least one shape (e.g. background(density=...))")
@@ -463,6 +473,16 @@ def region_label(regions: xr.Dataset, z: object, x: object, y: object | None = N
     -------
     numpy.ndarray
         int32 labels, shape of ``z``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(
+    ...     R.background(density=0.05), R.layer(100.0, 200.0, density=0.1, attenuation=0.002)
+    ... )
+    >>> speckle.region_label(regions, [50.0, 150.0, 250.0], [0.0, 0.0, 0.0])
+    array([0, 1, 0], dtype=int32)
     """
     compiled = compile_regions(regions)
     zz = as_finite_array(z, "z")
@@ -503,6 +523,18 @@ def rasterize(regions: xr.Dataset, depth_coord: object, x_coord: object) -> xr.D
     xarray.DataArray
         int32 labels with dims ``(depth, x)`` and those coordinates (``-1``: no region), the
         input the FEM mechanics takes.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(
+    ...     R.background(density=0.05), R.layer(100.0, 200.0, density=0.1, attenuation=0.002)
+    ... )
+    >>> labels = speckle.rasterize(regions, np.array([50.0, 150.0, 250.0]), np.array([0.0, 10.0]))
+    >>> labels.dims, labels.values[:, 0]
+    (('depth', 'x'), array([0, 1, 0], dtype=int32))
     """
     d = as_finite_array(depth_coord, "depth_coord")
     xs = as_finite_array(x_coord, "x_coord")

@@ -130,6 +130,13 @@ def random_scatterers(
     TypeError, ValueError
         On invalid input, and (``ValueError``) when the field would need more than
         :data:`speckle._validate.MAX_BYTES` (32 B per scatterer), before drawing anything.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> scene = speckle.random_scatterers(8, 4.0, n_pixels=64, depth_range=512.0, seed=1)
+    >>> sorted(scene.data_vars), int(scene.sizes["aline"])
+    (['amplitude', 'count', 'z'], 8)
     """
     nl = check_int(n_alines, "n_alines", low=1)
     rho = check_real(density, "density", low=0)

@@ -159,6 +159,17 @@ def shared_scene(
     ------
     ValueError
         On an empty or inverted window, a non-positive tile or negative seed.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(
+    ...     R.background(density=0.05), R.layer(100.0, 200.0, density=0.1, attenuation=0.002)
+    ... )
+    >>> scene = speckle.shared_scene(regions, z_range=(0.0, 256.0), x_range=(0.0, 64.0), seed=1)
+    >>> sorted(scene.data_vars)[:3], scene.attrs.get("ndim", 2)
+    (['amplitude', 'region', 'x'], 2)
     """
     compiled = compile_regions(regions)
     sd = check_int(seed, "seed", low=0)
@@ -291,6 +302,15 @@ def from_lines(scene: xr.Dataset) -> xr.Dataset:
     xarray.Dataset
         A 2-D shared scene (``region`` 0). Imaged with a waist ``w0`` much smaller than the line
         pitch ``p`` (a neighbour's weight is ``exp(-2 p^2/w0^2)``), it gives the paper's B-scan.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> scene = speckle.random_scatterers(8, 4.0, n_pixels=32, depth_range=256.0, seed=1)
+    >>> shared = speckle.from_lines(scene)
+    >>> sorted(shared.data_vars)[:3]
+    ['amplitude', 'region', 'x']
     """
     if not isinstance(scene, xr.Dataset) or set(scene.z.dims) != {"aline", "scatterer"}:
         raise TypeError("scene must be an independent-line field with dims (aline, scatterer)")

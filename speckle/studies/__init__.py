@@ -16,15 +16,6 @@ layered SynthOCT phantom to a scan (the challenge's inverse problem).
 Names load on first use (SPEC 1, ``lazy_loader``).
 """
 
-from .._lazy import attach, functions_of
+from .._lazy import attach
 
-__getattr__, __dir__, __all__ = attach(
-    __name__,
-    {
-        "dynamics": ["FLOW_CONTRASTS", *functions_of(__name__, "dynamics")],
-        "dynamics_series": functions_of(__name__, "dynamics_series"),
-        "looks": functions_of(__name__, "looks"),
-        "phantom": ["PhantomFit", "fit_phantom"],
-        "twin": ["SystemFit", "fit_system"],
-    },
-)
+__getattr__, __dir__, __all__ = attach(__name__, __file__)

@@ -89,6 +89,18 @@ def angular_looks(
     -------
     xarray.DataArray
         Complex looks ``(look, depth, x)``; coordinate ``angle`` (degrees) along ``look``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(R.background(density=0.05))
+    >>> scene = speckle.shared_scene(regions, z_range=(0.0, 256.0), x_range=(-32.0, 64.0), seed=1)
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> x = speckle.scan_lines(8, 4.0)
+    >>> looks = speckle.angular_looks(scene, src, [0.0, 5.0], waist=4.0, lines=x)
+    >>> looks.dims, looks.sizes["look"]
+    (('look', 'depth', 'x'), 2)
     """
     xs, _ = _inputs(scene, source, lines)
     ang = as_finite_array(angles, "angles")
@@ -139,6 +151,18 @@ def spatial_looks(
     -------
     xarray.DataArray
         Complex looks ``(look, depth, x)``; coordinate ``offset`` (µm) along ``look``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(R.background(density=0.05))
+    >>> scene = speckle.shared_scene(regions, z_range=(0.0, 256.0), x_range=(-32.0, 64.0), seed=1)
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> x = speckle.scan_lines(8, 4.0)
+    >>> looks = speckle.spatial_looks(scene, src, [0.0, 4.0], waist=4.0, lines=x)
+    >>> looks.dims, looks.sizes["look"]
+    (('look', 'depth', 'x'), 2)
     """
     xs, _ = _inputs(scene, source, lines)
     off = as_finite_array(offsets, "offsets")
@@ -169,6 +193,18 @@ def polarization_looks(
 
     Intensity-averaged they give the polarization-insensitive image, contrast
     ``sqrt((1 + P^2)/2)``, ``P = |1 - 2 f|`` (dense scene).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(R.background(density=0.05))
+    >>> scene = speckle.shared_scene(regions, z_range=(0.0, 256.0), x_range=(-32.0, 64.0), seed=1)
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> x = speckle.scan_lines(8, 4.0)
+    >>> looks = speckle.polarization_looks(scene, src, 0.5, seed=2, waist=4.0, lines=x)
+    >>> looks.dims, looks.sizes["look"]
+    (('look', 'depth', 'x'), 2)
     """
     xs, _ = _inputs(scene, source, lines)
     dep = depolarize(scene, depolarization, seed=seed)
@@ -193,7 +229,22 @@ def temporal_looks(
     tol: float | None = None,
     chunk: int = 64,
 ) -> xr.DataArray:
-    """Frames of a shared scene in Brownian motion (:func:`brownian_frames`) as looks."""
+    """Frames of a shared scene in Brownian motion (:func:`brownian_frames`) as looks.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(R.background(density=0.05))
+    >>> scene = speckle.shared_scene(regions, z_range=(0.0, 256.0), x_range=(-32.0, 64.0), seed=1)
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> lines = speckle.scan_lines(8, 4.0)
+    >>> looks = speckle.temporal_looks(
+    ...     scene, src, 3, diffusion=1.0, interval=1e-3, seed=2, waist=4.0, lines=lines
+    ... )
+    >>> looks.dims, looks.sizes["look"]
+    (('look', 'depth', 'x'), 3)
+    """
     xs, _ = _inputs(scene, source, lines)
     nf = check_int(n_frames, "n_frames", low=1)
     # the frames hold z, x and the amplitude (complex) of every scatterer: 32 bytes each

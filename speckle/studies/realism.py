@@ -37,8 +37,8 @@ from .._validate import check_choice, check_int, check_real
 from ..analysis import autocorrelation as ac
 from ..analysis import measured as ms
 from ..conventions import attrs, coord
+from ..imaging._bscan import bscan
 from ..imaging.beam_lines import beam_lines, shared_scatterers
-from ..imaging.bscan import bscan
 from ..scene.scatterers import random_scatterers
 from ..system.attenuation import attenuate
 from ..system.detection import add_floor, log_compress

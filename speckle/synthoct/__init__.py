@@ -9,33 +9,4 @@ micrometres. Names load on first use (SPEC 1, ``lazy_loader``).
 
 from .._lazy import attach
 
-__getattr__, __dir__, __all__ = attach(
-    __name__,
-    {
-        "files": [
-            "ScannerConfig",
-            "baseline_phantom",
-            "read_phantom",
-            "read_scan",
-            "read_scanner_config",
-            "write_phantom",
-            "write_scan",
-            "write_scanner_config",
-        ],
-        "maps": [
-            "MAP_NAMES",
-            "OFFICIAL_DYNAMIC_RANGE",
-            "SCAN_DYNAMIC_RANGE",
-            "SYNTHOCT_PIXEL_SIZE",
-            "synthoct_maps",
-        ],
-        "metrics": [
-            "METRIC_NAMES",
-            "SYNTHOCT_EXPERIMENTS",
-            "SYNTHOCT_MAPS",
-            "read_metrics_report",
-            "synthoct_metrics",
-        ],
-        "scanner": ["synthoct_scan"],
-    },
-)
+__getattr__, __dir__, __all__ = attach(__name__, __file__)

@@ -151,6 +151,13 @@ def interpolation_gain(theta: object, t: object, method: str) -> np.ndarray:
     -------
     numpy.ndarray
         Complex gain, the broadcast shape of ``theta`` and ``t``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> complex(speckle.interpolation_gain(np.pi / 4, 0.0, "linear"))  # 1 at the samples
+    (1+0j)
     """
     th = as_finite_array(theta, "theta")
     tt = as_finite_array(t, "t")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ..scene.layers import region_values, sample_map
+from ..scene._layers import region_values, sample_map
 from ..scene.shared import check_not_empty
 
 

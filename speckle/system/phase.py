@@ -239,6 +239,19 @@ def phase_perturb(
     -------
     xarray.Dataset
         The perturbed scene; attributes record the parameters.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> scene = speckle.random_scatterers(8, 4.0, n_pixels=32, depth_range=256.0, seed=1)
+    >>> k0 = float(src.attrs["k0"])
+    >>> out = speckle.phase_perturb(
+    ...     scene, index_variance=1e-6, correlation_length=20.0, k0=k0, seed=2
+    ... )
+    >>> bool(np.allclose(abs(out.amplitude), abs(scene.amplitude)))  # phases only
+    True
     """
     check_scene(scene)
     if is_shared(scene):

@@ -25,7 +25,7 @@ import xarray as xr
 
 from .._validate import as_finite_array, check_int, check_real
 from ..conventions import attrs
-from ..scene.layers import property_profile
+from ..scene._layers import property_profile
 from ._scene import check_scene, line_rng, region_property
 
 __all__ = [
@@ -69,6 +69,15 @@ def depolarize(
     xarray.Dataset
         ``amplitude`` with a leading dim ``channel`` = ``("co", "cross")``; image it with
         :func:`speckle.bscan` to get both channels.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> scene = speckle.random_scatterers(8, 4.0, n_pixels=32, depth_range=256.0, seed=1)
+    >>> both = speckle.depolarize(scene, 0.3, seed=2)
+    >>> both.amplitude.dims[0], [str(c) for c in both.channel.values]
+    ('channel', ['co', 'cross'])
     """
     check_scene(scene)
     if "channel" in scene.amplitude.dims:
@@ -112,6 +121,15 @@ def degree_of_polarization(image: xr.Dataset, dims: object = None) -> xr.DataArr
 
     ``P = sqrt(S1^2 + S2^2 + S3^2)/S0`` with ``S0 = <I_co + I_x>``, ``S1 = <I_co - I_x>``,
     ``S2 + i S3 = 2 <A_co A_x*>``, averages over ``dims`` (default: all but ``channel``).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> src = speckle.spectrum(32, 256.0, k0_dk=10.0)
+    >>> scene = speckle.random_scatterers(8, 4.0, n_pixels=32, depth_range=256.0, seed=1)
+    >>> img = speckle.bscan(speckle.depolarize(scene, 0.0, seed=2), src)
+    >>> round(float(speckle.degree_of_polarization(img)), 6)  # no cross channel: fully polarized
+    1.0
     """
     if not isinstance(image, xr.Dataset) or "channel" not in image.field.dims:
         raise TypeError("image must be a Dataset with a complex 'field' and dim 'channel'")

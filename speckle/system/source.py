@@ -49,6 +49,12 @@ def k0_from_wavelength(wavelength: float, refractive_index: float = 1.0) -> floa
     -------
     float
         ``k0`` in rad/µm.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> round(speckle.k0_from_wavelength(0.84, refractive_index=1.38), 4)
+    10.3224
     """
     lam = check_real(wavelength, "wavelength", low=0, low_inclusive=False)
     n = check_real(refractive_index, "refractive_index", low=0, low_inclusive=False)
@@ -56,7 +62,14 @@ def k0_from_wavelength(wavelength: float, refractive_index: float = 1.0) -> floa
 
 
 def wavelength_from_k0(k0: float, refractive_index: float = 1.0) -> float:
-    """Vacuum central wavelength in µm for a central wavenumber ``k0`` (rad/µm) in a medium."""
+    """Vacuum central wavelength in µm for a central wavenumber ``k0`` (rad/µm) in a medium.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> round(speckle.wavelength_from_k0(10.3227, refractive_index=1.38), 4)
+    0.84
+    """
     k = check_real(k0, "k0", low=0, low_inclusive=False)
     n = check_real(refractive_index, "refractive_index", low=0, low_inclusive=False)
     return 2 * np.pi * n / k
@@ -66,6 +79,12 @@ def delta_k(n_pixels: int, depth_range: float) -> float:
     """Spectral width ``N*pi/H`` in rad/µm of ``n_pixels`` components spaced ``pi/H``.
 
     ``depth_range`` is the unambiguous depth ``H`` in µm (> 0).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> round(speckle.delta_k(256, 2048.0), 6)
+    0.392699
     """
     n = check_int(n_pixels, "n_pixels", low=2)
     h = check_real(depth_range, "depth_range", low=0, low_inclusive=False)
@@ -142,6 +161,13 @@ def spectrum(
     ValueError
         On a missing or ambiguous ``k0`` specification, out-of-range values or a wrong
         ``weights`` length.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> s = speckle.spectrum(64, 512.0, k0_dk=10.0, shape="gaussian", fwhm=0.5)
+    >>> s.dims, s.sizes["wavenumber"], round(float(s.attrs["k0"] / s.attrs["delta_k"]), 6)
+    (('wavenumber',), 64, 10.0)
     """
     n = check_size(n_pixels, "n_pixels", low=2, bytes_per=64.0)
     h = check_real(depth_range, "depth_range", low=0, low_inclusive=False)

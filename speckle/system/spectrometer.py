@@ -42,7 +42,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from .._deprecate import moved, renamed_parameters
+from .._deprecate import keyword_only, moved, renamed_parameters
 from .._validate import (
     as_finite_array,
     check_bool,
@@ -61,7 +61,7 @@ from ._closed_forms import (
     resampling_error,
     spectral_apodization,
 )
-from .rolloff import carrier_response, rolloff_power
+from ._rolloff import carrier_response, rolloff_power
 
 __all__ = [
     "APODIZATIONS",
@@ -124,7 +124,7 @@ def resampling_response(system, z: object, method: str) -> np.ndarray:
 
     Parameters
     ----------
-    system : speckle.system.datasheet.System
+    system : speckle.System
         The system (wavelength-linear camera, processing grid).
     z : array_like
         Reflector depths ``z`` in µm (medium).
@@ -135,6 +135,15 @@ def resampling_response(system, z: object, method: str) -> np.ndarray:
     -------
     numpy.ndarray
         Complex factor, shape of ``z``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> system = speckle.example_system("840nm")
+    >>> f = speckle.resampling_response(system, np.array([0.0, 500.0]), "exact")
+    >>> abs(f).round(6)  # exact resampling: no loss at any depth
+    array([1., 1.])
     """
     z = as_finite_array(z, "z")
     check_choice(method, "method", ("linear", "cubic", "exact"))
@@ -223,6 +232,15 @@ def interferogram(
     -------
     numpy.ndarray
         Shape (..., K); complex128 for ``"complex"``, float64 for ``"real"``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> k = np.linspace(7.0, 8.0, 256)  # camera pixels, rad/µm
+    >>> signal = speckle.interferogram(np.array([100.0]), np.array([1.0 + 0j]), k, np.ones(256))
+    >>> signal.shape
+    (256,)
     """
     check_choice(detection, "detection", DETECTIONS)
     check_bool(dc, "dc")
@@ -253,7 +271,14 @@ def interferogram(
     z2, a2 = zz.reshape(-1, zz.shape[-1]), aa.reshape(-1, zz.shape[-1])
     finite = bool(np.any(w) or np.any(r))
     check_memory(
-        interferogram_bytes(z2.shape[0], z2.shape[1], k.size, method, finite, autocorrelation),
+        interferogram_bytes(
+            z2.shape[0],
+            z2.shape[1],
+            k.size,
+            method=method,
+            finite_pixels=finite,
+            autocorrelation=autocorrelation,
+        ),
         "z (lines x scatterers) or the camera pixels",
         "the camera signal",
     )
@@ -269,10 +294,12 @@ def interferogram(
     return out.reshape(*batch, k.size)
 
 
+@keyword_only("method", "finite_pixels", "autocorrelation")
 def interferogram_bytes(
     lines: int,
     scatterers: int,
     pixels: int,
+    *,
     method: str = "direct",
     finite_pixels: bool = True,
     autocorrelation: bool = False,
@@ -285,6 +312,12 @@ def interferogram_bytes(
     values and the coefficients), and the pair sources of the autocorrelation of finite pixels
     (``M (M - 1)/2`` pairs of one line: two indices, a depth and a product). The arguments
     are checked as :func:`interferogram` takes them (``ValueError``/``TypeError`` naming one).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> speckle.interferogram_bytes(16, 1000, 1024) > 0
+    True
     """
     lines = check_int(lines, "lines", low=1)
     scatterers = check_int(scatterers, "scatterers", low=0)
@@ -531,6 +564,19 @@ def process_interferogram(
     numpy.ndarray
         Complex A-scans (..., N); pixel ``q`` at depth ``q H/N``, negative depths wrap to the
         end (the mirror image of a real signal appears there).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> n, depth_range = 64, 512.0
+    >>> k0 = 64 * np.pi / depth_range
+    >>> grid = k0 + (np.arange(n) - n // 2) * np.pi / depth_range  # k_n = k0 + n pi/H
+    >>> z, a = np.array([200.0]), np.array([1.0 + 0j])  # one reflector at 200 µm
+    >>> signal = speckle.interferogram(z, a, grid, np.ones(n), k0=k0)
+    >>> ascan = speckle.process_interferogram(signal, grid=grid, k0=k0)
+    >>> int(abs(ascan).argmax())  # the reflector's pixel, 200 µm / 8 µm
+    25
     """
     check_choice(resample, "resample", ("none", "linear", "cubic"))
     check_choice(apodization, "apodization", APODIZATIONS)
@@ -580,7 +626,7 @@ def camera_sampling(system, sampling: str = "wavelength", at: object | None = No
 
     Parameters
     ----------
-    system : speckle.system.datasheet.System
+    system : speckle.System
         The system.
     sampling : {"wavelength", "wavenumber"}
         A camera linear in wavelength (a grating spectrometer; pixel ``i`` spans
@@ -704,6 +750,15 @@ def system_ascan(
     -------
     numpy.ndarray
         Complex A-scans (..., N), pixel ``q`` at ``q H/N``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> system = speckle.example_system("840nm")
+    >>> img = speckle.system_ascan(system, np.array([[200.0]]), np.array([[1.0 + 0j]]))
+    >>> img.shape  # (lines, pixels)
+    (1, 2048)
     """
     check_choice(resample, "resample", RESAMPLING)
     sig, k = camera_signal(system, z, amplitude, on_grid=resample == "exact", **camera)

@@ -15,6 +15,7 @@ import xarray as xr
 
 import speckle
 from speckle.analysis import correlation as corr
+from speckle.analysis import correlation_forms as forms
 from speckle.scene import deformation as D
 
 N, PIXEL = 64, 8.0
@@ -111,7 +112,7 @@ def test_theory_matches_the_continuum_closed_forms():
     strains = np.array([0.005, 0.01, 0.03, 0.05, 0.08])
     rect = speckle.spectrum(n, h, k0_dk=10)
     got = corr.expected_correlation(strains, spectrum=rect, density=1e6).complex.values
-    np.testing.assert_allclose(got, corr.continuum_gamma(strains, 10), atol=0.01)
+    np.testing.assert_allclose(got, forms.continuum_gamma(strains, 10), atol=0.01)
     fwhm = 0.3
     sigma = fwhm / (2 * np.sqrt(2 * np.log(2)))
     gauss = speckle.spectrum(n, h, k0_dk=10, shape="gaussian", fwhm=fwhm * n * np.pi / h)
@@ -203,11 +204,11 @@ def test_two_peak_spectrum_revives_and_carrier_window_factor():
     """A spectrum with two peaks separated by 0.5 delta_k has an autocorrelation side peak at
     lag 0.5: at R = 10 the compensated correlation revives near s = 5 % after a minimum near
     2.5 % -- the only single-spectrum way to a non-monotonic curve."""
-    w = corr.two_peak_weights(256, separation=0.5, fwhm=0.15)
+    w = forms.two_peak_weights(256, separation=0.5, fwhm=0.15)
     src = speckle.spectrum(256, 256 * PIXEL, k0_dk=10, shape="array", weights=w)
     th = corr.expected_correlation([0.025, 0.05], spectrum=src, density=1e6).complex.values
     assert th[1] > 0.4 > 0.1 > th[0]
-    f = corr.carrier_window_factor([0.0, 0.025, 0.0375, 0.05], 10, 4)
+    f = forms.carrier_window_factor([0.0, 0.025, 0.0375, 0.05], 10, 4)
     np.testing.assert_allclose(f[[0, 1, 3]], [1.0, 0.0, 0.0], atol=1e-12)
     assert f[2] == pytest.approx(1 / (4 * np.sin(np.pi * 0.375)), rel=1e-12)
 

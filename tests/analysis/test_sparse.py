@@ -29,13 +29,13 @@ def gaussian_weights(fwhm, n=N):
 
 @pytest.mark.parametrize("inverse_snr", [0.0, 0.1])
 def test_dense_limit_is_fully_developed(inverse_snr):
-    mean, var = log_intensity_moments(gaussian_weights(0.5), 2.0, 1e5, inverse_snr)
+    mean, var = log_intensity_moments(gaussian_weights(0.5), 2.0, 1e5, inverse_snr=inverse_snr)
     assert mean == pytest.approx(-np.euler_gamma, abs=1e-3)
     assert var == pytest.approx(np.pi**2 / 6, abs=1e-3)
 
 
 def test_noise_only_is_gaussian():
-    _, var = log_intensity_moments(gaussian_weights(1.0), 1.0, 1e-3, 1e4)
+    _, var = log_intensity_moments(gaussian_weights(1.0), 1.0, 1e-3, inverse_snr=1e4)
     assert var == pytest.approx(np.pi**2 / 6, abs=1e-3)
 
 
@@ -67,10 +67,12 @@ def test_low_density_against_the_field_drawn_directly(fwhm, waist, rho):
 
 def test_inversion_round_trip_and_monotone():
     w = gaussian_weights(0.5)
-    v = [log_intensity_moments(w, 2.0, rho, 0.01)[1] for rho in (0.25, 0.5, 1.0, 4.0)]
+    v = [log_intensity_moments(w, 2.0, rho, inverse_snr=0.01)[1] for rho in (0.25, 0.5, 1.0, 4.0)]
     assert np.all(np.diff(v) < 0)
     for rho, var in zip((0.25, 0.5, 1.0, 4.0), v, strict=True):
-        assert sparse_inverse_density(var, w, 2.0, 0.01) == pytest.approx(1 / rho, rel=1e-4)
+        assert sparse_inverse_density(var, w, 2.0, inverse_snr=0.01) == pytest.approx(
+            1 / rho, rel=1e-4
+        )
     assert sparse_inverse_density(np.pi**2 / 6, w, 2.0) == pytest.approx(0.0, abs=1e-9)
     assert sparse_inverse_density(np.pi**2 / 6 - 0.01, w, 2.0) < 0
 

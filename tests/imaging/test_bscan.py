@@ -7,7 +7,7 @@ import pytest
 import xarray as xr
 
 import speckle
-from speckle.imaging.bscan import bscan, expected_intensity
+from speckle.imaging import bscan, expected_intensity
 
 N, H = 64, 512.0
 

@@ -8,7 +8,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import speckle
-from speckle.scene.layers import layer_values, path_integral
+from speckle.scene._layers import layer_values, path_integral  # private: the profile helpers
 
 
 @given(

@@ -7,7 +7,7 @@ import pytest
 import xarray as xr
 
 import speckle
-from speckle.scene.layers import layer_values, path_integral
+from speckle.scene._layers import layer_values, path_integral  # private: the profile helpers
 
 N, H = 256, 1024.0
 

@@ -5,7 +5,7 @@ import pytest
 from scipy.optimize import brentq
 
 import speckle
-from speckle.system.datasheet import EXAMPLE_SYSTEMS, datasheet
+from speckle.system import EXAMPLE_SYSTEMS, datasheet
 
 LN2 = np.log(2)
 

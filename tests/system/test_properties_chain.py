@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from speckle.system import datasheet
 from speckle.system import spectrometer as sp
-from speckle.system.datasheet import datasheet
 
 SHEET = dict(
     wavelength_nm=840.0,
@@ -110,5 +110,7 @@ def test_chain_memory_is_estimated_before_allocation():
         sp.interferogram(
             many, np.ones_like(many), K, np.ones(K.size), pixel_width=0.01, autocorrelation=True
         )
-    est = sp.interferogram_bytes(1, 200_000, K.size, "direct", True, True)
+    est = sp.interferogram_bytes(
+        1, 200_000, K.size, method="direct", finite_pixels=True, autocorrelation=True
+    )
     assert est > 40 * 200_000**2 / 2 * 0.99

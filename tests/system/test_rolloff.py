@@ -7,7 +7,7 @@ import pytest
 import xarray as xr
 
 import speckle
-from speckle.system.rolloff import rolloff_amplitude, rolloff_curve
+from speckle.system._rolloff import rolloff_amplitude, rolloff_curve  # private: closed forms
 
 N, H = 64, 256.0
 

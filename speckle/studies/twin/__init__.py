@@ -79,11 +79,4 @@ scene (uniform compression, ``u_z = -s z``) and scores every strain estimator
 
 from ..._lazy import attach
 
-__getattr__, __dir__, __all__ = attach(
-    __name__,
-    {
-        "_theory": ["SPECTRUM_SHAPES", "rectangular_weights"],
-        "fit": ["fit_system"],
-        "system_fit": ["SystemFit"],
-    },
-)
+__getattr__, __dir__, __all__ = attach(__name__, __file__)

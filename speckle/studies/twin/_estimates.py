@@ -113,7 +113,7 @@ def _estimate(
             float(np.var(log_i)),
             _weights(shape, float(width), n_pixels),
             float(out["waist_pitch"]),
-            0.0 if snr is None else 1 / r,
+            inverse_snr=0.0 if snr is None else 1 / r,
         )
     return out
 

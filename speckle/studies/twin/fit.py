@@ -130,6 +130,21 @@ def fit_system(
         A linear image (amplitude/intensity) whose intensity contrast std/mean is below
         :data:`LOG_AS_LINEAR_CONTRAST` (fully developed speckle: 1): probably log data. No
         signal-free rows found (``noise_rows`` and ``snr_db`` not given).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> from speckle.data import SAMPLE_PITCH, SAMPLE_PIXEL_SIZE, sample_path
+    >>> image = speckle.load_image(
+    ...     sample_path("pdms"),
+    ...     kind="log",
+    ...     pixel_size=SAMPLE_PIXEL_SIZE,
+    ...     pitch=SAMPLE_PITCH["pdms"],
+    ...     dims=("depth", "x"),
+    ... )
+    >>> fit = speckle.fit_system(image, region={"depth": [95, 135]}, noise_rows=[5, 40])
+    >>> type(fit).__name__, str(fit.parameters.attrs["kind"])
+    ('SystemFit', 'log')
     """
     img = _as_image(image)
     kind = img.attrs["kind"]

@@ -34,6 +34,21 @@ class SystemFit:
         One variable per fitted quantity and its standard error ``<name>_se`` (units in attrs);
         attributes: ``spectrum_shape``, ``focused``, ``kind``, ``k0``, ``k0_dk`` and the fit
         settings.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> from speckle.data import SAMPLE_PITCH, SAMPLE_PIXEL_SIZE, sample_path
+    >>> image = speckle.load_image(
+    ...     sample_path("pdms"),
+    ...     kind="log",
+    ...     pixel_size=SAMPLE_PIXEL_SIZE,
+    ...     pitch=SAMPLE_PITCH["pdms"],
+    ...     dims=("depth", "x"),
+    ... )
+    >>> fit = speckle.fit_system(image, region={"depth": [95, 135]}, noise_rows=[5, 40])
+    >>> "waist" in fit.parameters and "waist_se" in fit.parameters
+    True
     """
 
     parameters: xr.Dataset

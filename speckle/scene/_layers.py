@@ -25,7 +25,7 @@ import numbers
 import numpy as np
 import xarray as xr
 
-from .._deprecate import moved
+from .._deprecate import keyword_only, moved
 from .._validate import as_finite_array, check_real
 from ..conventions import attrs, labelled, units_of
 
@@ -91,6 +91,13 @@ def layer_stack(tops: object, **properties: object) -> xr.Dataset:
     -------
     xarray.Dataset
         Dim ``layer``; coordinate ``top`` (µm); one variable per property with ``units``.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> stack = speckle.layer_stack([0.0, 100.0], attenuation=[0.001, 0.004], backscatter=[1.0, 2.0])
+    >>> stack.sizes["layer"], stack.top.values
+    (2, array([  0., 100.]))
     """
     t = as_finite_array(tops, "tops")
     if t.ndim != 1 or t.size < 1:
@@ -162,8 +169,9 @@ def property_integral(z: object, value: float | xr.Dataset, name: str) -> np.nda
     return property_profile(z, value, name) * np.asarray(z, dtype=float)
 
 
+@keyword_only("outside")
 def region_values(
-    labels: xr.DataArray, properties: xr.Dataset, name: str, outside: float | None = None
+    labels: xr.DataArray, properties: xr.Dataset, name: str, *, outside: float | None = None
 ) -> xr.DataArray:
     """Map a label image to property ``name`` by region label.
 
@@ -182,6 +190,18 @@ def region_values(
     ValueError
         If the table has no regions, a label of the image has no row in the table, or values are
         out of range.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> from speckle.scene import regions as R
+    >>> regions = speckle.make_regions(
+    ...     R.background(density=0.05), R.layer(100.0, 200.0, density=0.1, backscatter=4.0)
+    ... )
+    >>> labels = speckle.rasterize(regions, np.array([50.0, 150.0]), np.array([0.0]))
+    >>> speckle.region_values(labels, regions, "backscatter").values[:, 0]
+    array([1., 4.])
     """
     if not isinstance(properties, xr.Dataset) or "region" not in properties.dims:
         raise TypeError("properties must be a Dataset with dim 'region' (labels as coordinate)")

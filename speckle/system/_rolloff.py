@@ -20,7 +20,7 @@ pixels (see the tests: Eq. 4 integrated over each pixel's width). A measured cur
 instead (``curve``: intensity vs depth, linearly interpolated).
 
 The closed forms in the spectrometer's own units (pixel width and line FWHM in rad/µm, used by
-:mod:`speckle.system.datasheet` and :mod:`speckle.system.spectrometer`) are
+:mod:`speckle.system._datasheet` and :mod:`speckle.system.spectrometer`) are
 :func:`carrier_response` and :func:`rolloff_power`; :func:`rolloff_amplitude` is the same
 function with ``delta = pi/(2 z_max)`` and ``r = w delta``.
 """
@@ -128,6 +128,14 @@ def rolloff(
     -------
     xarray.Dataset
         The scene with amplitudes multiplied by the amplitude roll-off.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> scene = speckle.random_scatterers(4, 2.0, n_pixels=32, depth_range=256.0, seed=1)
+    >>> rolled = speckle.rolloff(scene, z_max=256.0, resolution=2.0)
+    >>> bool((abs(rolled.amplitude) <= abs(scene.amplitude) + 1e-12).all())
+    True
     """
     check_scene(scene)
     if curve is not None:

@@ -12,6 +12,7 @@ from collections.abc import Callable
 import numpy as np
 import xarray as xr
 
+from .._deprecate import keyword_only
 from .._validate import check_choice, check_int, check_real
 from ..conventions import attrs, coord, depth_range_of, units_of
 from ..provenance import provenance_attrs
@@ -29,14 +30,25 @@ __all__ = ["NORMALISATIONS", "bscan", "expected_intensity", "map_lines"]
 NORMALISATIONS = ("none", "density", "expected")
 
 
+@keyword_only("mean_square_amplitude")
 def expected_intensity(
-    density: float, n_pixels: int, spectrum: xr.DataArray | None, mean_square_amplitude: float = 1.0
+    density: float,
+    n_pixels: int,
+    spectrum: xr.DataArray | None,
+    *,
+    mean_square_amplitude: float = 1.0,
 ) -> float:
     """Expected mean pixel intensity ``<|A|^2> = rho * N * <|a|^2> * sum_n S_n^2``.
 
     Exact for uniformly distributed scatterers over the full depth ``[0, H)`` when
     ``2*k0*H`` is a multiple of ``2*pi`` (so that the mean field vanishes), and accurate to
     ``O(1/(k0 H))`` otherwise. ``spectrum=None`` means rectangular (``sum S^2 = N``).
+
+    Examples
+    --------
+    >>> import speckle
+    >>> speckle.expected_intensity(4.0, 64, None)  # rho N sum S^2 = 4 * 64 * 64
+    16384.0
     """
     rho = check_real(density, "density", low=0.0)
     n = check_int(n_pixels, "n_pixels", low=1)
@@ -131,6 +143,15 @@ def bscan(
         dims ``(..., depth, x)`` (a scene's lines ``aline`` become ``x``); coordinate
         ``depth`` = ``q*H/N`` in µm. Attributes carry
         the source and scene parameters and provenance.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> src = speckle.spectrum(64, 512.0, k0_dk=10.0)
+    >>> scene = speckle.random_scatterers(16, 4.0, n_pixels=64, depth_range=512.0, seed=3)
+    >>> img = speckle.bscan(scene, src, normalise="density")
+    >>> img.field.dims, img.field.shape
+    (('depth', 'x'), (64, 16))
     """
     check_choice(normalise, "normalise", NORMALISATIONS)
     if not isinstance(scene, xr.Dataset) or not {"z", "amplitude"} <= set(scene.data_vars):

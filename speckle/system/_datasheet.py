@@ -41,7 +41,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import check_choice, check_int, check_memory, check_real
-from .rolloff import rolloff_power
+from ._rolloff import rolloff_power
 from .source import spectrum as _spectrum
 
 __all__ = ["EXAMPLE_SYSTEMS", "TRUNCATION_SHOWN", "System", "datasheet", "example_system"]
@@ -58,6 +58,13 @@ class System:
     Stored quantities are in µm (wavelengths in vacuum, lengths in the medium); derived model
     parameters are properties. ``summary()`` gives a readable text, ``_repr_html_`` a table for
     notebooks, ``to_dict()`` a plain record.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> system = speckle.datasheet(840.0, 50.0, 1024, camera_range_nm=(790.0, 890.0))
+    >>> type(system).__name__, round(system.wavelength, 3)
+    ('System', 0.84)
     """
 
     wavelength: float  #: central vacuum wavelength lambda0, µm
@@ -378,6 +385,13 @@ def datasheet(
     ValueError, TypeError
         Bandwidth not smaller than the wavelength, camera range not covering the FWHM band, both
         or neither of ``camera_range_nm`` / ``imaging_depth``, out-of-range values.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> sheet = speckle.datasheet(840.0, 50.0, 1024, camera_range_nm=(790.0, 890.0))
+    >>> round(sheet.axial_resolution, 2), sheet.camera_pixels
+    (6.47, 1024)
     """
     lam = check_real(wavelength_nm, "wavelength_nm", low=0, low_inclusive=False)
     bw = check_real(bandwidth_nm, "bandwidth_nm", low=0, low_inclusive=False)
@@ -482,6 +496,13 @@ EXAMPLE_SYSTEMS: dict[str, dict] = {
 
 
 def example_system(name: str, **overrides) -> System:
-    """One of :data:`EXAMPLE_SYSTEMS` (illustrative), with datasheet overrides."""
+    """One of :data:`EXAMPLE_SYSTEMS` (illustrative), with datasheet overrides.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> speckle.example_system("840nm").wavelength
+    0.84
+    """
     check_choice(name, "name", EXAMPLE_SYSTEMS)
     return datasheet(**{**EXAMPLE_SYSTEMS[name], **overrides})
