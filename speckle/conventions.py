@@ -37,6 +37,9 @@ origin        1           where a SynthOCT scan or score comes from (published, 
 boundary      um          depth of a two-layer phantom's boundary
 energy        percent     backscattered energy of a phantom's scatterers (the file's %)
 layer         1           layer of a fitted phantom, 0 at the top (:mod:`speckle.studies.phantom`)
+case          1           a closed-loop case by its seed (:mod:`speckle.studies.phantom_loop`)
+candidate     1           a phantom scored against a target scan (fitted, floor, baseline)
+configuration 1           a SynthOCT scanner configuration by name (challenge, 2025)
 ============  ==========  ===============================================================
 
 Data variables (:data:`QUANTITIES`): ``field``, ``amplitude``, ``weight``, ``correlation``,
@@ -111,6 +114,9 @@ COORDS: dict[str, tuple[str, str]] = {
     "boundary": ("um", "depth of the layer boundary"),
     "energy": ("percent", "backscattered energy per scatterer"),
     "layer": ("1", "layer index from the top"),
+    "case": ("1", "closed-loop case (its seed)"),
+    "candidate": ("1", "phantom scored against the target scan"),
+    "configuration": ("1", "scanner configuration"),
 }
 
 #: Data-variable quantity -> (units, long_name); a variable's own long name may be more specific.
