@@ -51,10 +51,10 @@ import numpy as np
 import xarray as xr
 from scipy import optimize, special
 
-from ..analysis.sparse import depth_intensity_psf, log_intensity_moments, sparse_inverse_density
-from ..conventions import attrs, coord, units_of
-from ..synthoct import _scan
-from ..synthoct.files import ScannerConfig, read_png, read_scanner_config, write_scanner_config
+from ...analysis.sparse import depth_intensity_psf, log_intensity_moments, sparse_inverse_density
+from ...conventions import attrs, coord, units_of
+from ...synthoct import _scan
+from ...synthoct.files import ScannerConfig, read_png, read_scanner_config, write_scanner_config
 
 __all__ = ["BLOCKS", "GAP", "MAX_CLIPPED", "PhantomFit", "fit_phantom"]
 
@@ -277,7 +277,7 @@ class PhantomFit:
     def write(self, path: str | os.PathLike, seed: int) -> None:
         """Write :meth:`phantom` as the official text file and the INI beside it
         (``Configuration.ini``)."""
-        from ..synthoct.files import write_phantom
+        from ...synthoct.files import write_phantom
 
         table = self.phantom(seed)
         write_phantom(table, path)
@@ -286,7 +286,7 @@ class PhantomFit:
 
     def render(self, seed: int, **options):
         """:meth:`phantom` scanned by :func:`speckle.synthoct_scan` (``options`` passed on)."""
-        from ..synthoct.scanner import synthoct_scan
+        from ...synthoct.scanner import synthoct_scan
 
         return synthoct_scan(self.phantom(seed), self.config, **options)
 
