@@ -41,6 +41,7 @@ include: "workflow/rules/despeckle.smk"
 include: "workflow/rules/twin.smk"
 include: "workflow/rules/synthoct.smk"
 include: "workflow/rules/dynamics.smk"
+include: "workflow/rules/phantom.smk"
 
 
 rule all:
@@ -58,4 +59,5 @@ rule all:
         + DESPECKLE_TARGETS
         + TWIN_TARGETS
         + SYNTHOCT_TARGETS
-        + DYNAMICS_TARGETS,
+        + DYNAMICS_TARGETS
+        + PHANTOM_TARGETS,

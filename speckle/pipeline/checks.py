@@ -42,6 +42,7 @@ from ..imaging.scan import beam_reach
 from ..scene.shared import MAX_TILES
 from .adapters import system_from_config
 from .dynamics_checks import check_dynamics_config
+from .phantom_checks import check_phantom_fit
 from .synthoct_checks import check_synthoct
 
 __all__ = [
@@ -188,6 +189,8 @@ def check_config(config: Mapping, schema: Mapping | None = None) -> None:
         check_twin(config["twin"])
     if "synthoct" in config:
         check_synthoct(config["synthoct"])
+    if "phantom_fit" in config:
+        check_phantom_fit(config["phantom_fit"])
     if "dynamics" in config:
         dyn = config["dynamics"]
         check_dynamics_config(dyn)

@@ -44,6 +44,7 @@ MODULES = (
     "static",
     "system",
     "twin",
+    "phantom",
 )
 RNG_SEED = 37
 
@@ -616,6 +617,35 @@ def _twin():
     return {"plot_compare": (compare,), "plot_failure": (failure,)}
 
 
+def _phantom():
+    coords = {
+        "configuration": ["challenge", "2025"],
+        "case": [0, 1, 2],
+        "layer": np.arange(5),
+        "candidate": ["fitted", "floor", "baseline"],
+        "map": ["Struct", "OAC", "SC", "RSC"],
+    }
+    layer = ("configuration", "case", "layer")
+    ds = _fake(
+        coords,
+        {
+            "top_true": layer,
+            "top_error": layer,
+            "attenuation_pull": layer,
+            "rho_e_pull": layer,
+            "pixel_size": ("configuration",),
+            "MS-SSIM": ("configuration", "case", "candidate", "map"),
+        },
+    )
+    counts = np.array([[1, 2, 3], [1, 2, 2]])
+    failure = np.array([["none", "none", "boundary"], ["none", "layer count", "none"]])
+    return ds.assign(
+        n_shown=(("configuration", "case"), counts),
+        n_fit=(("configuration", "case"), counts + (failure == "layer count")),
+        failure=(("configuration", "case"), failure),
+    )
+
+
 BUILDERS = {
     "beam": _beam,
     "deformation": _deformation,
@@ -627,6 +657,7 @@ BUILDERS = {
     "static": _static,
     "system": _system,
     "twin": _twin,
+    "phantom": lambda: {"plot_closed_loop": (_phantom(),), "plot_scores": (_phantom(),)},
 }
 
 
