@@ -37,7 +37,10 @@ origin        1           where a SynthOCT scan or score comes from (published, 
 boundary      um          depth of a two-layer phantom's boundary
 energy        percent     backscattered energy of a phantom's scatterers (the file's %)
 layer         1           layer of a fitted phantom, 0 at the top (:mod:`speckle.studies.phantom`)
-case          1           a closed-loop case by its seed (:mod:`speckle.studies.phantom_loop`)
+inclusion     1           inclusion of a virtual patient or fitted phantom
+case          1           closed-loop case of the phantom fit (its seed)
+thickness     um          layer thickness (the phantom fit's failure map)
+energy_ratio  1           ratio of neighbouring layers' ``rho E`` (the failure map)
 candidate     1           a phantom scored against a target scan (fitted, floor, baseline)
 configuration 1           a SynthOCT scanner configuration by name (challenge, 2025)
 ============  ==========  ===============================================================
@@ -114,7 +117,10 @@ COORDS: dict[str, tuple[str, str]] = {
     "boundary": ("um", "depth of the layer boundary"),
     "energy": ("percent", "backscattered energy per scatterer"),
     "layer": ("1", "layer index from the top"),
+    "inclusion": ("1", "inclusion of a phantom"),
     "case": ("1", "closed-loop case (its seed)"),
+    "thickness": ("um", "layer thickness"),
+    "energy_ratio": ("1", "ratio of neighbouring layers' rho E"),
     "candidate": ("1", "phantom scored against the target scan"),
     "configuration": ("1", "scanner configuration"),
 }

@@ -1464,6 +1464,44 @@ ENTRIES: dict[str, Entry] = {
         blocks="count",
         why="config: a ScannerConfig or an INI path (tests/studies/test_phantom.py)",
     ),
+    "virtual_patient": E(
+        lambda: dict(
+            seed=1,
+            config=speckle.ScannerConfig(n_pixels=64, n_lines=16, x_max=96.0, n_scatterers=200),
+            layers=(1, 2),
+        ),
+        config="none",
+        layers="none",
+        shapes="none",
+        energy_range="none",
+        density_range="none",
+        min_contrast="positive",
+        min_thickness="positive_length",
+        max_tilt="nonnegative",
+        max_sag="nonnegative",
+        draw_seed="seed",
+        inclusions="flag",
+        why="config: a name or ScannerConfig; layers, shapes and the ranges: pairs and tuples "
+        "(tests/studies/test_phantom_patients.py)",
+    ),
+    "phantom_closed_loop_case": E(
+        lambda: dict(
+            seed=1,
+            config=speckle.ScannerConfig(n_pixels=64, n_lines=64, x_max=384.0, n_scatterers=4000),
+            layers=(1, 1),
+        ),
+        config="none",
+        fit_seed="seed",
+        max_layers="count",
+        patient="none",
+        why="config: a name or ScannerConfig; patient: virtual_patient's options (its entry)",
+    ),
+    "synthoct_config": E(
+        lambda: dict(name="2025"),
+        name="choice",
+        changes="none",
+        why="changes: ScannerConfig's fields, checked by ScannerConfig (its own entry)",
+    ),
     "PhantomFit": E(
         lambda: dict(layers=xr.Dataset(), config=speckle.ScannerConfig()),
         layers="none",
@@ -1488,7 +1526,7 @@ ENTRIES: dict[str, Entry] = {
         lpips="flag",
         scheduler="choice",
         n_workers="count",
-        why="seeds, layers, shapes: sequences (tests/studies/test_phantom_loop.py)",
+        why="seeds, layers, shapes: sequences (tests/studies/test_phantom_batch.py)",
     ),
     "ScannerConfig": E(
         lambda: dict(n_pixels=16, n_lines=8, x_max=96.0, n_scatterers=50),

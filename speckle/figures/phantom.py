@@ -18,7 +18,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from ..conventions import attrs, coord
-from ..studies.phantom_loop import phantom_closed_loop
+from ..studies.phantom.batch import phantom_closed_loop
 from ..synthoct.metrics import METRIC_NAMES, SYNTHOCT_MAPS
 from .style import new_figure
 
@@ -144,11 +144,14 @@ def plot_closed_loop(ds: xr.Dataset) -> Figure:
     fig, axes = new_figure(1, 3, width=11.0, height=3.4)
     a, b, c = axes[0]
     grid = np.linspace(-4.5, 4.5, 19)
+    right = np.asarray(ds["layers_right"].values, float) > 0
     for name, label, colour in (
         ("attenuation_pull", "attenuation µ", "C0"),
         ("rho_e_pull", "ρE/100", "C1"),
+        ("top_pull", "boundary depth", "C2"),
     ):
-        pulls = _pooled(ds, name)
+        pulls = np.asarray(ds[name].values, float)[right]
+        pulls = pulls[np.isfinite(pulls)]
         if pulls.size:
             a.hist(np.clip(pulls, -4.5, 4.5), bins=grid, density=True, histtype="step",
                    color=colour, label=f"{label} ({pulls.size} pulls, rms "
@@ -161,25 +164,25 @@ def plot_closed_loop(ds: xr.Dataset) -> Figure:
     a.legend(fontsize=8, loc="upper left", bbox_to_anchor=(0.0, -0.22))
     for i, conf in enumerate(ds["configuration"].values):
         sub = ds.sel(configuration=conf)
-        depth = np.asarray(sub["top_true"].values, float).ravel()
-        err = np.asarray(sub["top_error"].values, float).ravel()
+        depth = np.asarray(sub["true_top"].values, float).ravel()
+        err = np.asarray(sub["boundary_error"].values, float).ravel()
         keep = np.isfinite(err) & (depth > 0)
         b.plot(depth[keep], err[keep], _MARKERS[i % 4], mfc="none", ms=5,
                label=f"{conf} ({float(sub.pixel_size):g} µm pixels)")  # fmt: skip
-        shown = np.asarray(sub["n_shown"].values, float)
+        true = np.asarray(sub["n_true"].values, float)
         fitted = np.asarray(sub["n_fit"].values, float)
         jitter = 0.08 * (i - (ds.sizes["configuration"] - 1) / 2)
-        right = int(np.sum(np.asarray(sub["failure"].values).astype(str) != "layer count"))
-        c.plot(shown + jitter, fitted + jitter, _MARKERS[i % 4], mfc="none", ms=6,
-               label=f"{conf}: {right}/{shown.size} right")  # fmt: skip
-    b.axhspan(-1.0, 1.0, color="0.9", zorder=0, label="within a pixel")
-    b.set_xlabel("true boundary depth (µm)")
-    b.set_ylabel("boundary error (pixels)")
+        ok = int(np.sum(np.asarray(sub["success"].values) > 0))
+        c.plot(true + jitter, fitted + jitter, _MARKERS[i % 4], mfc="none", ms=6,
+               label=f"{conf}: {ok}/{true.size} cases succeed")  # fmt: skip
+    b.axhline(1.0, color="k", lw=0.6, ls="--", label="one pixel")
+    b.set_xlabel("true boundary depth, mean over x (µm)")
+    b.set_ylabel("largest boundary error (pixels)")
     b.set_title("boundaries")
     b.legend(fontsize=8, loc="upper left", bbox_to_anchor=(0.0, -0.22))
-    top = int(max(np.nanmax(ds["n_shown"].values), np.nanmax(ds["n_fit"].values))) + 1
+    top = int(max(np.nanmax(ds["n_true"].values), np.nanmax(ds["n_fit"].values))) + 1
     c.plot([0.5, top - 0.5], [0.5, top - 0.5], "k-", lw=0.5, label="count right")
-    c.set_xlabel("layers shown (4 pixels above the window's floor)")
+    c.set_xlabel("true layers")
     c.set_ylabel("layers fitted")
     c.set_title("layer counts")
     c.legend(fontsize=8, loc="upper left", bbox_to_anchor=(0.0, -0.22))

@@ -12,8 +12,8 @@ estimators on pairs of known strain (the failure maps); ``speed`` times the synt
 against their accuracy and maps where each fails; ``suppression`` builds the
 speckle-suppression phantom and scores images against its truth; ``looks`` forms the physical
 compounding looks (angle, offset, polarization, time) of one scene; ``phantom`` fits a
-layered SynthOCT phantom to a scan (the challenge's inverse problem); ``phantom_loop`` runs
-its closed loop over virtual patients on Dask and scores it as the challenge scores.
+layered SynthOCT phantom to a scan (the challenge's inverse problem), runs its closed loop over
+virtual patients on Dask and scores it as the challenge scores.
 Names load on first use (SPEC 1, ``lazy_loader``).
 """
 
@@ -25,8 +25,13 @@ __getattr__, __dir__, __all__ = attach(
         "dynamics": ["FLOW_CONTRASTS", *functions_of(__name__, "dynamics")],
         "dynamics_series": functions_of(__name__, "dynamics_series"),
         "looks": functions_of(__name__, "looks"),
-        "phantom": ["PhantomFit", "fit_phantom"],
-        "phantom_loop": ["phantom_closed_loop"],
+        "phantom": [
+            "PhantomFit",
+            "fit_phantom",
+            "phantom_closed_loop_case",
+            "virtual_patient",
+            "phantom_closed_loop",
+        ],
         "twin": ["SystemFit", "fit_system"],
     },
 )

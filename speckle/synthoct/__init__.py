@@ -12,6 +12,7 @@ from .._lazy import attach
 __getattr__, __dir__, __all__ = attach(
     __name__,
     {
+        "configs": ["synthoct_config"],
         "files": [
             "ScannerConfig",
             "baseline_phantom",

@@ -629,20 +629,22 @@ def _phantom():
     ds = _fake(
         coords,
         {
-            "top_true": layer,
-            "top_error": layer,
+            "true_top": layer,
+            "boundary_error": layer,
             "attenuation_pull": layer,
             "rho_e_pull": layer,
+            "top_pull": layer,
             "pixel_size": ("configuration",),
             "MS-SSIM": ("configuration", "case", "candidate", "map"),
         },
     )
     counts = np.array([[1, 2, 3], [1, 2, 2]])
-    failure = np.array([["none", "none", "boundary"], ["none", "layer count", "none"]])
+    right = np.array([[1, 1, 1], [1, 0, 1]])
     return ds.assign(
-        n_shown=(("configuration", "case"), counts),
-        n_fit=(("configuration", "case"), counts + (failure == "layer count")),
-        failure=(("configuration", "case"), failure),
+        n_true=(("configuration", "case"), counts),
+        n_fit=(("configuration", "case"), counts + 1 - right),
+        layers_right=(("configuration", "case"), right),
+        success=(("configuration", "case"), right * np.array([1, 1, 0])),
     )
 
 

@@ -43,7 +43,7 @@ def test_sections_are_valid_and_the_ci_one_small(repo_root):
         jsonschema.validate(cfg, _schema(repo_root))
         check_phantom_fit(cfg)
     assert ci["cases"] * len(ci["configurations"]) <= 2
-    assert set(full["configurations"]) == {"challenge", "2025"} and full["cases"] >= 10
+    assert set(full["configurations"]) == {"challenge", "2025"} and full["cases"] >= 8
 
 
 @pytest.mark.parametrize(
@@ -51,8 +51,8 @@ def test_sections_are_valid_and_the_ci_one_small(repo_root):
     [
         ({"layers": [3, 2]}, r"phantom_fit\.layers"),
         ({"seed": 2**63 - 1, "cases": 2}, r"phantom_fit\.seed"),
-        ({"shapes": ["flat", "tilted"]}, r"phantom_fit\.shapes\[1\]"),
-        ({"inclusions": True}, r"phantom_fit\.inclusions"),
+        ({"shapes": ["flat", "round"]}, r"phantom_fit\.shapes\[1\]"),
+        ({"configurations": ["challenge", "2026"]}, r"phantom_fit\.configurations\[1\]"),
     ],
 )  # fmt: skip
 def test_bad_sections_name_the_key(repo_root, changes, key):
@@ -91,7 +91,7 @@ def repo(tmp_path_factory, repo_root) -> Path:
     ("section", "key"),
     [
         ({"layers": [3, 1]}, "phantom_fit.layers"),
-        ({"shapes": ["curved"]}, "phantom_fit.shapes[0]"),
+        ({"seed": 2**63 - 1}, "phantom_fit.seed"),
         ({"lpips": "yes"}, "lpips"),
         ({"extra": 1}, "extra"),
     ],
@@ -123,8 +123,9 @@ def test_closed_loop_table(results, repo):
     assert list(ds.candidate.values) == ["fitted", "floor", "baseline"]
     assert ds["MS-SSIM"].dims == ("configuration", "case", "candidate", "map")
     assert np.all(np.isfinite(ds["MS-SSIM"].values))
-    assert ds.top_true.attrs["units"] == "um" and ds.attenuation_pull.attrs["units"] == "1"
-    assert set(ds.failure.values.ravel().astype(str)) <= {"none", "layer count", "boundary"}
+    assert ds.true_top.attrs["units"] == "um" and ds.attenuation_pull.attrs["units"] == "1"
+    classes = set(ds.failure_class.values.ravel().astype(str))
+    assert classes <= {"none", "layer count", "boundary"}
     assert ds.attrs["config_sha256"] and "progress" not in ds.attrs
     with open(results / "closed_loop.csv", newline="") as f:
         rows = list(csv.DictReader(f))

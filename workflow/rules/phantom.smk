@@ -14,7 +14,7 @@ rule phantom_closed_loop:
     input:
         code=package_code(
             "speckle.figures.phantom",
-            "speckle.studies.phantom_loop",
+            "speckle.studies.phantom.batch",
             "speckle.io",
             "speckle.provenance",
         ),

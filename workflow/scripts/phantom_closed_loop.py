@@ -21,11 +21,12 @@ def main(snakemake) -> None:
     summary = phantom.score_summary(ds)
     for conf in ds["configuration"].values:
         sub = ds.sel(configuration=conf)
-        right = int((sub["failure"] != "layer count").sum())
+        right = int(sub["layers_right"].sum())
+        ok = int(sub["success"].sum())
         diff = summary.difference.sel(configuration=conf, candidate="fitted").values
         print(
-            f"{conf}: layer counts right {right}/{sub.sizes['case']}; MS-SSIM fitted minus "
-            f"floor (Struct, OAC, SC, RSC) {diff.round(4).tolist()}"
+            f"{conf}: layer counts right {right}/{sub.sizes['case']}, {ok} cases succeed; "
+            f"MS-SSIM fitted minus floor (Struct, OAC, SC, RSC) {diff.round(4).tolist()}"
         )
     print(f"wrote {', '.join(snakemake.output)}")
 

@@ -10,5 +10,8 @@ __getattr__, __dir__, __all__ = attach(
     __name__,
     {
         "_fit": ["PhantomFit", "fit_phantom", "slab_constants"],
+        "batch": ["phantom_closed_loop"],
+        "loop": ["phantom_closed_loop_case"],
+        "patients": ["virtual_patient"],
     },
 )

@@ -1,0 +1,167 @@
+"""The phantom fit's closed loop (issue 34): one virtual patient scanned, fitted and compared.
+
+:func:`phantom_closed_loop_case` draws a virtual patient (:func:`speckle.virtual_patient`),
+scans it (:func:`speckle.synthoct_scan`), fits it (:func:`speckle.fit_phantom`) and compares,
+layer by layer: the boundary (the largest distance between the fitted and the true profile
+over the fitted lines, ``|x| <= x_max/2 - 3 r``, in pixels), and the pull ``(fit - truth)/SE``
+of the top (mean depth), the attenuation ``mu``, ``rho E/100`` and, where the fit identifies
+it, the density and the energy. A case succeeds when the layer count is right and every
+boundary is within a pixel; otherwise ``failure`` names the first reason. With ``fit_seed`` the
+case also holds the scans that the challenge's scoring compares: the fitted phantom drawn with
+``fit_seed`` and scanned, and the floor, the true patient drawn again with ``fit_seed``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from ...conventions import attrs, coord
+from ...synthoct.scanner import synthoct_scan
+from ._fit import fit_phantom
+from .patients import scanner_config_of, virtual_patient
+
+__all__ = ["PULLED", "fit_profiles", "phantom_closed_loop_case"]
+
+#: Parameters whose pulls the case reports (the fit's and the truth's variable names).
+PULLED = ("top", "attenuation", "rho_e", "density", "energy")
+
+
+def fit_profiles(layers: xr.Dataset, x: np.ndarray, x_max: float) -> np.ndarray:
+    """Fitted boundary profiles ``(layer, x)`` in µm: ``top + tilt x + curvature (x^2 -
+    X^2/12)`` (flat where the fit has no shape variables)."""
+    x = np.asarray(x, float)
+    top = layers.top.values[:, None]
+    tilt = layers["top_tilt"].values[:, None] if "top_tilt" in layers else 0.0
+    curv = layers["top_curvature"].values[:, None] if "top_curvature" in layers else 0.0
+    return top + tilt * x + curv * (x**2 - x_max**2 / 12)
+
+
+def phantom_closed_loop_case(
+    seed: int,
+    *,
+    config: object = "challenge",
+    fit_seed: int | None = None,
+    max_layers: int = 5,
+    **patient: object,
+) -> xr.Dataset:
+    """One closed-loop case: a virtual patient scanned, fitted back and compared with its truth.
+
+    Parameters
+    ----------
+    seed : int
+        The patient's seed (:func:`speckle.virtual_patient`).
+    config : str or ScannerConfig
+        ``"challenge"``, ``"2025"`` or a configuration.
+    fit_seed : int, optional
+        Seed of the fitted phantom's draw and of the true patient's second draw: with it the
+        case holds ``fitted_scan`` and ``floor_scan`` (two more scanner calls).
+    max_layers : int
+        Most layers the fit tries (1..10).
+    **patient
+        Options of :func:`speckle.virtual_patient` (``layers``, ``shapes``, ``inclusions``,
+        ...).
+
+    Returns
+    -------
+    xarray.Dataset
+        Dim ``layer`` (the true layers): ``true_<p>``, ``fit_<p>``, ``fit_<p>_se`` and
+        ``<p>_pull`` for ``p`` in :data:`PULLED` (the fitted layer matched by order when the
+        count is right, else the one of nearest top), ``boundary_error`` (pixels), ``true_shape``
+        and ``fit_shape``; scalars ``n_true``, ``n_fit``, ``layers_right``, ``boundaries_right``,
+        ``success`` and ``failure`` (empty on success); ``target_scan`` ``(depth, x)`` and, with
+        ``fit_seed``, ``fitted_scan`` and ``floor_scan``. Attributes: ``seed``, ``fit_seed``
+        (-1 without), the fit's ``criterion``.
+
+    Raises
+    ------
+    TypeError, ValueError
+        A bad seed, config or option (as :func:`speckle.virtual_patient` and
+        :func:`speckle.fit_phantom` refuse them), before any scan.
+
+    Examples
+    --------
+    >>> import speckle
+    >>> cfg = speckle.ScannerConfig(n_pixels=128, n_lines=128, x_max=768.0, n_scatterers=37_500)
+    >>> case = speckle.phantom_closed_loop_case(1, config=cfg, layers=(2, 2), shapes=("flat",))
+    >>> bool(case.layers_right), bool(case.success)
+    (True, True)
+    """
+    if fit_seed is not None and (
+        isinstance(fit_seed, bool) or not isinstance(fit_seed, int | np.integer) or fit_seed < 0
+    ):
+        raise ValueError(f"fit_seed must be None or a non-negative integer, got {fit_seed!r}")
+    if isinstance(max_layers, bool) or not isinstance(max_layers, int) or not 1 <= max_layers <= 10:
+        raise ValueError(f"max_layers must be an integer in 1..10, got {max_layers!r}")
+    cfg = scanner_config_of(config)
+    table, truth = virtual_patient(seed, config=cfg, **patient)
+    scan = synthoct_scan(table, cfg)
+    fit = fit_phantom(scan, cfg, max_layers=max_layers)
+    layers = fit.layers
+    n_true, n_fit = truth.sizes["layer"], layers.sizes["layer"]
+    if n_fit == n_true:
+        match = np.arange(n_true)
+    else:
+        match = np.array(
+            [int(np.argmin(np.abs(layers.top.values - t))) for t in truth.top_mean.values]
+        )
+    central = np.abs(cfg.line_positions) <= cfg.x_max / 2 - 3 * cfg.beam_radius
+    xs = cfg.line_positions[central]
+    fitted = fit_profiles(layers, xs, cfg.x_max)[match]
+    error = np.max(np.abs(fitted - truth.top.values[:, central]), axis=1) / cfg.pixel_size
+    true_of = {"top": truth.top_mean.values}
+    data = {}
+    for p in PULLED:
+        t = true_of.get(p, truth[p].values if p in truth else None)
+        f = layers[p].values[match]
+        s = layers[f"{p}_se"].values[match]
+        long = p.replace("_", " ")
+        q = layers[p].attrs
+        data[f"true_{p}"] = ("layer", t, {**q, "long_name": f"true {long}"})
+        data[f"fit_{p}"] = ("layer", f, {**q, "long_name": f"fitted {long}"})
+        data[f"fit_{p}_se"] = ("layer", s, {**q, "long_name": f"standard error of fitted {long}"})
+        with np.errstate(invalid="ignore", divide="ignore"):
+            pull = np.where(s > 0, (f - t) / s, np.nan)
+        data[f"{p}_pull"] = ("layer", pull, attrs("dimensionless", f"(fit - truth)/SE of {long}"))
+    data["top_pull"][1][0] = np.nan  # the surface is not fitted (0 by construction)
+    layers_right = n_fit == n_true
+    boundaries_right = bool(np.all(error < 1.0))
+    failure = ""
+    if not layers_right:
+        failure = f"layer count: {n_fit} fitted, {n_true} true"
+    elif not boundaries_right:
+        k = int(np.argmax(error))
+        failure = f"boundary {k}: {error[k]:.2f} px off"
+    fit_shape = layers["shape"].values[match] if "shape" in layers else ["flat"] * n_true
+    data.update(
+        boundary_error=("layer", error, attrs("pixels", "largest |fit - true| of the boundary")),
+        true_shape=("layer", truth.shape.values, attrs("label", "true boundary shape")),
+        fit_shape=("layer", np.asarray(fit_shape, dtype=object),
+                   attrs("label", "fitted boundary shape")),
+        n_true=((), n_true, attrs("count", "true layers")),
+        n_fit=((), n_fit, attrs("count", "fitted layers")),
+        layers_right=((), layers_right, attrs("label", "layer count right")),
+        boundaries_right=((), boundaries_right, attrs("label", "every boundary within a pixel")),
+        success=((), layers_right and boundaries_right, attrs("label", "case succeeded")),
+        failure=((), failure, attrs("label", "why the case failed (empty on success)")),
+        target_scan=(("depth", "x"), np.asarray(scan.values), attrs("label", "target scan")),
+    )  # fmt: skip
+    if fit_seed is not None:
+        floor_table, _ = virtual_patient(seed, config=cfg, draw_seed=int(fit_seed), **patient)
+        data["fitted_scan"] = (("depth", "x"), fit.render(int(fit_seed)).values,
+                               attrs("label", "fitted phantom's scan (fit_seed)"))  # fmt: skip
+        data["floor_scan"] = (("depth", "x"), synthoct_scan(floor_table, cfg).values,
+                              attrs("label", "true patient's scan (fit_seed)"))  # fmt: skip
+    return xr.Dataset(
+        data,
+        coords={
+            "layer": coord("layer", np.arange(n_true)),
+            "depth": scan["depth"],
+            "x": scan["x"],
+        },
+        attrs={
+            "seed": int(seed),
+            "fit_seed": -1 if fit_seed is None else int(fit_seed),
+            "criterion": layers.attrs["criterion"],
+        },
+    )
