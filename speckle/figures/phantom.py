@@ -84,7 +84,7 @@ def closed_loop_data(cfg: Mapping, dask_cfg: Mapping | None = None) -> xr.Datase
 
 
 def score_summary(ds: xr.Dataset, metric: str = "MS-SSIM") -> xr.Dataset:
-    """Mean over cases of ``metric``'s difference candidate minus floor, with its SE.
+    """Mean over the scored cases of ``metric``'s difference candidate minus floor, with its SE.
 
     Returns a Dataset of ``difference`` and ``difference_se`` along ``(configuration,
     candidate, map)`` (the floor's own row is zero) and ``within`` (1 where the mean is above
@@ -92,9 +92,9 @@ def score_summary(ds: xr.Dataset, metric: str = "MS-SSIM") -> xr.Dataset:
     """
     values = ds[metric]
     diff = values - values.sel(candidate="floor")
-    n = diff.sizes["case"]
+    n = diff.count("case")  # refused cases (NaN scores) left out
     mean = diff.mean("case")
-    se = diff.std("case", ddof=1) / np.sqrt(n) if n > 1 else xr.full_like(mean, np.nan)
+    se = (diff.std("case", ddof=1) / np.sqrt(n)).where(n > 1)
     within = (mean > -MARGIN - 2 * se.fillna(0.0)).astype(float)
     q = attrs("dimensionless", f"mean {metric} difference, candidate minus floor")
     return xr.Dataset(

@@ -95,3 +95,29 @@ def test_fitted_within_002_of_the_floor_on_every_map():
     assert np.all(mean > -0.02 - 2 * se), (mean.values, se.values)
     base = ms.sel(candidate="baseline") - ms.sel(candidate="floor")
     assert np.any(base.mean("case") < -0.02 - 2 * se)
+
+
+@pytest.mark.filterwarnings("ignore:MS-SSIM is NaN")
+def test_a_refused_scan_is_a_row_not_a_crash(monkeypatch):
+    """A scan the fit refuses (seen: seed 3401 of the 2025 configuration, a sparse top layer
+    with 10-14 % of its pixels below the window's floor) is recorded with its reason."""
+    from speckle.studies.phantom import batch
+
+    real = batch.phantom_closed_loop_case
+
+    def refusing(seed, **kwargs):
+        if seed == 6:
+            raise ValueError("scan has 0 rows above the floor (<= 10% clipped)")
+        return real(seed, **kwargs)
+
+    monkeypatch.setattr(batch, "phantom_closed_loop_case", refusing)
+    ds = phantom_closed_loop([6, 5], TINY, scheduler="synchronous")
+    row = ds.sel(case=6)
+    assert str(row.failure_class.values) == "refused"
+    assert "0 rows above the floor" in str(row.failure.values)
+    assert int(row.success) == 0 and np.all(np.isnan(row["MS-SSIM"].values))
+    _, truth = speckle.virtual_patient(6, config=TINY, layers=(1, 3))
+    n = truth.sizes["layer"]
+    assert int(row.n_true) == n and np.allclose(row.true_top.values[:n], truth.top_mean.values)
+    assert ds.fit_attenuation.attrs["units"] == "1/um"  # the refused row first: units kept
+    assert str(ds.sel(case=5).failure_class.values) in {"none", "layer count", "boundary"}

@@ -33,10 +33,10 @@ from ...conventions import attrs, coord
 from ...sweep import SCHEDULERS, sweep
 from ...synthoct.configs import SYNTHOCT_CONFIGS
 from ...synthoct.files import baseline_table
-from ...synthoct.metrics import SYNTHOCT_MAPS, synthoct_metrics
+from ...synthoct.metrics import METRIC_NAMES, SYNTHOCT_MAPS, synthoct_metrics
 from ...synthoct.scanner import synthoct_scan
-from .loop import phantom_closed_loop_case
-from .patients import SHAPES, scanner_config_of
+from .loop import PULLED, phantom_closed_loop_case
+from .patients import SHAPES, scanner_config_of, virtual_patient
 
 __all__ = ["phantom_closed_loop"]
 
@@ -46,8 +46,10 @@ CONFIGURATIONS = tuple(SYNTHOCT_CONFIGS)
 CANDIDATES = ("fitted", "floor", "baseline")
 #: Most layers of a patient (the fit tries up to 5); the case's ``layer`` dim is padded to it.
 MAX_LAYERS = 5
-#: Failure classes (``failure_class``): success, a wrong layer count, a boundary a pixel off.
-FAILURES = ("none", "layer count", "boundary")
+#: Failure classes (``failure_class``): success, a wrong layer count, a boundary a pixel off,
+#: a scan the fit refused (e.g. too few rows above the window's floor).
+FAILURES = ("none", "layer count", "boundary", "refused")
+FAILURE_NAME = "failure class: none, layer count, boundary (a pixel or more off), refused"
 #: Variables of the case with the patient's layer count, padded; their fill value.
 _FILL = {"true_shape": "", "fit_shape": ""}
 
@@ -77,11 +79,51 @@ def _padded(da: xr.DataArray) -> xr.DataArray:
     return xr.DataArray(out, dims="layer", attrs=da.attrs)
 
 
+def _refused(seed, why, *, config, patient, score) -> xr.Dataset:
+    """The row of a case whose scan the fit refused: the truth, NaN for the fit and scores."""
+    _, truth = virtual_patient(seed, config=config, **patient)
+    n = truth.sizes["layer"]
+    data = {}
+    for p in PULLED:
+        true = truth["top_mean"] if p == "top" else truth[p]
+        data[f"true_{p}"] = _padded(true.rename(f"true_{p}"))
+        units = {k: v for k, v in true.attrs.items() if k != "long_name"}
+        for name, extra in ((f"fit_{p}", units), (f"fit_{p}_se", units),
+                            (f"{p}_pull", attrs("dimensionless", "pull"))):  # fmt: skip
+            data[name] = xr.DataArray(np.full(MAX_LAYERS, np.nan), dims="layer", attrs=extra)
+    data["boundary_error"] = xr.DataArray(
+        np.full(MAX_LAYERS, np.nan), dims="layer", attrs=attrs("pixels", "boundary error")
+    )
+    shapes = np.full(MAX_LAYERS, "", dtype=object)
+    shapes[:n] = truth["shape"].values.astype(str)
+    data["true_shape"] = xr.DataArray(shapes, dims="layer", attrs=attrs("label", "true shape"))
+    data["fit_shape"] = xr.DataArray(np.full(MAX_LAYERS, "", dtype=object), dims="layer")
+    data["n_true"] = xr.DataArray(n, attrs=attrs("count", "true layers"))
+    data["n_fit"] = xr.DataArray(0, attrs=attrs("count", "fitted layers"))
+    for k in ("layers_right", "boundaries_right", "success"):
+        data[k] = xr.DataArray(0, attrs=attrs("label", k.replace("_", " ")))
+    data["failure"] = xr.DataArray(f"refused: {why}")
+    data["failure_class"] = xr.DataArray("refused", attrs=attrs("label", FAILURE_NAME))
+    if score:
+        nan = np.full((len(CANDIDATES), len(SYNTHOCT_MAPS)), np.nan)
+        for name in METRIC_NAMES:
+            data[name] = xr.DataArray(nan.copy(), dims=("candidate", "map"))
+    ds = xr.Dataset(data, coords={"layer": coord("layer", np.arange(MAX_LAYERS))})
+    if score:
+        ds = ds.assign_coords(
+            candidate=coord("candidate", list(CANDIDATES)), map=coord("map", list(SYNTHOCT_MAPS))
+        )
+    return ds
+
+
 def _case(case, *, config, patient, rescans, score, lpips) -> xr.Dataset:
     """One case of :func:`phantom_closed_loop` (its seed ``case``)."""
     seed = int(case)
     draws = [_seed_of(c) for c in np.random.SeedSequence([int(seed), 1]).spawn(rescans)]
-    case = phantom_closed_loop_case(int(seed), config=config, fit_seed=draws[0], **patient)
+    try:
+        case = phantom_closed_loop_case(int(seed), config=config, fit_seed=draws[0], **patient)
+    except ValueError as err:  # the options were checked: the fit refused this scan
+        return _refused(seed, str(err), config=config, patient=patient, score=score)
     data = {k: _padded(v) for k, v in case.data_vars.items() if v.dims == ("layer",)}
     for k in ("n_true", "n_fit"):
         data[k] = case[k]
@@ -89,9 +131,7 @@ def _case(case, *, config, patient, rescans, score, lpips) -> xr.Dataset:
         data[k] = xr.DataArray(int(bool(case[k])), attrs=case[k].attrs)
     failure = "none" if bool(case.success) else FAILURES[1 + bool(case.layers_right)]
     data["failure"] = case["failure"].astype(str)
-    data["failure_class"] = xr.DataArray(
-        failure, attrs=attrs("label", "failure class: none, layer count, boundary")
-    )
+    data["failure_class"] = xr.DataArray(failure, attrs=attrs("label", FAILURE_NAME))
     if score:
         target = case["target_scan"].values
         scores = {c: [] for c in CANDIDATES}
@@ -169,9 +209,10 @@ def phantom_closed_loop(
         ``rho_e``, ``density`` in µm^-3, ``energy`` in %; ``boundary_error`` in pixels;
         ``true_shape``, ``fit_shape``); per case ``n_true``, ``n_fit``, ``layers_right``,
         ``boundaries_right``, ``success`` (0/1), ``failure`` (why, empty on success) and
-        ``failure_class`` (``"none"``, ``"layer count"`` or ``"boundary"``); with ``score``
-        each metric of :data:`speckle.METRIC_NAMES` along ``(case, candidate, map)``,
-        candidates ``fitted``, ``floor``, ``baseline``.
+        ``failure_class`` (``"none"``, ``"layer count"``, ``"boundary"`` or ``"refused"``: the
+        fit refused the scan, its reason in ``failure``, NaN for the fit and the scores);
+        with ``score`` each metric of :data:`speckle.METRIC_NAMES` along ``(case, candidate,
+        map)``, candidates ``fitted``, ``floor``, ``baseline``.
 
     Raises
     ------
