@@ -1462,7 +1462,9 @@ ENTRIES: dict[str, Entry] = {
         config="none",
         max_layers="count",
         blocks="count",
-        why="config: a ScannerConfig or an INI path (tests/studies/test_phantom.py)",
+        shapes="none",
+        why="config: a ScannerConfig or an INI path (tests/studies/test_phantom.py); shapes: a "
+        "tuple of shape names (tests/studies/test_phantom_shapes.py)",
     ),
     "virtual_patient": E(
         lambda: dict(
@@ -1495,6 +1497,21 @@ ENTRIES: dict[str, Entry] = {
         max_layers="count",
         patient="none",
         why="config: a name or ScannerConfig; patient: virtual_patient's options (its entry)",
+    ),
+    "phantom_failure_map": E(
+        lambda: dict(
+            config=speckle.ScannerConfig(n_pixels=64, n_lines=64, x_max=384.0, n_scatterers=4000),
+            thickness=[8.0],
+            contrast=[4.0],
+        ),
+        config="none",
+        thickness="real_array",
+        contrast="real_array",
+        seeds="none",
+        energy="positive",
+        depth="positive_length",
+        why="config: a name or ScannerConfig; seeds: a list of seeds (tests/studies/"
+        "test_phantom_limits.py)",
     ),
     "synthoct_config": E(
         lambda: dict(name="2025"),

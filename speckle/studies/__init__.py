@@ -29,6 +29,7 @@ __getattr__, __dir__, __all__ = attach(
             "PhantomFit",
             "fit_phantom",
             "phantom_closed_loop_case",
+            "phantom_failure_map",
             "virtual_patient",
             "phantom_closed_loop",
         ],

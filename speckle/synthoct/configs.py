@@ -6,7 +6,9 @@
 defaults). ``"2025"`` is the configuration of the group's 2025 digital phantoms (Nikoshin et
 al., SASHIMI 2025, as the :class:`ScannerConfig` docstring records it): 601 pixels of 2.2 µm,
 975 A-lines over 3000 µm, beam radius 6 µm, 255,000 scatterers; the wavelength (not stated
-there) is taken as the challenge's 1.3 µm, one B-scan at ``y = 0``.
+there) is taken as the challenge's 1.3 µm, one B-scan at ``y = 0``. ``"reduced"`` is the
+challenge's scanner on a quarter of its box (128 pixels of 6 µm, 128 lines over 768 µm,
+37,500 scatterers: the same density), the size of the closed loop's tests.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ __all__ = ["SYNTHOCT_CONFIGS", "synthoct_config"]
 #: Named configurations: name -> the fields that differ from :class:`ScannerConfig`'s defaults.
 SYNTHOCT_CONFIGS: dict[str, dict[str, object]] = {
     "challenge": {},
+    "reduced": {"n_pixels": 128, "n_lines": 128, "x_max": 768.0, "n_scatterers": 37_500},
     "2025": {
         "n_pixels": 601,
         "pixel_size": 2.2,
@@ -36,10 +39,11 @@ def synthoct_config(name: str, **changes: object) -> ScannerConfig:
 
     Parameters
     ----------
-    name : {"challenge", "2025"}
+    name : {"challenge", "2025", "reduced"}
         ``"challenge"``: the baseline's INI (256 pixels of 6 µm, 512 lines over 3072 µm,
         radius 10 µm, 300,000 scatterers); ``"2025"``: 601 pixels of 2.2 µm, 975 lines over
-        3000 µm, radius 6 µm, 255,000 scatterers (module docstring).
+        3000 µm, radius 6 µm, 255,000 scatterers; ``"reduced"``: the challenge's scanner on
+        128 x 128 pixels (module docstring).
     **changes
         Fields of :class:`ScannerConfig` to replace (e.g. ``n_scatterers``; checked as the
         class checks them).

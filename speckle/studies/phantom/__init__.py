@@ -9,8 +9,10 @@ from ..._lazy import attach
 __getattr__, __dir__, __all__ = attach(
     __name__,
     {
-        "_fit": ["PhantomFit", "fit_phantom", "slab_constants"],
+        "_fit": ["PhantomFit", "fit_phantom"],
+        "_slab": ["slab_constants"],
         "batch": ["phantom_closed_loop"],
+        "limits": ["phantom_failure_map"],
         "loop": ["phantom_closed_loop_case"],
         "patients": ["virtual_patient"],
     },

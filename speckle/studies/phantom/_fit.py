@@ -49,12 +49,15 @@ import os
 
 import numpy as np
 import xarray as xr
-from scipy import optimize, special
+from scipy import optimize
 
 from ...analysis.sparse import depth_intensity_psf, log_intensity_moments, sparse_inverse_density
 from ...conventions import attrs, coord, units_of
 from ...synthoct import _scan
 from ...synthoct.files import ScannerConfig, read_png, read_scanner_config, write_scanner_config
+from ._shapes import SHAPE_DEGREE, fit_shapes, flat_shapes
+from ._slab import slab_constants
+from .patients import patient_table, region_volumes
 
 __all__ = ["BLOCKS", "GAP", "MAX_CLIPPED", "PhantomFit", "fit_phantom"]
 
@@ -75,26 +78,6 @@ MIN_ROWS = 4
 #: Significance (in SE) for the density's excess and for a usable slope.
 SIGNIFICANCE = 3.0
 _NEPER_DB = 10.0 / math.log(10.0)  # dB per neper of intensity
-ERF2 = special.erf(math.sqrt(2.0))
-
-
-def slab_constants(radius: float) -> dict[str, float]:
-    """Integrals of the double-pass weight over a slab ``|y| <= r``, infinite in ``x`` (µm^2).
-
-    ``A2 = int W^2 = (pi r^2/2) erf(sqrt 2)`` (``mu = rho (E/100) A2``), ``A4 = int W^4 = (pi
-    r^2/4) erf(2)``, ``a2_y = int_{-r}^{r} exp(-2 y^2/r^2) dy`` and the kurtosis-equivalent
-    thickness ``t_eq = a2_y^2 / int exp(-4 y^2/r^2) dy = r sqrt(pi) erf(sqrt 2)^2/erf(2)``.
-    """
-    r = float(radius)
-    a2y = r * math.sqrt(math.pi / 2) * ERF2
-    a4y = r * math.sqrt(math.pi) / 2 * special.erf(2.0)
-    return {
-        "A2": a2y * r * math.sqrt(math.pi / 2),
-        "A4": a4y * r * math.sqrt(math.pi) / 2,
-        "a2_y": a2y,
-        "t_eq": a2y**2 / a4y,
-    }
-
 
 # --- input ------------------------------------------------------------------------------
 
@@ -255,11 +238,19 @@ class PhantomFit:
         Scatterers uniform in ``|x| <= x_max/2``, ``|y| <= r`` and each layer's depths, counts
         in proportion to the layers' densities (their lower bound, or the config's mean density
         if larger, where unidentified), scaled to ``n_scatterers``; energy ``100 rho_e/rho``.
+        With a tilted or curved boundary the layers follow the fitted profiles
+        (:func:`speckle.studies.phantom.patients.patient_table`: multinomial counts in the
+        exact volumes).
         """
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
             raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
         cfg = self.config
         rng = np.random.default_rng(np.random.SeedSequence(int(seed)))
+        layers = self.layers
+        if "top_tilt" in layers and np.any(
+            (layers.top_tilt.values != 0) | (layers.top_curvature.values != 0)
+        ):
+            return self._shaped_phantom(rng)
         parts = []
         for top, bottom, rho_e, count in self.layer_table():
             rho = count / ((bottom - top) * cfg.x_max * 2 * cfg.beam_radius)
@@ -273,6 +264,23 @@ class PhantomFit:
                 ])
             )  # fmt: skip
         return np.concatenate(parts)
+
+    def _shaped_phantom(self, rng: np.random.Generator) -> np.ndarray:
+        """Tilted or curved boundaries: the layers' densities (as :meth:`layer_table` takes
+        them) scaled to ``n_scatterers`` in the exact volumes, energies ``100 rho_e/rho``."""
+        cfg, layers = self.config, self.layers
+        coefficients = np.column_stack(
+            [layers.top.values, layers.top_tilt.values, layers.top_curvature.values]
+        )[1:]
+        uniform = cfg.n_scatterers / (cfg.x_max * 2 * cfg.beam_radius * cfg.depth_range)
+        dens = np.asarray(layers.density.values, float)
+        bound = np.asarray(layers.density_bound.values, float)
+        rho = np.where(np.isfinite(dens) & (dens > 0), dens, np.fmax(bound, uniform))
+        volume, _ = region_volumes(cfg, coefficients, None)
+        scaled = rho * cfg.n_scatterers / np.sum(rho * volume)
+        energy = np.clip(100 * np.asarray(layers.rho_e.values, float) / scaled, 1e-12, 100.0)
+        table, _ = patient_table(cfg, coefficients, rho, energy, None, rng)
+        return table
 
     def write(self, path: str | os.PathLike, seed: int) -> None:
         """Write :meth:`phantom` as the official text file and the INI beside it
@@ -309,7 +317,12 @@ def _psf_cdf(n_pixels: int):
 
 
 def fit_phantom(
-    scan: object, config: object, *, max_layers: int = 5, blocks: int = BLOCKS
+    scan: object,
+    config: object,
+    *,
+    max_layers: int = 5,
+    blocks: int = BLOCKS,
+    shapes: tuple[str, ...] = ("flat", "tilted", "curved"),
 ) -> PhantomFit:
     """Fit flat layers (depth, attenuation, density, energy) to a SynthOCT scan.
 
@@ -325,6 +338,9 @@ def fit_phantom(
         Most layers tried (1..10); the number is chosen by BIC (module docstring).
     blocks : int
         Lateral blocks of lines of the jackknife (4..64).
+    shapes : tuple of {"flat", "tilted", "curved"}
+        Boundary shapes the fit may choose (by BIC, :mod:`speckle.studies.phantom._shapes`);
+        ``("flat",)`` fits flat layers only.
 
     Returns
     -------
@@ -352,8 +368,16 @@ def fit_phantom(
         raise ValueError(f"max_layers must be an integer in 1..10, got {max_layers!r}")
     if isinstance(blocks, bool) or not isinstance(blocks, int) or not 4 <= blocks <= 64:
         raise ValueError(f"blocks must be an integer in 4..64, got {blocks!r}")
+    if (
+        not isinstance(shapes, tuple | list)
+        or "flat" not in shapes
+        or any(s not in SHAPE_DEGREE for s in shapes)
+    ):
+        raise ValueError(
+            f"shapes must be a tuple of {tuple(SHAPE_DEGREE)} holding 'flat', got {shapes!r}"
+        )
     levels = _levels(scan, cfg)
-    r, p, pitch = cfg.beam_radius, cfg.pixel_size, cfg.line_pitch
+    r = cfg.beam_radius
     central = np.abs(cfg.line_positions) <= cfg.x_max / 2 - 3 * r
     if central.sum() < 2 * blocks:
         raise ValueError(
@@ -361,6 +385,20 @@ def fit_phantom(
             f"edges; the fit needs at least {2 * blocks} (2 per jackknife block)"
         )
     lev = levels[:, central]
+    ds = _fit_levels(lev, cfg, max_layers, blocks)
+    if len(shapes) > 1 and ds.sizes["layer"] > 1:
+        ds = fit_shapes(
+            lev, _log_intensity(lev), ds, cfg, tuple(shapes),
+            lambda lv: _fit_levels(lv, cfg, max_layers, blocks),
+        )  # fmt: skip
+    else:
+        ds = flat_shapes(ds)
+    return PhantomFit(layers=ds, config=cfg)
+
+
+def _fit_levels(lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: int) -> xr.Dataset:
+    """The flat-layer fit of the central lines' levels ``lev`` (pixels, lines)."""
+    r, p, pitch = cfg.beam_radius, cfg.pixel_size, cfg.line_pitch
     clipped = np.mean(lev == 0, axis=1)
     above = np.flatnonzero(clipped > MAX_CLIPPED)
     # the last GAP + 1 rows see the top through the periodic PSF: left out as the first
@@ -508,9 +546,9 @@ def fit_phantom(
     psf_area = float(np.sum(depth_intensity_psf(hann)) / 8 * p * r * math.sqrt(math.pi / 2))
     slope_ok = mu > SIGNIFICANCE * mu_se
 
-    def cum_shadow(zz, k):
-        c = sum(mu[j] * (tops[j + 1] - tops[j]) for j in range(k))
-        return c + mu[k] * (zz - tops[k])
+    def cum_shadow(zz, k, mu_, tops_):
+        c = sum(mu_[j] * (tops_[j + 1] - tops_[j]) for j in range(k))
+        return c + mu_[k] * (zz - tops_[k])
 
     def mean_log(k):
         """``E ln(I/<I>)`` of layer ``k`` (fully developed where the density is unknown)."""
@@ -518,34 +556,40 @@ def fit_phantom(
             return -np.euler_gamma
         return log_intensity_moments(hann, waist, rho[k] * consts["t_eq"] * p * pitch)[0]
 
-    def window_top(mm):
+    def window_top(mm, mu_, tops_):
         offs, wts = [], []
         for k, (a, b) in enumerate(segs):
-            if not slope_ok[k]:
+            if not slope_ok[k] or mu_[k] <= 0:
                 continue
-            rho_e = mu[k] / consts["A2"]
-            mean_rel = mean_log(k)
+            rho_e = mu_[k] / consts["A2"]
             zz = z[a:b]
-            pred = np.log(rho_e * consts["a2_y"] * psf_area) - 2 * cum_shadow(zz, k) + mean_rel
+            pred = (np.log(rho_e * consts["a2_y"] * psf_area) - 2 * cum_shadow(zz, k, mu_, tops_)
+                    + mean_log(k))  # fmt: skip
             offs.append(float(np.mean(pred - mm[a:b])))
             wts.append(b - a)
         return float(np.average(offs, weights=wts)) if offs else np.nan
 
-    wt = window_top(m)
-    wt_se = _jackknife(np.array([window_top(m_jk[j]) for j in range(blocks)]))
+    def brightness(k, mm, mu_, tops_, wt_):
+        """``rho E/100`` of layer ``k`` from its mean level under the window's top ``wt_``."""
+        a, b = segs[k]
+        zz = z[a:b]
+        ln_re = mm[a:b] + wt_ + 2 * cum_shadow(zz, k, mu_, tops_) - mean_log(k)
+        return float(np.exp(np.mean(ln_re))) / (consts["a2_y"] * psf_area)
+
+    # every replicate of the jackknife repeats the whole chain (its slopes, boundaries, window)
+    wt = window_top(m, mu, tops)
+    wt_jk = np.array([window_top(m_jk[j], mu_jk[j], tops_jk[j]) for j in range(blocks)])
+    wt_se = _jackknife(wt_jk)
 
     # rho E/100 per layer: from mu where the slope is significant, else from the brightness
     rho_e = mu / consts["A2"]
     rho_e_se = mu_se / consts["A2"]
-    for k, (a, b) in enumerate(segs):
+    for k in range(n_layers):
         if slope_ok[k] or not np.isfinite(wt):
             continue
-        mean_rel = mean_log(k)
-        zz = z[a:b]
-        ln_re = m[a:b] + wt + 2 * cum_shadow(zz, k) - mean_rel
-        rho_e[k] = float(np.exp(np.mean(ln_re))) / (consts["a2_y"] * psf_area)
-        ln_jk = [np.mean(m_jk[j, a:b]) for j in range(blocks)]
-        rho_e_se[k] = rho_e[k] * math.hypot(_jackknife(np.array(ln_jk)), wt_se)
+        rho_e[k] = brightness(k, m, mu, tops, wt)
+        reps = [brightness(k, m_jk[j], mu_jk[j], tops_jk[j], wt_jk[j]) for j in range(blocks)]
+        rho_e_se[k] = _jackknife(np.log(np.array(reps))) * rho_e[k]
 
     def var(name, values, quantity, long_name, extra=None):
         return (
@@ -586,4 +630,4 @@ def fit_phantom(
             "rows": int(rows.size),
         },
     )  # fmt: skip
-    return PhantomFit(layers=ds, config=cfg)
+    return ds

@@ -39,9 +39,16 @@ import xarray as xr
 from ...conventions import attrs, coord
 from ...synthoct.configs import synthoct_config
 from ...synthoct.files import ScannerConfig
-from ._fit import slab_constants
+from ._slab import slab_constants
 
-__all__ = ["SHAPES", "patient_table", "profiles", "scanner_config_of", "virtual_patient"]
+__all__ = [
+    "SHAPES",
+    "patient_table",
+    "profiles",
+    "region_volumes",
+    "scanner_config_of",
+    "virtual_patient",
+]
 
 #: Boundary shapes of a virtual patient.
 SHAPES = ("flat", "tilted", "curved")
@@ -94,6 +101,23 @@ def _region(x, z, bounds_of, inclusion):
     return layer
 
 
+def region_volumes(cfg: ScannerConfig, coefficients: np.ndarray, inclusion: tuple | None):
+    """Volumes (µm^3, slab ``|y| <= r``) of the layers, then the inclusion, from the exact
+    profiles on :data:`_GRID` lines; and the layers' edges on those lines."""
+    h, xm, r = cfg.depth_range, cfg.x_max, cfg.beam_radius
+    xs = (np.arange(_GRID) + 0.5) / _GRID * xm - xm / 2
+    bounds = np.clip(profiles(coefficients, xs, xm), 0, h)
+    edges = np.vstack([np.zeros((1, _GRID)), bounds, np.full((1, _GRID), h)])
+    area = np.diff(edges, axis=0).sum(axis=1) * xm / _GRID
+    if inclusion is not None:
+        xc, zc, w, hh = inclusion
+        u = np.clip(1 - ((xs - xc) / w) ** 2, 0, None)
+        lo, hi = zc - hh * np.sqrt(u), zc + hh * np.sqrt(u)
+        overlap = np.clip(np.minimum(hi, edges[1:]) - np.maximum(lo, edges[:-1]), 0, None)
+        area = np.append(area - overlap.sum(axis=1) * xm / _GRID, np.sum(hi - lo) * xm / _GRID)
+    return area * 2 * r, edges
+
+
 def patient_table(
     cfg: ScannerConfig,
     coefficients: np.ndarray,
@@ -104,21 +128,10 @@ def patient_table(
 ) -> tuple[np.ndarray, np.ndarray]:
     """The four-column table of a patient (regions: layers, then the inclusion) and the
     regions' densities scaled to ``cfg.n_scatterers`` expected scatterers (per µm^3)."""
-    h, xm, r = cfg.depth_range, cfg.x_max, cfg.beam_radius
-    xs = (np.arange(_GRID) + 0.5) / _GRID * xm - xm / 2
-    bounds = np.clip(profiles(coefficients, xs, xm), 0, h)
-    edges = np.vstack([np.zeros((1, _GRID)), bounds, np.full((1, _GRID), h)])
-    thick = np.diff(edges, axis=0)  # (K, grid)
-    n_regions = thick.shape[0] + (inclusion is not None)
-    area = thick.sum(axis=1) * xm / _GRID
-    if inclusion is not None:
-        xc, zc, w, hh = inclusion
-        u = np.clip(1 - ((xs - xc) / w) ** 2, 0, None)
-        lo, hi = zc - hh * np.sqrt(u), zc + hh * np.sqrt(u)
-        overlap = np.clip(np.minimum(hi, edges[1:]) - np.maximum(lo, edges[:-1]), 0, None)
-        area = np.append(area - overlap.sum(axis=1) * xm / _GRID, np.sum(hi - lo) * xm / _GRID)
-    volume = area * 2 * r
-    weights = np.asarray(density, float)[:n_regions]
+    xm, r = cfg.x_max, cfg.beam_radius
+    volume, edges = region_volumes(cfg, coefficients, inclusion)
+    n_layers = edges.shape[0] - 1
+    weights = np.asarray(density, float)[: volume.size]
     rho = weights * cfg.n_scatterers / np.sum(weights * volume)
     counts = rng.multinomial(cfg.n_scatterers, rho * volume / np.sum(rho * volume))
 
@@ -127,7 +140,7 @@ def patient_table(
 
     parts = []
     for k, count in enumerate(counts):
-        if k < thick.shape[0]:
+        if k < n_layers:
             box = (-xm / 2, xm / 2, float(edges[k].min()), float(edges[k + 1].max()))
         else:
             xc, zc, w, hh = inclusion
@@ -252,7 +265,6 @@ def virtual_patient(
     n_layers = int(rng.integers(k_lo, k_hi + 1))
     n_regions = n_layers + inclusions
     a2 = slab_constants(r)["A2"]
-    mean_rho = cfg.n_scatterers / (xm * 2 * r * h)
     x_lines = cfg.line_positions
     xs = np.linspace(-xm / 2, xm / 2, 257)
 
@@ -311,12 +323,14 @@ def virtual_patient(
     else:
         raise ValueError(f"min_contrast={min_contrast} cannot be met in energy_range: lower it")
     # visibility: energies scaled down until every layer's bottom is above the floor
-    rho_guess = rel * mean_rho
+    volume, _ = region_volumes(cfg, coefficients.reshape(-1, 3), inclusion)
+    rho_guess = rel * cfg.n_scatterers / np.sum(rel * volume)
     centre = np.linspace(-xm / 2 + 3 * r, xm / 2 - 3 * r, 33)
     bounds = (
         np.clip(profiles(coefficients, centre, xm), 0, h) if n_layers > 1 else np.empty((0, 33))
     )
-    lower = np.vstack([bounds, np.full((1, centre.size), h - 2 * t_min)])
+    last = bounds[-1] if n_layers > 1 else np.zeros(centre.size)
+    lower = np.vstack([bounds, np.minimum(last + t_min, h - 2 * t_min)[None, :]])
     upper = np.vstack([np.zeros((1, centre.size)), bounds])
     thick = lower - upper
     for _ in range(200):
@@ -349,7 +363,7 @@ def virtual_patient(
             "top_mean": per("length", full[:, 0], "mean depth of the upper boundary"),
             "top_tilt": per("dimensionless", full[:, 1], "tilt b of the boundary (um per um)"),
             "top_curvature": (("layer",), full[:, 2],
-                              attrs("attenuation", "curvature c of the boundary (1/um)")),
+                              attrs("curvature", "curvature c of the boundary")),
             "shape": (("layer",), np.array(shape, dtype=object), attrs("label", "boundary shape")),
             "attenuation": per("attenuation", mu[lay], "one-way amplitude attenuation mu"),
             "density": per("volume_density", rho[lay], "scatterers per um^3 (slab |y| <= r)"),

@@ -1,0 +1,243 @@
+"""Tilted and curved boundaries of the phantom fit (private): per-block positions, BIC, flatten.
+
+Each boundary ``k`` of the flat fit (:func:`speckle.fit_phantom`'s first pass) is located again
+in each of ``blocks`` lateral blocks of the central lines: the block's row-mean ``ln I`` in a
+window around it (half-way to its neighbours) is fitted by the two layers' lines (slopes
+``-2 mu`` of the flat fit, levels free per block) mixed through the depth PSF's cumulative
+intensity ``F`` at the trial position ``tau``,
+``ln(F e^{s1 z + i1} + (1 - F) e^{s2 z + i2})``; ``tau`` on a grid of a quarter pixel, levels
+from the rows more than 3 pixels from ``tau``, the least squares over every row of the window.
+The positions ``tau_b`` at the blocks' mean ``x`` are fitted by ``a``, ``a + b x`` and
+``a + b x + c (x^2 - X^2/12)`` (least squares; blocks further than 4 robust SDs from the
+largest model left out once), and the shape is the one of least
+``BIC = n ln(RSS/n) + (d + 1) ln n`` (``n`` blocks, ``d`` the degree) among those allowed; the
+SEs of ``b`` and ``c`` are the least-squares ones (``RSS/(n - d - 1)`` the blocks' variance).
+
+With any boundary not flat, the levels are flattened: line ``x``'s row at depth
+``z' + delta(x, z')`` moves to ``z'``, ``delta`` linear in ``z'`` between the boundaries'
+offsets ``delta_k(x) = b (x - <x>) + c (x^2 - <x^2>)`` (0 at the surface, constant below the last
+boundary), rows taken whole (nearest row: no interpolation, which would average speckle and bias
+``var ln I``); rows from beyond the scan are clipped. The flat fit of the flattened levels
+gives the layers; its tops are the boundaries' depths at the central lines' mean offset, so
+``a = top - b <x> - c (<x^2> - X^2/12)``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import xarray as xr
+from scipy import optimize
+
+from ...analysis.sparse import depth_intensity_psf
+from ...conventions import attrs
+from ...synthoct import _scan
+from ...synthoct.files import ScannerConfig
+
+__all__ = ["BOUNDARY_BLOCKS", "SHAPE_DEGREE", "fit_shapes", "flat_shapes"]
+
+#: Polynomial degree of each boundary shape.
+SHAPE_DEGREE = {"flat": 0, "tilted": 1, "curved": 2}
+#: Rounds of locating the boundaries and refitting the flattened levels (at most).
+ITERATIONS = 3
+#: Lateral blocks in which each boundary is located.
+BOUNDARY_BLOCKS = 16
+#: Rows (pixels) from the trial position beyond which a row sets a layer's level.
+_LEVEL_ROWS = 3
+_CRITERION = (
+    "least BIC = n ln(RSS/n) + (d + 1) ln n of the boundary's positions in 16 lateral blocks, "
+    "d = 0 (flat), 1 (tilted), 2 (curved)"
+)
+
+
+def _psf_cdf(n_pixels: int):
+    """``F(u)``: fraction of the depth PSF's intensity at offsets below ``u`` pixels."""
+    psf = depth_intensity_psf(_scan.hann_spectrum(n_pixels))
+    u = np.arange(psf.size) / 8.0
+    u = np.where(u > n_pixels / 2, u - n_pixels, u)
+    order = np.argsort(u)
+    cdf = np.cumsum(psf[order]) / psf.sum()
+    return lambda v: np.interp(v, u[order], cdf)
+
+
+def _shape_variables(ds, shape, tilt, tilt_se, curv, curv_se, criterion):
+    def var(values, quantity, long_name):
+        return ("layer",), np.asarray(values), attrs(quantity, long_name)
+
+    return ds.assign(
+        top_tilt=var(tilt, "dimensionless", "tilt b of the upper boundary (um per um)"),
+        top_tilt_se=var(tilt_se, "dimensionless", "standard error of top_tilt"),
+        top_curvature=var(curv, "curvature", "curvature c of the upper boundary"),
+        top_curvature_se=var(curv_se, "curvature", "standard error of top_curvature"),
+        shape=var(np.asarray(shape, dtype=object), "label", "shape of the upper boundary"),
+    ).assign_attrs(shape_criterion=criterion)
+
+
+def flat_shapes(ds: xr.Dataset) -> xr.Dataset:
+    """The shape variables of flat boundaries (tilt and curvature 0, their SEs NaN)."""
+    k = ds.sizes["layer"]
+    nan = np.full(k, np.nan)
+    return _shape_variables(ds, ["flat"] * k, np.zeros(k), nan, np.zeros(k), nan, _CRITERION)
+
+
+def _block_rss(mb, z, taus, s1, s2, p, cdf):
+    """Least-squares misfit of one block's row-mean profile ``mb`` (rows ``z``) for each trial
+    boundary position in ``taus`` (inf where a layer has fewer than 2 level rows)."""
+    out = np.full(taus.size, np.inf)
+    for i, tau in enumerate(taus):
+        above, below = z < tau - _LEVEL_ROWS * p, z > tau + _LEVEL_ROWS * p
+        if above.sum() < 2 or below.sum() < 2:
+            continue
+        i1 = np.mean(mb[above] - s1 * z[above])
+        i2 = np.mean(mb[below] - s2 * z[below])
+        f = cdf((tau - z) / p)
+        pred = np.log(f * np.exp(s1 * z + i1) + (1 - f) * np.exp(s2 * z + i2))
+        out[i] = float(np.sum((mb - pred) ** 2))
+    return out
+
+
+def _joint(rss, taus, basis, start, steps):
+    """Coefficients minimising ``sum_b rss_b(basis_b . theta)`` (rss interpolated on ``taus``),
+    Nelder-Mead from ``start``; and the minimum."""
+    finite = np.isfinite(rss)
+    big = 10 * float(np.max(rss[finite])) if finite.any() else 1.0
+    table = np.where(finite, rss, big)
+
+    step = taus[1] - taus[0]
+    rows = np.arange(table.shape[0])
+    padded = np.pad(table, ((0, 0), (0, 1)), constant_values=big)
+
+    def total(theta):
+        """The blocks' misfits at ``basis . theta``, linear between the grid's positions."""
+        u = (basis[:, : theta.size] @ theta - taus[0]) / step
+        out = (u < 0) | (u > taus.size - 1)
+        i = np.clip(np.floor(u), 0, taus.size - 1).astype(int)
+        f = np.clip(u - i, 0.0, 1.0)
+        v = (1 - f) * padded[rows, i] + f * padded[rows, i + 1]
+        return float(np.sum(np.where(out, big, v)))
+
+    start = np.asarray(start, float)
+    simplex = np.vstack([start, start + np.diag(steps[: start.size])])
+    options = {"initial_simplex": simplex, "xatol": 1e-9, "fatol": 1e-9}
+    res = optimize.minimize(total, start, method="Nelder-Mead", options=options)
+    return res.x, float(res.fun)
+
+
+def _boundary_shape(rss, taus, xb, x_max, shapes, p, n_rows):
+    """Shape, coefficients ``(a, b, c)`` and their jackknife SEs of one boundary."""
+    basis = np.column_stack([np.ones_like(xb), xb, xb**2 - x_max**2 / 12])
+    half = x_max / 2
+    steps = np.array([p, p / half, p / half**2])
+    flat = taus[int(np.argmin(np.sum(np.where(np.isfinite(rss), rss, 1e9), axis=0)))]
+    fits = {"flat": _joint(rss, taus, basis, [flat], steps)[0]}
+    if "tilted" in shapes or "curved" in shapes:
+        fits["tilted"] = _joint(rss, taus, basis, [fits["flat"][0], 0.0], steps)[0]
+    if "curved" in shapes:
+        fits["curved"] = _joint(rss, taus, basis, [*fits["tilted"], 0.0], steps)[0]
+    g = xb.size
+    cov, bic = {}, {"flat": 0.0}
+    for shape in shapes:
+        d = SHAPE_DEGREE[shape] + 1
+        reps = np.array([
+            _joint(rss[np.arange(g) != b], taus, basis[np.arange(g) != b], fits[shape], steps)[0]
+            for b in range(g)
+        ])  # fmt: skip
+        # delete-one-block jackknife: (g - 1)/g sum (theta_b - mean)^2 = (g - 1) x biased cov
+        cov[shape] = (g - 1) * np.atleast_2d(np.cov(reps.T, bias=True))
+        if d > 1:  # Wald chi-square of the shape's terms (tilt, curvature) against 0
+            theta = fits[shape][1:]
+            sub = cov[shape][1:, 1:]
+            chi2 = float(theta @ np.linalg.solve(sub, theta)) if np.all(np.diag(sub) > 0) else 0.0
+            bic[shape] = -chi2 + (d - 1) * math.log(n_rows)
+    best = min((s for s in shapes), key=lambda s: bic[s])
+    d = SHAPE_DEGREE[best] + 1
+    coef = np.pad(fits[best], (0, 3 - d))
+    se = np.full(3, np.nan)
+    se[:d] = np.sqrt(np.diag(cov[best]))
+    return best, coef, se
+
+
+def fit_shapes(
+    lev: np.ndarray,
+    li: np.ndarray,
+    ds: xr.Dataset,
+    cfg: ScannerConfig,
+    shapes: tuple[str, ...],
+    refit,
+) -> xr.Dataset:
+    """The boundaries' shapes (module docstring) and the layers refitted on flattened levels.
+
+    ``lev``/``li``: the central lines' levels and ``ln I`` (pixels, lines); ``ds`` the flat
+    fit; ``refit(levels)`` the flat fit of other levels.
+    """
+    p, r = cfg.pixel_size, cfg.beam_radius
+    x = cfg.line_positions[np.abs(cfg.line_positions) <= cfg.x_max / 2 - 3 * r]
+    n_pix = lev.shape[0]
+    z = np.arange(n_pix) * p
+    cdf = _psf_cdf(cfg.n_pixels)
+    groups = np.array_split(np.arange(x.size), BOUNDARY_BLOCKS)
+    xb = np.array([x[g].mean() for g in groups])
+    mb = np.stack([li[:, g].mean(axis=1) for g in groups])  # (blocks, pixels)
+    m1, m2 = float(np.mean(x)), float(np.mean(x**2))
+
+    def detect(cur):
+        """Each boundary's shape, coefficients and SEs, located around ``cur``'s tops."""
+        tops, slope = cur.top.values, -2 * cur.attenuation.values
+        end = (cur.attrs["rows"] + 2) * p  # the last fitted row (rows GAP + 1 ..)
+        shape, coef, ses = ["flat"], [np.zeros(3)], [np.full(3, np.nan)]
+        for k in range(1, tops.size):
+            lo = 0.5 * (tops[k - 1] + tops[k])
+            hi = 0.5 * (tops[k] + (tops[k + 1] if k + 1 < tops.size else max(end, tops[k])))
+            sel = (z >= lo) & (z <= hi)
+            margin = (_LEVEL_ROWS + 2) * p
+            taus = np.arange(lo + margin, hi - margin + 1e-9, p / 4)
+            if taus.size < 2:
+                shape.append("flat")
+                coef.append(np.array([tops[k], 0.0, 0.0]))
+                ses.append(np.full(3, np.nan))
+                continue
+            rss = np.stack([_block_rss(mb[b, sel], z[sel], taus, slope[k - 1], slope[k], p, cdf)
+                            for b in range(BOUNDARY_BLOCKS)])  # fmt: skip
+            best, cf, se = _boundary_shape(rss, taus, xb, cfg.x_max, shapes, p,
+                                           int(sel.sum()) * BOUNDARY_BLOCKS)  # fmt: skip
+            shape.append(best)
+            coef.append(cf)
+            ses.append(se)
+        return shape, np.array(coef), ses
+
+    def flatten(tops, coef):
+        delta = coef[:, 1, None] * (x - m1) + coef[:, 2, None] * (x**2 - m2)  # (K, lines)
+        delta[0] = 0.0
+        # delta(x, z') linear between the boundaries, constant below the last one
+        raw = np.stack([np.rint((z + np.interp(z, tops, delta[:, j])) / p).astype(int)
+                        for j in range(x.size)], axis=1)  # fmt: skip
+        inside = (raw >= 0) & (raw < n_pix)
+        out = np.where(inside, lev[np.clip(raw, 0, n_pix - 1), np.arange(x.size)], 0)
+        return out.astype(np.uint8)
+
+    current = ds
+    for _ in range(ITERATIONS):
+        shape, coef, ses = detect(current)
+        if all(s == "flat" for s in shape):
+            return flat_shapes(ds)
+        new = refit(flatten(current.top.values, coef))
+        tops = current.top.values
+        same = new.sizes["layer"] == tops.size and np.all(np.abs(new.top.values - tops) < p)
+        if same:
+            break
+        current = new
+    # each refitted boundary takes the shape of the nearest located one (within 3 pixels)
+    pick = [0] + [
+        int(np.argmin(np.abs(tops - t))) if np.min(np.abs(tops[1:] - t)) < 3 * p else -1
+        for t in new.top.values[1:]
+    ]
+    out_shape = [shape[i] if i >= 0 else "flat" for i in pick]
+    b = np.array([coef[i, 1] if i > 0 else 0.0 for i in pick])
+    c = np.array([coef[i, 2] if i > 0 else 0.0 for i in pick])
+    b_se = np.array([ses[i][1] if i > 0 else np.nan for i in pick])
+    c_se = np.array([ses[i][2] if i > 0 else np.nan for i in pick])
+    top = new.top.values - b * m1 - c * (m2 - cfg.x_max**2 / 12)
+    top[0] = 0.0
+    new = new.assign(top=(("layer",), top, new.top.attrs))
+    return _shape_variables(new, out_shape, b, b_se, c, c_se, _CRITERION)

@@ -1,0 +1,30 @@
+"""The slab's integrals of the scanner's double-pass weight (private): ``slab_constants``."""
+
+from __future__ import annotations
+
+import math
+
+from scipy import special
+
+__all__ = ["ERF2", "slab_constants"]
+
+#: ``erf(sqrt 2)``: the slab ``|y| <= r``'s cut of the beam's ``W^2``.
+ERF2 = special.erf(math.sqrt(2.0))
+
+
+def slab_constants(radius: float) -> dict[str, float]:
+    """Integrals of the double-pass weight over a slab ``|y| <= r``, infinite in ``x`` (µm^2).
+
+    ``A2 = int W^2 = (pi r^2/2) erf(sqrt 2)`` (``mu = rho (E/100) A2``), ``A4 = int W^4 = (pi
+    r^2/4) erf(2)``, ``a2_y = int_{-r}^{r} exp(-2 y^2/r^2) dy`` and the kurtosis-equivalent
+    thickness ``t_eq = a2_y^2 / int exp(-4 y^2/r^2) dy = r sqrt(pi) erf(sqrt 2)^2/erf(2)``.
+    """
+    r = float(radius)
+    a2y = r * math.sqrt(math.pi / 2) * ERF2
+    a4y = r * math.sqrt(math.pi) / 2 * special.erf(2.0)
+    return {
+        "A2": a2y * r * math.sqrt(math.pi / 2),
+        "A4": a4y * r * math.sqrt(math.pi) / 2,
+        "a2_y": a2y,
+        "t_eq": a2y**2 / a4y,
+    }
