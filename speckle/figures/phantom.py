@@ -1,12 +1,14 @@
-"""The phantom fit's closed loop and its challenge scores (results/phantom/).
+"""The phantom fit's closed loop, its challenge scores and its failure map (results/phantom/).
 
 ``closed_loop_data`` runs :func:`speckle.phantom_closed_loop` for every scanner configuration
 of the ``phantom_fit`` section (the case seeds ``seed .. seed + cases - 1``, on Dask) and
 stacks them along ``configuration``. ``plot_closed_loop`` draws the fit against the truth (the
-pulls of the attenuation and of ``rho E/100`` against a standard normal, the boundaries' errors
-in pixels, the layer counts); ``plot_scores`` draws a challenge metric of every map, target
-against the fitted phantom's scan and against the baseline's two-layer phantom, over the floor
-(target against the true phantom drawn again).
+pulls of the attenuation, of ``rho E/100`` and of the boundaries' depths against a standard
+normal, the boundaries' errors in pixels, the layer counts); ``plot_scores`` draws a challenge
+metric of every map, target against the fitted phantom's scan and against the baseline's
+two-layer phantom, over the floor (target against the true phantom drawn again).
+``failure_map_data`` runs :func:`speckle.phantom_failure_map` (thickness x contrast of a middle
+layer) one seed per Dask task and pools the seeds; ``plot_failure_map`` draws it.
 """
 
 from __future__ import annotations
@@ -19,12 +21,16 @@ from matplotlib.figure import Figure
 
 from ..conventions import attrs, coord
 from ..studies.phantom.batch import phantom_closed_loop
+from ..studies.phantom.limits import phantom_failure_map
+from ..sweep import sweep
 from ..synthoct.metrics import METRIC_NAMES, SYNTHOCT_MAPS
 from .style import new_figure
 
 __all__ = [
     "closed_loop_data",
+    "failure_map_data",
     "plot_closed_loop",
+    "plot_failure_map",
     "plot_scores",
     "score_summary",
     "table_csv",
@@ -80,6 +86,45 @@ def closed_loop_data(cfg: Mapping, dask_cfg: Mapping | None = None) -> xr.Datase
     out = xr.concat(parts, "configuration", combine_attrs="drop_conflicts")
     out = out.assign_coords(configuration=coord("configuration", list(cfg["configurations"])))
     out.attrs.update({"cases": len(seeds), "rescans": int(cfg["rescans"])})
+    return out
+
+
+def _failure_seed(seed: int, **options) -> xr.Dataset:
+    return phantom_failure_map(seeds=[int(seed)], **options)
+
+
+def failure_map_data(cfg: Mapping, dask_cfg: Mapping | None = None) -> xr.Dataset:
+    """The failure map of the ``phantom_fit.failure_map`` section, one seed per Dask task.
+
+    Each seed's map (:func:`speckle.phantom_failure_map` with that seed only: its cases draw
+    from ``(seed, thickness, contrast)``, so the pooled map equals one call with every seed) is
+    computed apart; the fractions are their means, ``boundary_error`` the median over the
+    seeds of the finite values, ``n_cases`` the number of seeds.
+
+    Parameters
+    ----------
+    cfg : Mapping
+        The ``failure_map`` subsection: ``configuration``, ``thickness`` (pixels),
+        ``contrast``, ``seeds`` (how many, from ``seed``), ``seed``, ``energy`` (%).
+    dask_cfg : Mapping, optional
+        The config's ``dask`` section.
+    """
+    dask_cfg = dict(dask_cfg or {"scheduler": "threads", "n_workers": None})
+    seeds = list(range(int(cfg["seed"]), int(cfg["seed"]) + int(cfg["seeds"])))
+    options = {
+        "config": str(cfg["configuration"]),
+        "thickness": [float(t) for t in cfg["thickness"]],
+        "contrast": [float(q) for q in cfg["contrast"]],
+        "energy": float(cfg["energy"]),
+    }
+    per = sweep(_failure_seed, {"seed": seeds}, fixed=options, scheduler=dask_cfg["scheduler"],
+                n_workers=dask_cfg.get("n_workers"), progress=True)  # fmt: skip
+    out = per[["success", "count_right", "boundary_right"]].mean("seed", keep_attrs=True)
+    out["boundary_error"] = per["boundary_error"].median("seed", skipna=True, keep_attrs=True)
+    out["n_cases"] = xr.DataArray(len(seeds), attrs=per["n_cases"].attrs)
+    out.attrs.update(
+        {"configuration": options["config"], "energy": options["energy"], "seeds": seeds}
+    )
     return out
 
 
@@ -221,5 +266,39 @@ def plot_scores(ds: xr.Dataset, metric: str = "MS-SSIM") -> Figure:
     fig.suptitle(
         f"Scored as the challenge scores: {metric} of the scan (Struct) and its maps, each "
         "case's target against re-drawn phantoms"
+    )
+    return fig
+
+
+def plot_failure_map(ds: xr.Dataset) -> Figure:
+    """Where the fit fails: success, count and boundary fractions over thickness x contrast."""
+    panels = (
+        ("success", "cases fitted right (fraction)"),
+        ("count_right", "layer count right (fraction)"),
+        ("boundary_right", "boundaries within a pixel (fraction)"),
+    )
+    fig, axes = new_figure(1, len(panels), width=11.0, height=3.4)
+    t = np.asarray(ds["thickness"].values, float)
+    q = np.asarray(ds["energy_ratio"].values, float)
+    xs, ys = np.arange(q.size), np.arange(t.size)
+    for ax, (name, label) in zip(axes[0], panels, strict=True):
+        values = ds[name].transpose("thickness", "energy_ratio").values
+        im = ax.imshow(values, origin="lower", aspect="auto", cmap="viridis", vmin=0, vmax=1,
+                       extent=[-0.5, q.size - 0.5, -0.5, t.size - 0.5])  # fmt: skip
+        fig.colorbar(im, ax=ax, label=label)
+        ax.set_xticks(xs, [f"{v:g}" for v in q])
+        ax.set_yticks(ys, [f"{v:g}" for v in t])
+        ax.set_xlabel("contrast q (ρE of the middle layer / its neighbours')")
+        ax.set_ylabel("middle-layer thickness (µm)")
+        if name == "success":
+            err = ds["boundary_error"].transpose("thickness", "energy_ratio").values
+            for (i, j), e in np.ndenumerate(err):
+                if np.isfinite(e):
+                    ax.text(j, i, f"{e:.1f} px", ha="center", va="center", fontsize=8,
+                            color="w" if values[i, j] < 0.5 else "k")  # fmt: skip
+    fig.suptitle(
+        f"Where the phantom fit fails: three flat layers, a middle one of thickness T and "
+        f"contrast q ({int(ds['n_cases'])} seeds per cell; numbers: median largest boundary "
+        "error)"
     )
     return fig

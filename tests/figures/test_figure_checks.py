@@ -659,7 +659,22 @@ BUILDERS = {
     "static": _static,
     "system": _system,
     "twin": _twin,
-    "phantom": lambda: {"plot_closed_loop": (_phantom(),), "plot_scores": (_phantom(),)},
+    "phantom": lambda: {
+        "plot_closed_loop": (_phantom(),),
+        "plot_scores": (_phantom(),),
+        "plot_failure_map": (
+            _fake(
+                {"thickness": [12.0, 24.0, 48.0], "energy_ratio": [1.5, 4.0]},
+                {
+                    "success": ("thickness", "energy_ratio"),
+                    "count_right": ("thickness", "energy_ratio"),
+                    "boundary_right": ("thickness", "energy_ratio"),
+                    "boundary_error": ("thickness", "energy_ratio"),
+                    "n_cases": ((), 4),
+                },
+            ),
+        ),
+    },
 }
 
 

@@ -22,13 +22,22 @@ from workflow_run import CI_CONFIG, CI_RESULTS, IGNORE, snakemake
 from speckle.io import open_dataset
 from speckle.pipeline.phantom_checks import check_phantom_fit
 
-TARGETS = ["closed_loop.nc", "closed_loop.csv", "closed_loop.png", "scores.png"]
+TARGETS = [
+    "closed_loop.nc",
+    "closed_loop.csv",
+    "closed_loop.png",
+    "scores.png",
+    "failure_map.nc",
+    "failure_map.png",
+]
 
 
 def _config(repo_root: Path) -> dict:
     cfg = yaml.safe_load((repo_root / "workflow/config/config.yaml").read_text())
-    ci = yaml.safe_load((repo_root / CI_CONFIG).read_text())
-    return copy.deepcopy(cfg["phantom_fit"]) | ci["phantom_fit"]
+    ci = yaml.safe_load((repo_root / CI_CONFIG).read_text())["phantom_fit"]
+    out = copy.deepcopy(cfg["phantom_fit"])
+    out["failure_map"].update(ci.get("failure_map", {}))
+    return out | {k: v for k, v in ci.items() if k != "failure_map"}
 
 
 def _schema(repo_root: Path) -> dict:
@@ -43,6 +52,8 @@ def test_sections_are_valid_and_the_ci_one_small(repo_root):
         jsonschema.validate(cfg, _schema(repo_root))
         check_phantom_fit(cfg)
     assert ci["cases"] * len(ci["configurations"]) <= 2
+    fm = ci["failure_map"]
+    assert len(fm["thickness"]) * len(fm["contrast"]) * fm["seeds"] <= 2
     assert set(full["configurations"]) == {"challenge", "2025"} and full["cases"] >= 8
 
 
@@ -53,10 +64,16 @@ def test_sections_are_valid_and_the_ci_one_small(repo_root):
         ({"seed": 2**63 - 1, "cases": 2}, r"phantom_fit\.seed"),
         ({"shapes": ["flat", "round"]}, r"phantom_fit\.shapes\[1\]"),
         ({"configurations": ["challenge", "2026"]}, r"phantom_fit\.configurations\[1\]"),
+        ({"failure_map": {"thickness": [2, 50]}}, r"failure_map\.thickness\[1\]"),
+        ({"failure_map": {"energy": 30.0}}, r"failure_map\.energy"),
+        ({"failure_map": {"seed": 2**63 - 1, "seeds": 2}}, r"failure_map\.seed"),
     ],
 )  # fmt: skip
 def test_bad_sections_name_the_key(repo_root, changes, key):
-    cfg = _config(repo_root) | changes
+    cfg = _config(repo_root)
+    if "failure_map" in changes:
+        changes = {"failure_map": cfg["failure_map"] | changes["failure_map"]}
+    cfg = cfg | changes
     with pytest.raises(ValueError, match=key):
         check_phantom_fit(cfg)
 
@@ -76,6 +93,17 @@ def test_bad_sections_name_the_key(repo_root, changes, key):
 def test_schema_refuses(repo_root, changes):
     with pytest.raises(jsonschema.ValidationError):
         jsonschema.validate(_config(repo_root) | changes, _schema(repo_root))
+
+
+@pytest.mark.parametrize(
+    "changes",
+    [{"configuration": "2026"}, {"contrast": [1.0]}, {"thickness": [0]}, {"seeds": 0}, {"x": 1}],
+)
+def test_schema_refuses_failure_maps(repo_root, changes):
+    cfg = _config(repo_root)
+    cfg["failure_map"] |= changes
+    with pytest.raises(jsonschema.ValidationError):
+        jsonschema.validate(cfg, _schema(repo_root))
 
 
 @pytest.fixture(scope="module")
@@ -134,3 +162,25 @@ def test_closed_loop_table(results, repo):
     assert floor and all(float(r["minus_floor"]) == 0.0 for r in floor)
     log = (results.parent / "logs" / "phantom_closed_loop.log").read_text()
     assert "[" in log and "MS-SSIM fitted minus floor" in log  # progress bar, summary
+
+
+@pytest.mark.pipeline
+@pytest.mark.slow
+def test_failure_map(results, repo):
+    import speckle
+
+    ds = open_dataset(results / "failure_map.nc")
+    fm = _config(repo)["failure_map"]
+    assert ds.success.dims == ("thickness", "energy_ratio")
+    assert ds.thickness.attrs["units"] == "um" and int(ds.n_cases) == fm["seeds"]
+    # one seed per Dask task, pooled: the same map as one call with every seed
+    seeds = list(range(fm["seed"], fm["seed"] + fm["seeds"]))
+    ref = speckle.phantom_failure_map(
+        config=fm["configuration"],
+        thickness=fm["thickness"],
+        contrast=fm["contrast"],
+        seeds=seeds,
+        energy=fm["energy"],
+    )
+    for name in ("success", "count_right", "boundary_right"):
+        assert np.array_equal(ds[name].values, ref[name].values), name

@@ -7,6 +7,8 @@ PHANTOM_TARGETS = [
     f"{RESULTS}/phantom/closed_loop.csv",
     f"{RESULTS}/phantom/closed_loop.png",
     f"{RESULTS}/phantom/scores.png",
+    f"{RESULTS}/phantom/failure_map.nc",
+    f"{RESULTS}/phantom/failure_map.png",
 ]
 
 
@@ -44,7 +46,34 @@ rule phantom_closed_loop:
     conda:
         "../envs/speckle.yaml"
     params:
-        phantom_fit=PHANTOM_FIT,
+        phantom_fit=section_without("phantom_fit", "failure_map"),
         dask=config["dask"],
     script:
         "../scripts/phantom_closed_loop.py"
+
+
+rule phantom_failure_map:
+    input:
+        code=package_code(
+            "speckle.figures.phantom",
+            "speckle.studies.phantom.limits",
+            "speckle.io",
+            "speckle.provenance",
+        ),
+    output:
+        data=f"{RESULTS}/phantom/failure_map.nc",
+        figure=report(
+            f"{RESULTS}/phantom/failure_map.png",
+            caption="../report/phantom_failure_map.rst",
+            category="Phantom fit",
+            labels={"figure": "failure map", "panel": "thickness x contrast"},
+        ),
+    log:
+        f"{RESULTS}/logs/phantom_failure_map.log",
+    conda:
+        "../envs/speckle.yaml"
+    params:
+        failure_map=PHANTOM_FIT["failure_map"],
+        dask=config["dask"],
+    script:
+        "../scripts/phantom_failure_map.py"
