@@ -52,7 +52,8 @@ Data variables (:data:`QUANTITIES`): ``field``, ``amplitude``, ``weight``, ``cor
 per µm^2 or µm^3 of a 2-D or 3-D scene); ``level`` (dB,
 ``20 log10 |A|``); ``pixels`` (pixel); ``line_density`` (1/pixel) and ``beam_density``
 (1/(pixel line)); ``modulus``, ``stress`` (kPa); ``attenuation`` (1/um); ``diffusion``
-(um^2/s); ``curvature`` (1/um); ``time`` (s); ``rate`` (1/s); ``velocity`` (um/s); ``line_rate`` (Hz);
+(um^2/s); ``curvature`` (1/um); ``time`` (s); ``rate`` (1/s); ``velocity`` (um/s);
+``line_rate`` (Hz);
 ``phase`` (rad); ``log_variance`` (dB^2); ``decay_speed`` (1/s); ``angle`` (degree); and, for
 measured images of
 unknown calibration, ``data``, ``data_slope``, ``mean_intensity`` and ``log_data``.

@@ -1481,6 +1481,7 @@ ENTRIES: dict[str, Entry] = {
         min_thickness="positive_length",
         max_tilt="nonnegative",
         max_sag="nonnegative",
+        visible="positive",
         draw_seed="seed",
         inclusions="flag",
         why="config: a name or ScannerConfig; layers, shapes and the ranges: pairs and tuples "
@@ -1509,7 +1510,7 @@ ENTRIES: dict[str, Entry] = {
         contrast="real_array",
         seeds="none",
         energy="positive",
-        depth="positive_length",
+        top_depth="positive_length",
         why="config: a name or ScannerConfig; seeds: a list of seeds (tests/studies/"
         "test_phantom_limits.py)",
     ),

@@ -35,8 +35,8 @@ def test_failure_map_thin_fails_thick_succeeds():
         (dict(seeds=[-1]), "seeds"),
         (dict(energy=0.0), "energy"),
         (dict(energy=50.0, contrast=[4.0]), "energy"),
-        (dict(depth=-5.0), "depth"),
-        (dict(depth=600.0), "depth"),
+        (dict(top_depth=-5.0), "top_depth"),
+        (dict(top_depth=600.0), "top_depth"),
         (dict(config="big"), "name"),
     ],
 )

@@ -19,7 +19,9 @@ The fit, on the central lines (``|x| <= x_max/2 - 3 r``, where the box does not 
    a clipped pixel, level 0, gets ``ln c - 1``, the mean of ``ln I`` below the clip ``c`` of any
    intensity density flat near 0); rows with more than :data:`MAX_CLIPPED` of their pixels
    clipped are below the floor and left out, as are the first and last ``GAP + 1``
-   rows (the surface's transition, seen at the bottom through the periodic PSF);
+   rows (the surface's transition, seen at the bottom through the periodic PSF); below a
+   floor region, only runs of at least :data:`RUN_ROWS` rows above the floor are fitted (a
+   faint layer's bottom may reach the floor above a brighter layer);
 2. the row-mean profile is cut into ``K = 1 .. max_layers`` linear segments, each boundary
    leaving out :data:`GAP` transition rows (the PSF's main lobe), by dynamic programming; ``K``
    is the one of least BIC, ``sum_q (residual_q/s_q)^2 + (3K - 1) ln n`` (weighted least
@@ -36,8 +38,8 @@ The fit, on the central lines (``|x| <= x_max/2 - 3 r``, where the box does not 
 4. standard errors: delete-one-block jackknife over :data:`BLOCKS` lateral blocks of lines
    (the line-to-line correlations of speckle and shadowing included), the segmentation fixed.
 
-Not done (issue 34's remainder): inclusions, tilted or curved boundaries, real tissue, the
-pipeline target, the 2025 phantoms' configuration in the closed loop.
+Tilted and curved boundaries: :mod:`speckle.studies.phantom._shapes`. Not done (issue 34's
+remainder, here): inclusions.
 """
 
 from __future__ import annotations
@@ -75,6 +77,8 @@ ACF_LAGS = 8
 LAG = 4
 #: Shortest layer, rows (fitted rows of a segment).
 MIN_ROWS = 4
+#: Shortest run of rows above the floor that is fitted below a floor region.
+RUN_ROWS = MIN_ROWS + 2 * GAP
 #: Significance (in SE) for the density's excess and for a usable slope.
 SIGNIFICANCE = 3.0
 _NEPER_DB = 10.0 / math.log(10.0)  # dB per neper of intensity
@@ -400,10 +404,17 @@ def _fit_levels(lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: in
     """The flat-layer fit of the central lines' levels ``lev`` (pixels, lines)."""
     r, p, pitch = cfg.beam_radius, cfg.pixel_size, cfg.line_pitch
     clipped = np.mean(lev == 0, axis=1)
-    above = np.flatnonzero(clipped > MAX_CLIPPED)
-    # the last GAP + 1 rows see the top through the periodic PSF: left out as the first
-    last = int(above[above > 0].min()) if np.any(above > 0) else cfg.n_pixels - GAP - 1
-    rows = np.arange(GAP + 1, last)
+    # rows above the floor, in runs of at least RUN_ROWS (a dim layer's bottom may reach the
+    # floor above a bright layer); the first and last GAP + 1 rows are left out (the last
+    # see the top through the periodic PSF)
+    ok = clipped <= MAX_CLIPPED
+    ok[: GAP + 1] = False
+    ok[cfg.n_pixels - GAP - 1 :] = False
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(int), [0]])))
+    rows = np.concatenate(
+        [np.arange(a, b) for a, b in zip(edges[::2], edges[1::2], strict=True)
+         if b - a >= RUN_ROWS or a == GAP + 1] or [np.arange(0)]
+    )  # fmt: skip
     if rows.size < MIN_ROWS + 1:
         raise ValueError(
             f"scan has {rows.size} rows above the floor (<= {MAX_CLIPPED:.0%} clipped); "
@@ -628,6 +639,7 @@ def _fit_levels(lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: in
             "profile, fewer layers while a boundary's slope and level steps are both < 3 SE",
             "bic": [float(bic[k]) for k in sorted(bic)],
             "rows": int(rows.size),
+            "last_row": int(rows[-1]),
         },
     )  # fmt: skip
     return ds

@@ -148,7 +148,9 @@ def _boundary_shape(rss, taus, xb, x_max, shapes, p, n_rows):
         if d > 1:  # Wald chi-square of the shape's terms (tilt, curvature) against 0
             theta = fits[shape][1:]
             sub = cov[shape][1:, 1:]
-            chi2 = float(theta @ np.linalg.solve(sub, theta)) if np.all(np.diag(sub) > 0) else 0.0
+            # a singular covariance (a term the replicates never move): no evidence for it
+            ok = np.all(np.diag(sub) > 0) and np.linalg.cond(sub) < 1e12
+            chi2 = float(theta @ np.linalg.solve(sub, theta)) if ok else 0.0
             bic[shape] = -chi2 + (d - 1) * math.log(n_rows)
     best = min((s for s in shapes), key=lambda s: bic[s])
     d = SHAPE_DEGREE[best] + 1
@@ -184,7 +186,7 @@ def fit_shapes(
     def detect(cur):
         """Each boundary's shape, coefficients and SEs, located around ``cur``'s tops."""
         tops, slope = cur.top.values, -2 * cur.attenuation.values
-        end = (cur.attrs["rows"] + 2) * p  # the last fitted row (rows GAP + 1 ..)
+        end = cur.attrs["last_row"] * p  # the last fitted row
         shape, coef, ses = ["flat"], [np.zeros(3)], [np.full(3, np.nan)]
         for k in range(1, tops.size):
             lo = 0.5 * (tops[k - 1] + tops[k])

@@ -1,15 +1,15 @@
 """Where the phantom fit fails (issue 34): the failure map over thickness and contrast.
 
 :func:`phantom_failure_map` scans, for each thickness ``T`` and contrast ``q``, three flat layers
-of one density (the config's mean): a top layer of energy ``E`` from the surface to ``depth``, a
+of one density (the config's mean): a top layer of energy ``E`` from the surface to ``top_depth``, a
 middle layer of energy ``q E`` and thickness ``T``, and a bottom layer of energy ``E`` (so
 ``rho E``, the brightness and the slope ``2 mu``, differ by ``q`` across both boundaries); each
 case is fitted by :func:`speckle.fit_phantom` and succeeds when it gives three layers with both
 boundaries within a pixel on every fitted line. The map is the fraction of ``seeds`` that
-succeed (with the fractions of the two criteria apart). A middle layer thinner than the fit's
-shortest segment (``MIN_ROWS`` fitted rows plus the ``GAP`` rows left out at each boundary)
-cannot be resolved; a contrast too small for the BIC's penalty merges the layers; a ``depth``
-near the window's floor leaves too few rows above the floor.
+succeed (with the fractions of the two criteria apart). A middle layer inside the depth PSF's
+main lobe (1 pixel) is never resolved; a contrast too small for the BIC's penalty merges the
+layers (1.5 merges at every thickness of the default map); a ``top_depth`` near the window's
+floor leaves too few rows above the floor (measured in docs/explanation/phantom_fit.md).
 """
 
 from __future__ import annotations
@@ -57,7 +57,7 @@ def phantom_failure_map(
     contrast: object = (1.5, 2.5, 4.0),
     seeds: object = (0,),
     energy: float = 0.2,
-    depth: float | None = None,
+    top_depth: float | None = None,
 ) -> xr.Dataset:
     """Fraction of cases fitted right (layer count, boundaries within a pixel) over thickness x
     contrast of a middle layer (module docstring).
@@ -76,7 +76,7 @@ def phantom_failure_map(
     energy : float
         Energy ``E`` (%) of the top and bottom layers (0 < E <= 100; the middle one has ``q E``,
         at most 100).
-    depth : float, optional
+    top_depth : float, optional
         Depth of the middle layer's top, µm (default a quarter of the depth range; > 0, and
         the middle layer must end a third of the depth range above the bottom).
 
@@ -90,7 +90,7 @@ def phantom_failure_map(
     Raises
     ------
     TypeError, ValueError
-        A bad config, grid, seed list, energy or depth, before any scan.
+        A bad config, grid, seed list, energy or top_depth, before any scan.
 
     Examples
     --------
@@ -116,12 +116,12 @@ def phantom_failure_map(
         raise ValueError(
             f"energy x the largest contrast must be <= 100 %, got {energy} x {ratio.max()}"
         )
-    top = h / 4 if depth is None else depth
+    top = h / 4 if top_depth is None else top_depth
     if isinstance(top, bool) or not isinstance(top, int | float) or not 0 < top:
-        raise ValueError(f"depth must be a number > 0 µm, got {depth!r}")
+        raise ValueError(f"top_depth must be a number > 0 µm, got {top_depth!r}")
     if top + thick.max() > 2 * h / 3:
         raise ValueError(
-            f"depth + the largest thickness ({top + thick.max():.1f} µm) must be <= 2/3 of the "
+            f"top_depth + the largest thickness ({top + thick.max():.1f} µm) must be <= 2/3 of the "
             f"depth range ({2 * h / 3:.1f} µm)"
         )
     central = np.abs(cfg.line_positions) <= cfg.x_max / 2 - 3 * cfg.beam_radius
@@ -162,5 +162,5 @@ def phantom_failure_map(
             "thickness": coord("thickness", thick),
             "energy_ratio": coord("energy_ratio", ratio),
         },
-        attrs={"energy": float(energy), "depth": float(top), "seeds": [int(s) for s in seeds]},
+        attrs={"energy": float(energy), "top_depth": float(top), "seeds": [int(s) for s in seeds]},
     )  # fmt: skip

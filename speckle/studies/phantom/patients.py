@@ -175,6 +175,7 @@ def virtual_patient(
     min_thickness: float | None = None,
     max_tilt: float = 0.1,
     max_sag: float = 0.05,
+    visible: float = VISIBLE_NEPER,
     draw_seed: int | None = None,
 ) -> tuple[np.ndarray, xr.Dataset]:
     """A random layered phantom (tilted or curved boundaries, an inclusion) and its truth.
@@ -206,6 +207,11 @@ def virtual_patient(
     max_sag : float
         Largest sag of a curved boundary (its centre against its edges), fraction of ``H``
         (0..0.5).
+    visible : float
+        Least margin (neper of mean ``ln I``, 0.5..11) between every layer's bottom and the
+        brightest region's top level: 6 (:data:`VISIBLE_NEPER`) keeps every boundary above the
+        floor at the challenge's density; sparser speckle (the 2025 configuration's smaller
+        cell) puts the image's maximum farther above the mean and needs less (4).
     draw_seed : int, optional
         Seed of the scatterers' draw (default ``seed``): the same patient drawn again with
         another seed (the closed loop's floor).
@@ -252,6 +258,7 @@ def virtual_patient(
         ("min_contrast", min_contrast, 1.0, 100.0),
         ("max_tilt", max_tilt, 0.0, 0.5),
         ("max_sag", max_sag, 0.0, 0.5),
+        ("visible", visible, 0.5, 11.0),
     ):
         if isinstance(value, bool) or not isinstance(value, int | float) or not lo <= value <= hi:
             raise ValueError(f"{name} must be a number in {lo}..{hi}, got {value!r}")
@@ -310,21 +317,8 @@ def virtual_patient(
                 break
         else:
             raise ValueError("no inclusion fits in the drawn layers: raise min_thickness")
-    # densities and energies, neighbours' rho E at least min_contrast apart
-    rel = np.exp(rng.uniform(math.log(d_lo), math.log(d_hi), n_regions))
-    energy = np.exp(rng.uniform(math.log(e_lo), math.log(e_hi), n_regions))
-    pairs = [(k, k + 1) for k in range(n_layers - 1)] + ([(host, n_layers)] if inclusions else [])
-    for _ in range(1000):
-        bad = [j for i, j in pairs if max(rel[i] * energy[i], rel[j] * energy[j])
-               < min_contrast * min(rel[i] * energy[i], rel[j] * energy[j])]  # fmt: skip
-        if not bad:
-            break
-        energy[bad[0]] = math.exp(rng.uniform(math.log(e_lo), math.log(e_hi)))
-    else:
-        raise ValueError(f"min_contrast={min_contrast} cannot be met in energy_range: lower it")
     # visibility: energies scaled down until every layer's bottom is above the floor
     volume, _ = region_volumes(cfg, coefficients.reshape(-1, 3), inclusion)
-    rho_guess = rel * cfg.n_scatterers / np.sum(rel * volume)
     centre = np.linspace(-xm / 2 + 3 * r, xm / 2 - 3 * r, 33)
     bounds = (
         np.clip(profiles(coefficients, centre, xm), 0, h) if n_layers > 1 else np.empty((0, 33))
@@ -333,16 +327,43 @@ def virtual_patient(
     lower = np.vstack([bounds, np.minimum(last + t_min, h - 2 * t_min)[None, :]])
     upper = np.vstack([np.zeros((1, centre.size)), bounds])
     thick = lower - upper
-    for _ in range(200):
+    pairs = [(k, k + 1) for k in range(n_layers - 1)] + ([(host, n_layers)] if inclusions else [])
+
+    def is_visible(rel, energy):
+        rho_guess = rel * cfg.n_scatterers / np.sum(rel * volume)
         mu = rho_guess[:n_layers] * energy[:n_layers] / 100 * a2
         shadow_top = np.vstack([np.zeros((1, centre.size)),
                                 np.cumsum(mu[:, None] * thick, axis=0)[:-1]])  # fmt: skip
         base = np.log(mu)[:, None]
         level_top = base - 2 * shadow_top
-        level_bottom = base - 2 * (shadow_top + mu[:, None] * (lower - upper))
-        if np.all(level_bottom >= level_top.max() - VISIBLE_NEPER):
-            break
-        energy *= 0.8
+        level_bottom = base - 2 * (shadow_top + mu[:, None] * thick)
+        return bool(np.all(level_bottom >= level_top.max() - visible))
+
+    # densities and energies, neighbours' rho E at least min_contrast apart, every layer
+    # visible (else drawn again: a faint layer over a bright one sits under the floor)
+    for _ in range(200):
+        rel = np.exp(rng.uniform(math.log(d_lo), math.log(d_hi), n_regions))
+        energy = np.exp(rng.uniform(math.log(e_lo), math.log(e_hi), n_regions))
+        for _ in range(1000):
+            bad = [j for i, j in pairs if max(rel[i] * energy[i], rel[j] * energy[j])
+                   < min_contrast * min(rel[i] * energy[i], rel[j] * energy[j])]  # fmt: skip
+            if not bad:
+                break
+            energy[bad[0]] = math.exp(rng.uniform(math.log(e_lo), math.log(e_hi)))
+        else:
+            raise ValueError(f"min_contrast={min_contrast} cannot be met in energy_range: lower it")
+        for _ in range(60):
+            if is_visible(rel, energy):
+                break
+            energy *= 0.8
+        else:
+            continue
+        break
+    else:
+        raise ValueError(
+            "no draw of densities and energies leaves every layer above the window's floor: "
+            "narrow energy_range or density_range"
+        )
     table, rho = patient_table(
         cfg, coefficients.reshape(-1, 3), rel, energy, inclusion,
         np.random.default_rng(np.random.SeedSequence([int(seed), int(draw)])),
