@@ -42,6 +42,7 @@ include: "workflow/rules/twin.smk"
 include: "workflow/rules/synthoct.smk"
 include: "workflow/rules/dynamics.smk"
 include: "workflow/rules/phantom_real.smk"
+include: "workflow/rules/phantom.smk"
 
 
 rule all:
@@ -60,4 +61,5 @@ rule all:
         + TWIN_TARGETS
         + SYNTHOCT_TARGETS
         + DYNAMICS_TARGETS
-        + PHANTOM_REAL_TARGETS,
+        + PHANTOM_REAL_TARGETS
+        + PHANTOM_TARGETS,

@@ -45,6 +45,8 @@ thickness     um          layer thickness (the phantom fit's failure map)
 energy_ratio  1           ratio of neighbouring layers' ``rho E`` (the failure map)
 seed          1           seed of a fitted phantom's draw (:mod:`speckle.studies.phantom.real`)
 pair          1           pair of draws compared, the floor (:mod:`speckle.studies.phantom.real`)
+candidate     1           a phantom scored against a target scan (fitted, floor, baseline)
+configuration 1           a SynthOCT scanner configuration by name (challenge, 2025)
 ============  ==========  ===============================================================
 
 Data variables (:data:`QUANTITIES`): ``field``, ``amplitude``, ``weight``, ``correlation``,
@@ -138,6 +140,8 @@ COORDS: dict[str, tuple[str, str]] = {
     "energy_ratio": ("1", "ratio of neighbouring layers' rho E"),
     "seed": ("1", "seed of a phantom's draw"),
     "pair": ("1", "pair of draws compared (the floor)"),
+    "candidate": ("1", "phantom scored against the target scan"),
+    "configuration": ("1", "scanner configuration"),
 }
 
 #: Data-variable quantity -> (units, long_name); a variable's own long name may be more specific.

@@ -32,16 +32,18 @@ from .compounding import (
     subband_fwhm,
 )
 from .correlation import (
-    amplitude_from_gamma,
     compensate,
     correlation_array,
     correlation_map,
     expected_correlation,
-    expected_gamma,
     oversample_depth,
     pearson,
     resample_depth,
     sample_field,
+)
+from .correlation_forms import (
+    amplitude_from_gamma,
+    expected_gamma,
 )
 from .dynamics import (
     doppler_phase,

@@ -19,7 +19,8 @@ from .._wrap import ArraySpec
 from ..system.source import spectrum
 from ._common import DEPTH, LATERAL, depth_major, parse_window
 from ._kernels import MARGIN, box_sums, lagrange_resample, vector_phase
-from .correlation import amplitude_from_gamma, correlation_array, expected_gamma, resample_depth
+from .correlation import correlation_array, resample_depth
+from .correlation_forms import amplitude_from_gamma, expected_gamma
 from .phase import DEFAULT_MAX_BIAS, choose_lag, depth_autocorrelation, lag_and_rho
 from .tracking import interpolate_windows, track_array, track_axial
 

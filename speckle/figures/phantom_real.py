@@ -14,7 +14,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from ..analysis.image_files import load_image
+from ..io import load_image
 from ..studies.phantom.real import real_tissue_phantom
 from .style import colorbar, new_figure, physical_image
 

@@ -5,6 +5,7 @@ from . import checks as checks
 from . import defaults as defaults
 from . import dynamics_checks as dynamics_checks
 from . import outputs as outputs
+from . import phantom_checks as phantom_checks
 from . import phantom_real_checks as phantom_real_checks
 from . import runner as runner
 from . import synthoct_checks as synthoct_checks

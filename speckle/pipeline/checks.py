@@ -43,6 +43,7 @@ from ..io import load_image
 from ..scene.shared import MAX_TILES
 from .adapters import system_from_config
 from .dynamics_checks import check_dynamics_config
+from .phantom_checks import check_phantom_fit
 from .phantom_real_checks import check_phantom_real
 from .synthoct_checks import check_synthoct
 
@@ -192,6 +193,8 @@ def check_config(config: Mapping, schema: Mapping | None = None) -> None:
         check_synthoct(config["synthoct"])
     if "phantom_real" in config:
         check_phantom_real(config["phantom_real"])
+    if "phantom_fit" in config:
+        check_phantom_fit(config["phantom_fit"])
     if "dynamics" in config:
         dyn = config["dynamics"]
         check_dynamics_config(dyn)

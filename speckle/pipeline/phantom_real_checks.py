@@ -11,7 +11,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ..analysis.image_files import load_image
+from ..io import load_image
 
 __all__ = ["check_phantom_real"]
 

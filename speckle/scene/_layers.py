@@ -95,7 +95,9 @@ def layer_stack(tops: object, **properties: object) -> xr.Dataset:
     Examples
     --------
     >>> import speckle
-    >>> stack = speckle.layer_stack([0.0, 100.0], attenuation=[0.001, 0.004], backscatter=[1.0, 2.0])
+    >>> stack = speckle.layer_stack(
+    ...     [0.0, 100.0], attenuation=[0.001, 0.004], backscatter=[1.0, 2.0]
+    ... )
     >>> stack.sizes["layer"], stack.top.values
     (2, array([  0., 100.]))
     """

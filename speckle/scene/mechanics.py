@@ -622,7 +622,9 @@ def displacement_at(result: xr.Dataset, z: object, x: object) -> tuple[np.ndarra
     >>> import speckle
     >>> depth, x = np.arange(4.0, 100.0, 8.0), np.arange(4.0, 100.0, 8.0)
     >>> labels = speckle.inclusion_labels(depth, x, (50.0, 50.0), 20.0)
-    >>> result = speckle.compress_phantom(labels, {0: 10.0, 1: 40.0}, 0.45, strain=0.01, contact="sliding")
+    >>> result = speckle.compress_phantom(
+    ...     labels, {0: 10.0, 1: 40.0}, 0.45, strain=0.01, contact="sliding"
+    ... )
     >>> uz, ux = speckle.displacement_at(result, [0.0, 96.0], [48.0, 48.0])  # sample: 0 to 96 µm
     >>> np.round(uz, 6)  # the probe holds z = 0; the base moves by -strain * L
     array([ 0.  , -0.96])

@@ -44,6 +44,7 @@ MODULES = (
     "static",
     "system",
     "twin",
+    "phantom",
 )
 RNG_SEED = 37
 
@@ -616,6 +617,37 @@ def _twin():
     return {"plot_compare": (compare,), "plot_failure": (failure,)}
 
 
+def _phantom():
+    coords = {
+        "configuration": ["challenge", "2025"],
+        "case": [0, 1, 2],
+        "layer": np.arange(5),
+        "candidate": ["fitted", "floor", "baseline"],
+        "map": ["Struct", "OAC", "SC", "RSC"],
+    }
+    layer = ("configuration", "case", "layer")
+    ds = _fake(
+        coords,
+        {
+            "true_top": layer,
+            "boundary_error": layer,
+            "attenuation_pull": layer,
+            "rho_e_pull": layer,
+            "top_pull": layer,
+            "pixel_size": ("configuration",),
+            "MS-SSIM": ("configuration", "case", "candidate", "map"),
+        },
+    )
+    counts = np.array([[1, 2, 3], [1, 2, 2]])
+    right = np.array([[1, 1, 1], [1, 0, 1]])
+    return ds.assign(
+        n_true=(("configuration", "case"), counts),
+        n_fit=(("configuration", "case"), counts + 1 - right),
+        layers_right=(("configuration", "case"), right),
+        success=(("configuration", "case"), right * np.array([1, 1, 0])),
+    )
+
+
 BUILDERS = {
     "beam": _beam,
     "deformation": _deformation,
@@ -627,6 +659,22 @@ BUILDERS = {
     "static": _static,
     "system": _system,
     "twin": _twin,
+    "phantom": lambda: {
+        "plot_closed_loop": (_phantom(),),
+        "plot_scores": (_phantom(),),
+        "plot_failure_map": (
+            _fake(
+                {"thickness": [12.0, 24.0, 48.0], "energy_ratio": [1.5, 4.0]},
+                {
+                    "success": ("thickness", "energy_ratio"),
+                    "count_right": ("thickness", "energy_ratio"),
+                    "boundary_right": ("thickness", "energy_ratio"),
+                    "boundary_error": ("thickness", "energy_ratio"),
+                    "n_cases": ((), 4),
+                },
+            ),
+        ),
+    },
 }
 
 

@@ -1,5 +1,6 @@
 """Public names of :mod:`speckle.studies.phantom` (``lazy_loader.attach_stub``, type checkers)."""
 
+from . import batch as batch
 from . import limits as limits
 from . import loop as loop
 from . import patients as patients
@@ -10,6 +11,9 @@ from ._fit import (
 )
 from ._slab import (
     slab_constants,
+)
+from .batch import (
+    phantom_closed_loop,
 )
 from .limits import (
     phantom_failure_map,
@@ -31,6 +35,7 @@ __all__ = [
     "PhantomFit",
     "equivalent_system",
     "fit_phantom",
+    "phantom_closed_loop",
     "phantom_closed_loop_case",
     "phantom_failure_map",
     "real_tissue_phantom",

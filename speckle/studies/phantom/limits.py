@@ -138,7 +138,7 @@ def phantom_failure_map(
             for k, s in enumerate(seeds):
                 rng = np.random.default_rng(np.random.SeedSequence([int(s), i, j]))
                 table, _ = patient_table(cfg, coefficients, np.ones(3), energies, None, rng)
-                fit = fit_phantom(synthoct_scan(table, cfg), cfg)
+                fit = fit_phantom(synthoct_scan(table, cfg, nthreads=1), cfg)
                 layers = fit.layers
                 count_ok[i, j, k] = layers.sizes["layer"] == 3
                 if count_ok[i, j, k]:

@@ -95,7 +95,7 @@ def phantom_closed_loop_case(
         raise ValueError(f"max_layers must be an integer in 1..10, got {max_layers!r}")
     cfg = scanner_config_of(config)
     table, truth = virtual_patient(seed, config=cfg, **patient)
-    scan = synthoct_scan(table, cfg)
+    scan = synthoct_scan(table, cfg, nthreads=1)
     fit = fit_phantom(scan, cfg, max_layers=max_layers)
     layers = fit.layers
     n_true, n_fit = truth.sizes["layer"], layers.sizes["layer"]
@@ -148,9 +148,9 @@ def phantom_closed_loop_case(
     )  # fmt: skip
     if fit_seed is not None:
         floor_table, _ = virtual_patient(seed, config=cfg, draw_seed=int(fit_seed), **patient)
-        data["fitted_scan"] = (("depth", "x"), fit.render(int(fit_seed)).values,
+        data["fitted_scan"] = (("depth", "x"), fit.render(int(fit_seed), nthreads=1).values,
                                attrs("label", "fitted phantom's scan (fit_seed)"))  # fmt: skip
-        data["floor_scan"] = (("depth", "x"), synthoct_scan(floor_table, cfg).values,
+        data["floor_scan"] = (("depth", "x"), synthoct_scan(floor_table, cfg, nthreads=1).values,
                               attrs("label", "true patient's scan (fit_seed)"))  # fmt: skip
     return xr.Dataset(
         data,
