@@ -51,7 +51,7 @@ def strain_pair(
     strain: float, n: int = 1024, lines: int = 256
 ) -> tuple[np.ndarray, np.ndarray, float]:
     """The strain benchmarks' image pair: reference and uniformly compressed complex B-scans
-    ``(depth, aline)`` of a Gaussian-spectrum scene (FWHM 0.5 delta_k, k0/delta_k 10, 4
+    ``(depth, x)`` of a Gaussian-spectrum scene (FWHM 0.5 delta_k, k0/delta_k 10, 4
     scatterers per pixel, :data:`PIXEL` µm pixels, seed 1) and ``k0`` (rad/µm)."""
     import speckle
 
@@ -60,7 +60,7 @@ def strain_pair(
     scene = speckle.deformable_scene(lines, 4.0, n_pixels=n, depth_range=h, seed=1, strain=strain)
     img = (
         speckle.bscan(speckle.uniaxial_strain(scene, [0.0, strain]), src, method="nufft", tol=1e-9)
-        .field.transpose("strain", "depth", "aline")
+        .field.transpose("strain", "depth", "x")
         .values
     )
     return img[0], img[1], float(src.attrs["k0"])

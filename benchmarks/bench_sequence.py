@@ -66,8 +66,8 @@ def main() -> None:
     ]
     field = xr.DataArray(
         da.concatenate(parts),
-        dims=("frame", "depth", "aline"),
-        coords={"depth": np.arange(n) * pixel, "aline": np.arange(lines) * 8.0},
+        dims=("frame", "depth", "x"),
+        coords={"depth": np.arange(n) * pixel, "x": np.arange(lines) * 8.0},
     )
     with tempfile.TemporaryDirectory(dir=".") as tmp:
         src, out = Path(tmp) / "frames.nc", Path(tmp) / "strain.nc"

@@ -27,10 +27,10 @@ from speckle.analysis import oversample_depth, track_array
 
 
 def window_means(flow: np.ndarray, tr: dict, factor: int) -> np.ndarray:
-    """Mean of a dense (depth samples, aline) flow over every window of the tracker's result
+    """Mean of a dense (depth samples, x) flow over every window of the tracker's result
     ``tr`` (window size from its centres' spacing rule: (32, 16) px), in pixels."""
     z0 = np.rint(tr["centre_depth"] - 15.5).astype(int) * factor
-    x0 = np.rint(tr["centre_aline"] - 7.5).astype(int)
+    x0 = np.rint(tr["centre_x"] - 7.5).astype(int)
     view = np.lib.stride_tricks.sliding_window_view(flow, (32 * factor, 16))
     return view[z0][:, x0].mean(axis=(2, 3)) / factor
 
