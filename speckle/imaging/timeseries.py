@@ -289,8 +289,9 @@ def bscan_series(
     Returns
     -------
     xarray.Dataset
-        ``field`` (complex, Dask) and ``intensity`` over ``(time, depth, x)`` (``aline`` for
-        independent lines), ``time`` in s (a frame's first line); with ``line_rate`` a
+        ``field`` (complex, Dask) and ``intensity`` over ``(time, depth, x)`` (independent
+        lines too: their ``aline`` is the image's ``x``), ``time`` in s (a frame's first
+        line); with ``line_rate`` a
         coordinate ``line_time`` (s) over ``(time, x)``.
 
     Raises

@@ -87,6 +87,7 @@ def test_independent_lines_series():
     moved = mo.brownian_motion(sc, [0.0, 1.0], diffusion=0.01, seed=0)
     out = ts.bscan_series(moved, src)
     assert out.field.sizes["time"] == 2
+    assert out.field.dims == ("time", "depth", "x")  # the scene's lines are the image's x
 
 
 @pytest.mark.parametrize(
