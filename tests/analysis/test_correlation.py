@@ -319,7 +319,9 @@ def test_amplitude_from_gamma_limits():
     assert speckle.amplitude_from_gamma(1.0) == pytest.approx(1.0, abs=1e-15)
     assert speckle.amplitude_from_gamma(1.0 + 1e-15) == pytest.approx(1.0, abs=1e-15)
     g = 1e-3
-    assert speckle.amplitude_from_gamma(g) == pytest.approx(np.pi / (16 - 4 * np.pi) * g**2, rel=1e-6)
+    assert speckle.amplitude_from_gamma(g) == pytest.approx(
+        np.pi / (16 - 4 * np.pi) * g**2, rel=1e-6
+    )
     with pytest.raises(ValueError, match="strain"):
         speckle.expected_gamma(1.0, spectrum=speckle.spectrum(N, H, k0_dk=1))
     with pytest.raises(ValueError, match="oversample"):
