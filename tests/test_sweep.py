@@ -24,7 +24,7 @@ def reference():
 
 
 def test_sweep_stacks_along_named_dims(reference):
-    assert reference.field.dims == ("density", "k0_dk", "depth", "aline")
+    assert reference.field.dims == ("density", "k0_dk", "depth", "x")
     np.testing.assert_array_equal(reference.density, GRID["density"])
     direct = small_bscan(2.0, 10.0, 3)
     np.testing.assert_array_equal(reference.field.sel(density=2.0, k0_dk=10.0), direct.field)
