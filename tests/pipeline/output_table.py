@@ -28,7 +28,10 @@ import xarray as xr
 
 TABLE = Path(__file__).with_name("ci_outputs.json")
 #: Relative agreement asked of every summary number on the machine the table was written on.
-RTOL_SAME = 1e-12
+#: Two CI-config runs of one commit on one machine (rocketlake, 2026-12-03) gave standard errors
+#: of elastography/failure_maps.nc (a difference of nearly equal sums over seeds) that differ by
+#: 1.04e-12 relative (threaded reductions summing in another order); 1e-11 keeps a 10x margin.
+RTOL_SAME = 1e-11
 #: ... and on any other. Another CPU makes numpy, numba (compiled for the host), OpenBLAS and
 #: FINUFFT dispatch other SIMD kernels, so elementwise functions and reductions differ in their
 #: last bits, which the statistics of fits on speckle amplify. Seen between an AVX-512 machine

@@ -122,7 +122,7 @@ def test_outputs_exist_and_open(built):
     default = yaml.safe_load((built / "workflow/config/config.yaml").read_text())
     assert fig2.field.dtype.kind == "c"
     assert list(fig2.density.values) == default["fig2"]["densities"]
-    assert fig2.sizes["aline"] == ci["fig2"]["n_alines"]
+    assert fig2.sizes["x"] == ci["fig2"]["n_alines"]
     fig5 = open_dataset(results / "fig5" / "fig5.nc")
     assert list(fig5.k0_dk.values) == default["fig5"]["k0_dk"]
     # Fig. 5 images the same scatterers for each k0/delta_k: the k0-independent scene
