@@ -51,6 +51,7 @@ def synthoct_config(name: str, **changes: object) -> ScannerConfig:
     Returns
     -------
     ScannerConfig
+        The named configuration with ``changes`` applied (lengths in µm).
 
     Raises
     ------
