@@ -12,14 +12,13 @@ import xarray as xr
 
 from .._validate import check_int, check_real
 from .._wrap import check_same_grid
-from ..conventions import attrs, canonical_dims, spacing
+from ..conventions import attrs, spacing
 
 __all__ = [
     "DEPTH",
     "LATERAL",
     "delay_selection",
     "depth_major",
-    "field_of",
     "grid_spacing",
     "label_looks",
     "matched",
@@ -32,20 +31,6 @@ __all__ = [
 #: The image dims of the analysis modules (issue 32: the lateral dim of every image is ``x``;
 #: ``aline`` is accepted for one release through :func:`speckle.conventions.canonical_dims`).
 DEPTH, LATERAL = "depth", "x"
-
-
-def field_of(data: xr.Dataset | xr.DataArray) -> xr.DataArray:
-    """The complex field of a B-scan Dataset (attrs merged on a copy), or the DataArray itself."""
-    if isinstance(data, xr.Dataset):
-        if "field" not in data:
-            raise TypeError(
-                "B-scan dataset must hold a complex 'field' (see speckle.imaging.bscan)"
-            )
-        field = data["field"]  # attrs merged on a copy: the caller's dataset is not modified
-        return canonical_dims(field.assign_attrs({**data.attrs, **field.attrs}), "image")
-    if not isinstance(data, xr.DataArray):
-        raise TypeError(f"expected a B-scan Dataset or DataArray, got {type(data).__name__}")
-    return canonical_dims(data, "image")
 
 
 def pixel_field(displacement: xr.Dataset) -> xr.Dataset:
