@@ -24,8 +24,9 @@ import finufft
 import numpy as np
 from _common import best_time, cpu_model, rel_err
 
+# private: FINUFFT's own A-scan, the baseline of the fast methods
+from speckle.imaging._methods.nufft import finufft_ascan
 from speckle.imaging.aline import ascan, stream_ascans
-from speckle.imaging.nufft import finufft_ascan
 from speckle.imaging.synthesis import choose_method
 
 

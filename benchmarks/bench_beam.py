@@ -13,16 +13,16 @@ all threads: on a shared machine the CPU time is the steadier of the two), numba
 excluded. Relative error ``||A - A_direct||_2 / ||A_direct||_2`` on ``--ref-lines`` lines spread
 over the scan (the exact direct reference costs seconds per line here).
 
-``beam_scan`` rows: the row path (:mod:`speckle.imaging.beam_row`, taken by a row or raster of
-lines without focus) and, as its baseline in the same run, the general code of
-:mod:`speckle.imaging.beam_nufft` (``(general path)``: the method of
+``beam_scan`` rows: the row path (:mod:`speckle.imaging._methods.beam_row`, taken by a row or raster
+of lines without focus) and, as its baseline in the same run, the general code of
+:mod:`speckle.imaging._methods.beam_nufft` (``(general path)``: the method of
 :data:`speckle.imaging.methods.BEAM_METHODS` called with ``path="general"``, as before the row
 path existed).
 
 FINUFFT baseline: the depth-independent beam is a Gaussian in ``x - X_i``, so one 2-D type-1
 transform of the scene (depth frequency x lateral frequency over a lateral period padded by the
 beam reach) times the beam's lateral Fourier transform, folded onto the line grid and
-transformed back (:func:`speckle.imaging.beam_nufft.finufft_beam_scan`), at FINUFFT's own
+transformed back (:func:`speckle.imaging._methods.beam_nufft.finufft_beam_scan`), at FINUFFT's own
 ``eps = tol`` (its loosest setting that still met tol here), on 1 or 2 threads and at
 upsampling factors 2 and 1.25; the fastest of these is the baseline of the ratio column.
 """
@@ -40,8 +40,10 @@ import numpy as np
 from _common import best_time, cpu_model, rel_err
 
 import speckle
+
+# private: the beam methods' internals (line grid, FINUFFT reference)
+from speckle.imaging._methods.beam_nufft import choose_beam_method, finufft_beam_scan, line_grid
 from speckle.imaging.beam import beam_problem
-from speckle.imaging.beam_nufft import choose_beam_method, finufft_beam_scan, line_grid
 from speckle.imaging.methods import BEAM_METHODS
 
 
@@ -140,7 +142,7 @@ def main():
 def scan(z, x, a, name, path, tol, kw):
     """``speckle.beam_scan(method=name)``, or on ``path="general"`` the same validation and
     method on the general code of ``beam_nufft`` (no row path): the baseline of the row path
-    (:mod:`speckle.imaging.beam_row`) in the same run."""
+    (:mod:`speckle.imaging._methods.beam_row`) in the same run."""
     if path == "general":
         return BEAM_METHODS[name](*beam_problem(z, x, a, tol=tol, **kw), path="general")
     return speckle.beam_scan(z, x, a, method=name, tol=tol, **kw)

@@ -23,7 +23,9 @@ from hypothesis import strategies as st
 
 import speckle
 from speckle.figures.deformation import scan_combine
-from speckle.imaging.carrier import float64_error_estimate
+
+# private: the fast methods' internals (imaging/_methods)
+from speckle.imaging._methods.carrier import float64_error_estimate
 from speckle.io import open_dataset, to_netcdf
 
 N, H = 32, 256.0
@@ -283,7 +285,8 @@ def test_float64_error_estimate_bounds_the_measured_error(zmax):
 
     The estimate is an rms bound: the measured error lies between 1/4 of it and it.
     """
-    from speckle.imaging.nufft import nufft_ascan
+    # private: the fast methods' internals (imaging/_methods)
+    from speckle.imaging._methods.nufft import nufft_ascan
 
     n, h = 128, 1000.0
     k0 = 10 * n * np.pi / h

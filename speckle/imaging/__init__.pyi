@@ -3,14 +3,8 @@
 from . import aline as aline
 from . import beam as beam
 from . import beam_lines as beam_lines
-from . import beam_nufft as beam_nufft
-from . import beam_row as beam_row
-from . import carrier as carrier
-from . import direct as direct
 from . import gaussian_beam as gaussian_beam
 from . import methods as methods
-from . import nufft as nufft
-from . import psf as psf
 from . import scan as scan
 from . import speed as speed
 from . import synthesis as synthesis
@@ -20,6 +14,10 @@ from ._bscan import (
     bscan,
     expected_intensity,
 )
+from ._methods.beam_nufft import (
+    beam_estimates,
+    choose_beam_method,
+)
 from .aline import (
     ascan,
     pixel_depths,
@@ -27,10 +25,6 @@ from .aline import (
 )
 from .beam import (
     beam_scan,
-)
-from .beam_nufft import (
-    beam_estimates,
-    choose_beam_method,
 )
 from .gaussian_beam import (
     Beam,

@@ -1,9 +1,9 @@
 """Rules shared by the imaging methods (private): tolerances, refusals, choosing a method.
 
-The A-scan methods (:mod:`speckle.imaging.nufft`, :mod:`speckle.imaging.psf`) and the beam
-methods (:mod:`speckle.imaging.beam_nufft`) refuse the same things with the same words, and
-``method="auto"`` picks the fastest admissible method of either family with :func:`choose`
-over that family's error and cost estimates.
+The A-scan methods (:mod:`speckle.imaging._methods.nufft`, :mod:`speckle.imaging._methods.psf`) and
+the beam methods (:mod:`speckle.imaging._methods.beam_nufft`) refuse the same things with the same
+words, and ``method="auto"`` picks the fastest admissible method of either family with
+:func:`choose` over that family's error and cost estimates.
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ from .._validate import check_real
 
 __all__ = [
     "DEFAULT_TOL",
+    "METHODS_INSTEAD",
     "NUFFT_TOL_FLOOR",
     "check_carrier_phase",
     "check_tol",
@@ -35,6 +36,8 @@ __all__ = [
 DEFAULT_TOL = 1e-12
 #: Tightest tolerance the NUFFT kernels reach (kernel width cap 16); below it use "direct".
 NUFFT_TOL_FLOOR = 1e-13
+#: What the retired paths of the method modules (``speckle.imaging.nufft``, ...) say to use.
+METHODS_INSTEAD = "methods by name: speckle.ascan(method=...), speckle.beam_scan(method=...)"
 
 #: ``estimate(name) -> (predicted relative error, predicted time in ns)``.
 Estimate = Callable[[str], "tuple[float, float]"]

@@ -7,8 +7,8 @@ with ``n = -(N//2) ... N-1-(N//2)`` and pixel ``q`` at depth ``q*H/N`` (µm). Se
 
 :func:`ascan` is the stable entry point. ``method`` selects how the double sum is evaluated,
 from the table :data:`speckle.imaging.methods.ASCAN_METHODS`; ``"direct"``
-is the exact float64 reference (:mod:`speckle.imaging.direct`). :func:`stream_ascans` images a
-random scene too large for memory, a chunk of A-lines at a time.
+is the exact float64 reference (:mod:`speckle.imaging._methods.direct`). :func:`stream_ascans`
+images a random scene too large for memory, a chunk of A-lines at a time.
 """
 
 from __future__ import annotations
@@ -85,9 +85,9 @@ def ascan(
         Synthesis method, one of :data:`speckle.ASCAN_METHODS`: ``"direct"`` (the exact float64
         reference),
         ``"nufft"`` / ``"nufft32"`` (folded type-1 NUFFT in double / single precision,
-        :mod:`speckle.imaging.nufft`), ``"finufft"`` (FINUFFT, one plan per call), ``"psf"``
-        (truncated point-spread function, :mod:`speckle.imaging.psf`) or ``"auto"`` (the fastest
-        method whose predicted error on this scene is within ``tol``,
+        :mod:`speckle.imaging._methods.nufft`), ``"finufft"`` (FINUFFT, one plan per call),
+        ``"psf"`` (truncated point-spread function, :mod:`speckle.imaging._methods.psf`) or
+        ``"auto"`` (the fastest method whose predicted error on this scene is within ``tol``,
         :mod:`speckle.imaging.synthesis`). Approximate methods refuse (``ValueError``) a
         ``tol`` they cannot reach.
     tol : float, optional

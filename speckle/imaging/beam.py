@@ -44,9 +44,9 @@ weight is ``W(r)`` with ``r^2 = (x - X)^2 + (y - Y)^2``; the result is still (L,
 Methods
 -------
 ``"direct"`` (:func:`beam_scan` default): the exact float64 reference, each line is
-Eq. 4 of its weighted scatterers (:func:`speckle.imaging.direct.beam_direct_method`; those
+Eq. 4 of its weighted scatterers (:func:`speckle.imaging._methods.direct.beam_direct_method`; those
 whose weight underflows to zero are skipped). ``"nufft"``, ``"nufft32"`` and ``"auto"``:
-:mod:`speckle.imaging.beam_nufft`. The table is
+:mod:`speckle.imaging._methods.beam_nufft`. The table is
 :data:`speckle.imaging.methods.BEAM_METHODS`; :func:`speckle.imaging.gaussian_beam.beam_problem`
 validates the arguments into the scene and beam every method takes.
 """
@@ -103,10 +103,10 @@ def beam_scan(
     method : {"direct", "nufft", "nufft32", "auto", "finufft"}
         ``"direct"``: the exact float64 reference. ``"nufft"`` / ``"nufft32"``: ES-kernel
         spreading in depth and exact Gaussian weights on the neighbouring lines, in double /
-        single precision (:mod:`speckle.imaging.beam_nufft`). ``"auto"``: the fastest method
-        whose predicted error is within ``tol`` (rules, nothing is run to decide; ``"direct"``
-        for irregular lines). ``"finufft"``: one FINUFFT 2-D transform with the beam applied
-        in lateral Fourier space (reference; 2-D scenes without focus only).
+        single precision (:mod:`speckle.imaging._methods.beam_nufft`). ``"auto"``: the fastest
+        method whose predicted error is within ``tol`` (rules, nothing is run to decide;
+        ``"direct"`` for irregular lines). ``"finufft"``: one FINUFFT 2-D transform with the beam
+        applied in lateral Fourier space (reference; 2-D scenes without focus only).
     tol : float, optional
         Requested relative accuracy in (0, 1), ``||A - A_direct||_2 / ||A_direct||_2`` over all
         lines and pixels, for approximate methods (``None``: 1e-12).

@@ -14,7 +14,7 @@ Two plain dicts, built here from the method functions (nothing registers itself 
 
 ``"auto"`` in each is the fastest method whose predicted error is within ``tol``
 (:func:`speckle.imaging.synthesis.choose_method`,
-:func:`speckle.imaging.beam_nufft.choose_beam_method`).
+:func:`speckle.imaging._methods.beam_nufft.choose_beam_method`).
 """
 
 from __future__ import annotations
@@ -22,24 +22,24 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import check_choice
-from ._rules import refuse_below_floor, refuse_float32, resolve_tol
-from .beam_nufft import (
+from ._methods.beam_nufft import (
     beam_finufft_method,
     beam_nufft32_method,
     beam_nufft_method,
     choose_beam_method,
 )
-from .carrier import float64_error_estimate
-from .direct import beam_direct_method, direct_method
-from .gaussian_beam import Beam, BeamScene
-from .nufft import (
+from ._methods.carrier import float64_error_estimate
+from ._methods.direct import beam_direct_method, direct_method
+from ._methods.nufft import (
     finufft_method,
     float32_error_estimate,
     kernel_width,
     nufft32_method,
     nufft_method,
 )
-from .psf import psf_method
+from ._methods.psf import psf_method
+from ._rules import refuse_below_floor, refuse_float32, resolve_tol
+from .gaussian_beam import Beam, BeamScene
 from .synthesis import choose_method
 
 __all__ = [
@@ -60,8 +60,8 @@ def ascan_auto_method(z, amplitude, n_pixels, depth_range, k0, spectrum, tol):
 
 
 def beam_auto_method(scene: BeamScene, beam: Beam, tol: float | None) -> np.ndarray:
-    """``beam_scan(..., method="auto")``: :func:`speckle.imaging.beam_nufft.choose_beam_method`,
-    then that method."""
+    """``beam_scan(..., method="auto")``:
+    :func:`speckle.imaging._methods.beam_nufft.choose_beam_method`, then that method."""
     return BEAM_METHODS[choose_beam_method(scene, beam, tol)](scene, beam, tol)
 
 

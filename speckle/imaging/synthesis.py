@@ -10,30 +10,30 @@ benchmark and the failure map):
 ``direct``
     0 (float64 rounding, ~1e-15): always admissible.
 ``nufft``
-    ES kernel of width ``w`` from :func:`~speckle.imaging.nufft.kernel_width` at upsampling 2:
-    aliasing error ~``10**(1-w) <= tol/2``; the worst of 300 random scenes per tolerance
+    ES kernel of width ``w`` from :func:`~speckle.imaging._methods.nufft.kernel_width` at upsampling
+    2: aliasing error ~``10**(1-w) <= tol/2``; the worst of 300 random scenes per tolerance
     (1e-1 ... 1e-12) is 0.1-0.56 ``tol``; the prediction is ``tol`` (a bound). Not admissible
     below ``1e-13`` (kernel width cap 16).
 ``nufft32``
     kernel at ``tol/2`` (so <= ``tol/2``) plus float32 rounding
-    :func:`speckle.imaging.nufft.float32_error_estimate`
+    :func:`speckle.imaging._methods.nufft.float32_error_estimate`
     (``~eps32/2 sqrt(2 + M w/(2N) + log2(2N) + log2 N)``, 3-6e-7 for 4-32 scatterers/pixel).
     The carrier phase is reduced in float64 first, so the error does not grow with
     ``2 k0 z``; a naive float32 phase would err by ~``eps32 2 k0 z``
-    (:func:`speckle.imaging.carrier.naive_float32_phase_error`), a mode this package never uses.
-    Admissible when the rounding estimate is <= ``tol/2``.
+    (:func:`speckle.imaging._methods.carrier.naive_float32_phase_error`), a mode this package never
+    uses. Admissible when the rounding estimate is <= ``tol/2``.
 ``psf``
     truncation (PSF tail energy beyond the half-width) plus interpolation error
-    (:func:`speckle.imaging.psf.psf_error_estimate`). On a rectangular spectrum the tail decays like
-    ``1/(pi sqrt(hw))``, so a tight ``tol`` needs the full A-line (``hw = N//2``): then ``psf``
-    is exact but costs ``M N`` per line, so the cost model prefers it only for tiny lines
+    (:func:`speckle.imaging._methods.psf.psf_error_estimate`). On a rectangular spectrum the tail
+    decays like ``1/(pi sqrt(hw))``, so a tight ``tol`` needs the full A-line (``hw = N//2``): then
+    ``psf`` is exact but costs ``M N`` per line, so the cost model prefers it only for tiny lines
     (N of order 10), never a truncated one.
 
 Deep scatterers: the fast methods place scatterers with ``z * (1/H)`` and reduce the carrier
 phase with a three-term ``2 pi`` in float64, which loses ~``eps |z|/H`` (position) and
 ``eps |2 k0 z| 3e-4`` (carrier) of relative accuracy
-(:func:`speckle.imaging.carrier.float64_error_estimate`, ~1e-14 for depths within a few ``H``,
-1e-2 at ``|z|`` ~ 1e15 µm). ``nufft`` admits it up to ``tol/4``, ``nufft32`` within its
+(:func:`speckle.imaging._methods.carrier.float64_error_estimate`, ~1e-14 for depths within a few
+``H``, 1e-2 at ``|z|`` ~ 1e15 µm). ``nufft`` admits it up to ``tol/4``, ``nufft32`` within its
 ``tol/2`` rounding budget and ``psf`` within ``tol`` minus its own error; beyond that they
 refuse and ``auto`` does not choose them. ``direct`` and ``finufft`` reduce ``z mod H``
 exactly and stay within ``tol``.
@@ -52,9 +52,9 @@ import numpy as np
 
 from .._validate import check_int, check_memory, check_real
 from ..system.source import check_weights
+from ._methods.nufft import FLOAT64_SHARE, fine_grid_size, float32_error_estimate, kernel_width
+from ._methods.psf import psf_error_estimate
 from ._rules import NUFFT_TOL_FLOOR, check_tol, choose, estimate_table, psf_slots, resolve_tol
-from .nufft import FLOAT64_SHARE, fine_grid_size, float32_error_estimate, kernel_width
-from .psf import psf_error_estimate
 
 __all__ = ["AUTO_CANDIDATES", "choose_method", "method_estimates"]
 
@@ -68,7 +68,8 @@ def _estimate(
     """(predicted relative error, predicted time in ns) of one method on a scene.
 
     ``e64``: float64 carrier/position error of the fast methods on this scene's depths
-    (:func:`speckle.imaging.carrier.float64_error_estimate`; 0 for depths within a few ``H``).
+    (:func:`speckle.imaging._methods.carrier.float64_error_estimate`; 0 for depths within a few
+    ``H``).
     """
     b, m, n = n_lines, n_scat, n_pix
     if method == "direct":
@@ -142,9 +143,9 @@ def method_estimates(
     spectrum : array_like or None
         ``N`` spectral weights (None: rectangular).
     tol : float or None
-        Requested relative accuracy (None: :data:`speckle.imaging.nufft.DEFAULT_TOL`).
+        Requested relative accuracy (None: :data:`speckle.imaging._methods.nufft.DEFAULT_TOL`).
     float64_error : float
-        :func:`speckle.imaging.carrier.float64_error_estimate` of the scene (depends on the
+        :func:`speckle.imaging._methods.carrier.float64_error_estimate` of the scene (depends on the
         depths; 0 means depths within a few ``H``): a method whose budget it exceeds is not
         admissible.
 

@@ -37,7 +37,7 @@ from ..analysis import filters as dsp
 from ..analysis.measured import measured_shape, roi_slices
 from ..conventions import canonical_keys
 from ..figures.despeckle import parameter_grid
-from ..imaging.nufft import NUFFT_TOL_FLOOR, float32_error_estimate
+from ..imaging._methods.nufft import NUFFT_TOL_FLOOR, float32_error_estimate
 from ..imaging.scan import beam_reach
 from ..io import load_image
 from ..scene.shared import MAX_TILES
@@ -449,11 +449,11 @@ def _reword(key: str, exc: Exception, names: Sequence[str] = ()) -> ValueError:
 def tol_floor(method: str, n_pixels: int = 2) -> float:
     """Smallest ``tol`` a synthesis ``method`` accepts (0 for ``direct`` and ``auto``).
 
-    ``nufft`` and ``finufft``: :data:`speckle.imaging.nufft.NUFFT_TOL_FLOOR` (float64 NUFFT);
-    ``nufft32``: twice the float32 rounding estimate
-    (:func:`speckle.imaging.nufft.float32_error_estimate`) of an image of ``n_pixels`` pixels
-    with no scatterer (a lower bound: more scatterers raise it; the method refuses at run time
-    what this bound lets through).
+    ``nufft`` and ``finufft``: :data:`speckle.imaging._methods.nufft.NUFFT_TOL_FLOOR` (float64
+    NUFFT); ``nufft32``: twice the float32 rounding estimate
+    (:func:`speckle.imaging._methods.nufft.float32_error_estimate`) of an image of ``n_pixels``
+    pixels with no scatterer (a lower bound: more scatterers raise it; the method refuses at run
+    time what this bound lets through).
     """
     if method in ("nufft", "finufft"):
         return NUFFT_TOL_FLOOR

@@ -21,12 +21,12 @@ import numpy as np
 import xarray as xr
 
 from ..conventions import attrs
+from ..imaging._methods.beam_nufft import choose_beam_method
+from ..imaging._methods.carrier import naive_float32_phase_error_estimate
+from ..imaging._methods.nufft import float32_error_estimate, kernel_width
+from ..imaging._methods.psf import psf_ascan, tail_error
 from ..imaging.aline import ascan
 from ..imaging.beam import Beam, BeamScene, beam_scan
-from ..imaging.beam_nufft import choose_beam_method
-from ..imaging.carrier import naive_float32_phase_error_estimate
-from ..imaging.nufft import float32_error_estimate, kernel_width
-from ..imaging.psf import psf_ascan, tail_error
 from ..imaging.synthesis import choose_method
 from ..scene.scatterers import line_generator
 from ..sweep import sweep

@@ -12,8 +12,8 @@ from hypothesis import strategies as st
 
 import speckle
 import speckle._validate  # private: the shared checks (MAX_BYTES) the tests lower
+from speckle.imaging import choose_beam_method
 from speckle.imaging.beam import beam_problem
-from speckle.imaging.beam_nufft import choose_beam_method
 from speckle.scene import regions as R
 
 N, H = 32, 256.0  # pixels, depth (µm)

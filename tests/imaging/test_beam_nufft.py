@@ -1,8 +1,10 @@
-"""The general fast beam method (:mod:`speckle.imaging.beam_nufft`) against exact references.
+"""The general fast beam method (:mod:`speckle.imaging._methods.beam_nufft`) against exact
+references.
 
 Focused beams and the ``path="general"`` code, the FINUFFT lateral-Fourier reference, the line
 grid and ``auto``'s choice. References: the direct sum
-(:func:`speckle.imaging.direct.beam_direct_method`) and closed forms with the beam's own weight
+(:func:`speckle.imaging._methods.direct.beam_direct_method`) and closed forms with the beam's own
+weight
 (:func:`speckle.imaging.gaussian_beam.beam_weight`). Relative error throughout:
 ``||A - A_ref||_2 / ||A_ref||_2`` over all lines and pixels.
 """
@@ -13,9 +15,13 @@ import numpy as np
 import pytest
 
 import speckle
+
+# private: the beam methods and their exact reference, called directly
+from speckle.imaging._methods.beam_nufft import beam_nufft_method, choose_beam_method, line_grid
+
+# private: the beam methods and their exact reference, called directly
+from speckle.imaging._methods.direct import beam_direct_method
 from speckle.imaging.beam import beam_problem, beam_weight
-from speckle.imaging.beam_nufft import beam_nufft_method, choose_beam_method, line_grid
-from speckle.imaging.direct import beam_direct_method
 
 N, H = 32, 256.0  # pixels, depth_range (µm): 8 µm pixels
 K0 = 10 * N * np.pi / H  # k0/delta_k = 10

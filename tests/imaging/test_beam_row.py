@@ -1,9 +1,10 @@
-"""The row path of the scanned beam (:mod:`speckle.imaging.beam_row`) against exact references.
+"""The row path of the scanned beam (:mod:`speckle.imaging._methods.beam_row`) against exact
+references.
 
 A row (or raster) of lines without focus takes the row path of ``beam_scan(method="nufft")``;
 ``path="row"`` forces it and ``path="general"`` runs the general code of
-:mod:`speckle.imaging.beam_nufft` on the same scene. References: the direct sum
-(:func:`speckle.imaging.direct.beam_direct_method`, exact in float64) and closed forms.
+:mod:`speckle.imaging._methods.beam_nufft` on the same scene. References: the direct sum
+(:func:`speckle.imaging._methods.direct.beam_direct_method`, exact in float64) and closed forms.
 Relative error throughout: ``||A - A_ref||_2 / ||A_ref||_2`` over all lines and pixels.
 """
 
@@ -13,9 +14,13 @@ import numpy as np
 import pytest
 
 import speckle
+
+# private: the beam methods and their exact reference, called directly
+from speckle.imaging._methods.beam_nufft import beam_nufft_method, line_grid, uses_row_path
+
+# private: the beam methods and their exact reference, called directly
+from speckle.imaging._methods.direct import beam_direct_method
 from speckle.imaging.beam import beam_problem
-from speckle.imaging.beam_nufft import beam_nufft_method, line_grid, uses_row_path
-from speckle.imaging.direct import beam_direct_method
 from speckle.imaging.methods import BEAM_METHODS
 
 N, H = 32, 256.0  # pixels, depth_range (µm): 8 µm pixels

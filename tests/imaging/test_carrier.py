@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from speckle.imaging.carrier import carrier_and_position, naive_float32_phase_error
+# private: the carrier phase of the fast methods (imaging/_methods)
+from speckle.imaging._methods.carrier import carrier_and_position, naive_float32_phase_error
 
 EPS32 = float(np.finfo(np.float32).eps)
 

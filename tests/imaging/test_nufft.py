@@ -10,14 +10,15 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from speckle.imaging.aline import ascan
-from speckle.imaging.nufft import (
+# private: the NUFFT method's internals (imaging/_methods)
+from speckle.imaging._methods.nufft import (
     NUFFT_TOL_FLOOR,
     es_kernel,
     float32_error_estimate,
     kernel_width,
     nufft_ascan,
 )
+from speckle.imaging.aline import ascan
 
 
 def rel_err(a, ref):

@@ -7,8 +7,9 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
+# private: the PSF method's internals (imaging/_methods)
+from speckle.imaging._methods.psf import half_width, psf_ascan, psf_error_estimate, tail_error
 from speckle.imaging.aline import ascan
-from speckle.imaging.psf import half_width, psf_ascan, psf_error_estimate, tail_error
 
 
 def gaussian(n, fraction):

@@ -7,10 +7,13 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
+# private: the methods' error models behind the choice
+from speckle.imaging._methods.nufft import float32_error_estimate, kernel_width
+
+# private: the methods' error models behind the choice
+from speckle.imaging._methods.psf import half_width
 from speckle.imaging.aline import ascan, stream_ascans
 from speckle.imaging.methods import ASCAN_METHODS
-from speckle.imaging.nufft import float32_error_estimate, kernel_width
-from speckle.imaging.psf import half_width
 from speckle.imaging.synthesis import (
     AUTO_CANDIDATES,
     choose_method,

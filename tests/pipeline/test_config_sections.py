@@ -17,7 +17,9 @@ import yaml
 
 import speckle.imaging.beam
 import speckle.system.spectrometer
-from speckle.imaging.nufft import NUFFT_TOL_FLOOR
+
+# private: the NUFFT tolerance floor the config check enforces
+from speckle.imaging._methods.nufft import NUFFT_TOL_FLOOR
 from speckle.pipeline.checks import check_config, tol_floor
 
 SCHEMA = "workflow/schemas/config.schema.yaml"

@@ -14,8 +14,10 @@ from snakemake.utils import validate
 from workflow_run import CI_CONFIG, IGNORE, snakemake
 
 from speckle.figures.speed import pareto_front, plot_failure_map, plot_speed_accuracy
+
+# private: the beam methods auto chooses from
+from speckle.imaging._methods.beam_nufft import BEAM_AUTO_CANDIDATES
 from speckle.imaging.beam import BEAM_METHODS
-from speckle.imaging.beam_nufft import BEAM_AUTO_CANDIDATES
 from speckle.studies.speed import (
     FAILURE_CASES,
     beam_speed_accuracy,

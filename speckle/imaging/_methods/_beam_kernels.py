@@ -1,5 +1,5 @@
-"""The numba kernels of :mod:`speckle.imaging.beam_nufft` (private): bucketing and sorting the
-scene by line, the lines' exact Gaussian weights (re-anchored every :data:`_ANCHOR` lines) and
+"""The numba kernels of :mod:`speckle.imaging._methods.beam_nufft` (private): bucketing and sorting
+the scene by line, the lines' exact Gaussian weights (re-anchored every :data:`_ANCHOR` lines) and
 the spreading of every scatterer's beam weights onto the fine grid."""
 
 from __future__ import annotations
@@ -89,8 +89,8 @@ def _sort_scene(
     Lateral coordinates in pitches ``so = (x - X_0)/p`` along the outer axis (and ``si`` along
     the inner one in 3-D, ``y`` of size 1 in 2-D); bucket ``(floor(so) + halo) * nbi + sub``
     with ``sub`` the inner-axis bucket (3-D) or one of ``nbi`` depth bins (2-D, cache
-    locality). :func:`speckle.imaging._kernels.bucket_sort`: the order within a bucket is the
-    input order whatever the number of threads. Returns ``(z, a, so, si, gam, starts)``
+    locality). :func:`speckle.imaging._methods._kernels.bucket_sort`: the order within a bucket is
+    the input order whatever the number of threads. Returns ``(z, a, so, si, gam, starts)``
     sorted (``si``/``gam`` of size 1 when not per scatterer).
     """
     key = _scene_keys(x, y, z, three_d, o_ax, xo, po, r_o, n_outer, halo, yo, pi_, r_i,

@@ -3,13 +3,13 @@
 A scene scanned along a row (B-scan) or a raster (C-scan) of lines by a depth-independent beam
 is the common case; every scatterer then costs the same, so the work is laid out for
 throughput rather than generality (the general code, for focused beams and the rare cases
-below, is :mod:`speckle.imaging.beam_nufft`; both compute the same sums within ``tol``):
+below, is :mod:`speckle.imaging._methods.beam_nufft`; both compute the same sums within ``tol``):
 
 1. **Sort** (:func:`_sort_rows`): one stable parallel counting sort of the scatterers within
    reach of the line grid by their bucket ``floor(s)`` along each axis (``s = (x - X_0)/p``
    in pitches; outer axis first), writing records ``(Re c, Im c, u, s_o[, s_i])`` with
-   ``c = a exp(2i k0 z)`` (:mod:`speckle.imaging.carrier`) and ``u`` the fine-grid depth. The
-   records live in a numpy-allocated buffer (huge pages: page faults cost more than the sort
+   ``c = a exp(2i k0 z)`` (:mod:`speckle.imaging._methods.carrier`) and ``u`` the fine-grid depth.
+   The records live in a numpy-allocated buffer (huge pages: page faults cost more than the sort
    itself in a buffer allocated inside numba).
 2. **Spread** (:func:`_spread_rows`): buckets in blocks of outer lines; even blocks first, then
    odd ones, in parallel, so that no two threads write the same line and the order of every
@@ -22,15 +22,15 @@ below, is :mod:`speckle.imaging.beam_nufft`; both compute the same sums within `
    scatterer and axis, each a branch-free Taylor polynomial and squarings that numba
    vectorises). A raster's weight is the product of its two axes' weights. The ES kernel's
    slot values come from Horner's scheme vectorised over the chunk, in the working precision
-   (:func:`speckle.imaging._kernels.es_kernel_values`), then each of its
+   (:func:`speckle.imaging._methods._kernels.es_kernel_values`), then each of its
    ``(2h_o + 2)(2h_i + 2)`` lines (``2h + 2`` for a row) gets two 8-wide axpys (real and
    imaginary planes of a padded grid).
 3. **Fold** (:func:`_fold_rows`): padded planar rows back onto periodic interleaved fine grids,
-   which :func:`speckle.imaging.nufft.fine_to_pixels` turns into pixels.
+   which :func:`speckle.imaging._methods.nufft.fine_to_pixels` turns into pixels.
 
 Weights: ``h = floor(r)`` with ``r = sqrt(ln_cut/b)`` the reach (pitches) of the weight cut of
-:func:`speckle.imaging.beam_nufft.beam_nufft_scan`: every line within reach is written (a few
-more, whose weights are below the cut, are written too). The exponentials carry a relative
+:func:`speckle.imaging._methods.beam_nufft.beam_nufft_scan`: every line within reach is written (a
+few more, whose weights are below the cut, are written too). The exponentials carry a relative
 error ``~ 2^nsq eps`` (``nsq = ceil(log2(8 b))`` squarings; :func:`row_weight_error`, summed
 over the axes, admissible while ``<= tol/8`` of the kernel's share of the budget); a beam
 narrower than ``p/sqrt(32)`` (``b > 64``) or a tol below that bound takes the general path.
@@ -237,8 +237,8 @@ def _sort_rows(x, y, z, a, k0, depth_range, nf, origin, pitch, reach, size, h, t
     the outer coordinate, ``y`` the inner one, used when ``two_d``: a raster of lines); bucket
     ``(floor(s_o) + h_o + 1) * nb_i + floor(s_i) + h_i + 1`` with ``nb = size + 2h + 1`` per
     axis, for ``s`` in ``[-reach, size - 1 + reach]`` on both axes; others are dropped. The
-    stable parallel counting sort of :func:`speckle.imaging._kernels.bucket_sort`: the order
-    within a bucket is the input order whatever the number of threads. Fills the first
+    stable parallel counting sort of :func:`speckle.imaging._methods._kernels.bucket_sort`: the
+    order within a bucket is the input order whatever the number of threads. Fills the first
     ``starts[-1]`` rows of ``rec`` (M, 4 or 5) and returns the offsets.
     """
     nbo = size[0] + 2 * h[0] + 1
@@ -437,11 +437,11 @@ def row_fine_grids(
     ``(x,)`` for a row, ``(outer, inner)`` for a raster of ``size = (n_outer, n_inner)`` lines
     (``origin`` and ``pitch`` per axis, µm); ``z`` (µm) and complex ``amplitude`` of shape
     (M,); ``waist`` w0 (µm); ``k0`` (rad/µm) and ``depth_range`` H (µm) as in
-    :func:`speckle.ascan`; ``plan`` a :class:`speckle.imaging.nufft.FineGridPlan`; weights
+    :func:`speckle.ascan`; ``plan`` a :class:`speckle.imaging._methods.nufft.FineGridPlan`; weights
     below ``exp(-ln_cut)`` of a scatterer's peak may be dropped. Returns ``plan.cplx`` grids
     (prod(size), nf), line ``(o, i)`` at row ``o * n_inner + i``, for
-    :func:`speckle.imaging.nufft.fine_to_pixels`. Call inside
-    :func:`speckle.imaging.beam_nufft._slp_vectorize` and the parallel lock.
+    :func:`speckle.imaging._methods.nufft.fine_to_pixels`. Call inside
+    :func:`speckle.imaging._methods.beam_nufft._slp_vectorize` and the parallel lock.
     """
     raster = len(size) == 2
     axes = [_reach(waist, p, ln_cut) for p in pitch]

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..system.source import index_shift_phase, spectral_index
-from .gaussian_beam import Beam, BeamScene
+from ...system.source import index_shift_phase, spectral_index
+from ..gaussian_beam import Beam, BeamScene
 
 __all__ = [
     "DIRECT_CHUNK_ELEMENTS",

@@ -1,9 +1,9 @@
 """Numba kernels shared by the fast imaging methods (private: the one copy of each).
 
 * :func:`carrier_and_position`: carrier ``a exp(2i k0 z)`` (phase reduced in float64 first,
-  :mod:`speckle.imaging.carrier` explains why) and the wrapped position on a periodic grid;
+  :mod:`speckle.imaging._methods.carrier` explains why) and the wrapped position on a periodic grid;
 * :func:`es_kernel_values`: the ES kernel's slot values by Horner's scheme, vectorised over
-  scatterers (:func:`speckle.imaging.nufft.fine_grid_plan` builds the table);
+  scatterers (:func:`speckle.imaging._methods.nufft.fine_grid_plan` builds the table);
 * :func:`axpy8`: one 8-wide update ``g[p:p + 8] += v * k`` of a fine grid;
 * :func:`fold_padded`: a padded fine grid (real and imaginary parts) folded back onto the
   periodic, interleaved fine grid;
@@ -149,7 +149,7 @@ def carrier_and_position(z, a, k0, depth_range, grid, cr, ci, u):
 @numba.njit(fastmath=True, inline="always")
 def es_kernel_values(x, coef, ker):
     """``ker[i, t]`` = slot ``i`` of the ES kernel at ``x[t]`` (``x = 2s - 1``, see
-    :func:`speckle.imaging.nufft.fine_grid_plan`), for every slot of ``coef`` (degree + 1,
+    :func:`speckle.imaging._methods.nufft.fine_grid_plan`), for every slot of ``coef`` (degree + 1,
     slots) and ``t < x.size``.
 
     Horner's scheme per slot, vectorised over scatterers in chunks of ``_HORNER_CHUNK`` (1-D

@@ -8,12 +8,12 @@ For lines on a uniform grid ``X_o = X_0 + o p`` (and ``Y`` likewise in 3-D) the 
 ``c_j = a_j exp(2i k0 z_j)``, ``t_j = 2 pi z_j/H``, ``W_j(o) = gamma_j^2 exp(-b_j (s_j - o)^2)``
 the double-pass weight (``s_j = (x_j - X_0)/p`` in pitches, ``b_j = 2 gamma_j p^2/w0^2``,
 ``gamma_j = 1`` without focus; :mod:`speckle.imaging.beam`). For every line ``o``, ``F_n(o)``
-is the type-1 NUFFT of :mod:`speckle.imaging.nufft` of the strengths ``c_j W_j(o)``: so each
-scatterer is spread once in depth with the ES kernel (width ``w`` from ``tol``) and written,
+is the type-1 NUFFT of :mod:`speckle.imaging._methods.nufft` of the strengths ``c_j W_j(o)``: so
+each scatterer is spread once in depth with the ES kernel (width ``w`` from ``tol``) and written,
 times its exact Gaussian weight, into the fine grids of the lines within its lateral reach;
 one batched inverse FFT per line, the deconvolution-and-spectrum multiplier and the exact pixel
-DFT follow (:func:`speckle.imaging.nufft.fine_to_pixels`). There is no lateral FFT, hence no
-lateral periodisation or padding: lines beyond the grid are simply not written. The weights are
+DFT follow (:func:`speckle.imaging._methods.nufft.fine_to_pixels`). There is no lateral FFT, hence
+no lateral periodisation or padding: lines beyond the grid are simply not written. The weights are
 formed by a two-exponential recurrence (re-anchored every 16 lines), scatterers are bucketed by
 line (counting sort), and blocks of lines run in parallel (numba), each over the scatterers
 within reach of its block, so no two threads write the same line. With a focus the weights are
@@ -22,15 +22,15 @@ reach growing with ``w(z_j)``. 3-D: the weight factorises, ``W = gamma^2 exp(-b_
 exp(-b_y d_y^2)``, and each scatterer is written into the ``K_x K_y`` lines of its reach.
 
 A row or raster of lines under a beam without focus (the common B-scan or C-scan) takes the
-row path of :mod:`speckle.imaging.beam_row` (:func:`uses_row_path`): the same sums and error
-budget, laid out for throughput (1.9x less time than the general code on the benchmark
+row path of :mod:`speckle.imaging._methods.beam_row` (:func:`uses_row_path`): the same sums and
+error budget, laid out for throughput (1.9x less time than the general code on the benchmark
 scene, 1.5x less CPU time on a 3-D tile). The code here serves focused beams, beams narrower
 than ``p/sqrt(32)`` and tolerances near the float64 floor.
 
 Errors (relative l2 over the B-scan, against ``"direct"``), budgeted to add up below ``tol``:
 
 * depth kernel: the ES kernel at ``tol/2`` (``"nufft"``; measured worst 0.56 of its target on
-  random scenes, :mod:`speckle.imaging.nufft`) or ``tol/4`` (``"nufft32"``);
+  random scenes, :mod:`speckle.imaging._methods.nufft`) or ``tol/4`` (``"nufft32"``);
 * lateral truncation: weights below ``tol/4`` of a scatterer's peak weight are dropped (reach
   ``w(z) sqrt(ln(4/tol)/2)``). For a scene whose scatterers cover the scanned lines the
   dropped energy fraction is ``erfc(2 R/w) < (tol/4)^2``, i.e. an error below ``tol/4``; a scene
@@ -40,7 +40,7 @@ Errors (relative l2 over the B-scan, against ``"direct"``), budgeted to add up b
   ``~ 2 d/w0``: admissible only while ``4 d/w0 <= tol/8`` (float64 rounding of ``linspace``
   grids is ~1e-16 relative);
 * ``"nufft32"`` only: float32 rounding of the spreading and FFTs,
-  :func:`speckle.imaging.nufft.float32_error_estimate` with the number of terms per line
+  :func:`speckle.imaging._methods.nufft.float32_error_estimate` with the number of terms per line
   weighted by their relative weight energy (``sum_k exp(-4 d_k^2/w0^2) ~ w0 sqrt(pi)/(2 p)``
   lines per axis), admissible while ``<= tol/2``; measured floors are 1.4-1.6x below it on five
   scenes (w0 = 1-6 pitches, 1-16 scatterers per pixel per line).
@@ -56,13 +56,7 @@ import numba
 import numpy as np
 import scipy.fft
 
-from ._beam_kernels import _sort_scene, _spread_beam
-from ._kernels import (
-    C2,
-    LANES,
-    parallel_section,
-)
-from ._rules import (
+from .._rules import (
     NUFFT_TOL_FLOOR,
     choose,
     estimate_table,
@@ -73,6 +67,13 @@ from ._rules import (
     refuse_memory,
     resolve_tol,
 )
+from ..gaussian_beam import Beam, BeamScene
+from ._beam_kernels import _sort_scene, _spread_beam
+from ._kernels import (
+    C2,
+    LANES,
+    parallel_section,
+)
 from .beam_row import (
     ROW_MAX_B,
     row_fine_grids,
@@ -82,7 +83,6 @@ from .beam_row import (
     weight_rate,
 )
 from .carrier import float64_error_estimate
-from .gaussian_beam import Beam, BeamScene
 from .nufft import (
     FLOAT64_SHARE,
     check_float64_placement,
@@ -119,7 +119,7 @@ SERIAL_BELOW = 200_000
 #: Depth bins per line bucket in 2-D (cache locality of the spreading).
 _DEPTH_BINS = 32
 #: Paths of :func:`beam_nufft_scan`: ``"auto"`` (the row path where :func:`uses_row_path`),
-#: ``"row"`` (:mod:`speckle.imaging.beam_row`, refused where it does not apply) or
+#: ``"row"`` (:mod:`speckle.imaging._methods.beam_row`, refused where it does not apply) or
 #: ``"general"`` (the code here).
 PATHS = ("auto", "row", "general")
 
@@ -188,7 +188,7 @@ def line_grid(lines: np.ndarray, waist: float) -> LineGrid | None:
 
 
 def uses_row_path(beam: Beam, grid: LineGrid, tol: float) -> bool:
-    """Whether a scan takes the row path (:mod:`speckle.imaging.beam_row`): a row or raster
+    """Whether a scan takes the row path (:mod:`speckle.imaging._methods.beam_row`): a row or raster
     of lines without focus, ``b = 2 p^2/w0^2 <= ROW_MAX_B`` along each axis and weights
     accurate to ``tol/8``."""
     if beam.focus is not None:
@@ -318,8 +318,8 @@ def beam_nufft_scan(
     from ``tol`` as in the error budget of :func:`beam_nufft_method`: here ``tol`` sets the
     kernel (``fine_grid_plan(tol)``) and lateral weights below ``tol/2`` of the peak are
     dropped. ``path`` (:data:`PATHS`): ``"auto"`` takes the row path of
-    :mod:`speckle.imaging.beam_row` where :func:`uses_row_path`, ``"general"`` the code here
-    always (the benchmark's baseline of the row path), ``"row"`` the row path or a
+    :mod:`speckle.imaging._methods.beam_row` where :func:`uses_row_path`, ``"general"`` the code
+    here always (the benchmark's baseline of the row path), ``"row"`` the row path or a
     ``ValueError``. Returns complex128 (L, N) in the order of ``scene.lines``.
     """
     plan = fine_grid_plan(scene.n_pixels, scene.spectrum, tol, precision)
@@ -526,8 +526,8 @@ def choose_beam_method(scene: BeamScene, beam: Beam, tol: float | None) -> str:
 
 
 def _placement_bound(scene: BeamScene) -> float:
-    """Upper bound of :func:`speckle.imaging.carrier.float64_error_estimate` from the deepest
-    scatterer alone (``z_rms <= max |z|``, ``n_rms <= N/2``; one pass over the depths)."""
+    """Upper bound of :func:`speckle.imaging._methods.carrier.float64_error_estimate` from the
+    deepest scatterer alone (``z_rms <= max |z|``, ``n_rms <= N/2``; one pass over the depths)."""
     zmax = float(np.max(np.abs(scene.z), initial=0.0))
     eps = float(np.finfo(np.float64).eps)
     position = math.pi * scene.n_pixels * eps * zmax / (math.sqrt(6.0) * scene.depth_range)
@@ -537,7 +537,7 @@ def _placement_bound(scene: BeamScene) -> float:
 
 def _check_placement(scene: BeamScene, budget: float, tol: float, method: str) -> None:
     """The float64 carrier/position refusal of the A-scan methods
-    (:func:`speckle.imaging.nufft.check_float64_placement`), on a beam scene; skipped when
+    (:func:`speckle.imaging._methods.nufft.check_float64_placement`), on a beam scene; skipped when
     the deepest scatterer's bound is within the budget."""
     if _placement_bound(scene) > budget:
         check_float64_placement(scene.z, scene.amplitude, scene.depth_range, scene.k0,
@@ -614,7 +614,7 @@ def finufft_beam_scan(
     with as many modes as keep ``g_hat`` above ``tol/4`` of its peak; the modes fold onto the
     ``L_p`` residues of the line grid and an FFT returns the lines, a second FFT the pixels.
     ``eps`` is FINUFFT's own tolerance (default ``tol/20``: FINUFFT's eps is not a bound on our
-    relative error, see :func:`speckle.imaging.nufft.finufft_ascan`).
+    relative error, see :func:`speckle.imaging._methods.nufft.finufft_ascan`).
     """
     if beam.focus is not None or len(grid.size) != 1:
         raise ValueError("the FINUFFT beam reference handles a 2-D scene without focus only")

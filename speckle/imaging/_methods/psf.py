@@ -31,9 +31,9 @@ import math
 import numba
 import numpy as np
 
-from ..system.source import index_shift_phase, spectral_index
+from ...system.source import index_shift_phase, spectral_index
+from .._rules import psf_slots, resolve_tol
 from ._kernels import carrier_and_position, parallel_section
-from ._rules import psf_slots, resolve_tol
 from .nufft import check_float64_placement
 
 __all__ = [

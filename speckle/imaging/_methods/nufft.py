@@ -19,8 +19,8 @@ implementations live here:
     ``log10(1/tol) + 1``) and ``beta = 2.30 w`` (FINUFFT's rule for upsampling 2, error
     ~10**(1-w)).
     ``"nufft32"`` spreads, and FFTs, in single precision after float64 reduction of the
-    carrier phase (:mod:`speckle.imaging.carrier`); its rounding floor is ~2e-7 measured, ~4e-7
-    estimated (:func:`float32_error_estimate`).
+    carrier phase (:mod:`speckle.imaging._methods.carrier`); its rounding floor is ~2e-7 measured,
+    ~4e-7 estimated (:func:`float32_error_estimate`).
 
 ``"finufft"`` (:func:`finufft_ascan`)
     The same transform with FINUFFT: one guru plan for the whole B-scan, ``setpts``/``execute``
@@ -42,15 +42,15 @@ import numba
 import numpy as np
 import scipy.fft
 
-from ..system.source import index_shift_phase, spectral_index
-from ._kernels import carrier_and_position, es_kernel_values, fold_padded, parallel_section
-from ._rules import (
+from ...system.source import index_shift_phase, spectral_index
+from .._rules import (
     DEFAULT_TOL,
     NUFFT_TOL_FLOOR,
     refuse_below_floor,
     refuse_float32,
     resolve_tol,
 )
+from ._kernels import carrier_and_position, es_kernel_values, fold_padded, parallel_section
 from .carrier import float64_error_estimate
 
 __all__ = [
@@ -278,7 +278,7 @@ def fine_grid_plan(
 
     Shared by every method that spreads scatterers with the ES kernel onto a fine periodic
     grid of one unambiguous depth (A-lines here, scanned-beam lines in
-    :mod:`speckle.imaging.beam_nufft`); ``precision`` is ``"double"`` or ``"single"``.
+    :mod:`speckle.imaging._methods.beam_nufft`); ``precision`` is ``"double"`` or ``"single"``.
     """
     real = np.float64 if precision == "double" else np.float32
     cplx = np.complex128 if precision == "double" else np.complex64
@@ -352,7 +352,7 @@ FLOAT64_SHARE = 0.25
 def check_float64_placement(z, amplitude, depth_range, k0, spectrum, budget, tol, method) -> float:
     """Refuse scenes whose float64 carrier/position error exceeds ``budget`` (deep scatterers).
 
-    See :func:`speckle.imaging.carrier.float64_error_estimate`; returns the estimate.
+    See :func:`speckle.imaging._methods.carrier.float64_error_estimate`; returns the estimate.
     """
     err = float64_error_estimate(z, amplitude, depth_range, k0, spectrum)
     if err > budget:

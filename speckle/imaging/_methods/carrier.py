@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from ..system.source import spectral_index
+from ...system.source import spectral_index
 from ._kernels import C2, INV_TWO_PI, carrier_and_position
 
 __all__ = [
