@@ -5,6 +5,13 @@ names)``. Each old name resolves to the new module's object on use and warns, na
 spelling; ``tests/test_layout.py`` lists the shim modules (``SHIMS``), the only modules allowed
 to import against the flow. A module that keeps code of its own and lost some names to a later
 layer passes the new module's name instead: it is imported only when an old name is used.
+
+A module PATH that was retired (kind ``module`` of :data:`speckle.conventions.RETIRED`: the
+module went private or into a private folder) keeps a file at the old path whose only line is
+``__getattr__, __dir__, __all__ = retired_module(__name__, new_module)``: importing it warns
+once, naming the new import, and its names are the new module's. Where the old module shared
+its name with a public function of its package (``speckle.system.rolloff``), the package keeps
+the function: see :func:`retired_module`.
 """
 
 from __future__ import annotations
@@ -12,11 +19,12 @@ from __future__ import annotations
 import functools
 import importlib
 import inspect
+import sys
 import types
 import warnings
 from collections.abc import Callable, Iterable, Mapping
 
-__all__ = ["keyword_only", "moved", "renamed_parameters", "retired_names"]
+__all__ = ["keyword_only", "moved", "renamed_parameters", "retired_module", "retired_names"]
 
 
 def moved(
@@ -81,10 +89,11 @@ def retired_names(package: str, getattr_: Callable[[str], object]) -> Callable[[
     """A package ``__getattr__``: retired public names resolve to their new ones, warning.
 
     The retired names are those of :data:`speckle.conventions.RETIRED` of kind ``function``
-    or ``constant`` whose new name the package exports (its ``__all__``) and that are not the
-    name of one of its modules (``speckle.scene.layers`` stays the module); any other name goes
-    to ``getattr_`` (the package's lazy ``__getattr__``). The old names are not in
-    ``__all__``.
+    or ``constant`` whose new name the package exports (its ``__all__``); a retired module
+    path of the package (kind ``module``, e.g. ``speckle.imaging.nufft``) is its shim module,
+    imported (and warning once) on first use, and wins over a retired function of the same
+    name (``speckle.scene.layers`` stays the module). Any other name goes to ``getattr_`` (the
+    package's lazy ``__getattr__``). The old names are not in ``__all__``.
 
     Parameters
     ----------
@@ -107,19 +116,16 @@ def retired_names(package: str, getattr_: Callable[[str], object]) -> Callable[[
     >>> table is speckle.ASCAN_METHODS, str(seen[0].message).split(";")[0]
     (True, 'speckle.METHODS is now speckle.ASCAN_METHODS')
     """
-    import pkgutil
-    import sys
 
     def __getattr__(name: str) -> object:
         from .conventions import RETIRED  # here: ``import speckle`` imports no xarray
 
-        new, kind = RETIRED.get(name, (None, None))
         module = sys.modules[package]
-        if (
-            kind in ("function", "constant")
-            and new in getattr(module, "__all__", ())
-            and name not in {m.name for m in pkgutil.iter_modules(getattr(module, "__path__", []))}
-        ):
+        public = getattr(module, "__all__", ())
+        if name not in public and RETIRED.get(f"{package}.{name}", ("", ""))[1] == "module":
+            return importlib.import_module(f"{package}.{name}")  # the shim warns
+        new, kind = RETIRED.get(name, (None, None))
+        if kind in ("function", "constant") and new in public:
             warnings.warn(
                 f"{package}.{name} is now {package}.{new}; the old name will be removed in the "
                 "next release",
@@ -130,6 +136,116 @@ def retired_names(package: str, getattr_: Callable[[str], object]) -> Callable[[
         return getattr_(name)
 
     return __getattr__
+
+
+class _KeepsPublicNames(types.ModuleType):
+    """A package whose public names stay theirs when a same-named retired module is imported.
+
+    The import system binds a submodule on its package (``setattr(package, child, module)``)
+    after running it; for the shim at ``speckle/system/rolloff.py`` that would replace the
+    public function ``speckle.system.rolloff`` by the shim. The names in
+    ``__retired_shadowed__`` are not rebound to their own submodule (``lazy_loader`` guards a
+    function named after its module the same way). Installed by :func:`retired_module` only
+    when such a shim is imported: ``import speckle`` swaps no class.
+    """
+
+    def __setattr__(self, name: str, value: object) -> None:
+        if name in self.__dict__.get("__retired_shadowed__", ()) and value is sys.modules.get(
+            f"{self.__name__}.{name}"
+        ):
+            return  # the import system binding the retired module: the public name stays
+        super().__setattr__(name, value)
+
+
+def retired_module(
+    old: str, new: str, *, use: str | None = None
+) -> tuple[Callable[[str], object], Callable[[], list[str]], list[str]]:
+    """``(__getattr__, __dir__, __all__)`` of a module kept at a retired path; warns once.
+
+    Called from the shim's module body, so it runs once, when the old path is first
+    imported: one ``FutureWarning`` names the new import, then the old path gives the new
+    module's ``__all__`` names without further warnings (``from speckle.system.rolloff import
+    rolloff_curve`` keeps working). If the old module's name is a public name of its package
+    (the function ``speckle.system.rolloff``), that name stays the function: the package does
+    not let the import system rebind it to this module (:class:`_KeepsPublicNames`), whatever
+    the order of imports. ``import speckle.system.rolloff as m`` then gives the function, as
+    in the release before, when the module was public: import its names with ``from``.
+
+    Parameters
+    ----------
+    old : str
+        The retired path (the shim's ``__name__``); a key of kind ``module`` of
+        :data:`speckle.conventions.RETIRED`.
+    new : str
+        The module that holds the code now (private).
+    use : str, optional
+        What to use instead, for the warning; default ``from <package> import <names>``, the
+        new module's names that its package exports.
+
+    Returns
+    -------
+    tuple
+        The shim's ``__getattr__``, ``__dir__`` and ``__all__`` (the new module's).
+
+    Examples
+    --------
+    >>> import sys, warnings
+    >>> sys.modules.pop("speckle.system.rolloff", None) and None
+    >>> with warnings.catch_warnings(record=True) as seen:
+    ...     warnings.simplefilter("always")
+    ...     from speckle.system.rolloff import rolloff
+    >>> import speckle
+    >>> rolloff is speckle.system.rolloff, str(seen[0].message).split("use ")[1].split(";")[0]
+    (True, 'from speckle.system import rolloff')
+    """
+    module = importlib.import_module(new)
+    package, _, child = old.rpartition(".")
+    parent = sys.modules[package]
+    public = getattr(parent, "__all__", ())
+    if use is None:
+        names = [n for n in module.__all__ if n in public]
+        use = f"from {package} import {', '.join(names)}"
+    # the warning points at the line that asked for the old path: the first frame outside the
+    # shim, the import machinery and this module (``speckle.imaging.nufft`` as an attribute
+    # comes through ``retired_names`` and ``importlib.import_module``)
+    frame = sys._getframe(1)
+    while frame.f_back is not None and (
+        frame.f_globals.get("__name__") == old
+        or "importlib" in frame.f_code.co_filename
+        or frame.f_code.co_filename == __file__
+    ):
+        frame = frame.f_back
+    warnings.warn_explicit(
+        f"the module {old} is retired (now the private {new}): use {use}; the old path will "
+        "be removed in the next release",
+        FutureWarning,
+        frame.f_code.co_filename,
+        frame.f_lineno,
+        module=frame.f_globals.get("__name__", "<string>"),
+        registry=frame.f_globals.setdefault("__warningregistry__", {}),
+    )
+    if child in public:
+        if type(parent) is types.ModuleType:
+            parent.__class__ = _KeepsPublicNames
+        shadowed = parent.__dict__.get("__retired_shadowed__", frozenset())
+        parent.__dict__["__retired_shadowed__"] = shadowed | {child}
+    names = list(module.__all__)
+
+    def __getattr__(name: str) -> object:
+        if name in names:
+            return getattr(module, name)
+        retired = module.__dict__.get("__getattr__")  # the new module's own retired names
+        if retired is not None and not name.startswith("__"):
+            try:
+                return retired(name)  # they warn on their own
+            except AttributeError:
+                pass
+        raise AttributeError(f"module {old!r} has no attribute {name!r}")
+
+    def __dir__() -> list[str]:
+        return sorted(names)
+
+    return __getattr__, __dir__, names
 
 
 def renamed_parameters(renames: Mapping[str, str]) -> Callable[[Callable], Callable]:

@@ -5,8 +5,9 @@ Each subpackage lists its public modules and names once, in its ``__init__.pyi``
 name; ``__all__`` for type checkers), and attaches it with ``lazy_loader.attach_stub``, as
 scikit-image does: modules and names load on first use. A module never shares its package's
 public name (the function ``bscan`` lives in the private ``imaging/_bscan.py``), so importing a
-module never rebinds a public name. ``__all__`` lists the names only (functions, classes,
-constants), never the modules.
+module never rebinds a public name; the shim kept at a retired path of the same name
+(``imaging/bscan.py``) leaves the function in place (``speckle._deprecate.retired_module``).
+``__all__`` lists the names only (functions, classes, constants), never the modules.
 """
 
 from __future__ import annotations
@@ -39,7 +40,15 @@ def attach(package: str, file: str) -> tuple[Callable, Callable, list[str]]:
         stub's names without its modules).
     """
     getattr_, dir_, everything = lazy_loader.attach_stub(package, file)
-    modules = {m.name for m in pkgutil.iter_modules(sys.modules[package].__path__)}
+    stub = ast.parse(Path(file).with_suffix(".pyi").read_text(encoding="utf-8"))
+    # the stub's modules (``from . import module``), not every file on disk: a retired
+    # module's shim may keep the name of a public function (``system/rolloff.py``)
+    modules = {
+        alias.name
+        for node in stub.body
+        if isinstance(node, ast.ImportFrom) and not node.module
+        for alias in node.names
+    }
     return getattr_, dir_, [n for n in everything if n not in modules]
 
 

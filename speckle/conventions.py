@@ -190,8 +190,9 @@ QUANTITIES: dict[str, tuple[str, str]] = {
 
 
 #: Retired names, old -> (new, kind); kind is ``dim``, ``attr``, ``function``, ``constant``
-#: (public names of the top level and their subpackage) or ``parameter`` (key
-#: ``"<function>.<parameter>"``: the parameter is retired in that function only).
+#: (public names of the top level and their subpackage), ``parameter`` (key
+#: ``"<function>.<parameter>"``: the parameter is retired in that function only) or ``module``
+#: (key the old dotted module path, value the module that holds its code now).
 #: Each old name keeps working for one release with a ``FutureWarning`` naming the new one
 #: (dims through :func:`canonical_dims`); ``tests/test_names.py`` checks that no module uses
 #: one outside its deprecation shim.
@@ -244,6 +245,18 @@ RETIRED: dict[str, tuple[str, str]] = {
     "interpolate_displacement.aline": ("x", "parameter"),
     "window_aline_pixels": ("window_x_pixels", "attr"),
     "step_aline_pixels": ("step_x_pixels", "attr"),
+    # module paths (issue 32): old path -> the private module that holds the code now; the
+    # shim at the old path warns once (``speckle._deprecate.retired_module``)
+    "speckle.imaging.bscan": ("speckle.imaging._bscan", "module"),
+    "speckle.system.rolloff": ("speckle.system._rolloff", "module"),
+    "speckle.system.backscatter": ("speckle.system._backscatter", "module"),
+    "speckle.system.datasheet": ("speckle.system._datasheet", "module"),
+    "speckle.scene.layers": ("speckle.scene._layers", "module"),
+    # imaging's method modules, in one private folder
+    **{
+        f"speckle.imaging.{m}": (f"speckle.imaging._methods.{m}", "module")
+        for m in ("direct", "nufft", "psf", "carrier", "beam_nufft", "beam_row")
+    },
 }
 
 

@@ -26,9 +26,12 @@ PACKAGES = [
 
 
 def _public_modules() -> list[str]:
+    from speckle.conventions import RETIRED
+
     names = ["speckle"]
     for info in pkgutil.walk_packages(speckle.__path__, "speckle."):
-        if not any(part.startswith("_") for part in info.name.split(".")):
+        retired = RETIRED.get(info.name, ("", ""))[1] == "module"  # a shim: its names live on
+        if not retired and not any(part.startswith("_") for part in info.name.split(".")):
             names.append(info.name)
     return names
 
@@ -367,3 +370,79 @@ def test_the_retired_dim_only_leaves_the_package():
     assert not grown, f"more uses of the retired dim 'aline' (now, recorded): {grown}; use 'x'"
     done = sorted(f for f in ALINE_LEFT if f not in now)
     assert not done, f"no 'aline' left in {done}: remove their rows from ALINE_LEFT"
+
+
+# --- no file uses a retired module path (kind ``module`` of RETIRED) outside its shim ------------
+REPO = PACKAGE_ROOT.parent
+#: Files that spell retired module paths on purpose: the table, the deprecation machinery, the
+#: map of rooms (a row per module, shims too) and the tests of names and shims (the changelog,
+#: history, is not read).
+PATH_SHIMS = {
+    "docs/explanation/design.md",
+    "speckle/conventions.py",
+    "speckle/_deprecate.py",
+    "tests/test_names.py",
+    "tests/test_retired_modules.py",
+}
+
+
+def _retired_paths() -> dict[str, bool]:
+    """Retired module path -> whether its last part is a public name of its package (then
+    ``package.name`` is that name, not the old module, and is fine to spell)."""
+    out = {}
+    for old in _retired("module"):
+        package, _, child = old.rpartition(".")
+        out[old] = child in importlib.import_module(package).__all__
+    return out
+
+
+def _path_users() -> list[Path]:
+    files = [*PACKAGE_ROOT.rglob("*.py"), *(REPO / "tests").rglob("*.py")]
+    files += [*(REPO / "benchmarks").glob("*.py"), *(REPO / "examples").glob("*.py")]
+    files += [
+        *(REPO / "workflow").rglob("*.py"),
+        *(REPO / "docs").rglob("*.md"),
+        REPO / "README.md",
+    ]
+    shims = {f"speckle/{old.split('.', 1)[1].replace('.', '/')}.py" for old in _retired("module")}
+    return [f for f in files if f.relative_to(REPO).as_posix() not in PATH_SHIMS | shims]
+
+
+def _absolute_imports(path: Path):
+    """(line, module, names) of every import in a Python file, relative ones made absolute."""
+    parts = path.relative_to(REPO).with_suffix("").parts
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom):
+            module = node.module or ""
+            if node.level:
+                base = list(parts[: len(parts) - node.level])
+                module = ".".join([*base, *([module] if module else [])])
+            yield node.lineno, module, [a.name for a in node.names]
+        elif isinstance(node, ast.Import):
+            yield from ((node.lineno, a.name, []) for a in node.names)
+
+
+def test_no_file_uses_a_retired_module_path():
+    """Package, tests, benchmarks, examples, workflow and docs use the new paths: only the shim
+    at an old path (and the tests of the shims) spell it. ``speckle.system.rolloff`` is the
+    function (a public name), ``speckle.imaging.nufft`` the retired module."""
+    paths = _retired_paths()
+    modules = [old for old, public in paths.items() if not public]
+    spelled = re.compile(r"\b(" + "|".join(map(re.escape, modules)) + r")\b(?!\w)")
+    from_package = re.compile(r"from\s+(speckle[\w.]*)\s+import\s+\(?([\w\s,]+)")
+    found = []
+    for path in _path_users():
+        rel = path.relative_to(REPO).as_posix()
+        text = path.read_text()
+        found += [f"{rel}: {m.group(1)}" for m in spelled.finditer(text)]
+        for m in from_package.finditer(text):
+            names = [n.strip() for n in m.group(2).replace("\n", ",").split(",") if n.strip()]
+            found += [f"{rel}: from {m.group(1)} import {n}" for n in names
+                      if f"{m.group(1)}.{n}" in modules]  # fmt: skip
+        if path.suffix != ".py":
+            continue
+        for line, module, names in _absolute_imports(path):
+            hits = [module] if module in paths or module.rpartition(".")[0] in paths else []
+            hits += [f"{module}.{n}" for n in names if f"{module}.{n}" in modules]
+            found += [f"{rel}:{line} imports {h}" for h in hits]
+    assert not found, "retired module paths in use (use the new module):\n" + "\n".join(found)

@@ -36,7 +36,7 @@ __all__ = [
 DEFAULT_TOL = 1e-12
 #: Tightest tolerance the NUFFT kernels reach (kernel width cap 16); below it use "direct".
 NUFFT_TOL_FLOOR = 1e-13
-#: What the retired paths of the method modules (``speckle.imaging.nufft``, ...) say to use.
+#: What the retired paths of the method modules (``speckle.imaging.<module>``) say to use.
 METHODS_INSTEAD = "methods by name: speckle.ascan(method=...), speckle.beam_scan(method=...)"
 
 #: ``estimate(name) -> (predicted relative error, predicted time in ns)``.

@@ -7,6 +7,6 @@ and row/raster paths), ``carrier`` (the carrier phase and wrapped positions ever
 shares), ``_kernels`` and ``_beam_kernels`` (numba). Users choose a method by name:
 ``speckle.ascan(..., method=)`` and ``speckle.beam_scan(..., method=)``, from the tables of
 :mod:`speckle.imaging.methods`; ``speckle.imaging.synthesis`` predicts their errors and costs.
-The modules' old public paths (``speckle.imaging.nufft``, ...) are shims that warn for a
+The modules' old public paths (``speckle.imaging.<module>``) are shims that warn for a
 release (``speckle._deprecate.retired_module``).
 """

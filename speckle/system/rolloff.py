@@ -1,0 +1,10 @@
+"""Retired path (issue 32) of the private :mod:`speckle.system._rolloff`.
+
+Use ``from speckle.system import rolloff``. Importing this path warns once (``FutureWarning``)
+and gives the old module's names; ``speckle.system.rolloff`` stays the function. The path will be
+removed in the next release.
+"""
+
+from .._deprecate import retired_module
+
+__getattr__, __dir__, __all__ = retired_module(__name__, "speckle.system._rolloff")
