@@ -10,6 +10,7 @@ the old path is imported, in either order. Each case runs in a fresh interpreter
 
 from __future__ import annotations
 
+import ast
 import functools
 import json
 import subprocess
@@ -156,3 +157,22 @@ except AttributeError as err:
     print(json.dumps({"error": str(err)}))
 """
     assert "'speckle.imaging.nufft' has no attribute 'no_such_name'" in _run(code)["error"]
+
+
+def test_every_shim_is_listed_and_every_listed_path_has_a_shim():
+    """The files that call ``retired_module`` are exactly the paths of kind ``module``."""
+
+    def calls_it(path: Path) -> bool:
+        return any(
+            isinstance(node, ast.Assign)
+            and isinstance(node.value, ast.Call)
+            and getattr(node.value.func, "id", None) == "retired_module"
+            for node in ast.parse(path.read_text()).body
+        )
+
+    shims = sorted(
+        ".".join(path.relative_to(REPO).with_suffix("").parts)
+        for path in (REPO / "speckle").rglob("*.py")
+        if calls_it(path)
+    )
+    assert shims == MODULES
