@@ -244,6 +244,9 @@ RETIRED: dict[str, tuple[str, str]] = {
     "interpolate_displacement.aline": ("x", "parameter"),
     "window_aline_pixels": ("window_x_pixels", "attr"),
     "step_aline_pixels": ("step_x_pixels", "attr"),
+    # displacement fields are quantities over the image (issue 32, xrest): dims (depth, x)
+    "pixel_displacement.aline": ("x", "parameter"),
+    "uniaxial_pixel_displacement.aline": ("x", "parameter"),
 }
 
 
