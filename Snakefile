@@ -7,6 +7,7 @@ import yaml
 from snakemake.utils import min_version, validate
 
 from speckle.pipeline.checks import check_config
+from speckle.pipeline.config_keys import rename_retired_keys
 
 min_version("9.0")
 
@@ -14,6 +15,8 @@ min_version("9.0")
 configfile: "workflow/config/config.yaml"
 
 
+# retired keys (fragment.aline -> fragment.x) read under their new names, warning; both refused
+rename_retired_keys(config, given=workflow.overwrite_configfiles)
 validate(config, "workflow/schemas/config.schema.yaml")
 # what the schema cannot say (16.0 as integer, .inf, cross-field rules, memory): before any job
 check_config(

@@ -257,6 +257,9 @@ RETIRED: dict[str, tuple[str, str]] = {
         f"speckle.imaging.{m}": (f"speckle.imaging._methods.{m}", "module")
         for m in ("direct", "nufft", "psf", "carrier", "beam_nufft", "beam_row")
     },
+    # displacement fields are quantities over the image (issue 32, xrest): dims (depth, x)
+    "pixel_displacement.aline": ("x", "parameter"),
+    "uniaxial_pixel_displacement.aline": ("x", "parameter"),
 }
 
 

@@ -56,3 +56,24 @@ def test_an_x_image_does_not_warn(pair):
     with warnings.catch_warnings():
         warnings.simplefilter("error", FutureWarning)
         speckle.correlation_map(ref, ref, window=8)
+
+
+def test_a_displacement_field_is_over_x_and_an_aline_field_warns_with_the_same_numbers(pair):
+    """Displacement fields are quantities over the image (dims ``depth, x``); a field written
+    before issue 32, over ``(depth, aline)``, is renamed with a FutureWarning in ``compensate``
+    and ``track(truth=)``, giving identical results."""
+    from speckle.scene.deformation import uniaxial_pixel_displacement
+
+    _, images = pair
+    ref, dfm = images.isel(strain=0), images.isel(strain=1)
+    disp = uniaxial_pixel_displacement([0.01], dfm.depth.values, dfm.x.values).isel(strain=0)
+    assert disp.uz.dims == ("depth", "x")
+    old = disp.rename(x="aline")
+    new = speckle.compensate(dfm, disp)
+    with pytest.warns(FutureWarning, match="dim 'aline' is now 'x'"):
+        np.testing.assert_array_equal(speckle.compensate(dfm, old).values, new.values)
+    kw = dict(window=(16, 3), step=(8, 1))
+    tracked = speckle.track(ref.field, dfm.field, truth=disp, **kw)
+    with pytest.warns(FutureWarning, match="dim 'aline' is now 'x'"):
+        again = speckle.track(ref.field, dfm.field, truth=old, **kw)
+    np.testing.assert_array_equal(again.uz_residual.values, tracked.uz_residual.values)

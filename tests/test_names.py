@@ -212,7 +212,11 @@ def _retired_parameters():
 def test_a_retired_parameter_is_renamed_and_its_old_keyword_warns(func, old, new):
     """``lines`` for line positions, ``apodization`` for spectral windows: the function takes
     the new name, and the old keyword still works for a release, warning."""
-    f = getattr(speckle, func, None) or getattr(speckle.system.spectrometer, func)
+    f = (
+        getattr(speckle, func, None)
+        or getattr(speckle.system.spectrometer, func, None)
+        or getattr(speckle.scene.deformation, func)
+    )
     params = inspect.signature(f).parameters
     assert new in params and old not in params, (func, list(params))
     with pytest.warns(FutureWarning, match=rf"{func}: parameter '{old}' is now '{new}'"):
@@ -235,24 +239,19 @@ def test_the_old_keyword_gives_the_same_result():
 PACKAGE_ROOT = Path(speckle.__file__).parent
 #: Files allowed to spell retired names: the table itself and the deprecation machinery.
 SHIM_FILES = {"conventions.py", "_deprecate.py"}
-#: Files still using the retired dim ``aline`` as a string (issue 32, step 1 not finished), and
-#: how many times: the count only shrinks (a new use fails); remove a file's row when it is 0.
+#: Files spelling ``aline`` as a string, and how many times: only as the SCENE dim of independent
+#: lines (scatterers per line), never an image's or a field's lateral dim (that is ``x``). The
+#: count only shrinks (a new use fails); remove a file's row when it is 0.
 ALINE_LEFT = {
-    "analysis/_common.py": 2,
-    "figures/elastography.py": 2,
-    "figures/static.py": 1,
-    "imaging/_bscan.py": 2,
-    "imaging/beam_lines.py": 4,
-    "imaging/timeseries.py": 1,
-    "pipeline/checks.py": 1,
-    "pipeline/phantom_real_checks.py": 1,
-    "scene/deformation.py": 20,
-    "scene/mechanics.py": 1,
-    "scene/scatterers.py": 5,
-    "scene/shared.py": 3,
-    "system/_scene.py": 1,
-    "system/phase.py": 2,
-    "system/polarization.py": 2,
+    "imaging/_bscan.py": 2,  # map_lines: the one place a line scene's aline becomes the image's x
+    "imaging/beam_lines.py": 4,  # builds a line scene (aline, scatterer) from a shared scene
+    "imaging/timeseries.py": 1,  # recognises a line scene over (time, aline, scatterer)
+    "scene/deformation.py": 13,  # deforms and re-bins line scenes over (aline, scatterer)
+    "scene/scatterers.py": 5,  # random_scatterers: makes the line scene (aline, scatterer)
+    "scene/shared.py": 3,  # from_lines: reads a line scene (aline, scatterer)
+    "system/_scene.py": 1,  # a line scene's lateral positions: its aline coordinate
+    "system/phase.py": 2,  # a line scene's lines (aline) get their phase noise
+    "system/polarization.py": 2,  # a line scene's lines (aline) each draw one stream
 }
 
 

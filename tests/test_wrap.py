@@ -203,15 +203,14 @@ import speckle.analysis  # noqa: E402
 
 #: Modules whose functions are being moved onto the decorator (issue 32, helper wrapb): their
 #: functions are not yet required to be decorated. Shrink-only: remove a module once done.
-PENDING_MODULES = {
-    "speckle.analysis.measured",
-}
+PENDING_MODULES: set[str] = set()
 #: Public functions that need no decorator, each with its reason.
 NOT_WRAPPED = {
     "filter_available": "takes a filter name, no array",
     "subband_fwhm": "takes two sizes, no array",
     "subband_apodizations": "takes sizes and an apodization name, no array",
     "brownian_frames": "scene: a scatterer Dataset (positions per scatterer), not an image",
+    "load_measured": "takes a file path, no array (retired shim of speckle.io.load_image)",
     **{
         n: "the one xarray wrapper of a decorated numpy core (*_array): a Dataset gives its "
         "intensity or, without one, its field (two variables; ArraySpec.variable names one)"

@@ -23,7 +23,6 @@ __all__ = [
     "label_looks",
     "matched",
     "parse_window",
-    "pixel_field",
     "same_grid",
 ]
 
@@ -31,19 +30,6 @@ __all__ = [
 #: The image dims of the analysis modules (issue 32: the lateral dim of every image is ``x``;
 #: ``aline`` is accepted for one release through :func:`speckle.conventions.canonical_dims`).
 DEPTH, LATERAL = "depth", "x"
-
-
-def pixel_field(displacement: xr.Dataset) -> xr.Dataset:
-    """A displacement field at an image's pixels ``(depth, x)``.
-
-    The scene module's fields (:func:`speckle.scene.deformation.pixel_displacement`) are over
-    its lines ``(depth, aline)``: the same lateral positions (µm) as the image's ``x``, so the
-    dim is renamed without a warning (``aline`` is a scene dim, not a retired image dim).
-    """
-    if isinstance(displacement, xr.Dataset) and "aline" in displacement.dims:
-        stale = [LATERAL] if LATERAL in displacement.variables else []  # not a dim: dropped
-        return displacement.drop_vars(stale).rename({"aline": LATERAL})
-    return displacement
 
 
 def depth_major(image: object) -> np.ndarray:

@@ -32,9 +32,9 @@ from scipy import ndimage
 from .._deprecate import keyword_only, moved
 from .._validate import check_bool, check_choice, check_int, check_real
 from .._wrap import ArraySpec, preprocess_and_wrap
-from ..conventions import attrs, coord, grid
+from ..conventions import attrs, canonical_dims, coord, grid
 from ..system.source import index_shift_phase, spectral_index
-from ._common import DEPTH, LATERAL, grid_spacing, matched, parse_window, pixel_field, same_grid
+from ._common import DEPTH, LATERAL, grid_spacing, matched, parse_window, same_grid
 from ._kernels import lagrange_resample
 from .correlation_forms import amplitude_from_gamma
 
@@ -278,8 +278,8 @@ def compensate(
             "displacement must be an xarray.Dataset with 'uz' (µm), got "
             f"{type(displacement).__name__}"
         )
+    displacement = canonical_dims(displacement, "displacement")  # (depth, aline): x, warning
     check_field(displacement, extra_dims=[d for d in field.dims if d != "depth"])
-    displacement = pixel_field(displacement)  # (depth, aline) of the scene module: x
     pixel, pitch = grid_spacing(field)  # from the coordinates, refused if missing/non-uniform
     k0 = grid(field).k0  # the central wavenumber in the medium (attribute k0), or None
     if carrier and k0 is None:

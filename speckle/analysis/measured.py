@@ -37,6 +37,7 @@ from scipy import integrate, optimize, special, stats
 
 from .._deprecate import renamed_parameters
 from .._validate import as_finite_array, check_choice, check_int, check_real
+from .._wrap import ArraySpec, preprocess_and_wrap
 from ..conventions import attrs, canonical_dims, canonical_keys, coord
 
 __all__ = [
@@ -59,6 +60,11 @@ SCALES = ("linear", "log")
 GUMBEL_SKEWNESS = float(-2.0 * special.zeta(3.0) / (np.pi**2 / 6.0) ** 1.5)
 GUMBEL_EXCESS_KURTOSIS = 2.4
 _BLOCKS = "from A-line blocks"
+#: A measured image: a real ``(depth, x)`` DataArray (``x`` read from ``aline``, warning), its
+#: labels kept (its ``kind`` or ``scale`` attribute says how to take its log).
+_MEASURED = ArraySpec(
+    kind="real", dims=("depth", "x"), min_shape=(2, 2), labelled=True, keep_labels=True
+)
 
 
 def _read(path: str | os.PathLike, *, mmap: bool = False) -> np.ndarray:
@@ -102,8 +108,8 @@ def roi_slices(roi: Mapping | None, shape: tuple[int, int]) -> dict[str, slice]:
     ----------
     roi : mapping, optional
         ``{"depth": [start, stop], "x": [start, stop]}`` in pixel indices (half-open, either
-        key optional, ``None`` bounds allowed; the retired key ``x`` is read as ``x``,
-        warning).
+        key optional, ``None`` bounds allowed; the retired key ``aline`` is read as
+        ``x``, warning).
     shape : (int, int)
         Image shape ``(depth, x)``.
 
@@ -375,7 +381,11 @@ def log_statistics(image: xr.DataArray, *, n_blocks: int = 16) -> xr.Dataset:
         steps) and, with theory for fully developed speckle, ``skewness_theory`` and
         ``excess_kurtosis_theory``.
     """
-    d = log_intensity(_checked(image))
+    return _log_statistics(image, log_intensity(_checked(image)), n_blocks)
+
+
+def _log_statistics(image: xr.DataArray, d: xr.DataArray, n_blocks: int) -> xr.Dataset:
+    """:func:`log_statistics` of a checked ``image`` whose log intensity is ``d``."""
     if "x" not in d.dims:
         raise TypeError("image must have an 'x' dim")
     nb = check_int(n_blocks, "n_blocks", low=2, high=d.sizes["x"])
@@ -444,7 +454,11 @@ def fit_floor(image: xr.DataArray) -> xr.Dataset:
         and ``skewness_model``. ``floor`` is 0 when the data are at least as skewed as fully
         developed speckle.
     """
-    d = log_intensity(_checked(image))
+    return _fit_floor(log_intensity(_checked(image)))
+
+
+def _fit_floor(d: xr.DataArray) -> xr.Dataset:
+    """:func:`fit_floor` of the log intensity ``d`` of a checked image."""
     x = _sample(d)
     target = float(stats.skew(x))
     if target <= GUMBEL_SKEWNESS:
@@ -501,6 +515,7 @@ def standardise(image: xr.DataArray) -> xr.DataArray:
     )
 
 
+@preprocess_and_wrap(checks={"image": _MEASURED})
 def compare_measured(image: xr.DataArray, *, n_blocks: int = 16) -> xr.Dataset:
     """All measured-versus-model numbers for one image ROI.
 
@@ -521,17 +536,18 @@ def compare_measured(image: xr.DataArray, *, n_blocks: int = 16) -> xr.Dataset:
     >>> sorted(out.data_vars)[:2]
     ['clipped_fraction', 'depth_slope']
     """
-    scale = _scale_of(image)
-    image = canonical_dims(_checked(image))
-    st = log_statistics(image, n_blocks=n_blocks)
-    fl = fit_floor(image)
+    scale = _scale_of(image)  # image: checked by the decorator (real, finite, (depth, x))
+    if image.size < 8:
+        raise ValueError(f"image must hold at least 8 pixels, got sizes {dict(image.sizes)}")
     d = log_intensity(image)
+    st = _log_statistics(image, d, n_blocks)
+    fl = _fit_floor(d)
     rows = d.mean("x").values
     t = np.arange(rows.size, dtype=float)
     slope, intercept = np.polyfit(t, rows, 1)
     trend_var = float(np.var(slope * t + intercept))
     detr = (d - d.mean("x")).values.ravel()
-    z = np.sort(standardise(image).values.ravel())
+    z = np.sort(((d - d.mean()) / d.std()).values.ravel())  # standardise(image)
     ecdf_hi = np.arange(1, z.size + 1) / z.size
     ecdf_lo = np.arange(z.size) / z.size
 

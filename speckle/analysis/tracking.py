@@ -40,8 +40,8 @@ from .._validate import (
     check_real,
 )
 from .._wrap import ArraySpec, preprocess_and_wrap
-from ..conventions import attrs, coord
-from ._common import DEPTH, LATERAL, grid_spacing, parse_window, pixel_field
+from ..conventions import attrs, canonical_dims, coord
+from ._common import DEPTH, LATERAL, grid_spacing, parse_window
 from ._kernels import refine_shifts, window_moments
 from .correlation import oversample_depth, sample_field
 
@@ -566,6 +566,7 @@ def track(
             f"truth must be an xarray.Dataset with 'uz' (µm) on the pixel grid, got "
             f"{type(truth).__name__}"
         )
+    truth = canonical_dims(truth, "truth")  # a field over (depth, aline): x, warning
     ref, dfm = reference, deformed  # fields (depth, x), finite, same grid: the decorator
     pixel, pitch = grid_spacing(ref)
     res = track_array.__wrapped__(  # the numpy body: checked by track's decorator
@@ -610,10 +611,7 @@ def track(
         },
     )
     if truth is not None:
-        exact = (
-            pixel_field(truth)["uz"].interp(depth=out.depth, x=out.x, kwargs={"fill_value": None})
-            / pixel
-        )
+        exact = truth["uz"].interp(depth=out.depth, x=out.x, kwargs={"fill_value": None}) / pixel
         resid = out["uz_pixels"] - exact
         out["uz_residual"] = resid.assign_attrs(attrs("pixels", "tracked minus exact displacement"))
         out["failed"] = (~(abs(resid) <= tol)).assign_attrs(

@@ -159,8 +159,7 @@ def strain_point(
     disp = disp.isel(strain=0)
     exact = corr.compensate(dfm, disp)
     # the same positions with the carrier exp(2i k0 u_z) put back
-    uz = disp["uz"].rename(aline="x")  # the scene's lines are the image's x
-    no_carrier = exact * np.exp(2j * float(dfm.attrs["k0"]) * uz)
+    no_carrier = exact * np.exp(2j * float(dfm.attrs["k0"]) * disp["uz"])
     window = tuple(fig6["window"])
     out = {}
     for kind in corr.KINDS:

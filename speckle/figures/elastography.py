@@ -135,7 +135,7 @@ def inclusion_data(cfg: Mapping, seed: int) -> xr.Dataset:
     ic = cfg["inclusion"]
     lines = int(ic.get("n_alines", cfg["n_alines"]))
     labels, fe = _inclusion_fe(cfg, lines, float(ic["strain"]))
-    disp = fe[["uz", "ux"]].rename(x="aline")  # a displacement of the scene's lines
+    disp = fe[["uz", "ux"]]  # over (depth, x): read at the scene's line positions
     truth = fe["strain_zz"].values
     ds = _maps(cfg, seed, [_uniform(0.0), disp], fe["youngs_modulus"].values, truth, lines)
     wz, wx = _window(cfg)
@@ -716,7 +716,7 @@ def sequence_large_frames(cfg: Mapping, seed: int) -> tuple[xr.DataArray, float]
     p = float(cfg["pixel_size"])
     depth, x = np.arange(n) * p, np.arange(lines) * p
     _, fe = _inclusion_fe(cfg, lines, s)
-    disp = fe[["uz", "ux"]].rename(x="aline").load()
+    disp = fe[["uz", "ux"]].load()
     max_strain = min(0.5, 2 * n_frames * s)
     parts = [
         da.from_delayed(

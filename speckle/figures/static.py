@@ -26,7 +26,7 @@ from matplotlib.ticker import MaxNLocator
 
 from .._validate import as_finite_array, check_int
 from ..analysis.statistics import fit_rayleigh, histogram, rayleigh_pdf
-from ..conventions import attrs, coord, depth_range_of
+from ..conventions import attrs, canonical_keys, coord, depth_range_of
 from ..imaging.aline import ascan, pixel_depths
 from ..provenance import provenance_attrs
 from ..sweep import sweep
@@ -327,15 +327,16 @@ def k0_sweep(
 
 
 def fragment(ds: xr.Dataset, frag: Mapping[str, int]) -> xr.Dataset:
-    """The ``size`` x ``size`` pixel fragment of a B-scan starting at pixel ``depth``,
-    ``aline`` (keys of ``fragment``: ``aline`` indexes the dim ``x``).
+    """The ``size`` x ``size`` pixel fragment of a B-scan starting at pixel ``depth``, ``x``.
 
-    ``frag`` holds integer pixel indices ``depth`` and ``aline`` (top-left corner) and ``size``;
-    a fragment that does not fit in the image raises ``ValueError``.
+    ``frag`` holds integer pixel indices ``depth`` and ``x`` (top-left corner) and ``size``
+    (the retired key ``aline`` is read as ``x``, warning); a fragment that does not fit in the
+    image raises ``ValueError``.
     """
+    frag = canonical_keys(frag, "fragment")
     size = check_int(frag["size"], "fragment.size", low=1)
     d0 = check_int(frag["depth"], "fragment.depth", low=0, high=ds.sizes["depth"] - size)
-    a0 = check_int(frag["aline"], "fragment.aline", low=0, high=ds.sizes["x"] - size)
+    a0 = check_int(frag["x"], "fragment.x", low=0, high=ds.sizes["x"] - size)
     return ds.isel(depth=slice(d0, d0 + size), x=slice(a0, a0 + size))
 
 

@@ -2,6 +2,7 @@
 
 from . import adapters as adapters
 from . import checks as checks
+from . import config_keys as config_keys
 from . import defaults as defaults
 from . import dynamics_checks as dynamics_checks
 from . import outputs as outputs
@@ -28,6 +29,9 @@ from .checks import (
     figure_bytes,
     tol_floor,
 )
+from .config_keys import (
+    rename_retired_keys,
+)
 from .defaults import (
     default_config,
 )
@@ -50,6 +54,7 @@ __all__ = [
     "figure_bytes",
     "log_to",
     "random_bscan",
+    "rename_retired_keys",
     "resolve_source",
     "run",
     "save",

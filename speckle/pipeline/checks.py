@@ -96,7 +96,7 @@ def _density_floor(density: float, n_pixels: int, key: str) -> None:
 def _fragment(frag: Mapping, n_pixels: int, n_alines: int, key: str) -> None:
     for dim, extent, what in (
         ("depth", n_pixels, "source.n_pixels"),
-        ("aline", n_alines, f"{key.split('.')[0]}.n_alines"),
+        ("x", n_alines, f"{key.split('.')[0]}.n_alines"),
     ):
         if frag[dim] + frag["size"] > extent:
             raise ValueError(

@@ -11,6 +11,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from ..conventions import canonical_keys
 from ..io import load_image
 
 __all__ = ["check_phantom_real"]
@@ -27,7 +28,7 @@ def _shape(cfg: Mapping, key: str) -> tuple[int, int]:
     dims = cfg.get("dims")
     if str(path).endswith(".npy") and dims is not None:
         shape = np.load(path, mmap_mode="r").shape
-        names = ["x" if d == "aline" else d for d in dims]
+        names = list(canonical_keys(dict.fromkeys(dims), f"config key {key}.dims"))
         if len(names) != len(shape):
             raise ValueError(
                 f"config key {key}.dims = {list(dims)} does not name the {len(shape)} axes of "

@@ -29,8 +29,9 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import xarray as xr
 
+from .._deprecate import renamed_parameters
 from .._validate import as_finite_array, check_bool, check_int, check_real
-from ..conventions import attrs, coord, depth_range_of, spacing
+from ..conventions import attrs, canonical_dims, coord, depth_range_of, spacing
 from .scatterers import line_generator, random_scatterers
 from .shared import check_not_empty, check_scene, is_shared
 
@@ -50,8 +51,10 @@ __all__ = [
 #: Sub-stream of :func:`speckle.scene.scatterers.line_generator` for lateral positions in the beam.
 LATERAL_STREAM = 1
 
-#: Dims a displacement field given as an xarray object may have (material coordinates).
-FIELD_DIMS = ("depth", "aline")
+#: Dims a displacement field given as an xarray object may have (material coordinates): a
+#: quantity over the image, lateral dim ``x`` (issue 32; ``aline`` is read as ``x`` for a
+#: release, warning).
+FIELD_DIMS = ("depth", "x")
 
 Displacement = Callable[..., object] | xr.DataArray | xr.Dataset
 
@@ -213,9 +216,12 @@ def _at_scatterers(values: np.ndarray, name: str) -> np.ndarray:
 
 
 def _field_values(
-    displacement: Displacement, z: np.ndarray, x: np.ndarray, aline: np.ndarray | None = None
+    displacement: Displacement, z: np.ndarray, x: np.ndarray, lines: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Evaluate a displacement (callable or xarray field) at material points (µm)."""
+    """Evaluate a displacement (callable or xarray field) at material points (µm).
+
+    A callable gets the scatterers' own lateral positions ``x``; an xarray field is read at
+    their lines' positions ``lines`` (default ``x``) along its ``x`` dim."""
     if callable(displacement) and not isinstance(displacement, xr.DataArray | xr.Dataset):
         out = displacement(z, x)
         if isinstance(out, tuple) and len(out) != 2:
@@ -231,8 +237,9 @@ def _field_values(
             "displacement must be a callable f(z, x) -> u_z or (u_z, u_x) in µm, or an xarray "
             f"DataArray/Dataset (variables uz[, ux]); got {type(displacement).__name__}"
         )
+    displacement = canonical_dims(displacement, "displacement field")  # aline: x, warning
     check_field(displacement)
-    aline_pos = x if aline is None else aline
+    line_pos = x if lines is None else lines
     out = []
     for name in ("uz", "ux"):
         if name not in displacement:
@@ -242,8 +249,8 @@ def _field_values(
         pts = {}
         if "depth" in da.dims:
             pts["depth"] = xr.DataArray(z.ravel(), dims="points")
-        if "aline" in da.dims:
-            pts["aline"] = xr.DataArray(np.broadcast_to(aline_pos, z.shape).ravel(), dims="points")
+        if "x" in da.dims:
+            pts["x"] = xr.DataArray(np.broadcast_to(line_pos, z.shape).ravel(), dims="points")
         if pts:
             # linear extrapolation beyond the coordinates: scipy's interp1d spells it
             # "extrapolate" (one interpolated dim), interpn None (several)
@@ -282,12 +289,12 @@ def check_line_scene(scene: object, name: str = "scene") -> None:
 
 
 def check_field(displacement: xr.Dataset, extra_dims: Sequence[str] = ()) -> None:
-    """Check a displacement field: variables ``uz``/``ux`` over dims ``depth``/``aline`` only.
+    """Check a displacement field: variables ``uz``/``ux`` over dims ``depth``/``x`` only.
 
     Raises
     ------
     ValueError
-        On a missing ``uz``, a dim other than ``depth``/``aline`` (and ``extra_dims``), a
+        On a missing ``uz``, a dim other than ``depth``/``x`` (and ``extra_dims``), a
         missing coordinate or NaN/infinite values.
     """
     if "uz" not in displacement:
@@ -337,8 +344,10 @@ def displace(scene: xr.Dataset, displacement: Displacement, *, wrap: bool = Fals
     displacement : callable or xarray.DataArray or xarray.Dataset
         Either ``f(z, x) -> u_z`` or ``f(z, x) -> (u_z, u_x)`` (µm, arrays shaped like ``z``),
         or a field on material coordinates: a DataArray of ``u_z`` or a Dataset with ``uz`` and
-        optionally ``ux``, with dims among ``depth`` and ``aline`` (coordinates in µm),
-        interpolated linearly (extrapolated linearly beyond its coordinates).
+        optionally ``ux``, with dims among ``depth`` and ``x`` (coordinates in µm, as an
+        image's; a line scene reads it at its lines' positions), interpolated linearly
+        (extrapolated linearly beyond its coordinates). A field over the retired dim name
+        ``aline`` is read as ``x`` for a release, with a ``FutureWarning``.
     wrap : bool
         Keep scatterers displaced outside ``[0, H)`` so they alias into the image (``True``),
         or give them amplitude 0 (``False``, default; see module docstring).
@@ -651,41 +660,50 @@ def translate(scene: xr.Dataset, dz: object, dx: float = 0.0, *, wrap: bool = Fa
     return _stack(scenes, "shift", np.atleast_1d(dzs), attrs("displacement", "axial translation"))
 
 
-def pixel_displacement(
-    displacement: Displacement, depth: np.ndarray, aline: np.ndarray
-) -> xr.Dataset:
+@renamed_parameters({"aline": "x"})
+def pixel_displacement(displacement: Displacement, depth: np.ndarray, x: np.ndarray) -> xr.Dataset:
     """A displacement evaluated at pixel centres (material coordinates) of an image.
 
     Parameters
     ----------
     displacement : callable or xarray object
         As in :func:`displace`.
-    depth, aline : array_like
-        Pixel-centre depths and A-line positions in µm (the image coordinates).
+    depth, x : array_like
+        Pixel-centre depths and lateral positions in µm (the image's coordinates ``depth``
+        and ``x``; the retired keyword ``aline=`` is read as ``x=``, warning).
 
     Returns
     -------
     xarray.Dataset
-        ``uz`` and ``ux`` in µm with dims ``(depth, aline)``.
+        ``uz`` and ``ux`` in µm with dims ``(depth, x)``, on the image's grid.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from speckle.scene.deformation import pixel_displacement
+    >>> u = pixel_displacement(lambda z, x: -0.01 * z, np.arange(3) * 8.0, np.arange(2) * 5.0)
+    >>> u.uz.dims, u.uz.values[:, 0].tolist()
+    (('depth', 'x'), [-0.0, -0.08, -0.16])
     """
     d = np.asarray(depth, float)
-    a = np.asarray(aline, float)
+    a = np.asarray(x, float)
     zz, xx = np.meshgrid(d, a, indexing="ij")
     uz, ux = _field_values(displacement, zz, xx, xx)
-    coords = {"depth": coord("depth", d), "aline": coord("aline", a)}
+    coords = {"depth": coord("depth", d), "x": coord("x", a)}
     return xr.Dataset(
         {
-            "uz": (("depth", "aline"), uz, attrs("displacement", "axial displacement")),
-            "ux": (("depth", "aline"), ux, attrs("displacement", "lateral displacement")),
+            "uz": (("depth", "x"), uz, attrs("displacement", "axial displacement")),
+            "ux": (("depth", "x"), ux, attrs("displacement", "lateral displacement")),
         },
         coords=coords,
     )
 
 
+@renamed_parameters({"aline": "x"})
 def uniaxial_pixel_displacement(
     strain: object,
     depth: np.ndarray,
-    aline: np.ndarray,
+    x: np.ndarray,
     *,
     poisson_ratio: float = 0.0,
     x_centre: float | None = None,
@@ -696,24 +714,33 @@ def uniaxial_pixel_displacement(
     ----------
     strain : float or array_like
         Uniaxial strain(s), compression > 0.
-    depth, aline : array_like
-        Pixel-centre depths and A-line positions in µm (the image coordinates).
+    depth, x : array_like
+        Pixel-centre depths and lateral positions in µm (the image's coordinates ``depth``
+        and ``x``; the retired keyword ``aline=`` is read as ``x=``, warning).
     poisson_ratio : float
         In ``[0, 0.5]``.
     x_centre : float, optional
-        Lateral centre in µm; defaults to the middle of ``aline`` (as in
+        Lateral centre in µm; defaults to the middle of ``x`` (as in
         :func:`uniaxial_strain`).
 
     Returns
     -------
     xarray.Dataset
-        ``uz``/``ux`` in µm with dims ``(strain, depth, aline)``.
+        ``uz``/``ux`` in µm with dims ``(strain, depth, x)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from speckle.scene.deformation import uniaxial_pixel_displacement
+    >>> u = uniaxial_pixel_displacement([0.01, 0.02], np.arange(3) * 8.0, np.arange(2) * 5.0)
+    >>> u.uz.dims, u.uz.sel(strain=0.02).values[:, 0].tolist()
+    (('strain', 'depth', 'x'), [-0.0, -0.16, -0.32])
     """
     s = check_strain(strain)
-    xc = float(np.mean(aline)) if x_centre is None else x_centre
+    xc = float(np.mean(x)) if x_centre is None else x_centre
     fields = [
         pixel_displacement(
-            uniaxial_displacement(si, poisson_ratio=poisson_ratio, x_centre=xc), depth, aline
+            uniaxial_displacement(si, poisson_ratio=poisson_ratio, x_centre=xc), depth, x
         )
         for si in s
     ]

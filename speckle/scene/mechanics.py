@@ -61,7 +61,7 @@ from speckle._validate import (
     check_memory,
     check_real,
 )
-from speckle.conventions import attrs, coord, units_of
+from speckle.conventions import attrs, canonical_dims, coord, units_of
 from speckle.scene.regions import check_modulus, in_ellipse
 
 __all__ = [
@@ -81,8 +81,6 @@ __getattr__ = moved(__name__, __name__, [], {"compress": "compress_phantom"})
 #: Probe/base contact conditions accepted by :func:`compress_phantom`.
 CONTACTS = ("bonded", "sliding")
 
-#: Names the lateral dim of a label image may have (``x``; ``aline`` for A-line scenes).
-LATERAL_DIMS = ("x", "aline")
 
 #: Largest Poisson ratio accepted (plane strain needs nu < 0.5, see the module docstring).
 NU_MAX = 0.5
@@ -206,10 +204,10 @@ def inclusion_labels(
         raise ValueError("radii must be one positive radius or (r_z, r_x) > 0 in µm")
     lab = check_int(label, "label")
     if isinstance(background, xr.DataArray):
-        base = _checked_labels(background)[0].values
+        checked = _checked_labels(background)[0]
+        base = checked.values
         if not (
-            np.array_equal(background["depth"].values, d)
-            and np.array_equal(background[LATERAL_DIMS[0]].values, xx)
+            np.array_equal(checked["depth"].values, d) and np.array_equal(checked["x"].values, xx)
         ):
             raise ValueError("background label image must have exactly the given depth and x")
     else:
@@ -219,18 +217,17 @@ def inclusion_labels(
 
 
 def _checked_labels(labels: object) -> tuple[xr.DataArray, str]:
-    """Labels transposed to ``(depth, lateral)`` and the name of the lateral dim."""
+    """Labels transposed to ``(depth, x)`` and the name of the lateral dim (``x``; a label
+    image over the retired dim ``aline`` is renamed, warning)."""
     if not isinstance(labels, xr.DataArray):
         raise TypeError(
             f"labels must be an integer xarray.DataArray over (depth, x), got "
             f"{type(labels).__name__}"
         )
-    lateral = [d for d in labels.dims if d in LATERAL_DIMS]
+    labels = canonical_dims(labels, "labels")
+    lateral = [d for d in labels.dims if d == "x"]
     if labels.ndim != 2 or "depth" not in labels.dims or len(lateral) != 1:
-        raise ValueError(
-            f"labels must have dims (depth, x) or (depth, aline) (coordinates in µm); got "
-            f"{labels.dims}"
-        )
+        raise ValueError(f"labels must have dims (depth, x) (coordinates in µm); got {labels.dims}")
     if not np.issubdtype(labels.dtype, np.integer):
         raise TypeError(f"labels must hold integers (region labels), got dtype {labels.dtype}")
     for dim in ("depth", lateral[0]):
@@ -402,9 +399,10 @@ def compress_phantom(
     Parameters
     ----------
     labels : xarray.DataArray
-        Integer region labels with dims ``(depth, x)`` (or ``(depth, aline)``), coordinates =
-        pixel centres in µm, strictly increasing (non-uniform grids allowed); the first depth
-        must lie in ``[0, depth[1] - depth[0]]`` (the first pixel row starts at the probe).
+        Integer region labels with dims ``(depth, x)`` (``aline`` is read as ``x``, warning),
+        coordinates = pixel centres in µm, strictly increasing (non-uniform grids allowed); the
+        first depth must lie in ``[0, depth[1] - depth[0]]`` (the first pixel row starts at
+        the probe).
     youngs_modulus : float or mapping of int to float
         Young's modulus in kPa (> 0), one for all or per label (every label present needs one).
     poisson_ratio : float or mapping of int to float
@@ -446,8 +444,8 @@ def compress_phantom(
         )
         moved = speckle.displace(scene, functools.partial(speckle.displacement_at, fe))
 
-    ``fe[["uz", "ux"]].rename(x="aline")`` is also a field :func:`speckle.displace` accepts
-    (linear interpolation between pixel centres instead of the exact FE field).
+    ``fe[["uz", "ux"]]`` is also a field :func:`speckle.displace` accepts (linear
+    interpolation between pixel centres instead of the exact FE field).
     """
     lab, lateral = _checked_labels(labels)
     s = check_real(strain, "strain", low=-1.0, high=1.0, low_inclusive=False, high_inclusive=False)

@@ -111,7 +111,7 @@ def test_fe_inclusion_displacement():
     x = sc.aline.values
     labels = speckle.inclusion_labels(depth, x, (H / 2, x.mean()), 160.0)
     fe = speckle.compress_phantom(labels, {0: 10.0, 1: 40.0}, 0.45, strain=s, contact="sliding")
-    disp = fe[["uz", "ux"]].rename(x="aline")
+    disp = fe[["uz", "ux"]]  # over (depth, x): read at the scene's line positions
     ref = speckle.bscan(speckle.displace(sc, lambda z, x: 0 * z), source(), method="nufft")
     dfm = speckle.bscan(speckle.displace(sc, disp), source(), method="nufft")
     truth = disp[["uz"]].assign_coords(depth=ref.depth, x=ref.x)

@@ -262,7 +262,7 @@ SHEET = {
 def _static():
     from speckle.figures import static
 
-    frag = {"depth": 0, "aline": 0, "size": 4}
+    frag = {"depth": 0, "x": 0, "size": 4}
     fig1 = static.single_scatterer([0.0, 1.25], [0.0, 10.0], n_pixels=8, pixel_size=8.0)
     images = static.density_sweep(
         [1.0, 4.0], k0_dk=10.0, n_alines=4, n_pixels=32, pixel_size=8.0, seed=2, dask=SYNC

@@ -5,6 +5,7 @@ from __future__ import annotations
 import matplotlib.figure
 import numpy as np
 import pytest
+import xarray as xr
 
 from speckle.figures import static
 
@@ -95,9 +96,14 @@ def test_density_sweep_is_normalised_and_scheduler_independent():
 
 def test_fragment_bounds():
     ds = static.speckle_image(1.0, 10.0, n_alines=10, n_pixels=N, pixel_size=PIXEL, seed=1)
-    assert static.fragment(ds, {"depth": 6, "aline": 0, "size": 10}).amplitude.shape == (10, 10)
+    assert static.fragment(ds, {"depth": 6, "x": 0, "size": 10}).amplitude.shape == (10, 10)
     with pytest.raises(ValueError, match=r"fragment\.depth"):
-        static.fragment(ds, {"depth": 7, "aline": 0, "size": 10})
+        static.fragment(ds, {"depth": 7, "x": 0, "size": 10})
+    with pytest.warns(FutureWarning, match="dim 'aline' is now 'x'"):  # retired key
+        old = static.fragment(ds, {"depth": 6, "aline": 0, "size": 10})
+    xr.testing.assert_identical(old, static.fragment(ds, {"depth": 6, "x": 0, "size": 10}))
+    with pytest.raises(ValueError, match=r"fragment\.x"):
+        static.fragment(ds, {"depth": 0, "x": 1, "size": 10})
 
 
 def test_dask_options_cap_local_workers():
@@ -115,7 +121,7 @@ def test_gaussian_source_needs_fwhm():
 
 
 def test_plots_draw(fig1):
-    frag = {"depth": 0, "aline": 0, "size": 4}
+    frag = {"depth": 0, "x": 0, "size": 4}
     images = static.density_sweep(
         [1.0, 4.0],
         k0_dk=10.0,

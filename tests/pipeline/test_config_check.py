@@ -15,13 +15,14 @@ import yaml
 
 import speckle
 from speckle.pipeline.checks import check_config, check_scan_table
+from speckle.pipeline.config_keys import rename_retired_keys
 
 SCHEMA = "workflow/schemas/config.schema.yaml"
 #: key path expected in the error, override (merged over the CI config).
 BAD_CONFIGS = {
     "fig3.method": {"fig3": {"method": "fastest"}},
     "fig5.n_alines": {"fig5": {"n_alines": 16.0}},
-    "fig2.fragment.depth": {"fig2": {"fragment": {"depth": 1000, "aline": 0, "size": 10}}},
+    "fig2.fragment.depth": {"fig2": {"fragment": {"depth": 1000, "x": 0, "size": 10}}},
     "source.fwhm_fraction": {"source": {"shape": "gaussian", "fwhm_fraction": None}},
     "source.k0_dk": {"source": {"k0_dk": float("inf")}},
     "fig5.density": {"fig5": {"density": float("nan")}},
@@ -110,3 +111,53 @@ def test_schema_method_enum_matches_the_package(schema):
     for sec in ("fig4", "fig6"):
         assert schema["properties"][sec]["properties"]["method"]["enum"] == enum
     assert schema["properties"]["speed_accuracy"]["properties"]["methods"]["items"]["enum"] == enum
+
+
+OLD_FRAGMENT = {"fig2": {"fragment": {"depth": 10, "aline": 3, "size": 4}}}
+
+
+def test_the_retired_fragment_key_is_read_as_x_with_a_warning(merged, schema, config_runs):
+    """``fragment.aline`` (before issue 32) is ``fragment.x``: an old config still loads,
+    warning; one giving both is refused, naming the key."""
+    config = config_runs.merge(merged, OLD_FRAGMENT)  # merged over the defaults: both keys
+    with pytest.warns(FutureWarning, match=r"fig2\.fragment\.aline is now fig2\.fragment\.x"):
+        rename_retired_keys(config, given=[OLD_FRAGMENT])
+    assert config["fig2"]["fragment"] == {"depth": 10, "x": 3, "size": 4}
+    check_config(config, schema)
+    both = {"fig2": {"fragment": {"depth": 10, "aline": 3, "x": 3, "size": 4}}}
+    with pytest.raises(
+        ValueError, match=r"fig2\.fragment has both 'aline'.*give only fig2\.fragment\.x"
+    ):
+        rename_retired_keys(config_runs.merge(merged, both), given=[both])
+    # layered files (e.g. ci.yaml, then an old override): the last one naming either key wins
+    new_x = {"fig2": {"fragment": {"x": 1}}}
+    for given, x in (([new_x, OLD_FRAGMENT], 3), ([OLD_FRAGMENT, new_x], 1)):
+        config = config_runs.merge(config_runs.merge(merged, given[0]), given[1])
+        with pytest.warns(FutureWarning, match=r"fig2\.fragment\.aline is now"):
+            rename_retired_keys(config, given=given)
+        assert config["fig2"]["fragment"] == {"depth": 10, "x": x, "size": 4}
+    with pytest.raises(ValueError, match=r"fig5\.fragment has both"):  # a config as a whole
+        rename_retired_keys({"fig5": {"fragment": {"aline": 0, "x": 0}}})
+    current = config_runs.merge(merged, {})
+    rename_retired_keys(current, given=[{}])  # nothing retired: no warning (-W error below)
+    assert current == merged
+
+
+@pytest.mark.filterwarnings("error::FutureWarning")
+def test_a_current_config_does_not_warn(merged):
+    config = dict(merged)
+    rename_retired_keys(config, given=[merged])
+
+
+@pytest.mark.slow
+def test_an_old_config_loads_with_a_warning_and_both_keys_stop(repo, config_runs):
+    old = repo / "old_fragment.yaml"
+    old.write_text(yaml.safe_dump(OLD_FRAGMENT))
+    proc = config_runs.dry_run(repo, old.name)
+    assert proc.returncode == 0, proc.stdout[-3000:]
+    assert "fig2.fragment.aline is now fig2.fragment.x" in proc.stdout
+    both = repo / "both_fragment.yaml"
+    both.write_text(
+        yaml.safe_dump({"fig2": {"fragment": {"depth": 10, "aline": 3, "x": 3, "size": 4}}})
+    )
+    config_runs.assert_refused(config_runs.dry_run(repo, both.name), "fig2.fragment")

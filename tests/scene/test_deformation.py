@@ -46,7 +46,7 @@ def test_displacement_field_with_wrong_dims_is_refused():
     field = xr.DataArray(
         np.zeros((3, 4)), dims=("y", "x"), coords={"y": np.arange(3.0), "x": np.arange(4.0)}
     )
-    with pytest.raises(ValueError, match=r"must have dims among \('depth', 'aline'\)"):
+    with pytest.raises(ValueError, match=r"must have dims among \('depth', 'x'\)"):
         D.displace(scene(), field)
 
 
@@ -161,18 +161,42 @@ def test_xarray_and_callable_fields_agree_with_uniaxial_strain():
         np.testing.assert_array_equal(by_field.amplitude, other.amplitude)
 
 
-def test_field_over_depth_and_aline_is_interpolated_in_both():
+def test_field_over_depth_and_x_is_interpolated_in_both():
+    """A field is a quantity over the image, dims (depth, x): a line scene reads it at its
+    lines' positions (its dim ``aline``)."""
     sc = scene()
     depth = np.linspace(0, H, 5)
-    aline = sc.aline.values
+    x = sc.aline.values
     uz = xr.DataArray(
-        np.add.outer(0.01 * depth, 0.5 * aline),
-        dims=("depth", "aline"),
-        coords={"depth": depth, "aline": aline},
+        np.add.outer(0.01 * depth, 0.5 * x), dims=("depth", "x"), coords={"depth": depth, "x": x}
     )
     out = D.displace(sc, uz, wrap=True)
     expected = sc.z + 0.01 * sc.z + 0.5 * sc.aline
     np.testing.assert_allclose(out.z, expected.transpose("aline", "scatterer"), rtol=1e-12)
+    # a field written before issue 32, over (depth, aline): read as x for a release, warning
+    with pytest.warns(FutureWarning, match="dim 'aline' is now 'x'"):
+        old = D.displace(sc, uz.rename(x="aline"), wrap=True)
+    xr.testing.assert_identical(old, out)
+
+
+def test_pixel_displacement_is_over_the_image_grid():
+    depth, x = np.arange(4) * 8.0, np.arange(3) * 5.0
+    u = D.pixel_displacement(lambda z, x: (-0.01 * z, 0.001 * x), depth, x)
+    assert u.uz.dims == u.ux.dims == ("depth", "x") and "aline" not in u.coords
+    np.testing.assert_array_equal(u.x, x)
+    np.testing.assert_allclose(u.ux.values, np.broadcast_to(0.001 * x, (4, 3)), rtol=1e-15)
+    s = D.uniaxial_pixel_displacement([0.01, 0.02], depth, x)
+    assert s.uz.dims == ("strain", "depth", "x")
+    for f, args in (
+        (D.pixel_displacement, (lambda z, x: -0.01 * z, depth)),
+        (
+            D.uniaxial_pixel_displacement,
+            ([0.01], depth),
+        ),
+    ):
+        with pytest.warns(FutureWarning, match="parameter 'aline' is now 'x'"):
+            old = f(*args, aline=x)
+        xr.testing.assert_identical(old, f(*args, x=x))
 
 
 def test_rigid_translation_and_shift_dim():

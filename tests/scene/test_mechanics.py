@@ -39,7 +39,7 @@ def test_bad_labels_are_refused():
     lab = block()
     with pytest.raises(TypeError, match=r"labels must be an integer xarray\.DataArray"):
         speckle.compress_phantom(lab.values, E0, NU, strain=S)
-    with pytest.raises(ValueError, match=r"dims \(depth, x\) or \(depth, aline\)"):
+    with pytest.raises(ValueError, match=r"dims \(depth, x\)"):
         speckle.compress_phantom(lab.rename(x="y"), E0, NU, strain=S)
     with pytest.raises(TypeError, match="labels must hold integers"):
         speckle.compress_phantom(lab.astype(float), E0, NU, strain=S)
@@ -341,15 +341,19 @@ def test_displace_with_fe_field_reproduces_uniaxial_strain(tmp_path):
     np.testing.assert_array_equal(moved.amplitude, ref.amplitude)
 
 
-def test_aline_labels_give_a_field_displace_accepts():
-    """Labels over (depth, aline) give uz/ux over (depth, aline), which speckle.displace takes
-    directly (linear interpolation between pixel centres: exact for a linear field)."""
+def test_aline_labels_warn_and_give_a_field_displace_accepts():
+    """Labels over the retired dim (depth, aline) are read as (depth, x), warning; the FE field
+    over (depth, x) is one speckle.displace takes directly for a line scene (read at its lines;
+    linear interpolation between pixel centres: exact for a linear field)."""
     n, pixel, s = 16, 4.0, 0.02
     scene = speckle.deformable_scene(6, 2.0, n_pixels=n, depth_range=n * pixel, seed=2, strain=s)
     depth = np.arange(0.0, scene.attrs["populated_depth"] + pixel, pixel)
-    lab = speckle.layered_labels(depth, scene.aline.values, []).rename(x="aline")
+    lab = speckle.layered_labels(depth, scene.aline.values, [])
+    with pytest.warns(FutureWarning, match="dim 'aline' is now 'x'"):
+        old = speckle.compress_phantom(lab.rename(x="aline"), E0, 0.0, strain=s, contact="sliding")
     res = speckle.compress_phantom(lab, E0, 0.0, strain=s, contact="sliding")
-    assert res.uz.dims == ("depth", "aline")
+    xr.testing.assert_identical(old, res)
+    assert res.uz.dims == ("depth", "x")
     moved = speckle.displace(scene, res)
     ref = speckle.uniaxial_strain(scene, s).isel(strain=0)
     np.testing.assert_allclose(moved.z, ref.z, atol=1e-11)
