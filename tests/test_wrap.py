@@ -201,9 +201,6 @@ import inspect  # noqa: E402
 
 import speckle.analysis  # noqa: E402
 
-#: Modules whose functions are being moved onto the decorator (issue 32, helper wrapb): their
-#: functions are not yet required to be decorated. Shrink-only: remove a module once done.
-PENDING_MODULES: set[str] = set()
 #: Public functions that need no decorator, each with its reason.
 NOT_WRAPPED = {
     "filter_available": "takes a filter name, no array",
@@ -226,11 +223,9 @@ def _analysis_functions():
             yield name, obj
 
 
-@pytest.mark.parametrize("name", [n for n, _ in _analysis_functions()])
+@pytest.mark.parametrize("name", [n for n, _ in _analysis_functions() if n not in NOT_WRAPPED])
 def test_every_public_analysis_function_is_decorated(name):
     func = getattr(speckle.analysis, name)
-    if name in NOT_WRAPPED or func.__module__ in PENDING_MODULES:
-        pytest.skip(NOT_WRAPPED.get(name, f"{func.__module__}: pending (issue 32)"))
     assert hasattr(func, "__speckle_checks__"), (
         f"{func.__module__}.{name} does not use speckle._wrap.preprocess_and_wrap: decorate "
         "it (its array checks declared there) or add it to NOT_WRAPPED with a reason"
@@ -240,5 +235,3 @@ def test_every_public_analysis_function_is_decorated(name):
 def test_the_exception_lists_hold_only_real_names():
     names = dict(_analysis_functions())
     assert set(NOT_WRAPPED) <= set(names)
-    modules = {f.__module__ for f in names.values()}
-    assert modules >= PENDING_MODULES
