@@ -132,3 +132,21 @@ def test_with_grid_spreads_the_dataset_grid_and_grid_attrs_match_the_source():
     with pytest.raises(TypeError, match="n_pixels, depth_range and k0"):
         with_grid(ds, pitch=3.0)
     assert dataclasses.asdict(grid(with_grid(ds.field, n_pixels=2, depth_range=4.0)))["k0"] is None
+
+
+def test_g1_models_read_k0_from_the_spectrum():
+    src = speckle.spectrum(32, 256.0, k0_dk=8)
+    k0, t = float(src.attrs["k0"]), np.array([0.0, 1e-3, 4e-3])
+    kw = {"spectrum": src, "waist": 5.0}
+    _same(
+        speckle.g1_brownian(t, diffusion=2.0, **kw),
+        speckle.g1_brownian(t, diffusion=2.0, k0=k0, **kw),
+    )
+    _same(
+        speckle.g1_ballistic(t, speed=50.0, ndim=2, **kw),
+        speckle.g1_ballistic(t, speed=50.0, ndim=2, k0=k0, **kw),
+    )
+    with pytest.raises(ValueError, match=r"k0=1\.0 disagrees with spectrum's attributes"):
+        speckle.g1_brownian(t, diffusion=2.0, k0=1.0, spectrum=src)
+    with pytest.raises(TypeError, match="k0 is needed"):
+        speckle.g1_brownian(t, diffusion=2.0)

@@ -256,10 +256,14 @@ def estimate_strain(
     >>> scene = speckle.deformable_scene(16, 4.0, strain=2e-3, **kw)
     >>> img = speckle.bscan(speckle.uniaxial_strain(scene, [0.0, 2e-3]), src).field
     >>> ref, moved = img.isel(strain=0), img.isel(strain=1)
-    >>> k0, pixel = float(src.attrs["k0"]), 8.0
-    >>> strain = speckle.estimate_strain(ref, moved, k0=k0, pixel_size=pixel, window=(16, 4))
+    >>> strain = speckle.estimate_strain(ref, moved, window=(16, 4))  # k0, pixel: from the image
     >>> round(float(np.nanmedian(strain)), 3)  # the applied 2e-3
     0.002
+    >>> k0, pixel = float(src.attrs["k0"]), 8.0  # numpy images: give them
+    >>> same = speckle.estimate_strain(ref.values, moved.values, k0=k0, pixel_size=pixel,
+    ...                                window=(16, 4))
+    >>> bool(np.array_equal(strain.values, same, equal_nan=True))
+    True
     """
     k = check_real(k0, "k0", low=0, low_inclusive=False)
     p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
