@@ -105,6 +105,14 @@ def test_every_image_producer_writes_the_grid_on_its_images():
         "bscan_series": speckle.bscan_series(moved, src, waist=4.0, lines=lines).intensity,
         "mmode": speckle.mmode(moved, src, waist=4.0, x=16.0).field,
         "speckle_free_image": speckle.speckle_free_image(sc, src, waist=4.0, lines=lines),
+        "spatial_looks": speckle.spatial_looks(sc, src, [0.0, 2.0], waist=4.0, lines=lines),
+        "angular_looks": speckle.angular_looks(sc, src, [0.0, 3.0], waist=4.0, lines=lines),
+        "polarization_looks": speckle.polarization_looks(
+            sc, src, 0.5, seed=1, waist=4.0, lines=lines
+        ),
+        "temporal_looks": speckle.temporal_looks(
+            sc, src, 2, diffusion=1.0, interval=1e-3, seed=1, waist=4.0, lines=lines
+        ),
     }
     for name, da in images.items():
         g = grid(da.isel(depth=slice(1, None)))
