@@ -278,6 +278,7 @@ def _same(name: str, other: str, a, b, stack: Sequence[str] = ()) -> None:
 
 def _fill_grid(bound, from_grid: Mapping[str, str], func_name: str) -> None:
     """Grid parameters from the labelled argument; a given value must agree."""
+    grids = {}  # one grid read per labelled argument
     for param, source in from_grid.items():
         given = bound.arguments.get(param)
         src = bound.arguments.get(source)
@@ -290,7 +291,9 @@ def _fill_grid(bound, from_grid: Mapping[str, str], func_name: str) -> None:
                     f"DataArray whose coordinates and attributes give it"
                 )
             continue
-        found = getattr(grid(src, what=source), param)
+        if source not in grids:
+            grids[source] = grid(src, what=source)
+        found = getattr(grids[source], param)
         if found is None:
             if given is None:
                 try:
