@@ -278,6 +278,7 @@ def _same(name: str, other: str, a, b, stack: Sequence[str] = ()) -> None:
 
 def _fill_grid(bound, from_grid: Mapping[str, str], func_name: str) -> None:
     """Grid parameters from the labelled argument; a given value must agree."""
+    grids = {}  # one grid read per labelled argument
     for param, source in from_grid.items():
         given = bound.arguments.get(param)
         src = bound.arguments.get(source)
@@ -287,13 +288,21 @@ def _fill_grid(bound, from_grid: Mapping[str, str], func_name: str) -> None:
             if given is None:
                 raise ValueError(
                     f"{func_name} needs {param}: give {param}= or {source} as a labelled "
-                    f"DataArray whose coordinates give it"
+                    f"DataArray whose coordinates and attributes give it"
                 )
             continue
-        found = getattr(grid(src, what=source), param)
+        if source not in grids:
+            grids[source] = grid(src, what=source)
+        found = getattr(grids[source], param)
         if found is None:
             if given is None:
-                grid(src, need=(param,), what=source)  # raises, naming what is missing
+                try:
+                    grid(src, need=(param,), what=source)  # raises, naming what is missing
+                except ValueError as err:
+                    raise ValueError(
+                        f"{func_name} needs {param}: give {param}= ({source} does not carry "
+                        f"it, e.g. a measured image: {err})"
+                    ) from None
             continue
         if given is not None and not isinstance(given, bool):
             try:
@@ -301,8 +310,9 @@ def _fill_grid(bound, from_grid: Mapping[str, str], func_name: str) -> None:
             except (TypeError, ValueError):
                 continue  # the body refuses it, naming the parameter
             if not np.isclose(value, found, rtol=GRID_RTOL, atol=0):
+                where = "coordinates" if param in ("pixel_size", "pitch") else "attributes"
                 raise ValueError(
-                    f"{param}={given!r} disagrees with {source}'s coordinates ({found!r}); "
+                    f"{param}={given!r} disagrees with {source}'s {where} ({found!r}); "
                     f"drop {param}= (it is read from them) or relabel {source}"
                 )
         bound.arguments[param] = found

@@ -95,10 +95,12 @@ __all__ = [
     "coord",
     "depth_range_of",
     "grid",
+    "grid_attrs",
     "inverse_units",
     "labelled",
     "spacing",
     "units_of",
+    "with_grid",
 ]
 
 #: Coordinate/dimension name -> (units, long_name).
@@ -514,6 +516,91 @@ def grid(obj: xr.DataArray | xr.Dataset, *, need: tuple[str, ...] = (), what: st
             f"'depth' coordinate or n_pixels and depth_range; pitch: an 'aline'/'x' "
             f"coordinate; k0, n_pixels, depth_range: attributes)"
         )
+    return out
+
+
+#: Attributes that carry an image's sampling grid (:func:`grid_attrs`, :func:`with_grid`).
+GRID_ATTRS = ("n_pixels", "depth_range", "depth_range_units", "k0", "k0_units")
+
+
+def grid_attrs(n_pixels: int, depth_range: float, k0: float | None = None) -> dict[str, object]:
+    """The grid attributes of an image: ``n_pixels``, ``depth_range`` (µm) and ``k0`` (rad/µm).
+
+    With their ``<name>_units`` from the tables; what :func:`grid` reads back.
+
+    Parameters
+    ----------
+    n_pixels : int
+        Pixels per A-scan ``N``.
+    depth_range : float
+        Unambiguous depth ``H`` in µm (the pixel size is ``H/N``).
+    k0 : float, optional
+        Central wavenumber in the medium, rad/µm; ``None``: not recorded (an image of unknown
+        source).
+
+    Returns
+    -------
+    dict
+        ``n_pixels``, ``depth_range``, ``depth_range_units`` and (with ``k0``) ``k0`` and
+        ``k0_units``.
+
+    Examples
+    --------
+    >>> grid_attrs(64, 512.0, 10.0)["k0_units"]
+    'rad/um'
+    """
+    out: dict[str, object] = {
+        "n_pixels": int(n_pixels),
+        "depth_range": float(depth_range),
+        "depth_range_units": units_of("depth_range"),
+    }
+    if k0 is not None:
+        out.update(k0=float(k0), k0_units=units_of("wavenumber"))
+    return out
+
+
+def with_grid(obj: xr.Dataset, **grid_values: object) -> xr.Dataset:
+    """``obj`` with its grid attributes on itself and on every data variable over ``depth``.
+
+    So that an image variable taken out of a B-scan Dataset (``img.field``,
+    ``img.intensity``) carries its own grid, and keeps it through ``isel``/``sel``:
+    :func:`grid` then finds ``k0`` on the DataArray alone. The one place producers of images
+    write their grid.
+
+    Parameters
+    ----------
+    obj : xarray.Dataset or xarray.DataArray
+        An image Dataset (its attributes give the grid unless ``grid_values`` do) or an image
+        DataArray.
+    **grid_values
+        ``n_pixels``, ``depth_range`` and ``k0`` (as in :func:`grid_attrs`); when not given,
+        the grid attributes already on ``obj`` are spread.
+
+    Returns
+    -------
+    xarray.Dataset or xarray.DataArray
+        A shallow copy with the attributes added (values unchanged).
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> ds = xr.Dataset({"field": (("depth", "x"), np.zeros((4, 2), complex))})
+    >>> out = with_grid(ds, n_pixels=4, depth_range=32.0, k0=10.0)
+    >>> out.field.isel(x=0).attrs["k0"], out.attrs["n_pixels"]
+    (10.0, 4)
+    """
+    unknown = set(grid_values) - {"n_pixels", "depth_range", "k0"}
+    if unknown:
+        raise TypeError(f"with_grid takes n_pixels, depth_range and k0, got {sorted(unknown)}")
+    if grid_values:
+        carried = grid_attrs(**grid_values)
+    else:
+        carried = {k: obj.attrs[k] for k in GRID_ATTRS if k in obj.attrs}
+    out = obj.copy(deep=False).assign_attrs(carried)
+    if isinstance(out, xr.Dataset):
+        for name in list(out.data_vars):
+            if "depth" in out[name].dims:
+                out[name] = out[name].assign_attrs(carried)
     return out
 
 

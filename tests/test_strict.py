@@ -223,8 +223,14 @@ def test_compensate_refuses_other_grids_and_a_missing_k0(pair):
     assert speckle.compensate(dfm, disp).shape == dfm.field.shape
     with pytest.raises(ValueError, match="different 'depth' coordinates"):
         speckle.compensate(dfm, disp.assign_coords(depth=disp.depth * 2))
+    # the field carries its grid (k0) itself now (issue 32): the same as the B-scan's
+    np.testing.assert_array_equal(
+        speckle.compensate(dfm.field, disp), speckle.compensate(dfm, disp)
+    )
+    bare = dfm.field.copy()
+    del bare.attrs["k0"]  # an image without k0 (e.g. a measured one)
     with pytest.raises(ValueError, match="deformed needs attribute k0"):
-        speckle.compensate(dfm.field, disp)
+        speckle.compensate(bare, disp)
 
 
 # --- 5. scene against source ---------------------------------------------------------------

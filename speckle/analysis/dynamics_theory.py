@@ -97,6 +97,13 @@ def _band(spectrum: xr.DataArray | None, k0: float) -> tuple[np.ndarray, np.ndar
     return np.asarray(spectrum.wavenumber.values, float), w / w.sum()
 
 
+def _k0(k0: object) -> float:
+    """``k0`` (rad/µm, >= 0), given or read from the spectrum by the decorator."""
+    if k0 is None:
+        raise TypeError("k0 is needed (rad/µm in the medium): give k0= or spectrum= (its k0)")
+    return check_real(k0, "k0", low=0)
+
+
 def _lateral(var: np.ndarray, waist: float | None, axes: int) -> np.ndarray:
     """``E exp(-d^2/w0^2)`` per lateral axis for ``d ~ N(0, var)``, to the power ``axes``."""
     if waist is None:
@@ -105,12 +112,12 @@ def _lateral(var: np.ndarray, waist: float | None, axes: int) -> np.ndarray:
     return (1.0 + 2.0 * var / w0**2) ** (-axes / 2.0)
 
 
-@preprocess_and_wrap(checks={"lag": _LAG})
+@preprocess_and_wrap(checks={"lag": _LAG}, from_grid={"k0": "spectrum"})
 def g1_brownian(
     lag: object,
     *,
     diffusion: float,
-    k0: float,
+    k0: float | None = None,
     spectrum: xr.DataArray | None = None,
     waist: float | None = None,
     lateral_axes: int = 1,
@@ -123,8 +130,9 @@ def g1_brownian(
         Time lags ``tau`` in s (>= 0).
     diffusion : float
         ``D`` in µm^2/s (>= 0).
-    k0 : float
-        Central wavenumber in the medium, rad/µm (>= 0; ``n k_vacuum``).
+    k0 : float, optional
+        Central wavenumber in the medium, rad/µm (>= 0; ``n k_vacuum``). Read from
+        ``spectrum`` when given (a value given as well must agree with it); required without.
     spectrum : xarray.DataArray, optional
         The source spectrum (:func:`speckle.spectrum`, same ``k0``): the axial factor becomes
         the ``S_n^2``-weighted mean of ``exp(-4 k_n^2 D tau)`` (exact for the sampled band).
@@ -146,7 +154,7 @@ def g1_brownian(
     """
     t = _lags(lag)
     d = check_real(diffusion, "diffusion", low=0)
-    k = check_real(k0, "k0", low=0)
+    k = _k0(k0)
     ax = check_int(lateral_axes, "lateral_axes", low=0, high=2)
     kn, w = _band(spectrum, k)
     axial = np.tensordot(np.exp(-4.0 * np.multiply.outer(t, kn**2) * d), w, axes=([-1], [0]))
@@ -169,12 +177,12 @@ def siegert_g2(g1: object, *, beta: float = 1.0) -> np.ndarray:
     return 1.0 + b * g**2
 
 
-@preprocess_and_wrap(checks={"lag": _LAG})
+@preprocess_and_wrap(checks={"lag": _LAG}, from_grid={"k0": "spectrum"})
 def g1_ballistic(
     lag: object,
     *,
     speed: float,
-    k0: float,
+    k0: float | None = None,
     ndim: int,
     distribution: str = "gaussian",
     waist: float | None = None,
@@ -189,8 +197,9 @@ def g1_ballistic(
     speed : float
         µm/s: the rms speed (``"gaussian"``, each component ``N(0, speed^2/ndim)``) or every
         scatterer's speed (``"constant"``).
-    k0 : float
-        rad/µm in the medium.
+    k0 : float, optional
+        rad/µm in the medium. Read from ``spectrum`` when given (a value given as well must
+        agree with it); required without.
     ndim : int
         Axes that move: 1 (independent lines, depth only), 2 or 3 (shared scenes).
     distribution : {"gaussian", "constant"}
@@ -216,7 +225,7 @@ def g1_ballistic(
     """
     t = _lags(lag)
     s = check_real(speed, "speed", low=0)
-    k = check_real(k0, "k0", low=0)
+    k = _k0(k0)
     nd = check_int(ndim, "ndim", low=1, high=3)
     check_choice(distribution, "distribution", ("gaussian", "constant"))
     kn, wn = _band(spectrum, k)

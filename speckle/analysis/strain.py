@@ -182,14 +182,14 @@ def _strain_pair(a1, a2, k, p, method, wz, wx, opts):
 @preprocess_and_wrap(
     checks=_image_pair(lazy=True),
     stack=("frame",),
-    from_grid={"pixel_size": "reference"},
+    from_grid={"k0": "reference", "pixel_size": "reference"},
     wrap_like="reference",
 )
 def estimate_strain(
     reference: np.ndarray | xr.DataArray,
     deformed: np.ndarray | xr.DataArray,
     *,
-    k0: float,
+    k0: float | None = None,
     pixel_size: float | None = None,
     method: str = DEFAULT_METHOD,
     window: int | tuple[int, int] | None = None,
@@ -206,8 +206,12 @@ def estimate_strain(
         finite. Axis 0 is depth with pixel size ``pixel_size``. DataArrays with a leading
         ``frame`` dim on both are pairs ``reference[i]``, ``deformed[i]``, checked once and
         estimated frame by frame (Dask-backed: lazily, one task per frame).
-    k0 : float
-        Central wavenumber in the medium, rad/µm (> 0), as in :func:`speckle.ascan`.
+    k0 : float, optional
+        Central wavenumber in the medium, rad/µm (> 0), as in :func:`speckle.ascan`. Read
+        from the ``k0`` attribute of labelled images (every image the package makes carries
+        it: :func:`speckle.conventions.with_grid`; a value given as well must agree with it);
+        required for numpy images and for measured images without it
+        (:func:`speckle.load_image`).
     pixel_size : float, optional
         Axial pixel size in the medium, µm (> 0); ``H/N`` for the model's images. Read from
         the ``depth`` coordinate of labelled images (a value given as well must agree with
@@ -252,10 +256,14 @@ def estimate_strain(
     >>> scene = speckle.deformable_scene(16, 4.0, strain=2e-3, **kw)
     >>> img = speckle.bscan(speckle.uniaxial_strain(scene, [0.0, 2e-3]), src).field
     >>> ref, moved = img.isel(strain=0), img.isel(strain=1)
-    >>> k0, pixel = float(src.attrs["k0"]), 8.0
-    >>> strain = speckle.estimate_strain(ref, moved, k0=k0, pixel_size=pixel, window=(16, 4))
+    >>> strain = speckle.estimate_strain(ref, moved, window=(16, 4))  # k0, pixel: from the image
     >>> round(float(np.nanmedian(strain)), 3)  # the applied 2e-3
     0.002
+    >>> k0, pixel = float(src.attrs["k0"]), 8.0  # numpy images: give them
+    >>> same = speckle.estimate_strain(ref.values, moved.values, k0=k0, pixel_size=pixel,
+    ...                                window=(16, 4))
+    >>> bool(np.array_equal(strain.values, same, equal_nan=True))
+    True
     """
     k = check_real(k0, "k0", low=0, low_inclusive=False)
     p = check_real(pixel_size, "pixel_size", low=0, low_inclusive=False)
@@ -286,14 +294,14 @@ def estimate_strain(
 
 @preprocess_and_wrap(
     checks=_image_pair(),
-    from_grid={"pixel_size": "reference"},
+    from_grid={"k0": "reference", "pixel_size": "reference"},
     wrap_like="reference",
 )
 def estimate_displacement(
     reference: np.ndarray | xr.DataArray,
     deformed: np.ndarray | xr.DataArray,
     *,
-    k0: float,
+    k0: float | None = None,
     pixel_size: float | None = None,
     method: str = "tracking",
     window: int | tuple[int, int] | None = None,
@@ -359,13 +367,13 @@ def estimate_displacement(
     return Out(uz, None, meta)
 
 
-@preprocess_and_wrap(checks=_image_pair(), from_grid={"pixel_size": "reference"})
+@preprocess_and_wrap(checks=_image_pair(), from_grid={"k0": "reference", "pixel_size": "reference"})
 def predicted_strain_std(
     reference: np.ndarray,
     deformed: np.ndarray,
     *,
     noise_power: float,
-    k0: float,
+    k0: float | None = None,
     pixel_size: float | None = None,
     window: int | tuple[int, int] | None = None,
     lag: int | None = None,
@@ -450,11 +458,11 @@ def _advance(state, fields, p):
     return y + u_at / p, keep * (1 - s_at)
 
 
-@preprocess_and_wrap(checks=_frames_spec(), from_grid={"pixel_size": "frames"})
+@preprocess_and_wrap(checks=_frames_spec(), from_grid={"k0": "frames", "pixel_size": "frames"})
 def accumulate_strain(
     frames: np.ndarray | xr.DataArray,
     *,
-    k0: float,
+    k0: float | None = None,
     pixel_size: float | None = None,
     method: str = DEFAULT_METHOD,
     window: int | tuple[int, int] | None = None,

@@ -230,7 +230,6 @@ def strain_data(source: Mapping, beam: Mapping, seed: int) -> xr.Dataset:
     )
     opts = {"chunk": int(beam["chunk"]), "method": beam["method"], "tol": beam["tol"]}
     ref = speckle.scan_image(scene, src, waist=w0, lines=xs, **opts).field.compute()
-    ref.attrs.update({"n_pixels": n, "depth_range": h, "k0": float(src.attrs["k0"])})
     data = {}
     for label, ratio in (("beam", 0.0), ("beam_poisson", nu)):
         dfm = _strain_images(scene, src, strains, ratio, xs, w0, opts)

@@ -14,7 +14,7 @@ import xarray as xr
 
 from .._deprecate import keyword_only
 from .._validate import check_choice, check_int, check_real
-from ..conventions import attrs, coord, depth_range_of, units_of
+from ..conventions import attrs, coord, depth_range_of, grid_attrs, with_grid
 from ..provenance import provenance_attrs
 from ..scene.scatterers import AMPLITUDE_MODELS
 from ..scene.shared import check_not_empty
@@ -216,10 +216,7 @@ def bscan(
     ds.attrs.update({f"scene_{k}": v for k, v in scene.attrs.items()})
     ds.attrs.update(
         {
-            "n_pixels": n,
-            "depth_range": h,
-            "k0": k0,
-            "k0_units": units_of("wavenumber"),
+            **grid_attrs(n, h, k0),
             "delta_k": float(source.attrs["delta_k"]),
             "k0_dk": float(source.attrs["k0_dk"]),
             "spectrum_shape": source.attrs.get("shape", "array"),
@@ -232,4 +229,4 @@ def bscan(
         }
     )
     ds.attrs.update(provenance_attrs())
-    return ds
+    return with_grid(ds)  # field, amplitude, intensity: each carries its grid

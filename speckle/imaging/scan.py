@@ -26,7 +26,7 @@ import xarray as xr
 
 from .._deprecate import keyword_only, moved, renamed_parameters
 from .._validate import as_finite_array, check_bool, check_int, check_real, check_size
-from ..conventions import attrs, coord, spacing, units_of
+from ..conventions import attrs, coord, grid_attrs, spacing, units_of, with_grid
 from ..provenance import provenance_attrs
 from ..scene.shared import check_scene, scene_window, shared_scene
 from ..system.source import check_source
@@ -174,7 +174,7 @@ def _dataset(
     ds["intensity"] = (abs(ds.field) ** 2).assign_attrs(attrs("dimensionless", "intensity |A|^2"))
     ds.attrs.update(meta)
     ds.attrs.update(provenance_attrs())
-    return ds
+    return with_grid(ds)  # field and intensity: each carries its grid
 
 
 def _prepare(source, waist, lines, y, chunk, method, tol, wrap, focus, rayleigh_range):
@@ -200,10 +200,7 @@ def _prepare(source, waist, lines, y, chunk, method, tol, wrap, focus, rayleigh_
         "waist": w0,
         "waist_units": units_of("length"),
         "beam": "Gaussian, double-pass amplitude exp(-2 r^2/w0^2)",
-        "n_pixels": src["n_pixels"],
-        "depth_range": src["depth_range"],
-        "k0": src["k0"],
-        "k0_units": units_of("wavenumber"),
+        **grid_attrs(src["n_pixels"], src["depth_range"], src["k0"]),
         "k0_dk": float(source.attrs.get("k0_dk", np.nan)),
         "spectrum_shape": source.attrs.get("shape", "array"),
         "method": method,

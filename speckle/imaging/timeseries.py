@@ -37,7 +37,7 @@ import xarray as xr
 
 from .._deprecate import renamed_parameters
 from .._validate import check_int, check_memory, check_real
-from ..conventions import attrs, coord, units_of
+from ..conventions import attrs, coord, units_of, with_grid
 from ..provenance import provenance_attrs
 from ..scene.motion import check_times
 from ..scene.shared import is_shared
@@ -135,7 +135,7 @@ def _series_dataset(field, times, xs, ys, meta, *, squeeze_x=False, extra=None):
         ds = ds.assign_coords(extra)
     ds.attrs.update(meta)
     ds.attrs.update(provenance_attrs())
-    return ds
+    return with_grid(ds)  # field and intensity: each carries its grid
 
 
 def mmode(

@@ -33,7 +33,7 @@ import xarray as xr
 
 from .._deprecate import renamed_parameters
 from .._validate import as_finite_array, check_int, check_real, check_size
-from ..conventions import attrs, coord, units_of
+from ..conventions import attrs, coord, grid_attrs, units_of
 from ..provenance import provenance_attrs
 from ..scene.shared import check_not_empty
 from ..system.source import check_source, check_weights, spectrum
@@ -220,9 +220,7 @@ def speckle_free_image(
     truth = truth.transpose(*[d for d in dims if d in truth.dims])
     truth = truth.rename("truth").assign_attrs(
         attrs("dimensionless", "speckle-free intensity E|A|^2 (incoherent sum)"),
-        k0=float(source.attrs["k0"]),
-        n_pixels=n,
-        depth_range=h,
+        **grid_attrs(n, h, float(source.attrs["k0"])),
         **({"waist": float(waist), "waist_units": units_of("length")} if shared else {}),
         **provenance_attrs(),
     )

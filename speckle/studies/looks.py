@@ -28,7 +28,7 @@ from .._deprecate import renamed_parameters
 from .._validate import as_finite_array, check_int, check_memory
 from ..analysis._common import label_looks
 from ..analysis.compounding import brownian_frames
-from ..conventions import coord, grid
+from ..conventions import coord, grid, grid_attrs
 from ..imaging.scan import scan_image
 from ..scene.shared import check_scene
 from ..system.polarization import depolarize
@@ -58,11 +58,13 @@ def _inputs(scene: object, source: object, lines: object) -> tuple[np.ndarray, d
 
 
 def _stacked_looks(
-    fields: list[np.ndarray], kind: str, name: str, coordinate: tuple, **extra: object
+    fields: list[np.ndarray], kind: str, name: str, coordinate: tuple, src: dict, **extra: object
 ) -> xr.DataArray:
-    """Looks ``(look, depth, x)`` of the fields, coordinate ``name`` along ``look``."""
+    """Looks ``(look, depth, x)`` of the fields, coordinate ``name`` along ``look``; the
+    source's grid (``src`` from ``check_source``) in their attributes, as every image."""
     looks = xr.DataArray(np.stack(fields), dims=("look", "depth", "x"), coords={name: coordinate})
-    return label_looks(looks, kind, **extra)
+    grid_of = grid_attrs(src["n_pixels"], src["depth_range"], src["k0"])
+    return label_looks(looks, kind, **extra).assign_attrs(grid_of)
 
 
 @renamed_parameters({"x": "lines"})
@@ -102,7 +104,7 @@ def angular_looks(
     >>> looks.dims, looks.sizes["look"]
     (('look', 'depth', 'x'), 2)
     """
-    xs, _ = _inputs(scene, source, lines)
+    xs, src = _inputs(scene, source, lines)
     ang = as_finite_array(angles, "angles")
     if ang.ndim != 1 or ang.size == 0 or np.any(np.abs(ang) >= 90):
         raise ValueError("angles must be a non-empty 1-D list of degrees in (-90, 90)")
@@ -128,7 +130,7 @@ def angular_looks(
         ]
         out.append(part[0] + 1j * part[1])
     angle = coord("angle", ang, "beam angle", dims="look")
-    return _stacked_looks(out, "angular", "angle", angle)
+    return _stacked_looks(out, "angular", "angle", angle, src)
 
 
 @renamed_parameters({"x": "lines"})
@@ -164,7 +166,7 @@ def spatial_looks(
     >>> looks.dims, looks.sizes["look"]
     (('look', 'depth', 'x'), 2)
     """
-    xs, _ = _inputs(scene, source, lines)
+    xs, src = _inputs(scene, source, lines)
     off = as_finite_array(offsets, "offsets")
     if off.ndim != 1 or off.size == 0:
         raise ValueError("offsets must be a non-empty 1-D list of lateral offsets in µm")
@@ -173,7 +175,7 @@ def spatial_looks(
         for d in off
     ]
     offset = coord("length", off, "lateral offset of the lines", dims="look")
-    return _stacked_looks(out, "spatial", "offset", offset)
+    return _stacked_looks(out, "spatial", "offset", offset, src)
 
 
 @renamed_parameters({"x": "lines"})
@@ -245,7 +247,7 @@ def temporal_looks(
     >>> looks.dims, looks.sizes["look"]
     (('look', 'depth', 'x'), 3)
     """
-    xs, _ = _inputs(scene, source, lines)
+    xs, src = _inputs(scene, source, lines)
     nf = check_int(n_frames, "n_frames", low=1)
     # the frames hold z, x and the amplitude (complex) of every scatterer: 32 bytes each
     check_memory(32.0 * nf * scene.sizes["scatterer"], "n_frames", f"{nf} frames of the scene")
@@ -257,5 +259,11 @@ def temporal_looks(
     ]
     time = ("look", frames.time.values, frames.time.attrs)
     return _stacked_looks(
-        out, "temporal", "time", time, diffusion=float(diffusion), frame_interval=float(interval)
+        out,
+        "temporal",
+        "time",
+        time,
+        src,
+        diffusion=float(diffusion),
+        frame_interval=float(interval),
     )

@@ -212,7 +212,7 @@ def _label(values: np.ndarray, cfg: ScannerConfig, field: bool):
     """(bscan, depth, x) values as a DataArray ``(depth, x)``, or ``(y, depth, x)``."""
     import xarray as xr
 
-    from ..conventions import attrs, coord
+    from ..conventions import attrs, coord, grid_attrs
 
     coords = {
         "depth": coord("depth", np.arange(cfg.n_pixels) * cfg.pixel_size),
@@ -222,6 +222,7 @@ def _label(values: np.ndarray, cfg: ScannerConfig, field: bool):
         name, attributes = "field", attrs("field", "complex field A of the SynthOCT scanner")
     else:
         name, attributes = "scan", attrs("dimensionless", "8-bit logarithmic OCT scan (51 dB)")
+    attributes = {**attributes, **grid_attrs(cfg.n_pixels, cfg.depth_range, cfg.k0)}
     if values.shape[0] == 1:
         return xr.DataArray(values[0], dims=("depth", "x"), coords=coords, name=name,
                             attrs=attributes)  # fmt: skip

@@ -20,7 +20,7 @@ import numpy as np
 import xarray as xr
 
 from .._validate import as_finite_array, check_choice, check_int, check_real, check_size
-from ..conventions import attrs, coord, depth_range_of, units_of
+from ..conventions import attrs, coord, depth_range_of, grid_attrs
 
 __all__ = [
     "SPECTRUM_SHAPES",
@@ -222,11 +222,7 @@ def spectrum(
         name="spectrum",
         attrs={
             **attrs("weight"),
-            "n_pixels": n,
-            "depth_range": h,
-            "depth_range_units": units_of("depth_range"),
-            "k0": k0v,
-            "k0_units": units_of("wavenumber"),
+            **grid_attrs(n, h, k0v),
             "delta_k": dk_total,
             "k0_dk": k0v / dk_total,
             "shape": shape,
