@@ -31,10 +31,12 @@ The fit, on the central lines (``|x| <= x_max/2 - 3 r``, where the box does not 
    boundary both agree within 3 jackknife SEs (a fluctuation of the phantom's shadowing);
 3. per layer: ``mu`` from the slope, each boundary to a fraction of a pixel from the transition
    rows (the Hann PSF's intensity cumulative weights mixing the two layers' extrapolated
-   intensities), ``var ln I`` (minus the shadowing spread) inverted to the density by
-   :func:`speckle.analysis.sparse.sparse_inverse_density` with the slab's kurtosis-equivalent
-   density ``rho r sqrt(pi) erf(sqrt 2)^2/erf(2)`` per µm^2 (its amplitudes ``exp(-y^2/r^2)``),
-   the energy ``E = 100 mu/(rho A2)``, and the window's top from the layers' mean levels;
+   intensities), ``var ln I`` (minus the shadowing spread, over rows whose predicted clipped
+   fraction is at most 1 %, corrected for the lines' correlation) inverted to the density by
+   the slab's exact sparse-speckle theory (its amplitudes ``exp(-y^2/r^2)``), identified where
+   its excess over ``pi^2/6`` exceeds 5 SE (else a lower bound), the energy
+   ``E = 100 mu/(rho A2)``, and the window's top from the layers' mean levels
+   (:mod:`speckle.studies.phantom._density`);
 4. standard errors: delete-one-block jackknife over :data:`BLOCKS` lateral blocks of lines
    (the line-to-line correlations of speckle and shadowing included), the segmentation fixed.
 
@@ -58,7 +60,6 @@ from ...conventions import attrs, coord, units_of
 from ...synthoct import _scan
 from ...synthoct.files import ScannerConfig, read_png, read_scanner_config, write_scanner_config
 from ._density import (
-    MAX_CLIPPED_VARIANCE,
     SIGNIFICANCE,
     _jackknife,
     layer_densities,
@@ -207,8 +208,8 @@ class PhantomFit:
         attenuation ``mu``, 1/µm), ``density`` (scatterers per µm^3, in the slab ``|y| <= r``),
         ``energy`` (%), ``rho_e`` (``rho E/100``, per µm^3, what the scan identifies at high
         density), each with ``*_se``; ``density_bound`` (lower bound where ``density`` is NaN)
-        and ``energy_bound`` (upper bound; both NaN too where the layer has no rows with at
-        most 1 % clipped pixels), ``log_variance`` (``var ln I``, shadowing spread
+        and ``energy_bound`` (upper bound; both NaN too where the layer has no rows whose
+        predicted clipped fraction is at most 1 %), ``log_variance`` (``var ln I``, shadowing spread
         removed) with its SE. Attributes: ``window_top`` (dB re ``|A| = 1``, the 51 dB window's
         top) and ``window_top_se``, ``criterion``, ``bic`` (per ``K``), ``rows``.
     config : ScannerConfig
@@ -510,8 +511,7 @@ def _fit_levels(lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: in
     top_se = np.array([_jackknife(tops_jk[:, k]) for k in range(n_layers)])
 
     # var ln I per layer, density, energy, the window and rho E/100: _density.py
-    var_ok = clipped[rows] <= MAX_CLIPPED_VARIANCE
-    v, v_jk = layer_variances(li, z, segs, var_ok, keep)
+    v, v_jk = layer_variances(li, z, segs, keep, cfg)
     dens = layer_densities(v, v_jk, mu, mu_jk, cfg)
     fitted = {"mu": mu, "mu_se": mu_se, "mu_jk": mu_jk, "tops": tops, "tops_jk": tops_jk}
     win = window_and_brightness(m, m_jk, z, segs, fitted, dens, cfg)
