@@ -63,9 +63,10 @@ def test_slab_inverse_density_round_trip(rho):
 
 def test_slab_theory_against_the_scanner_where_the_equivalent_density_fails():
     """The scanner's field without shadowing, 4,700 scatterers in the reduced box (0.23
-    equivalent scatterers per pixel per pitch): ``var ln I`` over 12 scans (the mean over all
-    pixels, no per-row bias) within 3 SE of the exact slab theory (2.723; measured 2.724 +-
-    0.014 over 40 scans), and more than 10 SE from the kurtosis-equivalent density's 3.169."""
+    equivalent scatterers per pixel per pitch): ``var ln I`` over 12 scans (about the mean of
+    all their pixels, no per-row bias) within 3 SE of the exact slab theory (2.723; measured
+    2.724 +- 0.014 over 40 scans), and more than 10 SE from the kurtosis-equivalent density's
+    3.169."""
     cfg = speckle.synthoct_config("reduced", n_scatterers=4700)
     rho = 4700 / (cfg.x_max * 2 * cfg.beam_radius * cfg.depth_range)
     central = np.abs(cfg.line_positions) <= cfg.x_max / 2 - 3 * cfg.beam_radius
@@ -73,7 +74,8 @@ def test_slab_theory_against_the_scanner_where_the_equivalent_density_fails():
     for seed in range(12):
         field = speckle.synthoct_scan(_uniform(4700, seed), cfg, field=True, shadowing="none",
                                       nthreads=1).values  # fmt: skip
-        li.append(np.log(np.abs(field[:, central]) ** 2).ravel())
+        # the first and last rows see half the scatterers (the PSF reaches past the box)
+        li.append(np.log(np.abs(field[4:-4, central]) ** 2).ravel())
     li = np.array(li)
     mean = li.mean()
     per_scan = np.mean((li - mean) ** 2, axis=1)
@@ -119,3 +121,40 @@ def test_fitted_log_variance_unbiased_on_a_uniform_layer():
     spread = values.std(ddof=1)
     assert abs(values.mean() - exact) < 3 * spread / math.sqrt(values.size)
     assert abs(np.mean(ses) / spread - 1) < 0.45
+
+
+@pytest.mark.slow
+def test_closed_loop_log_variance_pulls_and_bounds():
+    """60 flat reduced patients (185 layers; 31 s on the shared machine): ``var ln I`` against the exact theory at
+    the true density, and the density's bound where it is not identified.
+
+    With the jackknife's 16 blocks a pull is ``t`` with 15 degrees of freedom: within 2 SE
+    93.6 % of the time, below +2 SE (the bound's one side) 96.8 %. Measured: 92.6 % of 163
+    within 2 SE, mean difference +0.001 +- 0.007 (before the row choice by fitted level:
+    -0.036 +- 0.009), bounds 98.8 % of 162 (before: 97.1 % of 175).
+    """
+    from scipy import stats
+
+    within, diffs, holds = [], [], []
+    for seed in range(60):
+        table, truth = speckle.virtual_patient(seed, config=SMALL, shapes=("flat",))
+        scan = speckle.synthoct_scan(table, SMALL, nthreads=1)
+        layers = speckle.fit_phantom(scan, SMALL, shapes=("flat",)).layers
+        if layers.sizes["layer"] != truth.sizes["layer"]:
+            continue
+        for k in range(truth.sizes["layer"]):
+            v, se = float(layers.log_variance[k]), float(layers.log_variance_se[k])
+            rho = float(truth.density[k])
+            if np.isfinite(v):
+                diff = v - slab_log_moments(rho, SMALL)[1]
+                within.append(abs(diff) < 2 * se)
+                diffs.append(diff)
+            bound = float(layers.density_bound[k])
+            if np.isnan(float(layers.density[k])) and np.isfinite(bound):
+                holds.append(rho >= bound)
+    p2, p1 = 2 * stats.t.cdf(2, 15) - 1, stats.t.cdf(2, 15)
+    n, m = len(within), len(holds)
+    assert n > 120 and m > 120
+    assert np.mean(within) > p2 - 2 * math.sqrt(p2 * (1 - p2) / n)
+    assert abs(np.mean(diffs)) < 3 * np.std(diffs, ddof=1) / math.sqrt(n)
+    assert np.mean(holds) > p1 - 2 * math.sqrt(p1 * (1 - p1) / m)
