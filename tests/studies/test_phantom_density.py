@@ -125,8 +125,8 @@ def test_fitted_log_variance_unbiased_on_a_uniform_layer():
 
 @pytest.mark.slow
 def test_closed_loop_log_variance_pulls_and_bounds():
-    """60 flat reduced patients (185 layers; 31 s on the shared machine): ``var ln I`` against the exact theory at
-    the true density, and the density's bound where it is not identified.
+    """60 flat reduced patients (185 layers; 31 s on the shared machine): ``var ln I`` against
+    the exact theory at the true density, and the density's bound where it is not identified.
 
     With the jackknife's 16 blocks a pull is ``t`` with 15 degrees of freedom: within 2 SE
     93.6 % of the time, below +2 SE (the bound's one side) 96.8 %. Measured: 92.6 % of 163

@@ -207,11 +207,13 @@ class PhantomFit:
         Dim ``layer`` (0 at the top): ``top`` (µm), ``attenuation`` (one-way amplitude
         attenuation ``mu``, 1/µm), ``density`` (scatterers per µm^3, in the slab ``|y| <= r``),
         ``energy`` (%), ``rho_e`` (``rho E/100``, per µm^3, what the scan identifies at high
-        density), each with ``*_se``; ``density_bound`` (lower bound where ``density`` is NaN)
-        and ``energy_bound`` (upper bound; both NaN too where the layer has no rows whose
-        predicted clipped fraction is at most 1 %), ``log_variance`` (``var ln I``, shadowing spread
-        removed) with its SE. Attributes: ``window_top`` (dB re ``|A| = 1``, the 51 dB window's
-        top) and ``window_top_se``, ``criterion``, ``bic`` (per ``K``), ``rows``.
+        density), each with ``*_se`` (``density_se``: half the way to the density of ``var ln I``
+        2 SE lower, as ``density`` falls convexly with it); ``density_bound`` (lower bound where
+        ``density`` is NaN) and ``energy_bound`` (upper bound; both NaN too where the layer has
+        no rows whose predicted clipped fraction is at most 1 %), ``log_variance`` (``var ln I``,
+        shadowing spread removed) with its SE. Attributes: ``window_top`` (dB re ``|A| = 1``,
+        the 51 dB window's top) and ``window_top_se``, ``criterion``, ``bic`` (per ``K``),
+        ``rows``.
     config : ScannerConfig
         The scanner's configuration.
 
@@ -511,8 +513,8 @@ def _fit_levels(lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: in
     top_se = np.array([_jackknife(tops_jk[:, k]) for k in range(n_layers)])
 
     # var ln I per layer, density, energy, the window and rho E/100: _density.py
-    v, v_jk = layer_variances(li, z, segs, keep, cfg)
-    dens = layer_densities(v, v_jk, mu, mu_jk, cfg)
+    v, v_jk, mu_fine = layer_variances(li, z, segs, keep, cfg)
+    dens = layer_densities(v, v_jk, mu, mu_fine, cfg)
     fitted = {"mu": mu, "mu_se": mu_se, "mu_jk": mu_jk, "tops": tops, "tops_jk": tops_jk}
     win = window_and_brightness(m, m_jk, z, segs, fitted, dens, cfg)
     rho, rho_se, bound, v_se = dens["rho"], dens["rho_se"], dens["bound"], dens["v_se"]
