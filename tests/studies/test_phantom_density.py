@@ -158,3 +158,36 @@ def test_closed_loop_log_variance_pulls_and_bounds():
     assert np.mean(within) > p2 - 2 * math.sqrt(p2 * (1 - p2) / n)
     assert abs(np.mean(diffs)) < 3 * np.std(diffs, ddof=1) / math.sqrt(n)
     assert np.mean(holds) > p1 - 2 * math.sqrt(p1 * (1 - p1) / m)
+
+
+def test_density_se_covers_whenever_the_variance_does():
+    """The density's SE reaches from ``rho`` to the density of ``v - 2 SE``: with the true
+    ``var ln I`` ``v0`` (a layer at 1e-3 per µm^3, 9 SE above ``pi^2/6``) and a measured
+    ``v0 + Z SE``, ``|pull| < 2`` for every ``|Z| < 2`` (exactly at ``Z = +2`` on the low side),
+    where an SE taken at the estimate (the delta method) already fails at ``Z = 1.7``."""
+    from speckle.studies.phantom._density import layer_densities
+
+    rho0 = 1e-3
+    v0 = slab_log_moments(rho0, SMALL)[1]
+    se = (v0 - np.pi**2 / 6) / 9
+    g = 16
+    signs = np.where(np.arange(g) % 2, 1.0, -1.0)[:, None]
+    mu = np.array([1e-3])
+    for z in np.linspace(-1.99, 2.0, 12):
+        v = np.array([v0 + z * se])
+        v_jk = v + signs * se / math.sqrt(g - 1)  # jackknife SE = se
+        dens = layer_densities(v, v_jk, mu, np.full((g, 1), 1e-3), SMALL)
+        assert dens["v_se"][0] == pytest.approx(se, rel=1e-9) and dens["ident"][0]
+        pull = (dens["rho"][0] - rho0) / dens["rho_se"][0]
+        assert abs(pull) < 2 + 1e-6, (z, pull)
+        if z == 2.0:
+            assert pull == pytest.approx(-2.0, rel=1e-4)
+    # the delta method's SE at Z = 1.7: rho' from a finite difference at the estimate
+    v = v0 + 1.7 * se
+    rho = _equivalent(SMALL) / slab_inverse_density(v, SMALL)
+    h = 1e-4
+    slope = (
+        _equivalent(SMALL) / slab_inverse_density(v + h, SMALL)
+        - _equivalent(SMALL) / slab_inverse_density(v - h, SMALL)
+    ) / (2 * h)
+    assert abs((rho - rho0) / (abs(slope) * se)) > 2
