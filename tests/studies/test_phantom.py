@@ -257,7 +257,7 @@ def test_window_top_is_the_fields_maximum(published):
     field = speckle.synthoct_scan(speckle.baseline_phantom("uniform", "A"), CFG, field=True)
     truth = 20 * np.log10(np.abs(field.values).max())
     layers = published["Exp1_Uniform_A"].layers
-    # measured: 36.61 dB fitted against 36.70
+    # measured: 36.75 dB fitted against 36.70 (36.61 while the density was identified at 3 SE)
     bias = 0.023 * 10 / np.log(10)
     assert abs(layers.attrs["window_top"] - truth) < 3 * layers.attrs["window_top_se"] + bias
 

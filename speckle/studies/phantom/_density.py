@@ -4,7 +4,14 @@ and the brightness of layers without a measurable slope.
 
 The physics is in :mod:`speckle.studies.phantom._fit`'s docstring (steps 3 and 4); this module
 holds the part of :func:`~speckle.studies.phantom._fit._fit_levels` after the segmentation and
-the boundaries: ``layer_variances``, ``layer_densities``, ``window_and_brightness``.
+the boundaries: ``layer_variances``, ``layer_densities``, ``window_and_brightness``. What it
+adds to that model (each measured against the scanner, docs/explanation/phantom_fit.md, "The
+density"): the slab's exact sparse-speckle theory (:func:`slab_log_moments`, amplitudes
+``exp(-y^2/r^2)`` integrated in the characteristic function); the row variance's loss to the
+lines' correlation (:func:`lateral_variance_factor`); rows chosen by the layer's fitted level,
+not by their own clipped pixels; ``var ln I``'s own jackknife over blocks of
+:data:`BLOCK_RADII` beam radii; identification at :data:`IDENTIFY` SE, the density's SE to
+the density of ``v - 2 SE`` and a one-sided lower bound where it is not identified.
 """
 
 from __future__ import annotations
@@ -44,8 +51,8 @@ SIGNIFICANCE = 3.0
 #: ``rho`` about ``1/excess``, the pull of ``rho`` at its own SE is ``-Z (1 + Z/k)`` for an
 #: excess ``k`` SEs above ``pi^2/6`` and a fluctuation ``Z``: at 3 SE (and selected by the
 #: same data) the pulls of identified densities fail (4 of 7 beyond 2 in the reduced loop, the
-#: published uniform scan at -4); at 5 the relative SE is at most 0.2 and ``Z = 2`` is pulled
-#: to at most 2.8.
+#: published uniform scan at -4); at 5 the relative SE is at most 0.2. (The SE itself is taken
+#: to the density of ``v - 2 SE``, :func:`layer_densities`, so that no such stretch remains.)
 IDENTIFY = 5.0
 #: One-sided normal quantile of the density's lower bound (97.7 %).
 BOUND_SE = 2.0
@@ -59,18 +66,13 @@ def _jackknife(values: np.ndarray) -> float:
     return float(np.sqrt((g - 1) / g * np.sum((values - values.mean(0)) ** 2, axis=0)))
 
 
-def _waist(cfg: ScannerConfig) -> float:
-    """The beam's waist in line pitches (the 2-D theory's ``sqrt(2) r``)."""
-    return math.sqrt(2) * cfg.beam_radius / cfg.line_pitch
-
-
 @functools.lru_cache(maxsize=16)
 def _slab_lambda(n_pixels: int, radius: float, pitch: float) -> tuple[np.ndarray, float]:
     """``Lambda_slab(t) = int_{-r}^{r} Lambda(t exp(-y^2/r^2)) dy`` (µm) on the theory's ``t``
     grid, ``Lambda`` the 2-D unit-amplitude exponent of :mod:`speckle.analysis.sparse` (pixel
     and pitch units), and that module's ``int |h|^2`` (``area``)."""
     hann = _scan.hann_spectrum(n_pixels)
-    lam, area = sparse._lambda_cached(tuple(hann), math.sqrt(2) * radius / pitch)
+    lam, area = sparse._lambda_cached(tuple(hann), math.sqrt(2) * radius / pitch)  # waist
     ln_t = sparse._TAU - 0.5 * math.log(area)
     nodes, weights = np.polynomial.legendre.leggauss(64)
     y = (nodes + 1) / 2 * radius  # 0 .. r, doubled by symmetry
