@@ -10,14 +10,16 @@ import pytest
 
 import speckle
 from speckle.analysis.sparse import log_intensity_moments
+from speckle.studies.phantom import slab_constants
+
+# private: the fit's density model (the private module _density) is what these tests check
 from speckle.studies.phantom._density import (
     _equivalent,
     lateral_variance_factor,
     slab_inverse_density,
     slab_log_moments,
 )
-from speckle.studies.phantom._slab import slab_constants
-from speckle.synthoct import _scan
+from speckle.synthoct import _scan  # private: the scanner's Hann spectrum (the old model's PSF)
 
 #: The reduced closed-loop scanner: 128 x 128 pixels of 6 µm, radius 10 µm.
 SMALL = speckle.synthoct_config("reduced")
@@ -165,7 +167,7 @@ def test_density_se_covers_whenever_the_variance_does():
     ``var ln I`` ``v0`` (a layer at 1e-3 per µm^3, 9 SE above ``pi^2/6``) and a measured
     ``v0 + Z SE``, ``|pull| < 2`` for every ``|Z| < 2`` (exactly at ``Z = +2`` on the low side),
     where an SE taken at the estimate (the delta method) already fails at ``Z = 1.7``."""
-    from speckle.studies.phantom._density import layer_densities
+    from speckle.studies.phantom._density import layer_densities  # private: the unit tested
 
     rho0 = 1e-3
     v0 = slab_log_moments(rho0, SMALL)[1]
