@@ -38,7 +38,8 @@ The fit, on the central lines (``|x| <= x_max/2 - 3 r``, where the box does not 
    ``E = 100 mu/(rho A2)``, and the window's top from the layers' mean levels
    (:mod:`speckle.studies.phantom._density`);
 4. standard errors: delete-one-block jackknife over :data:`BLOCKS` lateral blocks of lines
-   (the line-to-line correlations of speckle and shadowing included), the segmentation fixed.
+   (the line-to-line correlations of speckle and shadowing included), the segmentation fixed;
+   ``var ln I`` and the density over blocks of 8 beam radii when there are more of them.
 
 Tilted and curved boundaries: :mod:`speckle.studies.phantom._shapes`. Not done (issue 34's
 remainder, here): inclusions.
