@@ -50,8 +50,8 @@ SIGNIFICANCE = 3.0
 #: Significance (in SE) of the excess ``var ln I - pi^2/6`` that identifies the density. With
 #: ``rho`` about ``1/excess``, the pull of ``rho`` at its own SE is ``-Z (1 + Z/k)`` for an
 #: excess ``k`` SEs above ``pi^2/6`` and a fluctuation ``Z``: at 3 SE (and selected by the
-#: same data) the pulls of identified densities fail (4 of 7 beyond 2 in the reduced loop, the
-#: published uniform scan at -4); at 5 the relative SE is at most 0.2. (The SE itself is taken
+#: same data) the pulls of identified densities fail (4 of 7 beyond 2 in the reduced loop); at
+#: 5 the relative SE is at most 0.2. (The SE itself is taken
 #: to the density of ``v - 2 SE``, :func:`layer_densities`, so that no such stretch remains.)
 IDENTIFY = 5.0
 #: One-sided normal quantile of the density's lower bound (97.7 %).
