@@ -172,7 +172,16 @@ def log_intensity_moments(
     lam, area = _lambda_cached(tuple(wts), w)
     t = np.exp(_TAU) / np.sqrt(area)
     s2 = rho * area * (1 + n)
-    dphi = np.exp(rho * lam - rho * area * n * t**2 / 4) - np.exp(-s2 * t**2 / 4)
+    phi = np.exp(rho * lam - rho * area * n * t**2 / 4)
+    return _moments_of(phi, s2, area)
+
+
+def _moments_of(phi: np.ndarray, s2: float, area: float) -> tuple[float, float]:
+    """``E ln(I/<I>)`` and ``var ln I`` from the characteristic function ``phi`` on
+    ``t = exp(_TAU)/sqrt(area)`` and the mean intensity ``s2`` (module docstring)."""
+    g = np.euler_gamma
+    t = np.exp(_TAU) / np.sqrt(area)
+    dphi = phi - np.exp(-s2 * t**2 / 4)
     ln_t = _TAU - 0.5 * np.log(area)
     d0 = float(np.trapezoid(dphi, _TAU))
     d1 = float(2 * np.trapezoid(ln_t * dphi, _TAU))

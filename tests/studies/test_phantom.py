@@ -83,7 +83,10 @@ def test_published_density_not_identified_gives_a_bound(published):
         layers = fit.layers
         for k in range(layers.sizes["layer"]):
             d, bound = float(layers.density[k]), float(layers.density_bound[k])
-            if np.isnan(d):
+            if np.isnan(d) and np.isnan(float(layers.log_variance[k])):
+                # no row far enough above the floor (Layers_B's dim top layer): no bound
+                assert np.isnan(bound)
+            elif np.isnan(d):
                 assert np.isfinite(bound) and bound < rho
                 assert np.isnan(float(layers.energy[k]))
             else:
@@ -254,7 +257,7 @@ def test_window_top_is_the_fields_maximum(published):
     field = speckle.synthoct_scan(speckle.baseline_phantom("uniform", "A"), CFG, field=True)
     truth = 20 * np.log10(np.abs(field.values).max())
     layers = published["Exp1_Uniform_A"].layers
-    # measured: 36.61 dB fitted against 36.70
+    # measured: 36.75 dB fitted against 36.70 (36.61 while the density was identified at 3 SE)
     bias = 0.023 * 10 / np.log(10)
     assert abs(layers.attrs["window_top"] - truth) < 3 * layers.attrs["window_top_se"] + bias
 

@@ -31,12 +31,15 @@ The fit, on the central lines (``|x| <= x_max/2 - 3 r``, where the box does not 
    boundary both agree within 3 jackknife SEs (a fluctuation of the phantom's shadowing);
 3. per layer: ``mu`` from the slope, each boundary to a fraction of a pixel from the transition
    rows (the Hann PSF's intensity cumulative weights mixing the two layers' extrapolated
-   intensities), ``var ln I`` (minus the shadowing spread) inverted to the density by
-   :func:`speckle.analysis.sparse.sparse_inverse_density` with the slab's kurtosis-equivalent
-   density ``rho r sqrt(pi) erf(sqrt 2)^2/erf(2)`` per µm^2 (its amplitudes ``exp(-y^2/r^2)``),
-   the energy ``E = 100 mu/(rho A2)``, and the window's top from the layers' mean levels;
+   intensities), ``var ln I`` (minus the shadowing spread, over rows whose predicted clipped
+   fraction is at most 1 %, corrected for the lines' correlation) inverted to the density by
+   the slab's exact sparse-speckle theory (its amplitudes ``exp(-y^2/r^2)``), identified where
+   its excess over ``pi^2/6`` exceeds 5 SE (else a lower bound), the energy
+   ``E = 100 mu/(rho A2)``, and the window's top from the layers' mean levels
+   (:mod:`speckle.studies.phantom._density`);
 4. standard errors: delete-one-block jackknife over :data:`BLOCKS` lateral blocks of lines
-   (the line-to-line correlations of speckle and shadowing included), the segmentation fixed.
+   (the line-to-line correlations of speckle and shadowing included), the segmentation fixed;
+   ``var ln I`` and the density over blocks of 8 beam radii when there are more of them.
 
 Tilted and curved boundaries: :mod:`speckle.studies.phantom._shapes`. Not done (issue 34's
 remainder, here): inclusions.
@@ -53,12 +56,18 @@ import numpy as np
 import xarray as xr
 from scipy import optimize
 
-from ...analysis.sparse import depth_intensity_psf, log_intensity_moments, sparse_inverse_density
+from ...analysis.sparse import depth_intensity_psf
 from ...conventions import attrs, coord, units_of
 from ...synthoct import _scan
 from ...synthoct.files import ScannerConfig, read_png, read_scanner_config, write_scanner_config
+from ._density import (
+    SIGNIFICANCE,
+    _jackknife,
+    layer_densities,
+    layer_variances,
+    window_and_brightness,
+)
 from ._shapes import SHAPE_DEGREE, fit_shapes, flat_shapes
-from ._slab import slab_constants
 from .patients import patient_table, region_volumes
 
 __all__ = ["BLOCKS", "GAP", "MAX_CLIPPED", "PhantomFit", "fit_phantom"]
@@ -69,18 +78,12 @@ BLOCKS = 16
 GAP = 2
 #: Rows with more clipped (level 0) pixels than this fraction are below the floor.
 MAX_CLIPPED = 0.1
-#: Rows with more clipped pixels than this fraction give no ``var ln I``.
-MAX_CLIPPED_VARIANCE = 0.01
 #: Lags of the row means' integrated autocorrelation (BIC's variance inflation).
 ACF_LAGS = 8
-#: Row lag whose covariance estimates the shadowing streaks' variance.
-LAG = 4
 #: Shortest layer, rows (fitted rows of a segment).
 MIN_ROWS = 4
 #: Shortest run of rows above the floor that is fitted below a floor region.
 RUN_ROWS = MIN_ROWS + 2 * GAP
-#: Significance (in SE) for the density's excess and for a usable slope.
-SIGNIFICANCE = 3.0
 _NEPER_DB = 10.0 / math.log(10.0)  # dB per neper of intensity
 
 # --- input ------------------------------------------------------------------------------
@@ -205,11 +208,13 @@ class PhantomFit:
         Dim ``layer`` (0 at the top): ``top`` (µm), ``attenuation`` (one-way amplitude
         attenuation ``mu``, 1/µm), ``density`` (scatterers per µm^3, in the slab ``|y| <= r``),
         ``energy`` (%), ``rho_e`` (``rho E/100``, per µm^3, what the scan identifies at high
-        density), each with ``*_se``; ``density_bound`` (lower bound where ``density`` is NaN)
-        and ``energy_bound`` (upper bound; both NaN too where the layer has no rows with at
-        most 1 % clipped pixels), ``log_variance`` (``var ln I``, shadowing spread
-        removed) with its SE. Attributes: ``window_top`` (dB re ``|A| = 1``, the 51 dB window's
-        top) and ``window_top_se``, ``criterion``, ``bic`` (per ``K``), ``rows``.
+        density), each with ``*_se`` (``density_se``: half the way to the density of ``var ln I``
+        2 SE lower, as ``density`` falls convexly with it); ``density_bound`` (lower bound where
+        ``density`` is NaN) and ``energy_bound`` (upper bound; both NaN too where the layer has
+        no rows whose predicted clipped fraction is at most 1 %), ``log_variance`` (``var ln I``,
+        shadowing spread removed) with its SE. Attributes: ``window_top`` (dB re ``|A| = 1``,
+        the 51 dB window's top) and ``window_top_se``, ``criterion``, ``bic`` (per ``K``),
+        ``rows``.
     config : ScannerConfig
         The scanner's configuration.
 
@@ -312,12 +317,6 @@ class PhantomFit:
         return synthoct_scan(self.phantom(seed), self.config, **options)
 
 
-def _jackknife(values: np.ndarray) -> float:
-    """SE of a statistic from its delete-one-block replicates ``values`` (blocks first axis)."""
-    g = values.shape[0]
-    return float(np.sqrt((g - 1) / g * np.sum((values - values.mean(0)) ** 2, axis=0)))
-
-
 def _psf_cdf(n_pixels: int):
     """``F(u)``: fraction of the depth PSF's intensity at offsets below ``u`` pixels."""
     p = depth_intensity_psf(_scan.hann_spectrum(n_pixels))
@@ -415,7 +414,7 @@ def fit_phantom(
 
 def _fit_levels(lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: int) -> xr.Dataset:
     """The flat-layer fit of the central lines' levels ``lev`` (pixels, lines)."""
-    r, p, pitch = cfg.beam_radius, cfg.pixel_size, cfg.line_pitch
+    p = cfg.pixel_size
     clipped = np.mean(lev == 0, axis=1)
     # rows above the floor, in runs of at least RUN_ROWS (a dim layer's bottom may reach the
     # floor above a bright layer); the first and last GAP + 1 rows are left out (the last
@@ -514,106 +513,14 @@ def _fit_levels(lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: in
     tops_jk = np.array([t for _, t in rep])
     top_se = np.array([_jackknife(tops_jk[:, k]) for k in range(n_layers)])
 
-    # var ln I per layer (rows with <= 1 % clipped), shadowing spread removed
-    consts = slab_constants(r)
-    hann = _scan.hann_spectrum(cfg.n_pixels)
-    waist = math.sqrt(2) * r / pitch
-    var_ok = clipped[rows] <= MAX_CLIPPED_VARIANCE
-
-    def layer_var(cols, a, b):
-        """``var ln I`` of the speckle: row variance minus the covariance of rows LAG apart
-        (the shadowing streaks, correlated over many rows; speckle is not, beyond the PSF)."""
-        sel = np.arange(a, b)[var_ok[a:b]]
-        sel = sel[np.isin(sel + LAG, sel)]
-        if sel.size < 2:
-            return np.nan, np.nan
-        d = li[np.ix_(sel, cols)]
-        d = d - d.mean(axis=1, keepdims=True)
-        e = li[np.ix_(sel + LAG, cols)]
-        e = e - e.mean(axis=1, keepdims=True)
-        n = len(cols) - 1
-        v = (np.sum(d * d, axis=1) + np.sum(e * e, axis=1)) / (2 * n) - np.sum(d * e, axis=1) / n
-        return float(np.mean(v)), float(np.mean(z[sel]))
-
-    all_cols = np.arange(li.shape[1])
-    raw = np.array([layer_var(all_cols, a, b) for a, b in segs])  # (K, 2)
-    raw_jk = np.array([[layer_var(k, a, b)[0] for a, b in segs] for k in keep])
-
-    def invert(v):
-        if not np.isfinite(v) or v <= 0:
-            return np.nan
-        inv = sparse_inverse_density(v, hann, waist)
-        return 1.0 / inv if inv > 0 else np.inf  # per pixel per pitch (equivalent)
-
-    to_3d = 1.0 / (consts["t_eq"] * p * pitch)
-    v, v_jk = raw[:, 0], raw_jk
-    v_se = np.array([_jackknife(v_jk[:, k]) for k in range(n_layers)])
-    ident = (v - np.pi**2 / 6) > SIGNIFICANCE * v_se
-    rho = np.array([invert(v[k]) * to_3d if ident[k] else np.nan for k in range(n_layers)])
-    energy_frac = np.where(ident, mu / (rho * consts["A2"]), np.nan)
-    rho_jk = np.array(
-        [[invert(v_jk[j, k]) * to_3d if ident[k] else np.nan for k in range(n_layers)]
-         for j in range(blocks)]
-    )  # fmt: skip
-    rho_se = np.array([_jackknife(rho_jk[:, k]) if ident[k] else np.nan for k in range(n_layers)])
-    bound = np.array(
-        [np.nan if ident[k] else invert(np.pi**2 / 6 + SIGNIFICANCE * v_se[k]) * to_3d
-         for k in range(n_layers)]
-    )  # fmt: skip
-    e_jk = mu_jk / (rho_jk * consts["A2"])
-    energy = 100 * energy_frac
-    energy_se = 100 * np.array([_jackknife(e_jk[:, k]) if ident[k] else np.nan
-                                for k in range(n_layers)])  # fmt: skip
-    energy_bound = np.where(ident, np.nan, 100 * mu / (bound * consts["A2"]))
-
-    # window placement: predicted E ln I (absolute) minus observed (relative to the top)
-    psf_area = float(np.sum(depth_intensity_psf(hann)) / 8 * p * r * math.sqrt(math.pi / 2))
-    slope_ok = mu > SIGNIFICANCE * mu_se
-
-    def cum_shadow(zz, k, mu_, tops_):
-        c = sum(mu_[j] * (tops_[j + 1] - tops_[j]) for j in range(k))
-        return c + mu_[k] * (zz - tops_[k])
-
-    def mean_log(k):
-        """``E ln(I/<I>)`` of layer ``k`` (fully developed where the density is unknown)."""
-        if not ident[k] or not np.isfinite(rho[k]):
-            return -np.euler_gamma
-        return log_intensity_moments(hann, waist, rho[k] * consts["t_eq"] * p * pitch)[0]
-
-    def window_top(mm, mu_, tops_):
-        offs, wts = [], []
-        for k, (a, b) in enumerate(segs):
-            if not slope_ok[k] or mu_[k] <= 0:
-                continue
-            rho_e = mu_[k] / consts["A2"]
-            zz = z[a:b]
-            pred = (np.log(rho_e * consts["a2_y"] * psf_area) - 2 * cum_shadow(zz, k, mu_, tops_)
-                    + mean_log(k))  # fmt: skip
-            offs.append(float(np.mean(pred - mm[a:b])))
-            wts.append(b - a)
-        return float(np.average(offs, weights=wts)) if offs else np.nan
-
-    def brightness(k, mm, mu_, tops_, wt_):
-        """``rho E/100`` of layer ``k`` from its mean level under the window's top ``wt_``."""
-        a, b = segs[k]
-        zz = z[a:b]
-        ln_re = mm[a:b] + wt_ + 2 * cum_shadow(zz, k, mu_, tops_) - mean_log(k)
-        return float(np.exp(np.mean(ln_re))) / (consts["a2_y"] * psf_area)
-
-    # every replicate of the jackknife repeats the whole chain (its slopes, boundaries, window)
-    wt = window_top(m, mu, tops)
-    wt_jk = np.array([window_top(m_jk[j], mu_jk[j], tops_jk[j]) for j in range(blocks)])
-    wt_se = _jackknife(wt_jk)
-
-    # rho E/100 per layer: from mu where the slope is significant, else from the brightness
-    rho_e = mu / consts["A2"]
-    rho_e_se = mu_se / consts["A2"]
-    for k in range(n_layers):
-        if slope_ok[k] or not np.isfinite(wt):
-            continue
-        rho_e[k] = brightness(k, m, mu, tops, wt)
-        reps = [brightness(k, m_jk[j], mu_jk[j], tops_jk[j], wt_jk[j]) for j in range(blocks)]
-        rho_e_se[k] = _jackknife(np.log(np.array(reps))) * rho_e[k]
+    # var ln I per layer, density, energy, the window and rho E/100: _density.py
+    v, v_jk, mu_fine = layer_variances(li, z, segs, keep, cfg)
+    dens = layer_densities(v, v_jk, mu, mu_fine, cfg)
+    fitted = {"mu": mu, "mu_se": mu_se, "mu_jk": mu_jk, "tops": tops, "tops_jk": tops_jk}
+    win = window_and_brightness(m, m_jk, z, segs, fitted, dens, cfg)
+    rho, rho_se, bound, v_se = dens["rho"], dens["rho_se"], dens["bound"], dens["v_se"]
+    energy, energy_se, energy_bound = dens["energy"], dens["energy_se"], dens["energy_bound"]
+    wt, wt_se, rho_e, rho_e_se = win["wt"], win["wt_se"], win["rho_e"], win["rho_e_se"]
 
     def var(name, values, quantity, long_name, extra=None):
         return (
