@@ -57,7 +57,7 @@ from ...analysis.sparse import depth_intensity_psf, log_intensity_moments, spars
 from ...conventions import attrs, coord, units_of
 from ...synthoct import _scan
 from ...synthoct.files import ScannerConfig, read_png, read_scanner_config, write_scanner_config
-from ._inclusions import fit_inclusions, no_inclusions
+from ._inclusions import fit_inclusions, no_inclusions, remove_inclusions
 from ._shapes import SHAPE_DEGREE, fit_shapes, flat_shapes
 from ._slab import slab_constants
 from .patients import patient_table, region_volumes
@@ -429,22 +429,30 @@ def fit_phantom(
             f"edges; the fit needs at least {2 * blocks} (2 per jackknife block)"
         )
     lev = levels[:, central]
-    ds = _fit_levels(lev, cfg, max_layers, blocks)
-    if len(shapes) > 1 and ds.sizes["layer"] > 1:
-        ds = fit_shapes(
-            lev, _log_intensity(lev), ds, cfg, tuple(shapes),
-            lambda lv: _fit_levels(lv, cfg, max_layers, blocks),
-        )  # fmt: skip
-    else:
-        ds = flat_shapes(ds)
+
+    def layers_of(lev):
+        ds = _fit_levels(lev, cfg, max_layers, blocks)
+        if len(shapes) > 1 and ds.sizes["layer"] > 1:
+            return fit_shapes(
+                lev, _log_intensity(lev), ds, cfg, tuple(shapes),
+                lambda lv: _fit_levels(lv, cfg, max_layers, blocks),
+            )  # fmt: skip
+        return flat_shapes(ds)
+
+    ds = layers_of(lev)
     if not inclusions:
         return PhantomFit(layers=ds, config=cfg)
+    # inclusions in the residual against the layers; with some found, the layers are fitted
+    # again to the levels without the inclusions' model (their level step and shadow bias
+    # the hosts' row means and slopes), and the inclusions again against those layers
     ok = np.mean(lev == 0, axis=1) <= MAX_CLIPPED
     ok[: GAP + 1] = False
     ok[cfg.n_pixels - GAP - 1 :] = False
-    found = fit_inclusions(
-        _log_intensity(lev), np.flatnonzero(ok), ds, cfg, cfg.line_positions[central]
-    )
+    li, x = _log_intensity(lev), cfg.line_positions[central]
+    found, model = fit_inclusions(li, np.flatnonzero(ok), ds, cfg, x)
+    if found.sizes["inclusion"]:
+        ds = layers_of(remove_inclusions(lev, model, _NEPER_DB))
+        found, _ = fit_inclusions(li, np.flatnonzero(ok), ds, cfg, x)
     return PhantomFit(layers=ds, config=cfg, inclusions=found)
 
 

@@ -62,7 +62,13 @@ from ...synthoct.files import ScannerConfig
 from ._slab import slab_constants
 from .patients import profiles
 
-__all__ = ["FALSE_ALARM", "MAX_INCLUSIONS", "fit_inclusions", "no_inclusions"]
+__all__ = [
+    "FALSE_ALARM",
+    "MAX_INCLUSIONS",
+    "fit_inclusions",
+    "no_inclusions",
+    "remove_inclusions",
+]
 
 #: Probability that a scan without inclusion reports one (the detection threshold's).
 FALSE_ALARM = 0.05
@@ -92,6 +98,18 @@ VARIABLES = {
     "density": ("volume_density", "scatterers per um^3 of the inclusion"),
     "energy": ("percent", "energy per scatterer of the inclusion"),
 }
+
+
+def remove_inclusions(lev: np.ndarray, model: np.ndarray, db_per_neper: float) -> np.ndarray:
+    """The 8-bit levels with the inclusions' model of ``ln I`` removed (the levels the layers
+    would give without them): each level moved by ``-model`` in dB, rounded to the level grid
+    (the scanner's 51 dB over 255 levels); clipped (0) and saturated (255) levels kept."""
+    from ...synthoct import _scan
+
+    step = _scan.DYNAMIC_RANGE / _scan.LEVELS
+    moved = np.rint(lev - model * db_per_neper / step)
+    out = np.where((lev > 0) & (lev < 255), np.clip(moved, 1, 254), lev)
+    return out.astype(np.uint8)
 
 
 def no_inclusions(criterion: str = "") -> xr.Dataset:
@@ -181,18 +199,21 @@ def _standardised(s: np.ndarray) -> np.ndarray:
 
 
 class _Geometry:
-    """The ellipse's ``chi`` and ``L`` on a window of the scan (rows ``z``, lines ``x``)."""
+    """The ellipse's ``chi`` and ``L`` on a window of the scan (rows ``z``, lines ``x``):
+    ``chi`` the share of the depth PSF's intensity (cumulative ``cdf``, pixels) inside the
+    chord, ``L`` the chord's length above the row; both smoothed laterally (Gaussian of SD
+    ``sigma_lines``: the double-pass weight)."""
 
-    def __init__(self, z: np.ndarray, x: np.ndarray, p: float, sigma_lines: float):
-        self.z, self.x, self.p, self.sigma = z, x, p, sigma_lines
+    def __init__(self, z, x, p, sigma_lines, cdf):
+        self.z, self.x, self.p, self.sigma, self.cdf = z, x, p, sigma_lines, cdf
 
     def basis(self, theta: np.ndarray) -> np.ndarray:
         xc, zc, w, h = theta
         u = np.clip(1 - ((self.x - xc) / w) ** 2, 0, None)
         top, bottom = zc - h * np.sqrt(u), zc + h * np.sqrt(u)  # (lines,)
         zz = self.z[:, None]
-        lo, hi = zz - self.p / 2, zz + self.p / 2
-        chi = np.clip(np.minimum(hi, bottom) - np.maximum(lo, top), 0, None) / self.p
+        chi = self.cdf((bottom - zz) / self.p) - self.cdf((top - zz) / self.p)
+        chi = np.where(u > 0, chi, 0.0)
         ell = np.clip(np.minimum(zz, bottom) - top, 0, None)
         if self.sigma > 0:
             chi = ndimage.gaussian_filter1d(chi, self.sigma, axis=1, mode="nearest")
@@ -200,16 +221,31 @@ class _Geometry:
         return np.stack([chi, ell])  # (2, rows, lines)
 
 
+def _model(basis: np.ndarray, a: float, b: float) -> np.ndarray:
+    """Mean ``ln I`` change: the intensities mixed (``ln(1 + (e^a - 1) chi)``), the shadow."""
+    return np.log1p(np.expm1(a) * basis[0]) + b * basis[1]
+
+
 def _profile_fit(geo: _Geometry, r: np.ndarray, valid: np.ndarray, theta: np.ndarray):
-    """``(rss, (a, b))`` of the residual ``r`` on the valid pixels for the ellipse ``theta``."""
+    """``(rss, (a, b))`` of the residual ``r`` on the valid pixels for the ellipse ``theta``
+    (``a``, ``b`` by Gauss-Newton from the linear least squares of ``a chi + b L``)."""
     if theta[2] <= geo.p / 2 or theta[3] <= geo.p / 2:
         return np.inf, np.zeros(2)
-    basis = geo.basis(theta)[:, valid].T  # (pixels, 2)
-    if not np.any(basis[:, 0] > 0.5):
+    basis = geo.basis(theta)[:, valid]  # (2, pixels)
+    if not np.any(basis[0] > 0.5):
         return np.inf, np.zeros(2)
-    coef, *_ = np.linalg.lstsq(basis, r[valid], rcond=None)
-    res = r[valid] - basis @ coef
-    return float(res @ res), coef
+    y = r[valid]
+    coef, *_ = np.linalg.lstsq(basis.T, y, rcond=None)
+    a, b = np.clip(coef[0], -8, 8), coef[1]
+    for _ in range(6):
+        mix = 1 + np.expm1(a) * basis[0]
+        jac = np.stack([np.exp(a) * basis[0] / mix, basis[1]]).T
+        step, *_ = np.linalg.lstsq(jac, y - np.log(mix) - b * basis[1], rcond=None)
+        a, b = float(np.clip(a + step[0], -8, 8)), float(b + step[1])
+        if abs(step[0]) < 1e-4:
+            break
+    res = y - _model(basis, a, b)
+    return float(res @ res), np.array([a, b])
 
 
 def _covariance(r: np.ndarray, quiet: np.ndarray, cells: int) -> tuple[dict, dict]:
@@ -270,12 +306,13 @@ def fit_inclusions(
     *,
     false_alarm: float = FALSE_ALARM,
     max_inclusions: int = MAX_INCLUSIONS,
-) -> xr.Dataset:
+) -> tuple[xr.Dataset, np.ndarray]:
     """Detect and fit inclusions in the central lines' ``ln I`` (module docstring).
 
     ``li`` (pixels, lines): every row of the central lines; ``rows``: the row indices the layer
     fit used (above the floor); ``layers``: the fit's Dataset (with its shape variables);
-    ``x`` (µm): the central lines' positions. Returns the Dataset of dim ``inclusion``.
+    ``x`` (µm): the central lines' positions. Returns the Dataset of dim ``inclusion`` and
+    the fitted inclusions' model of ``ln I`` (``a chi + b L``, pixels x lines: 0 without).
     """
     p, pitch, r = cfg.pixel_size, cfg.line_pitch, cfg.beam_radius
     n_z, n_x = li.shape
@@ -296,6 +333,9 @@ def fit_inclusions(
     sigma = (SMOOTH_ROWS, SMOOTH_CELLS * cells)
     sigma_lines = r / 2 / pitch
     a2 = slab_constants(r)["A2"]
+    from ._fit import _psf_cdf  # the layer fit's (imported here: _fit imports this module)
+
+    cdf = _psf_cdf(cfg.n_pixels)
     key = layer_of * (n_z + 1) + np.clip(depth_below, 0, n_z)
     criterion = (
         f"connected regions of |Z| > t, Z the residual ln I smoothed ({SMOOTH_ROWS} rows, "
@@ -354,7 +394,7 @@ def fit_inclusions(
         half_z = max((r1 - r0) / 2 * p, 2 * p)
         lines = np.arange(max(0, c0 - (c1 - c0) - 6), min(n_x, c1 + (c1 - c0) + 6))
         rws = np.arange(max(0, r0 - (r1 - r0) - 6), n_z)
-        geo = _Geometry(z[rws], x[lines], p, sigma_lines)
+        geo = _Geometry(z[rws], x[lines], p, sigma_lines, cdf)
         rr = resid[np.ix_(rws, lines)]
         valid = np.isfinite(rr)
         xc0 = float(x[round(reg.centroid[1])])
@@ -374,6 +414,20 @@ def fit_inclusions(
             if best is None or res.fun < best.fun:
                 best = res
         theta = best.x
+        # again with the layer model taken without this inclusion's lines (the first model's
+        # row means held its level step and shadow)
+        trial = geo.basis(theta)
+        hit = np.zeros((n_z, n_x), bool)
+        hit[np.ix_(rws, lines)] = (trial[0] > 0.01) | (np.abs(trial[1]) > 0.01 * p)
+        resid = li - layer_model(mask | hit) - model
+        rr = resid[np.ix_(rws, lines)]
+        valid = np.isfinite(rr)
+        theta = optimize.minimize(
+            lambda th, geo=geo, rr=rr, valid=valid: _profile_fit(geo, rr, valid, th)[0],
+            theta,
+            method="Nelder-Mead",
+            options={"xatol": 0.05, "fatol": 1e-3, "maxiter": 600},
+        ).x
         rss, (a, b) = _profile_fit(geo, rr, valid, theta)
         if not np.isfinite(rss):
             break
@@ -381,8 +435,7 @@ def fit_inclusions(
         params = np.append(theta, [a, b])
 
         def full(par, geo=geo):
-            basis = geo.basis(par[:4])
-            return par[4] * basis[0] + par[5] * basis[1]
+            return _model(geo.basis(par[:4]), par[4], par[5])
 
         jac = []
         for i in range(6):
@@ -422,6 +475,6 @@ def fit_inclusions(
             }
         )  # fmt: skip
         hosts.append(host)
-        model[np.ix_(rws, lines)] += a * basis[0] + b * basis[1]
+        model[np.ix_(rws, lines)] += _model(basis, a, b)
         mask |= footprint
-    return _dataset(found, hosts, criterion)
+    return _dataset(found, hosts, criterion), model
