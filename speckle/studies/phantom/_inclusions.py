@@ -426,7 +426,9 @@ def fit_inclusions(
         best = None
         for s0 in starts:
             res = optimize.minimize(
-                lambda th, geo=geo, rr=rr, valid=valid: _profile_fit(geo, rr, valid, th)[0],
+                lambda th, geo=geo, rr=rr, valid=valid: min(
+                    _profile_fit(geo, rr, valid, th)[0], 1e30
+                ),
                 s0,
                 method="Nelder-Mead",
                 options={"xatol": 0.05, "fatol": 1e-3, "maxiter": 600},
@@ -443,7 +445,7 @@ def fit_inclusions(
         rr = resid[np.ix_(rws, lines)]
         valid = np.isfinite(rr)
         theta = optimize.minimize(
-            lambda th, geo=geo, rr=rr, valid=valid: _profile_fit(geo, rr, valid, th)[0],
+            lambda th, geo=geo, rr=rr, valid=valid: min(_profile_fit(geo, rr, valid, th)[0], 1e30),
             theta,
             method="Nelder-Mead",
             options={"xatol": 0.05, "fatol": 1e-3, "maxiter": 600},
