@@ -103,6 +103,7 @@ def test_inclusion_found_and_fitted(patient_fit):
     assert fit.layers.sizes["layer"] == truth.sizes["layer"]
 
 
+@pytest.mark.slow
 def test_phantom_draws_and_render_reproduces(patient_fit):
     """``.phantom`` draws the fitted ellipse (its scatterers at the host's density, energy
     ``100 rho_e/rho``), and its scan, fitted again, shows the inclusion at the same place
@@ -138,6 +139,7 @@ def test_off_by_default_and_refused():
         speckle.fit_phantom(np.zeros((3, 3), np.uint8), SMALL, inclusions="yes")
 
 
+@pytest.mark.slow
 def test_case_reports_the_inclusion():
     """The closed-loop case's inclusion scalars: found, no false alarm, centre within a pixel
     (patient 4: a dark inclusion, ln contrast -3.5, in the top layer)."""

@@ -420,7 +420,7 @@ def fit_inclusions(
         xc0 = float(x[round(reg.centroid[1])])
         starts = [
             np.array([xc0, z[r0] + f * half_z, half_x * g, f * half_z])
-            for f in (1.0, 1.5, 2.0)
+            for f in (1.0, 1.5)
             for g in (1.0, 1.5)
         ]
         best = None
