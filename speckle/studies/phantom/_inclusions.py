@@ -90,6 +90,9 @@ SMOOTH_CELLS = 2.0
 DETREND_ROWS = 41
 #: Rows over which the smoothed residual's mean square is taken (its SD at each row).
 SD_ROWS = 41
+#: Scales of the detection's smoothing (times SMOOTH_ROWS and SMOOTH_CELLS): small and large
+#: inclusions.
+SCALES = (1.0, 2.0)
 #: Row lags of the speckle's covariance; beyond, the shadowing streaks' (rows LAG..2 LAG).
 SHORT_ROWS = 2
 LAG = 4
@@ -137,7 +140,7 @@ def _dataset(rows: list[dict], hosts: list[int], criterion: str) -> xr.Dataset:
     data["significance"] = (
         ("inclusion",),
         np.array([r["significance"] for r in rows], float),
-        attrs("dimensionless", "peak |Z| of the detection (smoothed residual over its SD)"),
+        attrs("dimensionless", "the level step |a| over its SE (kept above the threshold t)"),
     )
     return xr.Dataset(
         data,
@@ -385,18 +388,20 @@ def fit_inclusions(
     while len(found) < max_inclusions and attempts < 2 * max_inclusions + 2:
         attempts += 1
         resid = li - layer_model(mask, robust=True) - model
-        zfield = _standardised(_smooth(_detrended(resid), sigma))
-        zfield[mask] = np.nan  # an inclusion found (and its shadow) is not found again
-        if not np.isfinite(zfield).any():
-            break
-        t = _threshold(zfield, false_alarm)
-        t_c = _threshold(zfield, CANDIDATE_REGIONS)
-        candidates = []
-        for sign in (1, -1):
-            labels = measure.label(np.nan_to_num(sign * zfield) > t_c)
-            for reg in measure.regionprops(labels):
-                peak = float(np.max(np.abs(zfield[tuple(reg.coords.T)])))
-                candidates.append((peak, sign, reg))
+        detrended = _detrended(resid)
+        candidates, t = [], 0.0
+        for scale in SCALES:  # each scale's share of the false alarm: 1/len(SCALES)
+            zfield = _standardised(_smooth(detrended, (sigma[0] * scale, sigma[1] * scale)))
+            zfield[mask] = np.nan  # an inclusion found (and its shadow) is not found again
+            if not np.isfinite(zfield).any():
+                continue
+            t = max(t, _threshold(zfield, false_alarm / len(SCALES)))
+            t_c = _threshold(zfield, CANDIDATE_REGIONS / len(SCALES))
+            for sign in (1, -1):
+                labels = measure.label(np.nan_to_num(sign * zfield) > t_c)
+                for reg in measure.regionprops(labels):
+                    peak = float(np.max(np.abs(zfield[tuple(reg.coords.T)])))
+                    candidates.append((peak / t_c, sign, reg))
         if not candidates:
             break
         # the most significant region; a shadow (its sign opposite to the inclusion's and
@@ -493,7 +498,7 @@ def fit_inclusions(
                 "density": np.nan, "density_se": np.nan, "energy": np.nan, "energy_se": np.nan,
                 "log_contrast": a, "log_contrast_se": se[4],
                 "shadow_step": -b / 2, "shadow_step_se": se[5] / 2,
-                "significance": peak,
+                "significance": abs(a) / se[4],
             }
         )  # fmt: skip
         hosts.append(host)
