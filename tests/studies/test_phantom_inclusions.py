@@ -150,3 +150,42 @@ def test_case_reports_the_inclusion():
     assert float(case.inclusion_centre_error) < 1.0
     assert case.inclusion_centre_error.attrs["units"] == "pixel"
     assert np.isfinite(float(case.inclusion_rho_e_pull))
+
+
+@pytest.mark.slow
+def test_closed_loop_rates():
+    """Reduced box, one to three flat layers, seeds 0-29 (docs/explanation/phantom_fit.md,
+    Inclusions). False alarms: of the same 30 patients without inclusion, at most 5 % report
+    one, within 2 binomial SEs (3.98 %: at most 3 of 30; measured 3). Detection: measured 18 of
+    30, 15 of the 17 with ``|ln contrast|`` >= 1.5 (a measured floor of 13 of 17 is held, no
+    derived power); the centre within a pixel in 13 of 18 found (held: 12). The shadow's
+    ``rho E`` pulls: within 2 for 95.45 % less 2 binomial SEs of the found ones (measured 89 %
+    of 18). The level step's and the lateral geometry's pulls are too wide (documented, not
+    tested)."""
+    seeds = list(range(30))
+    ds = speckle.phantom_closed_loop(
+        seeds, SMALL, layers=(1, 3), shapes=("flat",), inclusions=True, score=False,
+        scheduler="synchronous",
+    )  # fmt: skip
+    false = 0
+    for seed in seeds:
+        case = speckle.phantom_closed_loop_case(seed, config=SMALL, layers=(1, 3),
+                                                shapes=("flat",), fit_inclusions=True)  # fmt: skip
+        false += int(case.n_inclusions_fit) > 0
+    n = len(seeds)
+    assert false / n <= inc.FALSE_ALARM + 2 * math.sqrt(inc.FALSE_ALARM * 0.95 / n), false
+    contrast = []
+    for seed in seeds:
+        _, truth = speckle.virtual_patient(seed, config=SMALL, layers=(1, 3), shapes=("flat",),
+                                           inclusions=True)  # fmt: skip
+        host = int(truth.inclusion_layer[0])
+        rho_e = float(truth.inclusion_density[0] * truth.inclusion_energy[0] / 100)
+        contrast.append(abs(math.log(rho_e / float(truth.rho_e[host]))))
+    found = ds.inclusion_found.values == 1
+    strong = np.array(contrast) >= 1.5
+    assert np.sum(found & strong) >= 13, (np.sum(found & strong), np.sum(strong))
+    assert np.sum(ds.inclusion_centre_error.values[found] < 1) >= 12
+    pulls = ds.inclusion_rho_e_shadow_pull.values[found]
+    pulls = pulls[np.isfinite(pulls)]
+    within = np.mean(np.abs(pulls) < 2)
+    assert within >= 0.9545 - 2 * math.sqrt(0.9545 * 0.0455 / pulls.size), within
