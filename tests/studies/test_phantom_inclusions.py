@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 import speckle
-from speckle.studies.phantom import _inclusions as inc
-from speckle.studies.phantom._fit import _psf_cdf
+from speckle.studies.phantom import _inclusions as inc  # private: the model's pieces, tested
+from speckle.studies.phantom._fit import _psf_cdf  # private: the depth PSF the model uses
 
 #: The reduced closed-loop scanner: 128 x 128 pixels of 6 µm, radius 10 µm.
 SMALL = speckle.synthoct_config("reduced")

@@ -232,7 +232,7 @@ class PhantomFit:
 
     layers: xr.Dataset
     config: ScannerConfig
-    inclusions: xr.Dataset = dataclasses.field(default_factory=no_inclusions)
+    inclusions: xr.Dataset = dataclasses.field(default_factory=no_inclusions, kw_only=True)
 
     def layer_table(self) -> list[tuple[float, float, float, int]]:
         """``(top, bottom, rho_e, count)`` per layer as :meth:`phantom` draws it."""
@@ -448,11 +448,11 @@ def fit_phantom(
     ok = np.mean(lev == 0, axis=1) <= MAX_CLIPPED
     ok[: GAP + 1] = False
     ok[cfg.n_pixels - GAP - 1 :] = False
-    li, x = _log_intensity(lev), cfg.line_positions[central]
-    found, model = fit_inclusions(li, np.flatnonzero(ok), ds, cfg, x)
+    li, x, cdf = _log_intensity(lev), cfg.line_positions[central], _psf_cdf(cfg.n_pixels)
+    found, model = fit_inclusions(li, np.flatnonzero(ok), ds, cfg, x, cdf)
     if found.sizes["inclusion"]:
         ds = layers_of(remove_inclusions(lev, model, _NEPER_DB))
-        found, _ = fit_inclusions(li, np.flatnonzero(ok), ds, cfg, x)
+        found, _ = fit_inclusions(li, np.flatnonzero(ok), ds, cfg, x, cdf)
     return PhantomFit(layers=ds, config=cfg, inclusions=found)
 
 

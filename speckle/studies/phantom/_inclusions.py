@@ -34,7 +34,8 @@ characteristic of ``{|Z| > t}``,
 (``A`` the area in pixels, ``P`` its perimeter, ``l`` the variances of ``Z``'s differences
 along each axis) is the probability that a scan without inclusion shows one, at high ``t``;
 ``t`` is set so that it equals :data:`FALSE_ALARM`. Each connected region of ``|Z| > t``
-(:func:`skimage.measure.label`, :func:`skimage.measure.regionprops`) is a candidate; the
+(:func:`scipy.ndimage.label`, :func:`scipy.ndimage.find_objects`; the studies' room imports
+no scikit-image) is a candidate; the
 shallowest is fitted first (its shadow, of the other sign, lies below it), its model removed,
 the layer model re-estimated without it and the detection repeated (at most
 :data:`MAX_INCLUSIONS`).
@@ -53,13 +54,13 @@ pixels; NaN, and the energy with it).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 
 import numpy as np
 import xarray as xr
 from scipy import ndimage, optimize, special
-from skimage import measure
 
 from ...conventions import attrs, coord
 from ...synthoct.files import ScannerConfig
@@ -212,6 +213,32 @@ def _standardised(s: np.ndarray) -> np.ndarray:
         return s / np.sqrt(var)[:, None]
 
 
+@dataclasses.dataclass(frozen=True)
+class _Region:
+    """A connected region: ``bbox`` (row0, col0, row1, col1), ``coords`` (pixels, 2),
+    ``centroid`` (row, col)."""
+
+    bbox: tuple[int, int, int, int]
+    coords: np.ndarray
+    centroid: tuple[float, float]
+
+
+def _regions(mask: np.ndarray) -> list[_Region]:
+    """Connected regions of ``mask`` (8-connectivity)."""
+    labels, _ = ndimage.label(mask, structure=np.ones((3, 3), int))
+    out = []
+    for i, sl in enumerate(ndimage.find_objects(labels)):
+        coords = np.argwhere(labels[sl] == i + 1) + np.array([sl[0].start, sl[1].start])
+        out.append(
+            _Region(
+                (sl[0].start, sl[1].start, sl[0].stop, sl[1].stop),
+                coords,
+                tuple(coords.mean(axis=0)),
+            )
+        )
+    return out
+
+
 class _Geometry:
     """The ellipse's ``chi`` and ``L`` on a window of the scan (rows ``z``, lines ``x``):
     ``chi`` the share of the depth PSF's intensity (cumulative ``cdf``, pixels) inside the
@@ -317,6 +344,7 @@ def fit_inclusions(
     layers: xr.Dataset,
     cfg: ScannerConfig,
     x: np.ndarray,
+    cdf,
     *,
     false_alarm: float = FALSE_ALARM,
     max_inclusions: int = MAX_INCLUSIONS,
@@ -325,7 +353,8 @@ def fit_inclusions(
 
     ``li`` (pixels, lines): every row of the central lines; ``rows``: the row indices the layer
     fit used (above the floor); ``layers``: the fit's Dataset (with its shape variables);
-    ``x`` (µm): the central lines' positions. Returns the Dataset of dim ``inclusion`` and
+    ``x`` (µm): the central lines' positions; ``cdf``: the depth PSF's cumulative intensity
+    (offsets in pixels, the layer fit's ``_psf_cdf``). Returns the Dataset of dim ``inclusion`` and
     the fitted inclusions' model of ``ln I`` (``a chi + b L``, pixels x lines: 0 without).
     """
     p, pitch, r = cfg.pixel_size, cfg.line_pitch, cfg.beam_radius
@@ -347,9 +376,6 @@ def fit_inclusions(
     sigma = (SMOOTH_ROWS, SMOOTH_CELLS * cells)
     sigma_lines = r / 2 / pitch
     a2 = slab_constants(r)["A2"]
-    from ._fit import _psf_cdf  # the layer fit's (imported here: _fit imports this module)
-
-    cdf = _psf_cdf(cfg.n_pixels)
     key = layer_of * (n_z + 1) + np.clip(depth_below, 0, n_z)
     criterion = (
         f"connected regions of |Z| > t, Z the residual ln I smoothed ({SMOOTH_ROWS} rows, "
@@ -398,8 +424,7 @@ def fit_inclusions(
             t = max(t, _threshold(zfield, false_alarm / len(SCALES)))
             t_c = _threshold(zfield, CANDIDATE_REGIONS / len(SCALES))
             for sign in (1, -1):
-                labels = measure.label(np.nan_to_num(sign * zfield) > t_c)
-                for reg in measure.regionprops(labels):
+                for reg in _regions(np.nan_to_num(sign * zfield) > t_c):
                     peak = float(np.max(np.abs(zfield[tuple(reg.coords.T)])))
                     candidates.append((peak / t_c, sign, reg))
         if not candidates:
