@@ -451,8 +451,12 @@ def fit_phantom(
     li, x, cdf = _log_intensity(lev), cfg.line_positions[central], _psf_cdf(cfg.n_pixels)
     found, model = fit_inclusions(li, np.flatnonzero(ok), ds, cfg, x, cdf)
     if found.sizes["inclusion"]:
-        ds = layers_of(remove_inclusions(lev, model, _NEPER_DB))
-        found, _ = fit_inclusions(li, np.flatnonzero(ok), ds, cfg, x, cdf)
+        again = layers_of(remove_inclusions(lev, model, _NEPER_DB))
+        # removing an inclusion explains structure; a refit with more layers is the removal's
+        # artefact (a shadow that clipped the rows below it cannot be undone): kept as it was
+        if again.sizes["layer"] <= ds.sizes["layer"]:
+            ds = again
+            found, _ = fit_inclusions(li, np.flatnonzero(ok), ds, cfg, x, cdf)
     return PhantomFit(layers=ds, config=cfg, inclusions=found)
 
 
