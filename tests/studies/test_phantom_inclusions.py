@@ -158,7 +158,7 @@ def test_closed_loop_rates():
     Inclusions). False alarms: of the same 30 patients without inclusion, at most 5 % report
     one, within 2 binomial SEs (3.98 %: at most 3 of 30; measured 3). Detection: measured 18 of
     30, 15 of the 17 with ``|ln contrast|`` >= 1.5 (a measured floor of 13 of 17 is held, no
-    derived power); the centre within a pixel in 13 of 18 found (held: 12). The shadow's
+    derived power); the centre within a pixel in 12 of 18 found (held: 12). The shadow's
     ``rho E`` pulls: within 2 for 95.45 % less 2 binomial SEs of the found ones (measured 89 %
     of 18). The level step's and the lateral geometry's pulls are too wide (documented, not
     tested)."""
