@@ -1,55 +1,62 @@
 """Inclusions of the phantom fit (private): detection and fit of ellipses of other ``rho E``.
 
-After the layer fit (:func:`speckle.fit_phantom`), each pixel's ``ln I`` (central lines, rows
-above the floor) is compared with its layer's model: the mean ``ln I`` of the layer at the
-same depth *below the layer's fitted upper boundary* (so tilted and curved layers are followed),
-over the lines not masked by an inclusion already found; pixels within :data:`EDGE` rows of a
-fitted boundary are left out (the transition is the layer fit's). Under the scanner's
-shadowing an ellipse ``((x - x_c)/w)^2 + ((z - z_c)/h)^2 < 1`` of ``rho_i E_i`` inside a host
-of ``rho_h E_h`` changes the mean ``ln I`` by
+After the layer fit (:func:`speckle.fit_phantom` with ``inclusions=True``), each pixel's
+``ln I`` (central lines, rows above the floor) is compared with its layer's model: the level of
+the layer at the same depth *below the layer's fitted upper boundary* (so tilted and curved
+layers are followed), over the lines not masked by an inclusion already found; pixels within
+:data:`EDGE` rows of a fitted boundary are left out (the transition is the layer fit's). Under
+the scanner's shadowing an ellipse ``((x - x_c)/w)^2 + ((z - z_c)/h)^2 < 1`` of ``rho_i E_i``
+inside a host of ``rho_h E_h`` changes the mean ``ln I`` by
 
-    a chi(x, z) + b L(x, z),   a = ln(rho_i E_i/(rho_h E_h)),   b = -2 (mu_i - mu_h),
+    ln(1 + (e^a - 1) chi(x, z)) + b L(x, z),   a = ln(rho_i E_i/(rho_h E_h)),
+                                               b = -2 (mu_i - mu_h),
 
-``chi`` the share of the pixel inside the ellipse, ``L`` the length of line ``x``'s chord
-through the ellipse above ``z`` (inside the ellipse the host's extra attenuation, below it the
-shadow ``-2 (mu_i - mu_h) x chord``, on every layer below), both smoothed laterally by the
-double-pass weight's ``exp(-2 dx^2/r^2)`` (a Gaussian of SD ``r/2``). The two coefficients are
-two independent estimates of ``rho_i E_i``: the level step, ``rho_h E_h e^a`` (it assumes the
-inclusion's ``E ln(I/<I>)`` is the host's, i.e. both in the same speckle regime), and the
-shadow, ``rho_h E_h + (-b/2)/A2`` (``mu = rho E A2``, :func:`slab_constants`).
+``chi`` the share of the depth PSF's intensity inside line ``x``'s chord (the level step mixes
+intensities, not logs), ``L`` the length of the chord above ``z`` (inside the ellipse the extra
+attenuation, below it the shadow ``-2 (mu_i - mu_h) x chord``, on every layer below), both
+smoothed laterally by the double-pass weight's ``exp(-2 dx^2/r^2)`` (a Gaussian of SD ``r/2``).
+The two coefficients are two independent estimates of ``rho_i E_i``: the level step,
+``rho_h E_h e^a`` (it assumes the inclusion's ``E ln(I/<I>)`` is the host's, i.e. both in the
+same speckle regime), and the shadow, ``rho_h E_h + (-b/2)/A2`` (``mu = rho E A2``,
+:func:`slab_constants`).
 
-Detection: the residual is smoothed by a Gaussian of SD :data:`SMOOTH_ROWS` rows and
-:data:`SMOOTH_CELLS` lateral speckle cells (``r/pitch`` lines, at least one line), each row
-divided by the RMS of the smoothed values over :data:`SD_ROWS` rows around it and every line
-(the shadowing streaks grow with depth; each square capped at 16 robust variances of its row,
-so that an inclusion hardly raises it), giving a field ``Z`` that is N(0, 1) without
-inclusions (a row-wise SD, from ~20 independent values of a smooth field, is itself so noisy
-that it raised the false-alarm rate of smoothed white noise from 4 % to 26-36 %; with 41 rows
-3.75 +- 1.1 % against 5 %, 400 fields of 120 x 118). Its extreme over the scan follows the
-random-field theory of a smooth Gaussian field (Worsley 1996): the expected Euler
-characteristic of ``{|Z| > t}``,
+Detection: the residual against a robust layer model (the median over the lines plus the
+mean's offset: an unfound inclusion hardly moves it), each line's running median over
+:data:`DETREND_ROWS` rows removed (the shadowing streaks), is smoothed by Gaussians of SD
+:data:`SMOOTH_ROWS` rows and :data:`SMOOTH_CELLS` lateral speckle cells (``r/pitch`` lines),
+times each of :data:`SCALES`, and divided by the RMS of the smoothed values over
+:data:`SD_ROWS` rows around it and every line (the streaks grow with depth; each square capped
+at 16 robust variances of its row), giving fields ``Z`` that are N(0, 1) without inclusions (a
+row-wise SD, from ~20 independent values of a smooth field, is itself so noisy that it raised
+the false-alarm rate of smoothed white noise from 4 % to 26-36 %; over 41 rows 3.0 +- 0.6 %
+against 5 %, 800 fields of 120 x 118). The extreme of such a field follows the random-field
+theory of a smooth Gaussian field (Worsley 1996): the expected Euler characteristic of
+``{|Z| > t}``,
 
-    2 [A sqrt(l_x l_z) t/(2 pi)^{3/2} + P/2 sqrt(l) /(2 pi) + Phi(-t)] e^{-t^2/2} (first two),
+    2 [(A sqrt(l_x l_z) t/(2 pi)^{3/2} + P/2 sqrt(l)/(2 pi)) e^{-t^2/2} + Phi(-t)],
 
 (``A`` the area in pixels, ``P`` its perimeter, ``l`` the variances of ``Z``'s differences
-along each axis) is the probability that a scan without inclusion shows one, at high ``t``;
-``t`` is set so that it equals :data:`FALSE_ALARM`. Each connected region of ``|Z| > t``
-(:func:`scipy.ndimage.label`, :func:`scipy.ndimage.find_objects`; the studies' room imports
-no scikit-image) is a candidate; the
-shallowest is fitted first (its shadow, of the other sign, lies below it), its model removed,
-the layer model re-estimated without it and the detection repeated (at most
-:data:`MAX_INCLUSIONS`).
+along each axis) bounds the probability that a scan without inclusion shows one, at high
+``t``; ``t`` makes it :data:`FALSE_ALARM` (shared by the scales). The connected regions of
+``|Z|`` above the threshold of :data:`CANDIDATE_REGIONS` expected null regions
+(:func:`scipy.ndimage.label`; the studies' room imports no scikit-image) are candidates, the
+most significant first (a shadow, of the other sign and below, gives way to the region above
+it); each is fitted and kept when its level step ``|a|`` exceeds ``t`` of its standard errors
+(the fit is the matched filter), its model removed, and the search repeated (at most
+:data:`MAX_INCLUSIONS` kept).
 
 Fit: the ellipse's ``(x_c, z_c, w, h)`` minimise the residual sum of squares in a window
-around the region and everything below it (the shadow), ``a`` and ``b`` by linear least squares
-for each trial (Nelder-Mead from a few starts). Standard errors: the sandwich
-``(J'J)^-1 J' S J (J'J)^-1`` of the linearised model, ``S`` the residual's covariance
-estimated from the pixels outside the inclusion and its shadow: the speckle's (lags up to
-:data:`SHORT_ROWS` rows and the lateral cell), plus the shadowing streaks' covariance (rows
-:data:`LAG` to ``2 LAG`` apart), taken as constant along depth on a line and its neighbours
-(a streak is the line's shadowing deficit, shared by every row below). Not identified: the
-inclusion's density (its ``var ln I`` would need the layer fit's inversion on the inclusion's
-pixels; NaN, and the energy with it).
+around the region and every row below it (the shadow), ``a`` and ``b`` by Gauss-Newton for each
+trial (Nelder-Mead from four starts, then again with the layer model taken, as a mean, without
+the ellipse's lines). Standard errors: the sandwich ``(J'J)^-1 J' S J (J'J)^-1`` of the
+linearised model, ``S`` the residual's covariance estimated from the pixels outside the
+inclusion and its shadow: the speckle's (lags up to :data:`SHORT_ROWS` rows and the lateral
+cell), plus the shadowing streaks' covariance (rows :data:`LAG` to ``2 LAG`` apart), taken as
+constant along depth on a line and its neighbours (a streak is the line's shadowing deficit,
+shared by every row below). Measured (docs/explanation/phantom_fit.md): the shadow's ``rho E``
+holds its SE, the level step's and the lateral geometry's SEs are 2-4 times too small. Not
+identified: the inclusion's density (its ``var ln I`` would need the layer fit's inversion on
+the inclusion's pixels; NaN, and the energy with it).
 """
 
 from __future__ import annotations
