@@ -1552,6 +1552,7 @@ ENTRIES: dict[str, Entry] = {
         max_layers="count",
         blocks="count",
         shapes="none",
+        inclusions="flag",
         why="config: a ScannerConfig or an INI path (tests/studies/test_phantom.py); shapes: a "
         "tuple of shape names (tests/studies/test_phantom_shapes.py)",
     ),
@@ -1585,8 +1586,10 @@ ENTRIES: dict[str, Entry] = {
         config="none",
         fit_seed="seed",
         max_layers="count",
+        fit_inclusions="none",
         patient="none",
-        why="config: a name or ScannerConfig; patient: virtual_patient's options (its entry)",
+        why="config: a name or ScannerConfig; patient: virtual_patient's options (its entry); "
+        "fit_inclusions: None or a bool (tests/studies/test_phantom_inclusions.py)",
     ),
     "phantom_failure_map": E(
         lambda: dict(

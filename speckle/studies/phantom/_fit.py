@@ -41,8 +41,8 @@ The fit, on the central lines (``|x| <= x_max/2 - 3 r``, where the box does not 
    (the line-to-line correlations of speckle and shadowing included), the segmentation fixed;
    ``var ln I`` and the density over blocks of 8 beam radii when there are more of them.
 
-Tilted and curved boundaries: :mod:`speckle.studies.phantom._shapes`. Not done (issue 34's
-remainder, here): inclusions.
+Tilted and curved boundaries: :mod:`speckle.studies.phantom._shapes`. Inclusions (with
+``inclusions=True``, after the layers): :mod:`speckle.studies.phantom._inclusions`.
 """
 
 from __future__ import annotations
@@ -67,6 +67,7 @@ from ._density import (
     layer_variances,
     window_and_brightness,
 )
+from ._inclusions import fit_inclusions, no_inclusions, remove_inclusions
 from ._shapes import SHAPE_DEGREE, fit_shapes, flat_shapes
 from .patients import patient_table, region_volumes
 
@@ -217,6 +218,12 @@ class PhantomFit:
         ``rows``.
     config : ScannerConfig
         The scanner's configuration.
+    inclusions : xarray.Dataset
+        Dim ``inclusion`` (0 or more, :mod:`speckle.studies.phantom._inclusions`): ``centre_x``,
+        ``centre_z``, ``axis_x``, ``axis_z`` (µm), ``rho_e`` (from the level step) and
+        ``rho_e_shadow`` (from the shadow below), ``log_contrast``, ``shadow_step`` (1/µm),
+        ``density``, ``energy`` (NaN: not identified), each with ``*_se``; ``host`` (layer),
+        ``significance``.
 
     Examples
     --------
@@ -230,6 +237,7 @@ class PhantomFit:
 
     layers: xr.Dataset
     config: ScannerConfig
+    inclusions: xr.Dataset = dataclasses.field(default_factory=no_inclusions, kw_only=True)
 
     def layer_table(self) -> list[tuple[float, float, float, int]]:
         """``(top, bottom, rho_e, count)`` per layer as :meth:`phantom` draws it."""
@@ -265,6 +273,8 @@ class PhantomFit:
         cfg = self.config
         rng = np.random.default_rng(np.random.SeedSequence(int(seed)))
         layers = self.layers
+        if self.inclusions.sizes["inclusion"]:
+            return self._shaped_phantom(rng)
         if "top_tilt" in layers and np.any(
             (layers.top_tilt.values != 0) | (layers.top_curvature.values != 0)
         ):
@@ -284,8 +294,10 @@ class PhantomFit:
         return np.concatenate(parts)
 
     def _shaped_phantom(self, rng: np.random.Generator) -> np.ndarray:
-        """Tilted or curved boundaries: the layers' densities (as :meth:`layer_table` takes
-        them) scaled to ``n_scatterers`` in the exact volumes, energies ``100 rho_e/rho``."""
+        """Tilted or curved boundaries, or an inclusion: the layers' densities (as
+        :meth:`layer_table` takes them) scaled to ``n_scatterers`` in the exact volumes,
+        energies ``100 rho_e/rho``; the first inclusion (the most significant: the drawing
+        holds one) at its host's density and its level step's ``rho_e``."""
         cfg, layers = self.config, self.layers
         coefficients = np.column_stack(
             [layers.top.values, layers.top_tilt.values, layers.top_curvature.values]
@@ -294,10 +306,18 @@ class PhantomFit:
         dens = np.asarray(layers.density.values, float)
         bound = np.asarray(layers.density_bound.values, float)
         rho = np.where(np.isfinite(dens) & (dens > 0), dens, np.fmax(bound, uniform))
-        volume, _ = region_volumes(cfg, coefficients, None)
+        rho_e = np.asarray(layers.rho_e.values, float)
+        inclusion = None
+        if self.inclusions.sizes["inclusion"]:
+            first = self.inclusions.isel(inclusion=0)
+            inclusion = tuple(float(first[v]) for v in ("centre_x", "centre_z", "axis_x",
+                                                        "axis_z"))  # fmt: skip
+            rho = np.append(rho, rho[int(first.host)])
+            rho_e = np.append(rho_e, float(first.rho_e))
+        volume, _ = region_volumes(cfg, coefficients, inclusion)
         scaled = rho * cfg.n_scatterers / np.sum(rho * volume)
-        energy = np.clip(100 * np.asarray(layers.rho_e.values, float) / scaled, 1e-12, 100.0)
-        table, _ = patient_table(cfg, coefficients, rho, energy, None, rng)
+        energy = np.clip(100 * rho_e / scaled, 1e-12, 100.0)
+        table, _ = patient_table(cfg, coefficients, rho, energy, inclusion, rng)
         return table
 
     def write(self, path: str | os.PathLike, seed: int) -> None:
@@ -335,6 +355,7 @@ def fit_phantom(
     max_layers: int = 5,
     blocks: int = BLOCKS,
     shapes: tuple[str, ...] = ("flat", "tilted", "curved"),
+    inclusions: bool = False,
 ) -> PhantomFit:
     """Fit flat layers (depth, attenuation, density, energy) to a SynthOCT scan.
 
@@ -355,6 +376,10 @@ def fit_phantom(
     shapes : tuple of {"flat", "tilted", "curved"}
         Boundary shapes the fit may choose (by BIC, :mod:`speckle.studies.phantom._shapes`);
         ``("flat",)`` fits flat layers only.
+    inclusions : bool
+        Detect and fit elliptical inclusions after the layers
+        (:mod:`speckle.studies.phantom._inclusions`: a stated false-alarm probability of
+        0.05 per scan); False (the default): none.
 
     Returns
     -------
@@ -392,6 +417,8 @@ def fit_phantom(
         raise ValueError(
             f"shapes must be a tuple of {tuple(SHAPE_DEGREE)} holding 'flat', got {shapes!r}"
         )
+    if not isinstance(inclusions, bool):
+        raise TypeError(f"inclusions must be a bool, got {inclusions!r}")
     levels = _levels(scan, cfg)
     r = cfg.beam_radius
     central = np.abs(cfg.line_positions) <= cfg.x_max / 2 - 3 * r
@@ -401,15 +428,35 @@ def fit_phantom(
             f"edges; the fit needs at least {2 * blocks} (2 per jackknife block)"
         )
     lev = levels[:, central]
-    ds = _fit_levels(lev, cfg, max_layers, blocks)
-    if len(shapes) > 1 and ds.sizes["layer"] > 1:
-        ds = fit_shapes(
-            lev, _log_intensity(lev), ds, cfg, tuple(shapes),
-            lambda lv: _fit_levels(lv, cfg, max_layers, blocks),
-        )  # fmt: skip
-    else:
-        ds = flat_shapes(ds)
-    return PhantomFit(layers=ds, config=cfg)
+
+    def layers_of(lev):
+        ds = _fit_levels(lev, cfg, max_layers, blocks)
+        if len(shapes) > 1 and ds.sizes["layer"] > 1:
+            return fit_shapes(
+                lev, _log_intensity(lev), ds, cfg, tuple(shapes),
+                lambda lv: _fit_levels(lv, cfg, max_layers, blocks),
+            )  # fmt: skip
+        return flat_shapes(ds)
+
+    ds = layers_of(lev)
+    if not inclusions:
+        return PhantomFit(layers=ds, config=cfg)
+    # inclusions in the residual against the layers; with some found, the layers are fitted
+    # again to the levels without the inclusions' model (their level step and shadow bias
+    # the hosts' row means and slopes), and the inclusions again against those layers
+    ok = np.mean(lev == 0, axis=1) <= MAX_CLIPPED
+    ok[: GAP + 1] = False
+    ok[cfg.n_pixels - GAP - 1 :] = False
+    li, x, cdf = _log_intensity(lev), cfg.line_positions[central], _psf_cdf(cfg.n_pixels)
+    found, model = fit_inclusions(li, np.flatnonzero(ok), ds, cfg, x, cdf)
+    if found.sizes["inclusion"]:
+        again = layers_of(remove_inclusions(lev, model, _NEPER_DB))
+        # removing an inclusion explains structure; a refit with more layers is the removal's
+        # artefact (a shadow that clipped the rows below it cannot be undone): kept as it was
+        if again.sizes["layer"] <= ds.sizes["layer"]:
+            ds = again
+            found, _ = fit_inclusions(li, np.flatnonzero(ok), ds, cfg, x, cdf)
+    return PhantomFit(layers=ds, config=cfg, inclusions=found)
 
 
 def _fit_levels(lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: int) -> xr.Dataset:

@@ -9,6 +9,13 @@ it, the density and the energy. A case succeeds when the layer count is right an
 boundary is within a pixel; otherwise ``failure`` names the first reason. With ``fit_seed`` the
 case also holds the scans that the challenge's scoring compares: the fitted phantom drawn with
 ``fit_seed`` and scanned, and the floor, the true patient drawn again with ``fit_seed``.
+
+Inclusions (``inclusions=True`` of the patient; the fit looks for them when ``fit_inclusions``,
+by default when the patient holds one): the true inclusion is *found* when a fitted
+inclusion's centre lies inside the true ellipse; the case reports the count fitted, the
+fitted inclusions not matched to the true one (false alarms), the centre error (the larger of
+the lateral error in lines and the depth error in pixels) and the pulls of
+:data:`INCLUSION_PULLED`. The case's ``success`` remains the layers' (count and boundaries).
 """
 
 from __future__ import annotations
@@ -21,10 +28,88 @@ from ...synthoct.scanner import synthoct_scan
 from ._fit import fit_phantom
 from .patients import scanner_config_of, virtual_patient
 
-__all__ = ["PULLED", "fit_profiles", "phantom_closed_loop_case"]
+__all__ = ["INCLUSION_PULLED", "PULLED", "fit_profiles", "phantom_closed_loop_case"]
 
 #: Parameters whose pulls the case reports (the fit's and the truth's variable names).
 PULLED = ("top", "attenuation", "rho_e", "density", "energy")
+#: The inclusion's pulled parameters: the fit's name -> the truth's (``rho_e``: density x
+#: energy/100).
+INCLUSION_PULLED = {
+    "centre_x": "inclusion_x",
+    "centre_z": "inclusion_z",
+    "axis_x": "inclusion_width",
+    "axis_z": "inclusion_height",
+    "rho_e": "rho_e",
+    "rho_e_shadow": "rho_e",
+}
+#: The case's inclusion scalars (NaN without a true inclusion), in order.
+INCLUSION_SCALARS = (
+    "n_inclusions_true",
+    "n_inclusions_fit",
+    "inclusion_found",
+    "inclusion_false_alarms",
+    "inclusion_centre_error",
+    *(f"{k}_{p}" for p in INCLUSION_PULLED for k in ("true_inclusion", "fit_inclusion")),
+    *(f"fit_inclusion_{p}_se" for p in INCLUSION_PULLED),
+    *(f"inclusion_{p}_pull" for p in INCLUSION_PULLED),
+)
+
+
+def inclusion_scores(inclusions: xr.Dataset, truth: xr.Dataset, cfg) -> dict:
+    """The case's inclusion scalars (:data:`INCLUSION_SCALARS`) from the fitted inclusions and
+    the patient's truth: ``{name: (value, attrs)}``."""
+    n_true, n_fit = truth.sizes["inclusion"], inclusions.sizes["inclusion"]
+    out = {
+        "n_inclusions_true": (n_true, attrs("count", "true inclusions")),
+        "n_inclusions_fit": (n_fit, attrs("count", "fitted inclusions")),
+    }
+    match = -1
+    if n_true:
+        xc, zc = float(truth.inclusion_x[0]), float(truth.inclusion_z[0])
+        w, h = float(truth.inclusion_width[0]), float(truth.inclusion_height[0])
+        inside = ((inclusions.centre_x.values - xc) / w) ** 2 + (
+            (inclusions.centre_z.values - zc) / h
+        ) ** 2
+        if n_fit and float(np.min(inside)) < 1:
+            match = int(np.argmin(inside))
+    found = match >= 0
+    out["inclusion_found"] = (
+        int(found) if n_true else -1,
+        attrs("label", "true inclusion found (1), missed (0), none in the patient (-1)"),
+    )
+    out["inclusion_false_alarms"] = (
+        n_fit - int(found),
+        attrs("count", "fitted inclusions not matched to the true one"),
+    )
+    error = np.nan
+    if found:
+        dx = abs(float(inclusions.centre_x[match]) - xc) / cfg.line_pitch
+        dz = abs(float(inclusions.centre_z[match]) - zc) / cfg.pixel_size
+        error = max(dx, dz)
+    out["inclusion_centre_error"] = (
+        error, attrs("pixels", "larger of the centre's lateral (lines) and depth (pixels) errors")
+    )  # fmt: skip
+    for p, t_name in INCLUSION_PULLED.items():
+        q = inclusions[p].attrs
+        long = p.replace("_", " ")
+        t = f = s = np.nan
+        if n_true:
+            if t_name == "rho_e":
+                t = float(truth.inclusion_density[0] * truth.inclusion_energy[0] / 100)
+            else:
+                t = float(truth[t_name][0])
+        if found:
+            f, s = float(inclusions[p][match]), float(inclusions[f"{p}_se"][match])
+        out[f"true_inclusion_{p}"] = (t, {**q, "long_name": f"true inclusion {long}"})
+        out[f"fit_inclusion_{p}"] = (f, {**q, "long_name": f"fitted inclusion {long}"})
+        out[f"fit_inclusion_{p}_se"] = (
+            s, {**q, "long_name": f"standard error of fitted inclusion {long}"}
+        )  # fmt: skip
+        pull = (f - t) / s if found and s > 0 else np.nan
+        out[f"inclusion_{p}_pull"] = (
+            pull, attrs("dimensionless", f"(fit - truth)/SE of the inclusion's {long}")
+        )  # fmt: skip
+    return {k: out[k] for k in INCLUSION_SCALARS}
 
 
 def fit_profiles(layers: xr.Dataset, x: np.ndarray, x_max: float) -> np.ndarray:
@@ -43,6 +128,7 @@ def phantom_closed_loop_case(
     config: object = "challenge",
     fit_seed: int | None = None,
     max_layers: int = 5,
+    fit_inclusions: bool | None = None,
     **patient: object,
 ) -> xr.Dataset:
     """One closed-loop case: a virtual patient scanned, fitted back and compared with its truth.
@@ -58,6 +144,9 @@ def phantom_closed_loop_case(
         case holds ``fitted_scan`` and ``floor_scan`` (two more scanner calls).
     max_layers : int
         Most layers the fit tries (1..10).
+    fit_inclusions : bool, optional
+        Whether the fit looks for inclusions (:func:`speckle.fit_phantom`'s ``inclusions``);
+        default: when the patient holds one (``inclusions=True``).
     **patient
         Options of :func:`speckle.virtual_patient` (``layers``, ``shapes``, ``inclusions``,
         ...).
@@ -68,7 +157,12 @@ def phantom_closed_loop_case(
         Dim ``layer`` (the true layers): ``true_<p>``, ``fit_<p>``, ``fit_<p>_se`` and
         ``<p>_pull`` for ``p`` in :data:`PULLED` (the fitted layer matched by order when the
         count is right, else the one of nearest top), ``boundary_error`` (pixels), ``true_shape``
-        and ``fit_shape``; scalars ``n_true``, ``n_fit``, ``layers_right``, ``boundaries_right``,
+        and ``fit_shape``; the inclusion scalars (module docstring: ``n_inclusions_true``,
+        ``n_inclusions_fit``, ``inclusion_found``, ``inclusion_false_alarms``,
+        ``inclusion_centre_error`` in pixels, ``true_inclusion_<p>``, ``fit_inclusion_<p>``,
+        ``fit_inclusion_<p>_se``, ``inclusion_<p>_pull`` for ``p`` in
+        :data:`INCLUSION_PULLED`); scalars ``n_true``, ``n_fit``, ``layers_right``,
+        ``boundaries_right``,
         ``success`` and ``failure`` (empty on success); ``target_scan`` ``(depth, x)`` and, with
         ``fit_seed``, ``fitted_scan`` and ``floor_scan``. Attributes: ``seed``, ``fit_seed``
         (-1 without), the fit's ``criterion``.
@@ -93,10 +187,14 @@ def phantom_closed_loop_case(
         raise ValueError(f"fit_seed must be None or a non-negative integer, got {fit_seed!r}")
     if isinstance(max_layers, bool) or not isinstance(max_layers, int) or not 1 <= max_layers <= 10:
         raise ValueError(f"max_layers must be an integer in 1..10, got {max_layers!r}")
+    if fit_inclusions is None:
+        fit_inclusions = patient.get("inclusions", False)
+    if not isinstance(fit_inclusions, bool):
+        raise TypeError(f"fit_inclusions must be None or a bool, got {fit_inclusions!r}")
     cfg = scanner_config_of(config)
     table, truth = virtual_patient(seed, config=cfg, **patient)
     scan = synthoct_scan(table, cfg, nthreads=1)
-    fit = fit_phantom(scan, cfg, max_layers=max_layers)
+    fit = fit_phantom(scan, cfg, max_layers=max_layers, inclusions=fit_inclusions)
     layers = fit.layers
     n_true, n_fit = truth.sizes["layer"], layers.sizes["layer"]
     if n_fit == n_true:
@@ -146,6 +244,8 @@ def phantom_closed_loop_case(
         failure=((), failure, attrs("label", "why the case failed (empty on success)")),
         target_scan=(("depth", "x"), np.asarray(scan.values), attrs("label", "target scan")),
     )  # fmt: skip
+    for name, (value, attr) in inclusion_scores(fit.inclusions, truth, cfg).items():
+        data[name] = ((), value, attr)
     if fit_seed is not None:
         floor_table, _ = virtual_patient(seed, config=cfg, draw_seed=int(fit_seed), **patient)
         data["fitted_scan"] = (("depth", "x"), fit.render(int(fit_seed), nthreads=1).values,

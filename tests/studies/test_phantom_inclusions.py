@@ -1,0 +1,191 @@
+"""Inclusions of the phantom fit (issue 34): detection, fit, drawing, the closed loop's columns.
+
+The physics and the statistics are in :mod:`speckle.studies.phantom._inclusions`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import speckle
+from speckle.studies.phantom import _inclusions as inc  # private: the model's pieces, tested
+from speckle.studies.phantom._fit import _psf_cdf  # private: the depth PSF the model uses
+
+#: The reduced closed-loop scanner: 128 x 128 pixels of 6 µm, radius 10 µm.
+SMALL = speckle.synthoct_config("reduced")
+
+
+def _binomial_ok(k: int, n: int, p: float, z: float = 2.0) -> bool:
+    """``k`` of ``n`` within ``z`` binomial SEs of the rate ``p``."""
+    return abs(k / n - p) <= z * math.sqrt(p * (1 - p) / n)
+
+
+def test_geometry_is_the_exact_chord():
+    """``sum_z chi p`` is the chord ``2 h sqrt(1 - ((x - xc)/w)^2)`` (the PSF's weights sum to
+    one) and ``L`` below the ellipse is the chord, on every line (no lateral smoothing)."""
+    p = 6.0
+    z = np.arange(80) * p
+    x = np.linspace(-90, 90, 37)
+    geo = inc._Geometry(z, x, p, 0.0, _psf_cdf(128))
+    theta = np.array([7.0, 200.0, 60.0, 33.0])
+    chi, ell = geo.basis(theta)
+    u = np.clip(1 - ((x - theta[0]) / theta[2]) ** 2, 0, None)
+    chord = 2 * theta[3] * np.sqrt(u)
+    np.testing.assert_allclose(chi.sum(axis=0) * p, chord, atol=1e-6 * p)
+    np.testing.assert_allclose(ell[-1], chord, atol=1e-12)
+    assert np.all(np.diff(ell, axis=0) >= -1e-12)  # L grows with depth
+
+
+def test_model_is_the_intensity_mixture():
+    """The level step mixes intensities: ``chi = 1`` gives ``a``, ``chi = 0`` nothing, half a
+    pixel ``ln((1 + e^a)/2)``; the shadow is linear in ``L``."""
+    basis = np.array([[1.0, 0.0, 0.5], [0.0, 10.0, 2.0]])
+    got = inc._model(basis, 2.0, -0.1)
+    np.testing.assert_allclose(got, [2.0, -1.0, math.log((1 + math.e**2) / 2) - 0.2])
+
+
+def test_threshold_false_alarm_on_smoothed_noise():
+    """The Euler-characteristic threshold on smoothed white noise (the detection's own
+    smoothing and standardisation): the fraction of 400 fields of 120 x 118 whose largest
+    ``|Z|`` exceeds ``t`` is at most FALSE_ALARM = 0.05 (2 binomial SEs, 1.1 %, allowed above)
+    and at least a third of it. The expected Euler characteristic bounds the probability from
+    above; measured 15/400 and (these seeds) 9/400, together 3.0 +- 0.6 %: conservative at
+    this size by about 2 %, not exact, so the test is one-sided."""
+    rng = np.random.default_rng(np.random.SeedSequence(340))
+    sigma = (inc.SMOOTH_ROWS, inc.SMOOTH_CELLS * SMALL.beam_radius / SMALL.line_pitch)
+    hits, n = 0, 400
+    for _ in range(n):
+        z = inc._standardised(inc._smooth(rng.standard_normal((120, 118)), sigma))
+        hits += bool(np.nanmax(np.abs(z)) > inc._threshold(z, inc.FALSE_ALARM))
+    se = math.sqrt(inc.FALSE_ALARM * (1 - inc.FALSE_ALARM) / n)
+    assert inc.FALSE_ALARM / 3 < hits / n <= inc.FALSE_ALARM + 2 * se, hits
+
+
+@pytest.fixture(scope="module")
+def patient_fit():
+    """Reduced box, virtual patient 2 (three flat layers, a dark inclusion of ln contrast -3.1
+    in the top layer), scanned and fitted with inclusions."""
+    table, truth = speckle.virtual_patient(2, config=SMALL, layers=(1, 3), shapes=("flat",),
+                                           inclusions=True)  # fmt: skip
+    scan = speckle.synthoct_scan(table, SMALL, nthreads=1)
+    return truth, speckle.fit_phantom(scan, SMALL, inclusions=True)
+
+
+def test_inclusion_found_and_fitted(patient_fit):
+    """One inclusion, its centre within a pixel and 3 SE, its semi-axes within 2 pixels, its
+    ``rho E`` from the level step and from the shadow within 3 SE of the truth (measured:
+    centre 0.2 px off, pulls 0.7, 0.9 (centre), -1.1 (level) and 0.8 (shadow))."""
+    truth, fit = patient_fit
+    found = fit.inclusions
+    assert found.sizes["inclusion"] == 1
+    assert found.centre_x.attrs["units"] == "um" and found.rho_e.attrs["units"] == "um-3"
+    first = found.isel(inclusion=0)
+    true = {
+        "centre_x": float(truth.inclusion_x[0]),
+        "centre_z": float(truth.inclusion_z[0]),
+        "axis_x": float(truth.inclusion_width[0]),
+        "axis_z": float(truth.inclusion_height[0]),
+        "rho_e": float(truth.inclusion_density[0] * truth.inclusion_energy[0] / 100),
+    }
+    true["rho_e_shadow"] = true["rho_e"]
+    for name in ("centre_x", "centre_z"):
+        assert abs(float(first[name]) - true[name]) < SMALL.pixel_size
+        assert abs(float(first[name]) - true[name]) < 3 * float(first[f"{name}_se"])
+    for name in ("axis_x", "axis_z"):
+        assert abs(float(first[name]) - true[name]) < 2 * SMALL.pixel_size
+    for name in ("rho_e", "rho_e_shadow"):
+        assert abs(float(first[name]) - true[name]) < 3 * float(first[f"{name}_se"]), name
+    assert int(first.host) == int(truth.inclusion_layer[0])
+    assert np.isnan(float(first.density)) and np.isnan(float(first.energy))
+    assert fit.layers.sizes["layer"] == truth.sizes["layer"]
+
+
+@pytest.mark.slow
+def test_phantom_draws_and_render_reproduces(patient_fit):
+    """``.phantom`` draws the fitted ellipse (its scatterers at the host's density, energy
+    ``100 rho_e/rho``), and its scan, fitted again, shows the inclusion at the same place
+    within 2 pixels."""
+    _, fit = patient_fit
+    first = fit.inclusions.isel(inclusion=0)
+    xc, zc, w, h = (float(first[v]) for v in ("centre_x", "centre_z", "axis_x", "axis_z"))
+    table = fit.phantom(1)
+    assert table.shape == (SMALL.n_scatterers, 4)
+    inside = ((table[:, 0] - xc) / w) ** 2 + ((table[:, 2] - zc) / h) ** 2 < 1
+    energies = np.unique(table[inside, 3])
+    assert energies.size == 1
+    host = int(first.host)
+    host_rows = (table[:, 2] < fit.layers.top.values[host + 1]) & ~inside
+    ratio = energies[0] / np.unique(table[host_rows, 3])[0]
+    np.testing.assert_allclose(ratio, float(first.rho_e) / float(fit.layers.rho_e[host]),
+                               rtol=1e-9)  # fmt: skip
+    again = speckle.fit_phantom(fit.render(1, nthreads=1), SMALL, inclusions=True).inclusions
+    assert again.sizes["inclusion"] >= 1
+    assert abs(float(again.centre_x[0]) - xc) < 2 * SMALL.pixel_size
+    assert abs(float(again.centre_z[0]) - zc) < 2 * SMALL.pixel_size
+
+
+def test_off_by_default_and_refused():
+    """Without ``inclusions`` the Dataset is empty (dim ``inclusion`` of 0) and the phantom
+    the layers'; a non-bool is refused before any work."""
+    table, _ = speckle.virtual_patient(1, config=SMALL, layers=(2, 2), shapes=("flat",))
+    scan = speckle.synthoct_scan(table, SMALL, nthreads=1)
+    fit = speckle.fit_phantom(scan, SMALL)
+    assert fit.inclusions.sizes["inclusion"] == 0
+    assert set(inc.VARIABLES) <= set(fit.inclusions.data_vars)
+    with pytest.raises(TypeError, match="inclusions"):
+        speckle.fit_phantom(np.zeros((3, 3), np.uint8), SMALL, inclusions="yes")
+
+
+@pytest.mark.slow
+def test_case_reports_the_inclusion():
+    """The closed-loop case's inclusion scalars: found, no false alarm, centre within a pixel
+    (patient 4: a dark inclusion, ln contrast -3.5, in the top layer)."""
+    case = speckle.phantom_closed_loop_case(4, config=SMALL, layers=(1, 3), shapes=("flat",),
+                                            inclusions=True)  # fmt: skip
+    assert int(case.n_inclusions_true) == 1 and int(case.inclusion_found) == 1
+    assert int(case.inclusion_false_alarms) == 0
+    assert float(case.inclusion_centre_error) < 1.0
+    assert case.inclusion_centre_error.attrs["units"] == "pixel"
+    assert np.isfinite(float(case.inclusion_rho_e_pull))
+
+
+@pytest.mark.slow
+def test_closed_loop_rates():
+    """Reduced box, one to three flat layers, seeds 0-29 (docs/explanation/phantom_fit.md,
+    Inclusions). False alarms: of the same 30 patients without inclusion, at most 5 % report
+    one, within 2 binomial SEs (3.98 %: at most 3 of 30; measured 3). Detection: measured 18 of
+    30, 15 of the 17 with ``|ln contrast|`` >= 1.5 (a measured floor of 13 of 17 is held, no
+    derived power); the centre within a pixel in 12 of 18 found (held: 12). The shadow's
+    ``rho E`` pulls: within 2 for 95.45 % less 2 binomial SEs of the found ones (measured 89 %
+    of 18). The level step's and the lateral geometry's pulls are too wide (documented, not
+    tested)."""
+    seeds = list(range(30))
+    ds = speckle.phantom_closed_loop(
+        seeds, SMALL, layers=(1, 3), shapes=("flat",), inclusions=True, score=False,
+        scheduler="synchronous",
+    )  # fmt: skip
+    false = 0
+    for seed in seeds:
+        case = speckle.phantom_closed_loop_case(seed, config=SMALL, layers=(1, 3),
+                                                shapes=("flat",), fit_inclusions=True)  # fmt: skip
+        false += int(case.n_inclusions_fit) > 0
+    n = len(seeds)
+    assert false / n <= inc.FALSE_ALARM + 2 * math.sqrt(inc.FALSE_ALARM * 0.95 / n), false
+    contrast = []
+    for seed in seeds:
+        _, truth = speckle.virtual_patient(seed, config=SMALL, layers=(1, 3), shapes=("flat",),
+                                           inclusions=True)  # fmt: skip
+        host = int(truth.inclusion_layer[0])
+        rho_e = float(truth.inclusion_density[0] * truth.inclusion_energy[0] / 100)
+        contrast.append(abs(math.log(rho_e / float(truth.rho_e[host]))))
+    found = ds.inclusion_found.values == 1
+    strong = np.array(contrast) >= 1.5
+    assert np.sum(found & strong) >= 13, (np.sum(found & strong), np.sum(strong))
+    assert np.sum(ds.inclusion_centre_error.values[found] < 1) >= 12
+    pulls = ds.inclusion_rho_e_shadow_pull.values[found]
+    pulls = pulls[np.isfinite(pulls)]
+    within = np.mean(np.abs(pulls) < 2)
+    assert within >= 0.9545 - 2 * math.sqrt(0.9545 * 0.0455 / pulls.size), within
