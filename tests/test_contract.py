@@ -1616,6 +1616,7 @@ ENTRIES: dict[str, Entry] = {
         lambda: dict(layers=xr.Dataset(), config=speckle.ScannerConfig()),
         layers="none",
         config="none",
+        inclusions="none",
         why="a record built by fit_phantom",
         record="fit_phantom",
     ),
