@@ -57,7 +57,7 @@ from ...analysis.sparse import depth_intensity_psf, log_intensity_moments, spars
 from ...conventions import attrs, coord, units_of
 from ...synthoct import _scan
 from ...synthoct.files import ScannerConfig, read_png, read_scanner_config, write_scanner_config
-from ._shapes import SHAPE_DEGREE, fit_shapes, flat_shapes
+from ._shapes import SHAPE_DEGREE, TransitionModel, fit_shapes, flat_shapes
 from ._slab import slab_constants
 from .patients import patient_table, region_volumes
 
@@ -220,7 +220,7 @@ class PhantomFit:
     >>> scan = resources.files("speckle.data") / "synthoct" / "Scan_Exp2_Layers_A.png"
     >>> fit = speckle.fit_phantom(scan, speckle.ScannerConfig())  # the challenge's default scanner
     >>> fit.layers.sizes["layer"], fit.layers.top.values.round(1)  # boundary near 400 µm
-    (2, array([  0. , 400.1]))
+    (2, array([  0. , 400.2]))
     """
 
     layers: xr.Dataset
@@ -316,17 +316,6 @@ def _jackknife(values: np.ndarray) -> float:
     """SE of a statistic from its delete-one-block replicates ``values`` (blocks first axis)."""
     g = values.shape[0]
     return float(np.sqrt((g - 1) / g * np.sum((values - values.mean(0)) ** 2, axis=0)))
-
-
-def _psf_cdf(n_pixels: int):
-    """``F(u)``: fraction of the depth PSF's intensity at offsets below ``u`` pixels."""
-    p = depth_intensity_psf(_scan.hann_spectrum(n_pixels))
-    u = np.arange(p.size) / 8.0
-    u = np.where(u > n_pixels / 2, u - n_pixels, u)
-    order = np.argsort(u)
-    u, p = u[order], p[order]
-    cdf = np.cumsum(p) / p.sum()
-    return lambda v: np.interp(v, u, cdf)
 
 
 def fit_phantom(
@@ -479,7 +468,7 @@ def _fit_levels(lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: in
         n_layers -= 1
     segs = best[n_layers][1]
 
-    cdf = _psf_cdf(cfg.n_pixels)
+    model = TransitionModel(cfg.n_pixels)
 
     def tops_of(mm, fits):
         out = [0.0]
@@ -490,8 +479,7 @@ def _fit_levels(lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: in
             zz = z[idx]
 
             def misfit(t, zz=zz, idx=idx, s1=s1, i1=i1, s2_=s2_, i2=i2):
-                f = cdf(t / p - zz / p)  # share of the rows' (symmetric) PSF above t
-                pred = np.log(f * np.exp(s1 * zz + i1) + (1 - f) * np.exp(s2_ * zz + i2))
+                pred = model.log_mean(zz, t, s1, i1, s2_, i2, p)  # the PSF's share of each
                 return float(np.sum((pred - mm[idx]) ** 2))
 
             res = optimize.minimize_scalar(
