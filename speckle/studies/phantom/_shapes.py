@@ -30,7 +30,6 @@ import numpy as np
 import xarray as xr
 from scipy import optimize
 
-from ...analysis.sparse import depth_intensity_psf
 from ...conventions import attrs
 from ...synthoct import _scan
 from ...synthoct.files import ScannerConfig
@@ -43,6 +42,8 @@ SHAPE_DEGREE = {"flat": 0, "tilted": 1, "curved": 2}
 ITERATIONS = 3
 #: Lateral blocks in which each boundary is located.
 BOUNDARY_BLOCKS = 16
+#: Samples per pixel of the transition model's PSF.
+_SAMPLES = 64
 #: Rows (pixels) from the trial position beyond which a row sets a layer's level.
 _LEVEL_ROWS = 3
 _CRITERION = (
@@ -66,24 +67,35 @@ class TransitionModel:
     (the upper layer's scatterers above ``t``, the lower's below). ``G(v; 0)`` is the PSF's
     cumulative intensity. Neglecting the tilt ``e^{s u}`` shifts the boundary by ``s sigma^2``
     (``sigma^2 = 0.336`` pixel^2 of the Hann PSF: 0.1 pixel at ``s = 0.3`` per pixel). The
-    cumulative sums are trapezoidal on the PSF's 8 samples per pixel (a plain cumulative sum
-    counts each sample whole: ``G`` 1/16 pixel early, which placed every boundary 0.06 pixel
-    high).
+    PSF is summed directly (:func:`speckle.depth_intensity_psf`'s formula) on a midpoint grid
+    of 1/64 pixel and its cumulative sums are trapezoidal (a plain cumulative sum of
+    ``depth_intensity_psf``'s 8 samples per pixel counts each sample whole: ``G`` 1/16 pixel
+    early, which placed every boundary 0.06 pixel high).
     """
 
     def __init__(self, n_pixels: int):
-        psf = depth_intensity_psf(_scan.hann_spectrum(n_pixels))
-        u = np.arange(psf.size) / 8.0
-        u = np.where(u > n_pixels / 2, u - n_pixels, u)
-        order = np.argsort(u)
-        keep = np.abs(u[order]) <= 16.0  # the main lobe and 15 side lobes each way
-        self.u, self.w = u[order][keep], psf[order][keep]
+        spectrum = _scan.hann_spectrum(n_pixels)
+        n = np.arange(n_pixels) - n_pixels // 2
+        # the main lobe and 15 side lobes each way, on a midpoint grid of 1/SAMPLES pixel
+        self.u = (np.arange(-16 * _SAMPLES, 16 * _SAMPLES) + 0.5) / _SAMPLES
+        self.w = np.abs(np.exp(-2j * np.pi * np.outer(self.u, n) / n_pixels) @ spectrum) ** 2
 
     def cdf(self, v, s: float = 0.0):
         """``G(v; s)``: ``v`` offsets (pixels), ``s`` the layer's slope of ``ln I`` per pixel."""
         tilted = self.w * np.exp(s * self.u)
         c = np.cumsum(tilted) - 0.5 * tilted
         return np.interp(v, self.u, c / tilted.sum(), left=0.0, right=1.0)
+
+    def log_mean_layers(self, z, tops, slopes, levels, p):
+        """``ln`` of the rows' mean intensity across several boundaries ``tops`` (µm, rising)
+        between layers ``levels + slopes z`` (``slopes`` per µm)."""
+        edges = [None, *tops, None]
+        total = np.zeros(np.shape(z))
+        for j, (s, i) in enumerate(zip(slopes, levels, strict=True)):
+            above = 1.0 if edges[j + 1] is None else self.cdf((edges[j + 1] - z) / p, s * p)
+            below = 0.0 if edges[j] is None else self.cdf((edges[j] - z) / p, s * p)
+            total = total + np.exp(s * z + i) * (above - below)
+        return np.log(total)
 
     def log_mean(self, z, t, s1, i1, s2, i2, p):
         """``ln`` of the rows' mean intensity (class docstring) at depths ``z`` (µm) for a
@@ -129,6 +141,24 @@ def _block_rss(mb, z, taus, s1, s2, p, cdf):
     return out
 
 
+def _split_rss(mb, z, t1, t2, slopes, p, model):
+    """Least-squares misfit, summed over the blocks ``mb`` (blocks, rows ``z``), of two
+    boundaries at ``t1[b] < t2[b]`` (per block) with a layer between them (the three layers'
+    ``slopes``, levels free per block from the rows more than :data:`_LEVEL_ROWS` pixels from a
+    boundary); inf where a layer has fewer than 2 such rows."""
+    total = 0.0
+    for row, a, b in zip(mb, t1, t2, strict=True):
+        edges = [-np.inf, a, b, np.inf]
+        masks = [(z > edges[j] + _LEVEL_ROWS * p) & (z < edges[j + 1] - _LEVEL_ROWS * p)
+                 for j in range(3)]  # fmt: skip
+        if min(int(mk.sum()) for mk in masks) < 2:
+            return np.inf
+        levels = [float(np.mean(row[mk] - s * z[mk])) for mk, s in zip(masks, slopes, strict=True)]
+        pred = model.log_mean_layers(z, [a, b], slopes, levels, p)
+        total += float(np.sum((row - pred) ** 2))
+    return total
+
+
 def _joint(rss, taus, basis, start, steps):
     """Coefficients minimising ``sum_b rss_b(basis_b . theta)`` (rss interpolated on ``taus``),
     Nelder-Mead from ``start``; and the minimum."""
@@ -157,16 +187,18 @@ def _joint(rss, taus, basis, start, steps):
 
 
 def _boundary_shape(rss, taus, xb, x_max, shapes, p, n_rows):
-    """Shape, coefficients ``(a, b, c)`` and their jackknife SEs of one boundary."""
+    """Shape, coefficients ``(a, b, c)`` and their jackknife SEs of one boundary; and the least
+    joint misfit over the shapes tried."""
     basis = np.column_stack([np.ones_like(xb), xb, xb**2 - x_max**2 / 12])
     half = x_max / 2
     steps = np.array([p, p / half, p / half**2])
     flat = taus[int(np.argmin(np.sum(np.where(np.isfinite(rss), rss, 1e9), axis=0)))]
-    fits = {"flat": _joint(rss, taus, basis, [flat], steps)[0]}
+    fits, misfit = {}, {}
+    fits["flat"], misfit["flat"] = _joint(rss, taus, basis, [flat], steps)
     if "tilted" in shapes or "curved" in shapes:
-        fits["tilted"] = _joint(rss, taus, basis, [fits["flat"][0], 0.0], steps)[0]
+        fits["tilted"], misfit["tilted"] = _joint(rss, taus, basis, [fits["flat"][0], 0.0], steps)
     if "curved" in shapes:
-        fits["curved"] = _joint(rss, taus, basis, [*fits["tilted"], 0.0], steps)[0]
+        fits["curved"], misfit["curved"] = _joint(rss, taus, basis, [*fits["tilted"], 0.0], steps)
     g = xb.size
     cov, bic = {}, {"flat": 0.0}
     for shape in shapes:
@@ -189,7 +221,7 @@ def _boundary_shape(rss, taus, xb, x_max, shapes, p, n_rows):
     coef = np.pad(fits[best], (0, 3 - d))
     se = np.full(3, np.nan)
     se[:d] = np.sqrt(np.diag(cov[best]))
-    return best, coef, se
+    return best, coef, se, min(misfit.values())
 
 
 def fit_shapes(
@@ -215,30 +247,75 @@ def fit_shapes(
     mb = np.stack([li[:, g].mean(axis=1) for g in groups])  # (blocks, pixels)
     m1, m2 = float(np.mean(x)), float(np.mean(x**2))
 
+    def locate(lo, hi, s_above, s_below):
+        """Shape, coefficients, SEs and joint misfit of one boundary in rows ``lo..hi`` (µm)
+        between layers of slopes ``s_above``, ``s_below``; None if the window is too short."""
+        sel = (z >= lo) & (z <= hi)
+        margin = (_LEVEL_ROWS + 2) * p
+        taus = np.arange(lo + margin, hi - margin + 1e-9, p / 4)
+        if taus.size < 2:
+            return None
+        rss = np.stack([_block_rss(mb[b, sel], z[sel], taus, s_above, s_below, p, cdf)
+                        for b in range(BOUNDARY_BLOCKS)])  # fmt: skip
+        return _boundary_shape(rss, taus, xb, cfg.x_max, shapes, p,
+                               int(sel.sum()) * BOUNDARY_BLOCKS)  # fmt: skip
+
+    def anchor(cf):
+        """Depth of a located boundary at the central lines' mean offset."""
+        return float(cf[0] + cf[1] * m1 + cf[2] * (m2 - cfg.x_max**2 / 12))
+
     def detect(cur):
-        """Each boundary's shape, coefficients and SEs, located around ``cur``'s tops."""
+        """Each boundary's anchor depth, shape, coefficients and SEs, located around ``cur``'s
+        tops; two neighbouring boundaries merge into one shaped boundary where that fits the
+        blocks' profiles at least as well as the two flat ones with a layer between them (a
+        tilted or curved boundary that the flat fit saw as a ramp: one level per block fewer)."""
         tops, slope = cur.top.values, -2 * cur.attenuation.values
         end = cur.attrs["last_row"] * p  # the last fitted row
-        shape, coef, ses = ["flat"], [np.zeros(3)], [np.full(3, np.nan)]
-        for k in range(1, tops.size):
-            lo = 0.5 * (tops[k - 1] + tops[k])
-            hi = 0.5 * (tops[k] + (tops[k + 1] if k + 1 < tops.size else max(end, tops[k])))
-            sel = (z >= lo) & (z <= hi)
-            margin = (_LEVEL_ROWS + 2) * p
-            taus = np.arange(lo + margin, hi - margin + 1e-9, p / 4)
-            if taus.size < 2:
+        bottom = np.append(tops, max(end, tops[-1]))
+
+        def mid(k):
+            return 0.5 * (bottom[k] + bottom[k + 1])
+
+        anchors, shape, coef, ses = [0.0], ["flat"], [np.zeros(3)], [np.full(3, np.nan)]
+        located = [None] + [locate(mid(k - 1), mid(k), slope[k - 1], slope[k])
+                            for k in range(1, tops.size)]  # fmt: skip
+
+        def at_blocks(k):
+            cf = located[k][1] if located[k] is not None else np.array([tops[k], 0.0, 0.0])
+            return cf[0] + cf[1] * xb + cf[2] * (xb**2 - cfg.x_max**2 / 12)
+
+        k = 1
+        while k < tops.size:
+            if k + 1 < tops.size:
+                merged = locate(mid(k - 1), mid(k + 1), slope[k - 1], slope[k + 1])
+                if merged is not None and merged[0] != "flat":
+                    # the merged profile must sweep at least half the layer between (a ramp
+                    # is the boundary's sweep across the lines) and fit the blocks as well as
+                    # the two located boundaries with the layer between them
+                    cf = merged[1]
+                    sweep = np.ptp(cf[1] * x + cf[2] * x**2)
+                    window = (z >= mid(k - 1)) & (z <= mid(k + 1))
+                    split = _split_rss(mb[:, window], z[window], at_blocks(k),
+                                       at_blocks(k + 1), slope[k - 1 : k + 2], p, cdf)  # fmt: skip
+                    if sweep >= 0.5 * (tops[k + 1] - tops[k]) and merged[3] <= split:
+                        anchors.append(anchor(cf))
+                        shape.append(merged[0])
+                        coef.append(cf)
+                        ses.append(merged[2])
+                        k += 2
+                        continue
+            one = located[k]
+            anchors.append(tops[k])
+            if one is None:
                 shape.append("flat")
                 coef.append(np.array([tops[k], 0.0, 0.0]))
                 ses.append(np.full(3, np.nan))
-                continue
-            rss = np.stack([_block_rss(mb[b, sel], z[sel], taus, slope[k - 1], slope[k], p, cdf)
-                            for b in range(BOUNDARY_BLOCKS)])  # fmt: skip
-            best, cf, se = _boundary_shape(rss, taus, xb, cfg.x_max, shapes, p,
-                                           int(sel.sum()) * BOUNDARY_BLOCKS)  # fmt: skip
-            shape.append(best)
-            coef.append(cf)
-            ses.append(se)
-        return shape, np.array(coef), ses
+            else:
+                shape.append(one[0])
+                coef.append(one[1])
+                ses.append(one[2])
+            k += 1
+        return np.array(anchors), shape, np.array(coef), ses
 
     def flatten(tops, coef):
         delta = coef[:, 1, None] * (x - m1) + coef[:, 2, None] * (x**2 - m2)  # (K, lines)
@@ -252,11 +329,10 @@ def fit_shapes(
 
     current = ds
     for _ in range(ITERATIONS):
-        shape, coef, ses = detect(current)
-        if all(s == "flat" for s in shape):
+        tops, shape, coef, ses = detect(current)
+        if all(sh == "flat" for sh in shape):
             return flat_shapes(ds)
-        new = refit(flatten(current.top.values, coef))
-        tops = current.top.values
+        new = refit(flatten(tops, coef))
         same = new.sizes["layer"] == tops.size and np.all(np.abs(new.top.values - tops) < p)
         if same:
             break
