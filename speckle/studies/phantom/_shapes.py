@@ -193,12 +193,23 @@ def _boundary_shape(rss, taus, xb, x_max, shapes, p, n_rows):
     half = x_max / 2
     steps = np.array([p, p / half, p / half**2])
     flat = taus[int(np.argmin(np.sum(np.where(np.isfinite(rss), rss, 1e9), axis=0)))]
+    # starts of the tilted and curved fits: the simpler shape's fit, and the least-squares
+    # polynomial through the blocks' own best positions (a steep boundary's flat fit sits at
+    # the window's edge, a start from which Nelder-Mead does not reach it); the better one
+    finite = np.isfinite(rss).any(axis=1)
+    own = taus[np.argmin(np.where(np.isfinite(rss), rss, np.inf)[finite], axis=1)]
+
+    def best_of(d, nested):
+        through = np.linalg.lstsq(basis[finite, :d], own, rcond=None)[0]
+        tries = [_joint(rss, taus, basis, start, steps) for start in (nested, through)]
+        return min(tries, key=lambda fit: fit[1])
+
     fits, misfit = {}, {}
     fits["flat"], misfit["flat"] = _joint(rss, taus, basis, [flat], steps)
     if "tilted" in shapes or "curved" in shapes:
-        fits["tilted"], misfit["tilted"] = _joint(rss, taus, basis, [fits["flat"][0], 0.0], steps)
+        fits["tilted"], misfit["tilted"] = best_of(2, [fits["flat"][0], 0.0])
     if "curved" in shapes:
-        fits["curved"], misfit["curved"] = _joint(rss, taus, basis, [*fits["tilted"], 0.0], steps)
+        fits["curved"], misfit["curved"] = best_of(3, [*fits["tilted"], 0.0])
     g = xb.size
     cov, bic = {}, {"flat": 0.0}
     for shape in shapes:
