@@ -19,7 +19,8 @@ offsets ``delta_k(x) = b (x - <x>) + c (x^2 - <x^2>)`` (0 at the surface, consta
 boundary), rows taken whole (nearest row: no interpolation, which would average speckle and bias
 ``var ln I``); rows from beyond the scan are clipped. The flat fit of the flattened levels
 gives the layers; its tops are the boundaries' depths at the central lines' mean offset, so
-``a = top - b <x> - c (<x^2> - X^2/12)``.
+``a = top - b <x> - c (<x^2> - X^2/12)``, and ``a``'s SE adds ``b``'s and ``c``'s in
+quadrature (times ``<x>`` and ``<x^2> - X^2/12``) to the flattened fit's.
 """
 
 from __future__ import annotations
@@ -360,5 +361,12 @@ def fit_shapes(
     c_se = np.array([ses[i][2] if i > 0 else np.nan for i in pick])
     top = new.top.values - b * m1 - c * (m2 - cfg.x_max**2 / 12)
     top[0] = 0.0
-    new = new.assign(top=(("layer",), top, new.top.attrs))
+    # the flattened fit measures the boundary at the central lines' mean offset, t_c; the
+    # mean depth over the box a = t_c - b <x> - c (<x^2> - X^2/12) carries the shape's
+    # errors too (b and c from other data: the blocks' positions, independent of t_c's rows)
+    shape_var = np.nan_to_num((b_se * m1) ** 2 + (c_se * (m2 - cfg.x_max**2 / 12)) ** 2)
+    top_se = np.sqrt(new.top_se.values**2 + shape_var)
+    new = new.assign(
+        top=(("layer",), top, new.top.attrs), top_se=(("layer",), top_se, new.top_se.attrs)
+    )
     return _shape_variables(new, out_shape, b, b_se, c, c_se, _CRITERION)
