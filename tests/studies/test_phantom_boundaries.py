@@ -9,11 +9,11 @@ import pytest
 from scipy import optimize
 
 import speckle
-from speckle.studies.phantom._fit import _fit_levels
-from speckle.studies.phantom._shapes import TransitionModel
+from speckle.studies.phantom._fit import _fit_levels  # private: the flat fit alone (the ramp)
+from speckle.studies.phantom._shapes import TransitionModel  # private: the model under test
 from speckle.studies.phantom.loop import fit_profiles
 from speckle.studies.phantom.patients import patient_table, profiles
-from speckle.synthoct import _scan
+from speckle.synthoct import _scan  # private: the scanner's Hann spectrum (the reference)
 
 REDUCED = speckle.synthoct_config("reduced")
 

@@ -30,8 +30,9 @@ The fit, on the central lines (``|x| <= x_max/2 - 3 r``, where the box does not 
    fewer layers are taken while a boundary separates layers whose slopes and levels at the
    boundary both agree within 3 jackknife SEs (a fluctuation of the phantom's shadowing);
 3. per layer: ``mu`` from the slope, each boundary to a fraction of a pixel from the transition
-   rows (the Hann PSF's intensity cumulative weights mixing the two layers' extrapolated
-   intensities), ``var ln I`` (minus the shadowing spread) inverted to the density by
+   rows (the Hann PSF's intensity weights of the two layers' scatterers, each layer's
+   exponential decay under the PSF included: :class:`~speckle.studies.phantom._shapes.
+   TransitionModel`), ``var ln I`` (minus the shadowing spread) inverted to the density by
    :func:`speckle.analysis.sparse.sparse_inverse_density` with the slab's kurtosis-equivalent
    density ``rho r sqrt(pi) erf(sqrt 2)^2/erf(2)`` per µm^2 (its amplitudes ``exp(-y^2/r^2)``),
    the energy ``E = 100 mu/(rho A2)``, and the window's top from the layers' mean levels;

@@ -3,15 +3,21 @@
 Each boundary ``k`` of the flat fit (:func:`speckle.fit_phantom`'s first pass) is located again
 in each of ``blocks`` lateral blocks of the central lines: the block's row-mean ``ln I`` in a
 window around it (half-way to its neighbours) is fitted by the two layers' lines (slopes
-``-2 mu`` of the flat fit, levels free per block) mixed through the depth PSF's cumulative
-intensity ``F`` at the trial position ``tau``,
-``ln(F e^{s1 z + i1} + (1 - F) e^{s2 z + i2})``; ``tau`` on a grid of a quarter pixel, levels
+``-2 mu`` of the flat fit, levels free per block) mixed through the depth PSF at the trial
+position ``tau`` (:class:`TransitionModel`); ``tau`` on a grid of a quarter pixel, levels
 from the rows more than 3 pixels from ``tau``, the least squares over every row of the window.
-The positions ``tau_b`` at the blocks' mean ``x`` are fitted by ``a``, ``a + b x`` and
-``a + b x + c (x^2 - X^2/12)`` (least squares; blocks further than 4 robust SDs from the
-largest model left out once), and the shape is the one of least
-``BIC = n ln(RSS/n) + (d + 1) ln n`` (``n`` blocks, ``d`` the degree) among those allowed; the
-SEs of ``b`` and ``c`` are the least-squares ones (``RSS/(n - d - 1)`` the blocks' variance).
+The blocks' misfits are summed along ``tau_b = a``, ``a + b x_b`` and
+``a + b x_b + c (x_b^2 - X^2/12)`` (``x_b`` the blocks' mean ``x``) and minimised jointly
+(Nelder-Mead; the tilted and curved fits start from the simpler shape's fit and from the
+least-squares polynomial through the blocks' own best positions, the better end kept); the
+shape is the one of least ``BIC = -chi^2 + d ln n`` (``n`` the rows used, ``d`` the terms
+beyond ``a``, ``chi^2`` the Wald statistic of ``b`` or ``(b, c)``) among those allowed, the
+covariance (and the SEs) from the delete-one-block jackknife of the joint fit.
+Two neighbouring boundaries of the flat fit merge into one tilted or curved boundary (a ramp:
+a steep boundary's sweep across the lines, which the flat fit cuts in two with a layer
+between) where that boundary, located between the layers above and below, sweeps at least half
+the layer between and fits the blocks at least as well as the two located boundaries with the
+layer between them (one level per block more).
 
 With any boundary not flat, the levels are flattened: line ``x``'s row at depth
 ``z' + delta(x, z')`` moves to ``z'``, ``delta`` linear in ``z'`` between the boundaries'
@@ -193,32 +199,39 @@ def _boundary_shape(rss, taus, xb, x_max, shapes, p, n_rows):
     basis = np.column_stack([np.ones_like(xb), xb, xb**2 - x_max**2 / 12])
     half = x_max / 2
     steps = np.array([p, p / half, p / half**2])
-    flat = taus[int(np.argmin(np.sum(np.where(np.isfinite(rss), rss, 1e9), axis=0)))]
-    # starts of the tilted and curved fits: the simpler shape's fit, and the least-squares
-    # polynomial through the blocks' own best positions (a steep boundary's flat fit sits at
-    # the window's edge, a start from which Nelder-Mead does not reach it); the better one
-    finite = np.isfinite(rss).any(axis=1)
-    own = taus[np.argmin(np.where(np.isfinite(rss), rss, np.inf)[finite], axis=1)]
 
-    def best_of(d, nested):
-        through = np.linalg.lstsq(basis[finite, :d], own, rcond=None)[0]
-        tries = [_joint(rss, taus, basis, start, steps) for start in (nested, through)]
-        return min(tries, key=lambda fit: fit[1])
+    def chain(table, base):
+        """Every allowed shape's fit and misfit from the blocks' misfits ``table``: the flat
+        one from the best common position; the tilted and curved ones from two starts, the
+        simpler shape's fit and the least-squares polynomial through the blocks' own best
+        positions (a steep boundary's flat fit sits at the window's edge, a start from which
+        Nelder-Mead does not reach it), the better end kept."""
+        flat = taus[int(np.argmin(np.sum(np.where(np.isfinite(table), table, 1e9), axis=0)))]
+        finite = np.isfinite(table).any(axis=1)
+        own = taus[np.argmin(np.where(np.isfinite(table), table, np.inf)[finite], axis=1)]
 
-    fits, misfit = {}, {}
-    fits["flat"], misfit["flat"] = _joint(rss, taus, basis, [flat], steps)
-    if "tilted" in shapes or "curved" in shapes:
-        fits["tilted"], misfit["tilted"] = best_of(2, [fits["flat"][0], 0.0])
-    if "curved" in shapes:
-        fits["curved"], misfit["curved"] = best_of(3, [*fits["tilted"], 0.0])
+        def best_of(d, nested):
+            through = np.linalg.lstsq(base[finite, :d], own, rcond=None)[0]
+            tries = [_joint(table, taus, base, start, steps) for start in (nested, through)]
+            return min(tries, key=lambda fit: fit[1])
+
+        fits, misfit = {}, {}
+        fits["flat"], misfit["flat"] = _joint(table, taus, base, [flat], steps)
+        if "tilted" in shapes or "curved" in shapes:
+            fits["tilted"], misfit["tilted"] = best_of(2, [fits["flat"][0], 0.0])
+        if "curved" in shapes:
+            fits["curved"], misfit["curved"] = best_of(3, [*fits["tilted"], 0.0])
+        return fits, misfit
+
+    fits, misfit = chain(rss, basis)
     g = xb.size
+    # the delete-one-block jackknife repeats the whole chain (both starts: a replicate may
+    # end in another local minimum, which the spread must show)
+    replicas = [chain(rss[np.arange(g) != b], basis[np.arange(g) != b])[0] for b in range(g)]
     cov, bic = {}, {"flat": 0.0}
     for shape in shapes:
         d = SHAPE_DEGREE[shape] + 1
-        reps = np.array([
-            _joint(rss[np.arange(g) != b], taus, basis[np.arange(g) != b], fits[shape], steps)[0]
-            for b in range(g)
-        ])  # fmt: skip
+        reps = np.array([rep[shape] for rep in replicas])
         # delete-one-block jackknife: (g - 1)/g sum (theta_b - mean)^2 = (g - 1) x biased cov
         cov[shape] = (g - 1) * np.atleast_2d(np.cov(reps.T, bias=True))
         if d > 1:  # Wald chi-square of the shape's terms (tilt, curvature) against 0
