@@ -89,7 +89,7 @@ class TransitionModel:
 
     def cdf(self, v, s: float = 0.0):
         """``G(v; s)``: ``v`` offsets (pixels), ``s`` the layer's slope of ``ln I`` per pixel."""
-        tilted = self.w * np.exp(s * self.u)
+        tilted = self.w * np.exp(s * self.u - abs(s) * self.u[-1])  # scaled: no overflow
         c = np.cumsum(tilted) - 0.5 * tilted
         return np.interp(v, self.u, c / tilted.sum(), left=0.0, right=1.0)
 
@@ -97,20 +97,20 @@ class TransitionModel:
         """``ln`` of the rows' mean intensity across several boundaries ``tops`` (µm, rising)
         between layers ``levels + slopes z`` (``slopes`` per µm)."""
         edges = [None, *tops, None]
-        total = np.zeros(np.shape(z))
-        for j, (s, i) in enumerate(zip(slopes, levels, strict=True)):
+        z = np.asarray(z, float)
+        logs = np.array([s * z + i for s, i in zip(slopes, levels, strict=True)])
+        top = logs.max(axis=0)  # factored out: no overflow
+        total = np.zeros(z.shape)
+        for j, s in enumerate(slopes):
             above = 1.0 if edges[j + 1] is None else self.cdf((edges[j + 1] - z) / p, s * p)
             below = 0.0 if edges[j] is None else self.cdf((edges[j] - z) / p, s * p)
-            total = total + np.exp(s * z + i) * (above - below)
-        return np.log(total)
+            total = total + np.exp(logs[j] - top) * (above - below)
+        return top + np.log(total)
 
     def log_mean(self, z, t, s1, i1, s2, i2, p):
         """``ln`` of the rows' mean intensity (class docstring) at depths ``z`` (µm) for a
         boundary at ``t`` (µm), layers ``i + s z`` (``s`` per µm), pixel ``p`` (µm)."""
-        v = (t - z) / p
-        upper = np.exp(s1 * z + i1) * self.cdf(v, s1 * p)
-        lower = np.exp(s2 * z + i2) * (1.0 - self.cdf(v, s2 * p))
-        return np.log(upper + lower)
+        return self.log_mean_layers(z, [t], [s1, s2], [i1, i2], p)
 
 
 def _shape_variables(ds, shape, tilt, tilt_se, curv, curv_se, criterion):
