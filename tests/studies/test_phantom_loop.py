@@ -88,7 +88,7 @@ def test_closed_loop_challenge_shapes():
     configuration (256 x 512 pixels of 6 µm, r = 10 µm): counts right in at least 9 of 10
     (measured 10 of 10, and 39 of 40 over seeds 0-39, against 8 of 10 before ramps were
     merged into one shaped boundary: seeds 1 and 4), every boundary of those within a pixel
-    on every fitted line (measured: all 27), the pulls of the top, mu and rho E within 2 as
+    on every fitted line (measured: all 31), the pulls of the top, mu and rho E within 2 as
     often as a normal distribution says, within 3 binomial SEs (the top's measured 77 % of 31
     before the transition model placed boundaries 1/16 pixel high; 94 % of 94 over seeds
     0-39 after; docs/explanation/phantom_fit.md)."""
