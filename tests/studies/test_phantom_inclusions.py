@@ -12,7 +12,7 @@ import pytest
 
 import speckle
 from speckle.studies.phantom import _inclusions as inc  # private: the model's pieces, tested
-from speckle.studies.phantom._fit import _psf_cdf  # private: the depth PSF the model uses
+from speckle.studies.phantom._shapes import TransitionModel  # private: the depth PSF the model uses
 
 #: The reduced closed-loop scanner: 128 x 128 pixels of 6 µm, radius 10 µm.
 SMALL = speckle.synthoct_config("reduced")
@@ -29,7 +29,7 @@ def test_geometry_is_the_exact_chord():
     p = 6.0
     z = np.arange(80) * p
     x = np.linspace(-90, 90, 37)
-    geo = inc._Geometry(z, x, p, 0.0, _psf_cdf(128))
+    geo = inc._Geometry(z, x, p, 0.0, TransitionModel(128).cdf)
     theta = np.array([7.0, 200.0, 60.0, 33.0])
     chi, ell = geo.basis(theta)
     u = np.clip(1 - ((x - theta[0]) / theta[2]) ** 2, 0, None)

@@ -30,13 +30,13 @@ The fit, on the central lines (``|x| <= x_max/2 - 3 r``, where the box does not 
    fewer layers are taken while a boundary separates layers whose slopes and levels at the
    boundary both agree within 3 jackknife SEs (a fluctuation of the phantom's shadowing);
 3. per layer: ``mu`` from the slope, each boundary to a fraction of a pixel from the transition
-   rows (the Hann PSF's intensity cumulative weights mixing the two layers' extrapolated
-   intensities), ``var ln I`` (minus the shadowing spread, over rows whose predicted clipped
-   fraction is at most 1 %, corrected for the lines' correlation) inverted to the density by
-   the slab's exact sparse-speckle theory (its amplitudes ``exp(-y^2/r^2)``), identified where
-   its excess over ``pi^2/6`` exceeds 5 SE (else a lower bound), the energy
-   ``E = 100 mu/(rho A2)``, and the window's top from the layers' mean levels
-   (:mod:`speckle.studies.phantom._density`);
+   rows (the Hann PSF's intensity weights of the two layers' scatterers, each layer's
+   exponential decay under the PSF included: ``_shapes.TransitionModel``), ``var ln I`` (minus
+   the shadowing spread, over rows whose predicted clipped fraction is at most 1 %, corrected
+   for the lines' correlation) inverted to the density by the slab's exact sparse-speckle
+   theory (its amplitudes ``exp(-y^2/r^2)``), identified where its excess over ``pi^2/6``
+   exceeds 5 SE (else a lower bound), the energy ``E = 100 mu/(rho A2)``, and the window's top
+   from the layers' mean levels (:mod:`speckle.studies.phantom._density`);
 4. standard errors: delete-one-block jackknife over :data:`BLOCKS` lateral blocks of lines
    (the line-to-line correlations of speckle and shadowing included), the segmentation fixed;
    ``var ln I`` and the density over blocks of 8 beam radii when there are more of them.
@@ -56,7 +56,6 @@ import numpy as np
 import xarray as xr
 from scipy import optimize
 
-from ...analysis.sparse import depth_intensity_psf
 from ...conventions import attrs, coord, units_of
 from ...synthoct import _scan
 from ...synthoct.files import ScannerConfig, read_png, read_scanner_config, write_scanner_config
@@ -68,7 +67,7 @@ from ._density import (
     window_and_brightness,
 )
 from ._inclusions import fit_inclusions, no_inclusions, remove_inclusions
-from ._shapes import SHAPE_DEGREE, fit_shapes, flat_shapes
+from ._shapes import SHAPE_DEGREE, TransitionModel, fit_shapes, flat_shapes
 from .patients import patient_table, region_volumes
 
 __all__ = ["BLOCKS", "GAP", "MAX_CLIPPED", "PhantomFit", "fit_phantom"]
@@ -337,17 +336,6 @@ class PhantomFit:
         return synthoct_scan(self.phantom(seed), self.config, **options)
 
 
-def _psf_cdf(n_pixels: int):
-    """``F(u)``: fraction of the depth PSF's intensity at offsets below ``u`` pixels."""
-    p = depth_intensity_psf(_scan.hann_spectrum(n_pixels))
-    u = np.arange(p.size) / 8.0
-    u = np.where(u > n_pixels / 2, u - n_pixels, u)
-    order = np.argsort(u)
-    u, p = u[order], p[order]
-    cdf = np.cumsum(p) / p.sum()
-    return lambda v: np.interp(v, u, cdf)
-
-
 def fit_phantom(
     scan: object,
     config: object,
@@ -447,7 +435,7 @@ def fit_phantom(
     ok = np.mean(lev == 0, axis=1) <= MAX_CLIPPED
     ok[: GAP + 1] = False
     ok[cfg.n_pixels - GAP - 1 :] = False
-    li, x, cdf = _log_intensity(lev), cfg.line_positions[central], _psf_cdf(cfg.n_pixels)
+    li, x, cdf = _log_intensity(lev), cfg.line_positions[central], TransitionModel(cfg.n_pixels).cdf
     found, model = fit_inclusions(li, np.flatnonzero(ok), ds, cfg, x, cdf)
     if found.sizes["inclusion"]:
         again = layers_of(remove_inclusions(lev, model, _NEPER_DB))
@@ -525,7 +513,7 @@ def _fit_levels(lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: in
         n_layers -= 1
     segs = best[n_layers][1]
 
-    cdf = _psf_cdf(cfg.n_pixels)
+    model = TransitionModel(cfg.n_pixels)
 
     def tops_of(mm, fits):
         out = [0.0]
@@ -536,8 +524,7 @@ def _fit_levels(lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: in
             zz = z[idx]
 
             def misfit(t, zz=zz, idx=idx, s1=s1, i1=i1, s2_=s2_, i2=i2):
-                f = cdf(t / p - zz / p)  # share of the rows' (symmetric) PSF above t
-                pred = np.log(f * np.exp(s1 * zz + i1) + (1 - f) * np.exp(s2_ * zz + i2))
+                pred = model.log_mean(zz, t, s1, i1, s2_, i2, p)  # the PSF's share of each
                 return float(np.sum((pred - mm[idx]) ** 2))
 
             res = optimize.minimize_scalar(

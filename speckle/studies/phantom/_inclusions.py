@@ -361,8 +361,9 @@ def fit_inclusions(
     ``li`` (pixels, lines): every row of the central lines; ``rows``: the row indices the layer
     fit used (above the floor); ``layers``: the fit's Dataset (with its shape variables);
     ``x`` (µm): the central lines' positions; ``cdf``: the depth PSF's cumulative intensity
-    (offsets in pixels, the layer fit's ``_psf_cdf``). Returns the Dataset of dim ``inclusion`` and
-    the fitted inclusions' model of ``ln I`` (``a chi + b L``, pixels x lines: 0 without).
+    (offsets in pixels, ``TransitionModel.cdf`` of ``_shapes``). Returns the Dataset of dim
+    ``inclusion`` and the fitted inclusions' model of ``ln I`` (``a chi + b L``, pixels x lines:
+    0 without).
     """
     p, pitch, r = cfg.pixel_size, cfg.line_pitch, cfg.beam_radius
     n_z, n_x = li.shape

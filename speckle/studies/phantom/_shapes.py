@@ -3,15 +3,21 @@
 Each boundary ``k`` of the flat fit (:func:`speckle.fit_phantom`'s first pass) is located again
 in each of ``blocks`` lateral blocks of the central lines: the block's row-mean ``ln I`` in a
 window around it (half-way to its neighbours) is fitted by the two layers' lines (slopes
-``-2 mu`` of the flat fit, levels free per block) mixed through the depth PSF's cumulative
-intensity ``F`` at the trial position ``tau``,
-``ln(F e^{s1 z + i1} + (1 - F) e^{s2 z + i2})``; ``tau`` on a grid of a quarter pixel, levels
+``-2 mu`` of the flat fit, levels free per block) mixed through the depth PSF at the trial
+position ``tau`` (:class:`TransitionModel`); ``tau`` on a grid of a quarter pixel, levels
 from the rows more than 3 pixels from ``tau``, the least squares over every row of the window.
-The positions ``tau_b`` at the blocks' mean ``x`` are fitted by ``a``, ``a + b x`` and
-``a + b x + c (x^2 - X^2/12)`` (least squares; blocks further than 4 robust SDs from the
-largest model left out once), and the shape is the one of least
-``BIC = n ln(RSS/n) + (d + 1) ln n`` (``n`` blocks, ``d`` the degree) among those allowed; the
-SEs of ``b`` and ``c`` are the least-squares ones (``RSS/(n - d - 1)`` the blocks' variance).
+The blocks' misfits are summed along ``tau_b = a``, ``a + b x_b`` and
+``a + b x_b + c (x_b^2 - X^2/12)`` (``x_b`` the blocks' mean ``x``) and minimised jointly
+(Nelder-Mead; the tilted and curved fits start from the simpler shape's fit and from the
+least-squares polynomial through the blocks' own best positions, the better end kept); the
+shape is the one of least ``BIC = -chi^2 + d ln n`` (``n`` the rows used, ``d`` the terms
+beyond ``a``, ``chi^2`` the Wald statistic of ``b`` or ``(b, c)``) among those allowed, the
+covariance (and the SEs) from the delete-one-block jackknife of the joint fit.
+Two neighbouring boundaries of the flat fit merge into one tilted or curved boundary (a ramp:
+a steep boundary's sweep across the lines, which the flat fit cuts in two with a layer
+between) where that boundary, located between the layers above and below, sweeps at least half
+the layer between and fits the blocks at least as well as the two located boundaries with the
+layer between them (one level per block more).
 
 With any boundary not flat, the levels are flattened: line ``x``'s row at depth
 ``z' + delta(x, z')`` moves to ``z'``, ``delta`` linear in ``z'`` between the boundaries'
@@ -19,7 +25,8 @@ offsets ``delta_k(x) = b (x - <x>) + c (x^2 - <x^2>)`` (0 at the surface, consta
 boundary), rows taken whole (nearest row: no interpolation, which would average speckle and bias
 ``var ln I``); rows from beyond the scan are clipped. The flat fit of the flattened levels
 gives the layers; its tops are the boundaries' depths at the central lines' mean offset, so
-``a = top - b <x> - c (<x^2> - X^2/12)``.
+``a = top - b <x> - c (<x^2> - X^2/12)``, and ``a``'s SE adds ``b``'s and ``c``'s in
+quadrature (times ``<x>`` and ``<x^2> - X^2/12``) to the flattened fit's.
 """
 
 from __future__ import annotations
@@ -30,12 +37,11 @@ import numpy as np
 import xarray as xr
 from scipy import optimize
 
-from ...analysis.sparse import depth_intensity_psf
 from ...conventions import attrs
 from ...synthoct import _scan
 from ...synthoct.files import ScannerConfig
 
-__all__ = ["BOUNDARY_BLOCKS", "SHAPE_DEGREE", "fit_shapes", "flat_shapes"]
+__all__ = ["BOUNDARY_BLOCKS", "SHAPE_DEGREE", "TransitionModel", "fit_shapes", "flat_shapes"]
 
 #: Polynomial degree of each boundary shape.
 SHAPE_DEGREE = {"flat": 0, "tilted": 1, "curved": 2}
@@ -43,6 +49,8 @@ SHAPE_DEGREE = {"flat": 0, "tilted": 1, "curved": 2}
 ITERATIONS = 3
 #: Lateral blocks in which each boundary is located.
 BOUNDARY_BLOCKS = 16
+#: Samples per pixel of the transition model's PSF.
+_SAMPLES = 64
 #: Rows (pixels) from the trial position beyond which a row sets a layer's level.
 _LEVEL_ROWS = 3
 _CRITERION = (
@@ -51,14 +59,58 @@ _CRITERION = (
 )
 
 
-def _psf_cdf(n_pixels: int):
-    """``F(u)``: fraction of the depth PSF's intensity at offsets below ``u`` pixels."""
-    psf = depth_intensity_psf(_scan.hann_spectrum(n_pixels))
-    u = np.arange(psf.size) / 8.0
-    u = np.where(u > n_pixels / 2, u - n_pixels, u)
-    order = np.argsort(u)
-    cdf = np.cumsum(psf[order]) / psf.sum()
-    return lambda v: np.interp(v, u[order], cdf)
+class TransitionModel:
+    """Mean intensity of rows across a boundary: the depth PSF's share of each layer.
+
+    Row ``q`` (depth ``z_q``) collects scatterers at offsets ``u = z - z_q`` (pixels) with the
+    intensity PSF's weight ``w(u)`` (:func:`speckle.depth_intensity_psf`, symmetric). A layer
+    whose row-mean intensity is ``exp(i + s z)`` (``s`` per pixel here) has scatterers of mean
+    intensity ``exp(i + s z)/M(s)``, ``M(s) = int w(u) e^{s u} du``, so the rows near a boundary
+    at ``t`` hold
+
+        exp(i1 + s1 z_q) G(t - z_q; s1) + exp(i2 + s2 z_q) (1 - G(t - z_q; s2)),
+        G(v; s) = int_{u < v} w(u) e^{s u} du / M(s),
+
+    (the upper layer's scatterers above ``t``, the lower's below). ``G(v; 0)`` is the PSF's
+    cumulative intensity. Neglecting the tilt ``e^{s u}`` shifts the boundary by ``s sigma^2``
+    (``sigma^2 = 0.336`` pixel^2 of the Hann PSF: 0.1 pixel at ``s = 0.3`` per pixel). The
+    PSF is summed directly (:func:`speckle.depth_intensity_psf`'s formula) on a midpoint grid
+    of 1/64 pixel and its cumulative sums are trapezoidal (a plain cumulative sum of
+    ``depth_intensity_psf``'s 8 samples per pixel counts each sample whole: ``G`` 1/16 pixel
+    early, which placed every boundary 0.06 pixel high).
+    """
+
+    def __init__(self, n_pixels: int):
+        spectrum = _scan.hann_spectrum(n_pixels)
+        n = np.arange(n_pixels) - n_pixels // 2
+        # the main lobe and 15 side lobes each way, on a midpoint grid of 1/SAMPLES pixel
+        self.u = (np.arange(-16 * _SAMPLES, 16 * _SAMPLES) + 0.5) / _SAMPLES
+        self.w = np.abs(np.exp(-2j * np.pi * np.outer(self.u, n) / n_pixels) @ spectrum) ** 2
+
+    def cdf(self, v, s: float = 0.0):
+        """``G(v; s)``: ``v`` offsets (pixels), ``s`` the layer's slope of ``ln I`` per pixel."""
+        tilted = self.w * np.exp(s * self.u - abs(s) * self.u[-1])  # scaled: no overflow
+        c = np.cumsum(tilted) - 0.5 * tilted
+        return np.interp(v, self.u, c / tilted.sum(), left=0.0, right=1.0)
+
+    def log_mean_layers(self, z, tops, slopes, levels, p):
+        """``ln`` of the rows' mean intensity across several boundaries ``tops`` (µm, rising)
+        between layers ``levels + slopes z`` (``slopes`` per µm)."""
+        edges = [None, *tops, None]
+        z = np.asarray(z, float)
+        logs = np.array([s * z + i for s, i in zip(slopes, levels, strict=True)])
+        top = logs.max(axis=0)  # factored out: no overflow
+        total = np.zeros(z.shape)
+        for j, s in enumerate(slopes):
+            above = 1.0 if edges[j + 1] is None else self.cdf((edges[j + 1] - z) / p, s * p)
+            below = 0.0 if edges[j] is None else self.cdf((edges[j] - z) / p, s * p)
+            total = total + np.exp(logs[j] - top) * (above - below)
+        return top + np.log(total)
+
+    def log_mean(self, z, t, s1, i1, s2, i2, p):
+        """``ln`` of the rows' mean intensity (class docstring) at depths ``z`` (µm) for a
+        boundary at ``t`` (µm), layers ``i + s z`` (``s`` per µm), pixel ``p`` (µm)."""
+        return self.log_mean_layers(z, [t], [s1, s2], [i1, i2], p)
 
 
 def _shape_variables(ds, shape, tilt, tilt_se, curv, curv_se, criterion):
@@ -91,10 +143,27 @@ def _block_rss(mb, z, taus, s1, s2, p, cdf):
             continue
         i1 = np.mean(mb[above] - s1 * z[above])
         i2 = np.mean(mb[below] - s2 * z[below])
-        f = cdf((tau - z) / p)
-        pred = np.log(f * np.exp(s1 * z + i1) + (1 - f) * np.exp(s2 * z + i2))
+        pred = cdf.log_mean(z, tau, s1, i1, s2, i2, p)
         out[i] = float(np.sum((mb - pred) ** 2))
     return out
+
+
+def _split_rss(mb, z, t1, t2, slopes, p, model):
+    """Least-squares misfit, summed over the blocks ``mb`` (blocks, rows ``z``), of two
+    boundaries at ``t1[b] < t2[b]`` (per block) with a layer between them (the three layers'
+    ``slopes``, levels free per block from the rows more than :data:`_LEVEL_ROWS` pixels from a
+    boundary); inf where a layer has fewer than 2 such rows."""
+    total = 0.0
+    for row, a, b in zip(mb, t1, t2, strict=True):
+        edges = [-np.inf, a, b, np.inf]
+        masks = [(z > edges[j] + _LEVEL_ROWS * p) & (z < edges[j + 1] - _LEVEL_ROWS * p)
+                 for j in range(3)]  # fmt: skip
+        if min(int(mk.sum()) for mk in masks) < 2:
+            return np.inf
+        levels = [float(np.mean(row[mk] - s * z[mk])) for mk, s in zip(masks, slopes, strict=True)]
+        pred = model.log_mean_layers(z, [a, b], slopes, levels, p)
+        total += float(np.sum((row - pred) ** 2))
+    return total
 
 
 def _joint(rss, taus, basis, start, steps):
@@ -125,24 +194,44 @@ def _joint(rss, taus, basis, start, steps):
 
 
 def _boundary_shape(rss, taus, xb, x_max, shapes, p, n_rows):
-    """Shape, coefficients ``(a, b, c)`` and their jackknife SEs of one boundary."""
+    """Shape, coefficients ``(a, b, c)`` and their jackknife SEs of one boundary; and the least
+    joint misfit over the shapes tried."""
     basis = np.column_stack([np.ones_like(xb), xb, xb**2 - x_max**2 / 12])
     half = x_max / 2
     steps = np.array([p, p / half, p / half**2])
-    flat = taus[int(np.argmin(np.sum(np.where(np.isfinite(rss), rss, 1e9), axis=0)))]
-    fits = {"flat": _joint(rss, taus, basis, [flat], steps)[0]}
-    if "tilted" in shapes or "curved" in shapes:
-        fits["tilted"] = _joint(rss, taus, basis, [fits["flat"][0], 0.0], steps)[0]
-    if "curved" in shapes:
-        fits["curved"] = _joint(rss, taus, basis, [*fits["tilted"], 0.0], steps)[0]
+
+    def chain(table, base):
+        """Every allowed shape's fit and misfit from the blocks' misfits ``table``: the flat
+        one from the best common position; the tilted and curved ones from two starts, the
+        simpler shape's fit and the least-squares polynomial through the blocks' own best
+        positions (a steep boundary's flat fit sits at the window's edge, a start from which
+        Nelder-Mead does not reach it), the better end kept."""
+        flat = taus[int(np.argmin(np.sum(np.where(np.isfinite(table), table, 1e9), axis=0)))]
+        finite = np.isfinite(table).any(axis=1)
+        own = taus[np.argmin(np.where(np.isfinite(table), table, np.inf)[finite], axis=1)]
+
+        def best_of(d, nested):
+            through = np.linalg.lstsq(base[finite, :d], own, rcond=None)[0]
+            tries = [_joint(table, taus, base, start, steps) for start in (nested, through)]
+            return min(tries, key=lambda fit: fit[1])
+
+        fits, misfit = {}, {}
+        fits["flat"], misfit["flat"] = _joint(table, taus, base, [flat], steps)
+        if "tilted" in shapes or "curved" in shapes:
+            fits["tilted"], misfit["tilted"] = best_of(2, [fits["flat"][0], 0.0])
+        if "curved" in shapes:
+            fits["curved"], misfit["curved"] = best_of(3, [*fits["tilted"], 0.0])
+        return fits, misfit
+
+    fits, misfit = chain(rss, basis)
     g = xb.size
+    # the delete-one-block jackknife repeats the whole chain (both starts: a replicate may
+    # end in another local minimum, which the spread must show)
+    replicas = [chain(rss[np.arange(g) != b], basis[np.arange(g) != b])[0] for b in range(g)]
     cov, bic = {}, {"flat": 0.0}
     for shape in shapes:
         d = SHAPE_DEGREE[shape] + 1
-        reps = np.array([
-            _joint(rss[np.arange(g) != b], taus, basis[np.arange(g) != b], fits[shape], steps)[0]
-            for b in range(g)
-        ])  # fmt: skip
+        reps = np.array([rep[shape] for rep in replicas])
         # delete-one-block jackknife: (g - 1)/g sum (theta_b - mean)^2 = (g - 1) x biased cov
         cov[shape] = (g - 1) * np.atleast_2d(np.cov(reps.T, bias=True))
         if d > 1:  # Wald chi-square of the shape's terms (tilt, curvature) against 0
@@ -157,7 +246,7 @@ def _boundary_shape(rss, taus, xb, x_max, shapes, p, n_rows):
     coef = np.pad(fits[best], (0, 3 - d))
     se = np.full(3, np.nan)
     se[:d] = np.sqrt(np.diag(cov[best]))
-    return best, coef, se
+    return best, coef, se, min(misfit.values())
 
 
 def fit_shapes(
@@ -177,36 +266,81 @@ def fit_shapes(
     x = cfg.line_positions[np.abs(cfg.line_positions) <= cfg.x_max / 2 - 3 * r]
     n_pix = lev.shape[0]
     z = np.arange(n_pix) * p
-    cdf = _psf_cdf(cfg.n_pixels)
+    cdf = TransitionModel(cfg.n_pixels)
     groups = np.array_split(np.arange(x.size), BOUNDARY_BLOCKS)
     xb = np.array([x[g].mean() for g in groups])
     mb = np.stack([li[:, g].mean(axis=1) for g in groups])  # (blocks, pixels)
     m1, m2 = float(np.mean(x)), float(np.mean(x**2))
 
+    def locate(lo, hi, s_above, s_below):
+        """Shape, coefficients, SEs and joint misfit of one boundary in rows ``lo..hi`` (µm)
+        between layers of slopes ``s_above``, ``s_below``; None if the window is too short."""
+        sel = (z >= lo) & (z <= hi)
+        margin = (_LEVEL_ROWS + 2) * p
+        taus = np.arange(lo + margin, hi - margin + 1e-9, p / 4)
+        if taus.size < 2:
+            return None
+        rss = np.stack([_block_rss(mb[b, sel], z[sel], taus, s_above, s_below, p, cdf)
+                        for b in range(BOUNDARY_BLOCKS)])  # fmt: skip
+        return _boundary_shape(rss, taus, xb, cfg.x_max, shapes, p,
+                               int(sel.sum()) * BOUNDARY_BLOCKS)  # fmt: skip
+
+    def anchor(cf):
+        """Depth of a located boundary at the central lines' mean offset."""
+        return float(cf[0] + cf[1] * m1 + cf[2] * (m2 - cfg.x_max**2 / 12))
+
     def detect(cur):
-        """Each boundary's shape, coefficients and SEs, located around ``cur``'s tops."""
+        """Each boundary's anchor depth, shape, coefficients and SEs, located around ``cur``'s
+        tops; two neighbouring boundaries merge into one shaped boundary where that fits the
+        blocks' profiles at least as well as the two flat ones with a layer between them (a
+        tilted or curved boundary that the flat fit saw as a ramp: one level per block fewer)."""
         tops, slope = cur.top.values, -2 * cur.attenuation.values
         end = cur.attrs["last_row"] * p  # the last fitted row
-        shape, coef, ses = ["flat"], [np.zeros(3)], [np.full(3, np.nan)]
-        for k in range(1, tops.size):
-            lo = 0.5 * (tops[k - 1] + tops[k])
-            hi = 0.5 * (tops[k] + (tops[k + 1] if k + 1 < tops.size else max(end, tops[k])))
-            sel = (z >= lo) & (z <= hi)
-            margin = (_LEVEL_ROWS + 2) * p
-            taus = np.arange(lo + margin, hi - margin + 1e-9, p / 4)
-            if taus.size < 2:
+        bottom = np.append(tops, max(end, tops[-1]))
+
+        def mid(k):
+            return 0.5 * (bottom[k] + bottom[k + 1])
+
+        anchors, shape, coef, ses = [0.0], ["flat"], [np.zeros(3)], [np.full(3, np.nan)]
+        located = [None] + [locate(mid(k - 1), mid(k), slope[k - 1], slope[k])
+                            for k in range(1, tops.size)]  # fmt: skip
+
+        def at_blocks(k):
+            cf = located[k][1] if located[k] is not None else np.array([tops[k], 0.0, 0.0])
+            return cf[0] + cf[1] * xb + cf[2] * (xb**2 - cfg.x_max**2 / 12)
+
+        k = 1
+        while k < tops.size:
+            if k + 1 < tops.size:
+                merged = locate(mid(k - 1), mid(k + 1), slope[k - 1], slope[k + 1])
+                if merged is not None and merged[0] != "flat":
+                    # the merged profile must sweep at least half the layer between (a ramp
+                    # is the boundary's sweep across the lines) and fit the blocks as well as
+                    # the two located boundaries with the layer between them
+                    cf = merged[1]
+                    sweep = np.ptp(cf[1] * x + cf[2] * x**2)
+                    window = (z >= mid(k - 1)) & (z <= mid(k + 1))
+                    split = _split_rss(mb[:, window], z[window], at_blocks(k),
+                                       at_blocks(k + 1), slope[k - 1 : k + 2], p, cdf)  # fmt: skip
+                    if sweep >= 0.5 * (tops[k + 1] - tops[k]) and merged[3] <= split:
+                        anchors.append(anchor(cf))
+                        shape.append(merged[0])
+                        coef.append(cf)
+                        ses.append(merged[2])
+                        k += 2
+                        continue
+            one = located[k]
+            anchors.append(tops[k])
+            if one is None:
                 shape.append("flat")
                 coef.append(np.array([tops[k], 0.0, 0.0]))
                 ses.append(np.full(3, np.nan))
-                continue
-            rss = np.stack([_block_rss(mb[b, sel], z[sel], taus, slope[k - 1], slope[k], p, cdf)
-                            for b in range(BOUNDARY_BLOCKS)])  # fmt: skip
-            best, cf, se = _boundary_shape(rss, taus, xb, cfg.x_max, shapes, p,
-                                           int(sel.sum()) * BOUNDARY_BLOCKS)  # fmt: skip
-            shape.append(best)
-            coef.append(cf)
-            ses.append(se)
-        return shape, np.array(coef), ses
+            else:
+                shape.append(one[0])
+                coef.append(one[1])
+                ses.append(one[2])
+            k += 1
+        return np.array(anchors), shape, np.array(coef), ses
 
     def flatten(tops, coef):
         delta = coef[:, 1, None] * (x - m1) + coef[:, 2, None] * (x**2 - m2)  # (K, lines)
@@ -220,11 +354,10 @@ def fit_shapes(
 
     current = ds
     for _ in range(ITERATIONS):
-        shape, coef, ses = detect(current)
-        if all(s == "flat" for s in shape):
+        tops, shape, coef, ses = detect(current)
+        if all(sh == "flat" for sh in shape):
             return flat_shapes(ds)
-        new = refit(flatten(current.top.values, coef))
-        tops = current.top.values
+        new = refit(flatten(tops, coef))
         same = new.sizes["layer"] == tops.size and np.all(np.abs(new.top.values - tops) < p)
         if same:
             break
@@ -241,5 +374,12 @@ def fit_shapes(
     c_se = np.array([ses[i][2] if i > 0 else np.nan for i in pick])
     top = new.top.values - b * m1 - c * (m2 - cfg.x_max**2 / 12)
     top[0] = 0.0
-    new = new.assign(top=(("layer",), top, new.top.attrs))
+    # the flattened fit measures the boundary at the central lines' mean offset, t_c; the
+    # mean depth over the box a = t_c - b <x> - c (<x^2> - X^2/12) carries the shape's
+    # errors too (b and c from other data: the blocks' positions, independent of t_c's rows)
+    shape_var = np.nan_to_num((b_se * m1) ** 2 + (c_se * (m2 - cfg.x_max**2 / 12)) ** 2)
+    top_se = np.sqrt(new.top_se.values**2 + shape_var)
+    new = new.assign(
+        top=(("layer",), top, new.top.attrs), top_se=(("layer",), top_se, new.top_se.attrs)
+    )
     return _shape_variables(new, out_shape, b, b_se, c, c_se, _CRITERION)

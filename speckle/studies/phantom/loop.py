@@ -177,7 +177,7 @@ def phantom_closed_loop_case(
     --------
     >>> import speckle
     >>> cfg = speckle.ScannerConfig(n_pixels=128, n_lines=128, x_max=768.0, n_scatterers=37_500)
-    >>> case = speckle.phantom_closed_loop_case(1, config=cfg, layers=(2, 2), shapes=("flat",))
+    >>> case = speckle.phantom_closed_loop_case(0, config=cfg, layers=(2, 2), shapes=("flat",))
     >>> bool(case.layers_right), bool(case.success)
     (True, True)
     """

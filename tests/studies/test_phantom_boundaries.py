@@ -1,0 +1,106 @@
+"""Boundaries of fit_phantom (issue 34): the transition model, ramps merged, no spurious layers."""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+import pytest
+from scipy import optimize
+
+import speckle
+from speckle.studies.phantom._fit import _fit_levels  # private: the flat fit alone (the ramp)
+from speckle.studies.phantom._shapes import TransitionModel  # private: the model under test
+from speckle.studies.phantom.loop import fit_profiles
+from speckle.studies.phantom.patients import patient_table, profiles
+from speckle.synthoct import _scan  # private: the scanner's Hann spectrum (the reference)
+
+REDUCED = speckle.synthoct_config("reduced")
+
+
+@functools.cache
+def fine_psf(n_pixels):
+    """The Hann intensity PSF on a midpoint grid of 1/1024 pixel over +-12 pixels."""
+    spectrum = _scan.hann_spectrum(n_pixels)
+    n = np.arange(n_pixels) - n_pixels // 2
+    u = (np.arange(-12 * 1024, 12 * 1024) + 0.5) / 1024
+    w = np.abs(np.exp(-2j * np.pi * np.outer(u, n) / n_pixels) @ spectrum) ** 2
+    return u, w / w.sum()
+
+
+def exact_rows(n_pixels, q, t, layers):
+    """``ln`` of the rows' mean intensity at rows ``q`` (pixels) for a boundary at ``t``: the
+    Hann intensity PSF ``|sum_n S_n e^{-2 pi i n u/N}|^2`` summed directly on a midpoint grid
+    of 1/1024 pixel over +-12 pixels (the step within half a sample), layers ``exp(i + s z)``
+    of scatterers normalised so that each alone gives rows ``exp(i + s z_q)``."""
+    u, w = fine_psf(n_pixels)
+    z = q[:, None] + u[None, :]
+    (s1, i1), (s2, i2) = layers
+    upper = np.exp(i1 + s1 * z) / np.sum(w * np.exp(s1 * u))
+    lower = np.exp(i2 + s2 * z) / np.sum(w * np.exp(s2 * u))
+    return np.log(np.sum(w * np.where(z < t, upper, lower), axis=1))
+
+
+@pytest.mark.parametrize("n_pixels", [256, 601])
+@pytest.mark.parametrize(
+    "s1, s2, step", [(0.0, 0.0, 2.0), (-0.1, -0.1, -2.0), (-0.01, -0.3, 2.0), (-0.3, -0.01, -2.0)]
+)
+def test_transition_model_places_the_boundary(n_pixels, s1, s2, step):
+    """The boundary fitted to the exact rows (the fit's 4 transition rows, its layers' lines
+    known) lies within 0.003 pixel of the truth for slopes of ln I up to 0.3 per pixel (2 mu p
+    of a strongly attenuating layer), where the PSF's plain cumulative weight put it 1/16
+    pixel high and ignoring the layers' tilt under the PSF moves it by s sigma^2 (0.1 pixel at
+    s = 0.3; sigma^2 = 0.336 pixel^2). The reference's grid places the step within 1/2048
+    pixel, the model's linear interpolation of G on 1/64 pixel errs by ~ (1/64)^2/8 of G''
+    (< 1e-4 of the step): 0.003 pixel holds both with a margin."""
+    model = TransitionModel(n_pixels)
+    for t in (50.0, 50.3, 50.5):
+        q = np.arange(49.0, 53.0)
+        i2 = s1 * t - s2 * t + step
+        rows = exact_rows(n_pixels, q, t, [(s1, 0.0), (s2, i2)])
+
+        def misfit(tt, q=q, rows=rows, i2=i2):
+            return float(np.sum((model.log_mean(q, tt, s1, 0.0, s2, i2, 1.0) - rows) ** 2))
+
+        got = optimize.minimize_scalar(misfit, bounds=(48.0, 54.0), method="bounded",
+                                       options={"xatol": 1e-7}).x  # fmt: skip
+        assert abs(got - t) < 3e-3, (t, got)
+
+
+def test_transition_model_cumulative():
+    """G(v; 0) is the PSF's cumulative intensity: 1/2 at 0, symmetric, and the Hann PSF's
+    variance sigma^2 = int v^2 dG = 0.336 pixel^2 (the s sigma^2 shift's scale)."""
+    model = TransitionModel(256)
+    v = np.linspace(-6, 6, 97)
+    g = model.cdf(v)
+    assert model.cdf(0.0) == pytest.approx(0.5, abs=1e-12)
+    np.testing.assert_allclose(g + g[::-1], 1.0, atol=1e-12)
+    variance = float(np.sum(model.w * model.u**2) / np.sum(model.w))
+    assert variance == pytest.approx(0.336, abs=0.001)
+    # two equal layers are one: the rows follow the line whatever the boundary
+    z = np.arange(40.0, 60.0)
+    np.testing.assert_allclose(model.log_mean(z, 50.3, -0.2, 1.0, -0.2, 1.0, 1.0), 1.0 - 0.2 * z,
+                               atol=1e-12)  # fmt: skip
+
+
+def two_layers(tilt, curvature, seed, ratio):
+    coefficients = np.array([[REDUCED.depth_range / 3, tilt, curvature]])
+    rng = np.random.default_rng(np.random.SeedSequence(seed))
+    table, _ = patient_table(REDUCED, coefficients, np.ones(2), np.array([0.2, 0.2 * ratio]),
+                             None, rng)  # fmt: skip
+    return speckle.synthoct_scan(table, REDUCED).values, coefficients
+
+
+@pytest.mark.parametrize("seed, ratio", [(5, 4.0), (6, 0.25)])
+def test_tilted_ramp_is_one_boundary(seed, ratio):
+    """A steep tilt (0.15: 106 µm, 18 pixels, across the fitted lines) that the flat fit
+    sees as a ramp between two boundaries (three layers) is fitted as one tilted boundary:
+    two layers, the boundary within a pixel on every fitted line."""
+    scan, coefficients = two_layers(0.15, 0.0, seed, ratio)
+    central = np.abs(REDUCED.line_positions) <= REDUCED.x_max / 2 - 3 * REDUCED.beam_radius
+    assert _fit_levels(scan[:, central], REDUCED, 5, 16).sizes["layer"] == 3  # the ramp
+    layers = speckle.fit_phantom(scan, REDUCED).layers
+    assert layers.sizes["layer"] == 2 and str(layers.shape.values[1]) == "tilted"
+    x = REDUCED.line_positions[central]
+    got = fit_profiles(layers, x, REDUCED.x_max)[1]
+    assert np.max(np.abs(got - profiles(coefficients, x, REDUCED.x_max)[0])) < REDUCED.pixel_size
