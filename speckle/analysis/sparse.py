@@ -29,42 +29,21 @@ g(a)``, ``g`` tabulated once; the depth integral is a sum over 8 samples per pix
 from __future__ import annotations
 
 import inspect
-from functools import lru_cache
 
 import numpy as np
-from scipy import optimize, special
 
 from .._deprecate import keyword_only
 from .._validate import check_real
 from .._wrap import ArraySpec, preprocess_and_wrap
+from ._sparse_theory import (
+    TAU,
+    exponent,
+    intensity_psf,
+    invert_log_variance,
+    moments_of,
+)
 
 __all__ = ["depth_intensity_psf", "log_intensity_moments", "sparse_inverse_density"]
-
-#: Largest inverse density (1 / scatterers per pixel per pitch) the inversion searches.
-MAX_INVERSE_DENSITY = 20.0
-_TAU = np.linspace(np.log(1e-4), np.log(1e10), 4000)  # ln t, t in units of 1/sqrt(area)
-
-
-@lru_cache(maxsize=1)
-def _lateral_table() -> tuple[np.ndarray, np.ndarray]:
-    """``ln(-g(a))``, ``g(a) = int (J0(a exp(-2 y^2)) - 1) dy`` (``y = x / w0``), on ``ln a``.
-
-    ``-g > 0`` rises as ``a^2`` then slowly: ``ln(-g)`` is nearly linear in ``ln a``, so the
-    linear interpolation is accurate to ~1e-6.
-    """
-    la = np.linspace(np.log(1e-5), np.log(1e16), 2000)
-    out = np.empty_like(la)
-    for i, v in enumerate(la):
-        y = np.linspace(0.0, np.sqrt(max(v + 25.0, 1.0) / 2), 3001)
-        out[i] = 2 * np.trapezoid(special.j0(np.exp(v - 2 * y**2)) - 1, y)
-    return la, np.log(-out)
-
-
-def _lateral(a: np.ndarray) -> np.ndarray:
-    la, g = _lateral_table()
-    lna = np.log(np.maximum(a, 1e-300))
-    # below the table J0(u) - 1 = -u^2/4: g(a) = -a^2/4 int exp(-4 y^2) dy = -a^2 sqrt(pi)/8
-    return np.where(lna < la[0], -(a**2) * np.sqrt(np.pi) / 8, -np.exp(np.interp(lna, la, g)))
 
 
 #: Spectral weights: finite, real, 1-D, non-empty (the decorator's checks).
@@ -107,21 +86,7 @@ def depth_intensity_psf(weights: np.ndarray) -> np.ndarray:
     >>> psf.shape, round(float(psf.max()), 6)  # 8 samples per pixel; (sum S)^2 at the peak
     ((64,), 64.0)
     """
-    w = _weights(weights)
-    n = w.size
-    # P(k/8) = sum_n w_n exp(2 pi i k (n - N//2) / (8 N)): a zero-padded inverse FFT
-    padded = np.zeros(8 * n, complex)
-    padded[(np.arange(n) - n // 2) % (8 * n)] = w
-    return np.abs(np.fft.ifft(padded) * (8 * n)) ** 2
-
-
-@lru_cache(maxsize=64)
-def _lambda_cached(weights: tuple, waist_pitch: float) -> tuple[np.ndarray, float]:
-    amp = np.sqrt(depth_intensity_psf(np.array(weights)))
-    area = float(np.sum(amp**2) / 8 * waist_pitch * np.sqrt(np.pi) / 2)  # int |h|^2
-    t = np.exp(_TAU) / np.sqrt(area)
-    lam = _lateral(np.outer(t, amp)).sum(axis=1) / 8 * waist_pitch
-    return lam, area
+    return intensity_psf(_weights(weights))
 
 
 @keyword_only("inverse_snr")
@@ -169,25 +134,11 @@ def log_intensity_moments(
     g = np.euler_gamma
     if not np.isfinite(rho):
         return -g, np.pi**2 / 6
-    lam, area = _lambda_cached(tuple(wts), w)
-    t = np.exp(_TAU) / np.sqrt(area)
+    lam, area = exponent(tuple(wts), w)
+    t = np.exp(TAU) / np.sqrt(area)
     s2 = rho * area * (1 + n)
     phi = np.exp(rho * lam - rho * area * n * t**2 / 4)
-    return _moments_of(phi, s2, area)
-
-
-def _moments_of(phi: np.ndarray, s2: float, area: float) -> tuple[float, float]:
-    """``E ln(I/<I>)`` and ``var ln I`` from the characteristic function ``phi`` on
-    ``t = exp(_TAU)/sqrt(area)`` and the mean intensity ``s2`` (module docstring)."""
-    g = np.euler_gamma
-    t = np.exp(_TAU) / np.sqrt(area)
-    dphi = phi - np.exp(-s2 * t**2 / 4)
-    ln_t = _TAU - 0.5 * np.log(area)
-    d0 = float(np.trapezoid(dphi, _TAU))
-    d1 = float(2 * np.trapezoid(ln_t * dphi, _TAU))
-    mean = np.log(s2) - g - 2 * d0
-    second = (np.log(s2) - g) ** 2 + np.pi**2 / 6 + 4 * (d1 + 2 * d0 * (g - np.log(2)))
-    return float(mean - np.log(s2)), float(second - mean**2)
+    return moments_of(phi, s2, area)
 
 
 @keyword_only("inverse_snr")
@@ -239,12 +190,4 @@ def sparse_inverse_density(
         body = inspect.unwrap(log_intensity_moments)
         return body(weights, waist_pitch, 1 / y, inverse_snr=inverse_snr)[1] - v
 
-    lo = 0.01
-    g_lo = gap(lo)
-    if g_lo >= 0:
-        # between pi^2/6 and the value at lo: linear in 1/rho (continues below 0 for a
-        # variance under pi^2/6, so the estimate stays unbiased at high density)
-        return float(lo * (v - np.pi**2 / 6) / (g_lo + v - np.pi**2 / 6))
-    if gap(MAX_INVERSE_DENSITY) <= 0:
-        return MAX_INVERSE_DENSITY
-    return float(optimize.brentq(gap, lo, MAX_INVERSE_DENSITY, xtol=1e-6))
+    return invert_log_variance(gap, v)

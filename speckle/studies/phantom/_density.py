@@ -20,9 +20,10 @@ import functools
 import math
 
 import numpy as np
-from scipy import optimize, special
+from scipy import special
 
-from ...analysis import sparse
+# private: the sparse-speckle theory's numerical core, shared with analysis.sparse
+from ...analysis._sparse_theory import TAU, exponent, invert_log_variance, moments_of
 from ...analysis.sparse import depth_intensity_psf
 from ...synthoct import _scan
 from ...synthoct.files import ScannerConfig
@@ -72,8 +73,8 @@ def _slab_lambda(n_pixels: int, radius: float, pitch: float) -> tuple[np.ndarray
     grid, ``Lambda`` the 2-D unit-amplitude exponent of :mod:`speckle.analysis.sparse` (pixel
     and pitch units), and that module's ``int |h|^2`` (``area``)."""
     hann = _scan.hann_spectrum(n_pixels)
-    lam, area = sparse._lambda_cached(tuple(hann), math.sqrt(2) * radius / pitch)  # waist
-    ln_t = sparse._TAU - 0.5 * math.log(area)
+    lam, area = exponent(tuple(hann), math.sqrt(2) * radius / pitch)  # waist
+    ln_t = TAU - 0.5 * math.log(area)
     nodes, weights = np.polynomial.legendre.leggauss(64)
     y = (nodes + 1) / 2 * radius  # 0 .. r, doubled by symmetry
     ln_t_a = ln_t[None, :] - (y[:, None] / radius) ** 2  # ln(t a(y))
@@ -119,7 +120,7 @@ def slab_log_moments(density: float, cfg: ScannerConfig) -> tuple[float, float]:
     lam, area = _slab_lambda(cfg.n_pixels, cfg.beam_radius, cfg.line_pitch)
     k = density * cfg.pixel_size * cfg.line_pitch  # per µm of y, per pixel per pitch
     s2 = k * slab_constants(cfg.beam_radius)["a2_y"] * area
-    return sparse._moments_of(np.exp(k * lam), s2, area)
+    return moments_of(np.exp(k * lam), s2, area)
 
 
 def _equivalent(cfg: ScannerConfig) -> float:
@@ -145,13 +146,7 @@ def slab_inverse_density(log_variance: float, cfg: ScannerConfig) -> float:
     def gap(x):
         return slab_log_moments(to_3d / x, cfg)[1] - v
 
-    lo, hi = 0.01, sparse.MAX_INVERSE_DENSITY
-    g_lo = gap(lo)
-    if g_lo >= 0:
-        return float(lo * (v - np.pi**2 / 6) / (g_lo + v - np.pi**2 / 6))
-    if gap(hi) <= 0:
-        return hi
-    return float(optimize.brentq(gap, lo, hi, xtol=1e-6))
+    return invert_log_variance(gap, v)
 
 
 def lateral_variance_factor(cols: np.ndarray, cfg: ScannerConfig) -> float:
