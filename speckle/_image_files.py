@@ -36,7 +36,11 @@ names among ``depth``, ``x``, ``frame``; the retired ``aline`` is read as ``x`` 
 ``FutureWarning``, :func:`speckle.conventions.canonical_dims`) are read by name; for every
 other array ``dims`` must be given, e.g. ``("depth", "x")`` or ``("frame", "x", "depth")``.
 Pixel size and pitch are never guessed either: they are taken from µm coordinates of the file
-or must be passed.
+or must be passed. The central wavenumber ``k0`` (rad/µm in the medium) is taken from a NetCDF or
+Zarr file's attributes (the image variable's, else the file's: what the package writes,
+:func:`speckle.conventions.with_grid`) or from ``k0=``; the image then carries its grid
+(``k0``, and ``n_pixels``/``depth_range`` when the file holds them) and goes to
+:func:`speckle.estimate_strain` or :func:`speckle.accumulate_strain` without ``k0=``.
 """
 
 from __future__ import annotations
@@ -48,7 +52,8 @@ import numpy as np
 import xarray as xr
 
 from ._validate import check_choice, check_real
-from .conventions import attrs, canonical_dims, coord
+from ._wrap import GRID_RTOL
+from .conventions import GRID_ATTRS, attrs, canonical_dims, coord, grid_attrs, units_of
 
 __all__ = ["IMAGE_DIMS", "IMAGE_KINDS", "load_image"]
 
@@ -119,7 +124,9 @@ def _read_mat(path: Path, variable: str | None) -> np.ndarray:
 def _from_xarray(ds: xr.Dataset, variable: str | None, path: Path) -> xr.DataArray:
     names = [k for k, v in ds.data_vars.items() if _is_image(v.shape)]
     da = ds[_pick(names, variable, path)].load()
-    return canonical_dims(da, f"image in {path.name}")
+    # the grid the file stores (the variable's attributes first, then the file's)
+    stored = {k: v for k, v in {**ds.attrs, **da.attrs}.items() if k in GRID_ATTRS}
+    return canonical_dims(da.assign_attrs(stored), f"image in {path.name}")
 
 
 def _read(path: Path, fmt: str, variable: str | None) -> np.ndarray | xr.DataArray:
@@ -189,6 +196,27 @@ def _check_kind(data: np.ndarray, kind: str) -> None:
         )
 
 
+def _grid_of(raw: object, k0: float | None, path: Path) -> dict[str, object]:
+    """The grid attributes of the loaded image: the file's, with ``k0`` (given, or the file's;
+    both: they must agree to :data:`speckle._wrap.GRID_RTOL`)."""
+    stored = dict(raw.attrs) if isinstance(raw, xr.DataArray) else {}
+    own = stored.get("k0")
+    if own is not None:
+        own = float(own)
+        if k0 is not None and not np.isclose(k0, own, rtol=GRID_RTOL, atol=0):
+            raise ValueError(
+                f"k0 = {k0!r} rad/µm contradicts the k0 = {own!r} rad/µm stored in "
+                f"{path.name}; omit k0 to use the file's, or correct the file"
+            )
+    k = own if own is not None else k0
+    if "n_pixels" in stored and "depth_range" in stored:
+        return grid_attrs(int(stored["n_pixels"]), float(stored["depth_range"]), k)
+    if k is None:
+        return {}
+    # k0 alone: a measured image's A-scan length and depth range are not known
+    return {"k0": float(k), "k0_units": units_of("wavenumber")}
+
+
 def load_image(
     path: str | os.PathLike,
     *,
@@ -197,6 +225,7 @@ def load_image(
     pitch: float | None = None,
     dims: tuple[str, ...] | None = None,
     variable: str | None = None,
+    k0: float | None = None,
 ) -> xr.DataArray:
     """Load a measured OCT image as a labelled DataArray ``(depth, x)`` (module docstring).
 
@@ -216,6 +245,12 @@ def load_image(
         ``"aline"`` is read as ``"x"``, warning); needed unless the file names its dims.
     variable : str, optional
         Which array of a file holding several (MATLAB, NetCDF, Zarr group).
+    k0 : float, optional
+        Central wavenumber of the scanner in the medium, rad/µm (> 0; ``n k_vacuum``),
+        recorded as the image's ``k0`` attribute so that :func:`speckle.estimate_strain`,
+        :func:`speckle.estimate_displacement` and :func:`speckle.accumulate_strain` read it
+        (no ``k0=`` at each call). A NetCDF/Zarr file that stores ``k0`` in its attributes
+        gives it; a different value given as well is refused.
 
     Returns
     -------
@@ -223,8 +258,10 @@ def load_image(
         Float64 (complex128 for ``kind="complex"``) values with dims ``(depth, x)`` or
         ``(frame, depth, x)``; coordinates ``depth`` and ``x`` in µm from 0 (units and long
         names of :data:`speckle.conventions.COORDS`), ``frame`` 0, 1, ...; attributes
-        ``kind``, ``source``, ``format``, ``dtype`` (as stored), ``pixel_size``, ``pitch`` and,
-        for integer data, ``clip_low``/``clip_high`` (the dtype's limits).
+        ``kind``, ``source``, ``format``, ``dtype`` (as stored), ``pixel_size``, ``pitch``,
+        for integer data ``clip_low``/``clip_high`` (the dtype's limits), and the grid
+        (:func:`speckle.conventions.grid_attrs`): ``k0`` (given or stored) and the file's
+        ``n_pixels``/``depth_range`` when it stores them.
 
     Raises
     ------
@@ -233,7 +270,7 @@ def load_image(
     ValueError
         Unknown suffix or ``kind``; ``dims`` missing or not matching the array; a missing
         ``pixel_size``/``pitch``; several arrays and no ``variable``; non-finite values;
-        fewer than 2 x 2 pixels.
+        fewer than 2 x 2 pixels; ``k0`` not > 0, or not the ``k0`` the file stores.
     TypeError
         Values that do not match ``kind`` (complex for a real kind, or the reverse).
 
@@ -249,8 +286,19 @@ def load_image(
     ... )
     >>> img.dims, img.shape, float(img.x[1] - img.x[0])
     (('depth', 'x'), (16, 8), 10.0)
+
+    With the scanner's ``k0`` the image carries its grid; strain then needs no ``k0=``:
+
+    >>> np.save(path, np.random.default_rng(0).normal(size=(64, 16)).view(complex))
+    >>> field = speckle.load_image(path, kind="complex", pixel_size=5.0, pitch=10.0,
+    ...                            dims=("depth", "x"), k0=10.0)
+    >>> field.attrs["k0"], field.attrs["k0_units"]
+    (10.0, 'rad/um')
+    >>> float(np.nanmax(np.abs(speckle.estimate_strain(field, field, window=(16, 4)))))
+    0.0
     """
     check_choice(kind, "kind", IMAGE_KINDS)
+    k0 = None if k0 is None else check_real(k0, "k0", low=0, low_inclusive=False)
     if not isinstance(path, str | os.PathLike):
         raise TypeError(f"path must be a str or path-like, got {type(path).__name__} {path!r}")
     p = Path(path)
@@ -339,4 +387,5 @@ def load_image(
     if np.issubdtype(stored, np.integer):
         info = np.iinfo(stored)
         meta.update(clip_low=int(info.min), clip_high=int(info.max))
+    meta.update(_grid_of(raw, k0, p))
     return xr.DataArray(data, dims=order, coords=coords, name="image", attrs=meta)

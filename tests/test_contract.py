@@ -1270,6 +1270,7 @@ ENTRIES: dict[str, Entry] = {
         path="path",
         variable="none",
         dims="none",
+        k0="positive",
         why="variable, dims: tests/io/test_load_image.py",
     ),
     "load_measured": E(
