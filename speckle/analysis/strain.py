@@ -68,7 +68,12 @@ strain phase ``2 k0 u`` is kept); ``"auto"`` (default) does
 this only when the tracked displacement exceeds :data:`AUTO_ALIGN_PIXELS` (0.5 px) somewhere.
 Alignment costs about as much as the vector pass itself (``benchmarks/bench_strain.py``).
 
-Every method returns NaN where its window does not fit in the image or it has no answer.
+Every method returns NaN where its window does not fit in the image or it has no answer. With
+no answer at any pixel a warning says why (which quality fell below which threshold, or which
+range was exceeded) and what to try, naming only what the call did not use: ``align=True``
+for the phase methods when the pair was not aligned, ``method='tracking'`` for the others, a
+smaller ``track_window`` for a decorrelated registration, a larger one at its chance level, a
+lower ``min_quality`` when the option alone refused a correlated pair.
 """
 
 from __future__ import annotations
@@ -93,6 +98,7 @@ from ._strain_methods import (
     DEFAULT_METHOD,
     DEFAULT_WINDOWS,
     DISPLACEMENT_METHODS,
+    OPTIONS,
     STRAIN_METHODS,
     TRACK_FALSE_RATE,
     TRACK_MIN_QUALITY,
@@ -136,21 +142,92 @@ __getattr__ = moved(__name__, __name__, [], {"METHODS": "STRAIN_METHODS"})
 # --------------------------------------------------------------------------------------------
 
 
-def _no_answer_reason(method: str, quality: np.ndarray, opts: dict, window) -> str:
-    """Why an estimate has no finite pixel, for the warning."""
+def _advice(method: str, opts: dict, info: dict, *, decorrelated: bool) -> str:
+    """What to try when an estimate has no answer: only what this call did not use.
+
+    ``decorrelated``: the pair lost its correlation (quality below its threshold, or the
+    method's range exceeded), as opposed to a window too small for its chance level.
+    """
+    tips = []
+    if method in ("vector", "wls"):
+        aligned = opts.get("align") is True or info.get("aligned") == 1
+        if not aligned:
+            how = "'auto' found no displacement to align" if opts.get("align") == "auto" else "off"
+            tips.append(
+                f"align=True ({how}; a displacement beyond the speckle size decorrelates the pair)"
+            )
+        tips.append("method='tracking' (supra-pixel displacements, no phase wrapping)")
+    elif method == "tracking":
+        tw = opts["track_window"]
+        if decorrelated:
+            tips.append(
+                f"a smaller track_window than {tw} pixels (a strain decorrelates the "
+                "registration window less)"
+            )
+        else:  # the chance level of the (track_window, window x) registration window
+            tips.append(
+                f"a larger track_window than {tw} pixels or a wider window (x) (the chance "
+                "level falls with the speckle cells the registration window holds)"
+            )
+    else:  # correlation: the magnitude, from the tracked and compensated pair
+        tips.append(
+            f"a smaller track_window than {opts['track_window']} pixels or step than "
+            f"{opts['step']} (the compensation follows the displacement more closely)"
+        )
+        tips.append("method='tracking' (the displacement's gradient, no correlation theory)")
+    return "; try " + " or ".join(tips)
+
+
+def _no_answer_reason(method: str, quality: np.ndarray, opts: dict, window, info=None) -> str:
+    """Why an estimate has no finite pixel, and what to try (only what was not used)."""
+    info = {} if info is None else info
     q = quality[np.isfinite(quality)]
     head = f"estimate_strain(method={method!r}) has no answer at any pixel: "
-    if "min_quality" in opts and q.size and q.max() < opts["min_quality"]:
-        return head + (
-            f"every window's quality is below min_quality={opts['min_quality']:g} (or the "
-            f"window's chance level; highest {q.max():.3f}); use a larger window"
-        )
+    threshold = info.get("min_quality", opts["min_quality"])
     if not q.size:
         return head + f"no window {tuple(window)} has a finite quality (image too small?)"
-    return head + (
-        "the pair is decorrelated beyond the method's range (correlation below its theory or "
-        "unwrapping failed everywhere); try method='tracking' or align=True"
-    )
+    if q.max() < threshold:
+        what = {
+            "vector": "phase coherence",
+            "wls": "phase coherence",
+            "tracking": "registration quality",
+            "correlation": "compensated amplitude correlation",
+        }[method]
+        limit = (
+            f"the registration window's chance level {threshold:.3g} "
+            f"(above min_quality={opts['min_quality']:g})"
+            if threshold > opts["min_quality"]
+            else f"min_quality={threshold:g}"
+        )
+        default = OPTIONS[method]["min_quality"]
+        lower = (
+            f"; try a lower min_quality (the default is {default:g})"
+            if opts["min_quality"] > default and threshold <= opts["min_quality"]
+            else ""
+        )
+        advice = _advice(method, opts, info, decorrelated=threshold <= opts["min_quality"])
+        return (
+            head
+            + f"every window's {what} is below {limit}; highest {q.max():.3f}"
+            + (
+                lower
+                if lower and q.max() >= default  # correlated: the option alone refused it
+                else lower + advice.replace("; try ", " or ", 1)
+                if lower
+                else advice
+            )
+        )
+    why = {
+        "vector": "the lag phase could not be unwrapped anywhere (strain beyond the method's "
+        "range 1/(2 R), R = k0/delta_k, or the pair decorrelated)",
+        "wls": "unwrapping failed everywhere (the fitted phase step disagrees with the lag-1 "
+        "step: strain beyond the method's range or the pair decorrelated)",
+        "tracking": f"every depth window of {window[0]} pixels holds a tracked pixel without "
+        "an answer (the least-squares gradient needs all of them)",
+        "correlation": "the local correlation is below its theory's range everywhere (a strain "
+        "beyond what the theory inverts) or outside the tracked windows",
+    }[method]
+    return head + why + _advice(method, opts, info, decorrelated=True)
 
 
 def _strain_attrs(method: str, wz: int, wx: int) -> dict:
@@ -174,8 +251,7 @@ def _strain_pair(a1, a2, k, p, method, wz, wx, opts):
     else:
         strain, quality, info = _METHOD_FUNCS[method](a1, a2, k, p, wz, wx, opts)
     if not np.isfinite(strain).any():
-        used = {**opts, **{k: v for k, v in info.items() if k == "min_quality"}}
-        warnings.warn(_no_answer_reason(method, quality, used, (wz, wx)), stacklevel=4)
+        warnings.warn(_no_answer_reason(method, quality, opts, (wz, wx), info), stacklevel=4)
     return strain, quality, info
 
 
