@@ -1868,7 +1868,7 @@ ANSWERS: dict[tuple[str, str, str], str] = {
     "forms (speckle.analysis.statistics.spectrum_moments): nothing is allocated",
     **{
         (n, "intensity", "complex"): "a complex field is taken as its intensity |A|^2 "
-        "(speckle.analysis.dynamics._series)"
+        "(speckle.analysis._pooling.checked_series)"
         for n in ("g2_array", "liv_array", "ocds_array", "speckle_variance_array")
     },
     ("ssada_array", "amplitudes", "complex"): "complex sub-band fields: |A| is used",

@@ -32,24 +32,39 @@ Definitions (``<.>`` the pooled average over time pairs and the window):
   wavelength and resolution dependence: Fujimura et al., arXiv:2503.21539, 2025).
 
 Estimators with no answer (a pixel whose intensity is zero, a window with no signal) return
-NaN with a ``RuntimeWarning`` saying why. The expected values of each contrast for developed
-speckle are in :mod:`speckle.analysis.dynamics_theory` (re-exported here).
+NaN with a ``RuntimeWarning`` saying why.
+
+Every contrast (and ``*_array`` core) computes a Dask-backed series lazily, chunk by chunk (the
+time dim whole in each chunk; SSADA also each A-line): per-pixel time moments, pooled by the
+mean (``window=None``) or the boxcar with an overlap of ``window // 2`` pixels, then finished
+per pixel; the result is a Dask array with the numpy path's numbers to rounding (1e-12), and NaN
+warnings come when it is computed (:mod:`speckle.analysis._pooling`).
+The expected values of each contrast for developed speckle are in
+:mod:`speckle.analysis.dynamics_theory` (re-exported here).
 """
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Sequence
 
 import numpy as np
-import scipy.ndimage as ndi
 import xarray as xr
 
 from .._deprecate import renamed_parameters
 from .._validate import check_choice, check_int, check_real
 from .._wrap import ArraySpec, preprocess_and_wrap
 from ..conventions import attrs, coord, spacing
-from ._common import delay_selection, parse_window
+from ._common import delay_selection
+from ._pooling import (
+    checked_series,
+    decibels,
+    frame_lags,
+    is_dask,
+    no_answer,
+    pooled_contrast,
+    ratio,
+    series_values,
+)
 from .compounding import SUBBAND_APODIZATIONS, frequency_looks, subband_apodizations
 from .dynamics_theory import (
     doppler_shift,
@@ -104,78 +119,18 @@ _THEORY = (
 
 #: A series (time on axis 0): finite, non-empty numbers; the field complex (the decorator's
 #: checks). :func:`_series` adds the frame count and the intensity's sign.
-_INTENSITY = ArraySpec(kind="number")
-_FIELD = ArraySpec(kind="complex")
+_INTENSITY = ArraySpec(kind="number", lazy=True)
+_FIELD = ArraySpec(kind="complex", lazy=True)
 #: A labelled complex series (a DataArray with a time dim, or a Dataset's field).
 _FIELD_SERIES = {
-    "images": ArraySpec(kind="complex", labelled=True, keep_labels=True, variable="field")
+    "images": ArraySpec(
+        kind="complex", labelled=True, keep_labels=True, variable="field", lazy=True
+    )
 }
 
 
-def _series(a: object, name: str, *, complex_: bool = False, min_frames: int = 2) -> np.ndarray:
-    arr = np.asarray(a)
-    if arr.ndim < 1 or arr.shape[0] < min_frames:
-        raise ValueError(
-            f"{name} needs at least {min_frames} frames along axis 0 (time), got shape {arr.shape}"
-        )
-    if complex_ and not np.iscomplexobj(arr):
-        raise TypeError(f"{name} must be the complex field (phase needed), got dtype {arr.dtype}")
-    if not complex_ and np.iscomplexobj(arr):
-        arr = np.abs(arr) ** 2  # a field given where an intensity is used
-    if not complex_ and np.any(arr < 0):
-        raise ValueError(f"{name} intensities must be >= 0")
-    return arr
-
-
-def _window(window: object, spatial: int) -> tuple[int, ...] | None:
-    """None, or a boxcar size per spatial axis: the package's window parser for images
-    ``(depth, x)``, one int per axis otherwise (an M-mode's depth, a C-scan)."""
-    if window is None:
-        return None
-    if spatial == 2:
-        return parse_window(window, low=1)
-    w = tuple(np.atleast_1d(np.asarray(window)).tolist())
-    if len(w) != spatial:
-        raise ValueError(
-            f"window must give one size (pixels) per spatial axis ({spatial}), got {window!r}"
-        )
-    return tuple(check_int(int(v) if float(v) == int(v) else v, "window", low=1) for v in w)
-
-
-def _pool(a: np.ndarray, window: tuple[int, ...] | None) -> np.ndarray:
-    """Mean over every spatial element (``window`` None) or a boxcar map of it."""
-    if window is None:
-        return np.asarray(a.mean()) if a.ndim else np.asarray(a)
-    if np.iscomplexobj(a):
-        return _pool(a.real, window) + 1j * _pool(a.imag, window)
-    return ndi.uniform_filter(a, size=window, mode="nearest")
-
-
-def _lags_of(lags: object, n: int) -> np.ndarray:
-    m = np.atleast_1d(np.asarray(lags))
-    if m.ndim != 1 or m.size == 0 or m.dtype.kind not in "iu":
-        raise TypeError(f"lags must be a 1-D sequence of integers (frames), got {lags!r}")
-    if np.any(m < 0) or np.any(m >= n):
-        raise ValueError(f"lags must be in [0, {n - 1}] frames for a series of {n}, got {lags!r}")
-    return m.astype(int)
-
-
-def _no_answer(bad: np.ndarray, what: str, why: str) -> None:
-    if np.any(bad):
-        warnings.warn(
-            f"{what}: NaN at {int(np.sum(bad))} value(s): {why}", RuntimeWarning, stacklevel=3
-        )
-
-
-def _ratio(num: np.ndarray, den: np.ndarray, what: str, why: str) -> np.ndarray:
-    bad = ~(den > 0)
-    _no_answer(bad, what, why)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(bad, np.nan, num / np.where(bad, 1.0, den))
-
-
 # ------------------------------------------------------------------------------------------
-# numpy cores
+# numpy cores (Dask arrays too: lazily, :func:`pooled_contrast`)
 # ------------------------------------------------------------------------------------------
 
 
@@ -205,18 +160,25 @@ def g1_array(field: object, lags: object, *, window: object = None) -> np.ndarra
     >>> np.round(g1_array(a, [1]), 12).tolist()
     [(0.540302305868+0.841470984808j)]
     """
-    f = _series(field, "field", complex_=True)
+    f = checked_series(field, "field", complex_=True)
     n = f.shape[0]
-    m = _lags_of(lags, n)
-    w = _window(window, f.ndim - 1)
-    out = []
-    for lag in m:
-        a, b = f[: n - lag], f[lag:]
-        num = _pool(np.mean(a.conj() * b, axis=0), w)
-        pa = _pool(np.mean(np.abs(a) ** 2, axis=0), w)
-        pb = _pool(np.mean(np.abs(b) ** 2, axis=0), w)
-        out.append(_ratio(num, np.sqrt(pa * pb), "g1", "no signal (zero intensity) to correlate"))
-    return np.stack(out)
+    m = frame_lags(lags, n)
+
+    def moments(f):
+        out = []
+        for lag in m:
+            a, b = f[: n - lag], f[lag:]
+            out += [np.mean(a.conj() * b, axis=0), np.mean(np.abs(a) ** 2, axis=0)]
+            out.append(np.mean(np.abs(b) ** 2, axis=0))
+        return out
+
+    def finish(p):
+        why = "no signal (zero intensity) to correlate"
+        return np.stack(
+            [ratio(p[i], np.sqrt(p[i + 1] * p[i + 2]), "g1", why) for i in range(0, len(p), 3)]
+        )
+
+    return pooled_contrast(f, moments, finish, window)
 
 
 @preprocess_and_wrap(checks={"intensity": _INTENSITY})
@@ -232,17 +194,22 @@ def g2_array(intensity: object, lags: object, *, window: object = None) -> np.nd
     >>> g2_array(np.ones((3, 2)), [0, 2]).tolist()
     [1.0, 1.0]
     """
-    i = _series(intensity, "intensity")
+    i = checked_series(intensity, "intensity")
     n = i.shape[0]
-    m = _lags_of(lags, n)
-    w = _window(window, i.ndim - 1)
-    out = []
-    for lag in m:
-        a, b = i[: n - lag], i[lag:]
-        num = _pool(np.mean(a * b, axis=0), w)
-        den = _pool(np.mean(a, axis=0), w) * _pool(np.mean(b, axis=0), w)
-        out.append(_ratio(num, den, "g2", "zero mean intensity"))
-    return np.stack(out)
+    m = frame_lags(lags, n)
+
+    def moments(i):
+        out = []
+        for lag in m:
+            a, b = i[: n - lag], i[lag:]
+            out += [np.mean(a * b, axis=0), np.mean(a, axis=0), np.mean(b, axis=0)]
+        return out
+
+    def finish(p):
+        why = "zero mean intensity"
+        return np.stack([ratio(p[j], p[j + 1] * p[j + 2], "g2", why) for j in range(0, len(p), 3)])
+
+    return pooled_contrast(i, moments, finish, window)
 
 
 @preprocess_and_wrap(checks={"field": _FIELD})
@@ -256,21 +223,19 @@ def doppler_phase_array(field: object, *, lag: int = 1, window: object = None) -
     >>> round(float(doppler_phase_array(a)), 12)
     0.3
     """
-    f = _series(field, "field", complex_=True)
+    f = checked_series(field, "field", complex_=True)
     n = f.shape[0]
     lg = check_int(lag, "lag", low=1, high=n - 1)
-    w = _window(window, f.ndim - 1)
-    r = _pool(np.mean(f[: n - lg].conj() * f[lg:], axis=0), w)
-    bad = ~(np.abs(r) > 0)
-    _no_answer(bad, "doppler_phase", "zero lag correlation (no signal): the phase is undefined")
-    return np.where(bad, np.nan, np.angle(r))
 
+    def finish(p):
+        bad = ~(np.abs(p[0]) > 0)
+        no_answer(bad, "doppler_phase", "zero lag correlation (no signal): the phase is undefined")
+        return np.where(bad, np.nan, np.angle(p[0]))
 
-def _db(i: np.ndarray, what: str) -> np.ndarray:
-    bad = ~(i > 0)
-    _no_answer(bad, what, "zero intensity has no logarithm")
-    with np.errstate(divide="ignore"):
-        return np.where(bad, np.nan, 10.0 * np.log10(np.where(bad, 1.0, i)))
+    def moments(f):
+        return [np.mean(f[: n - lg].conj() * f[lg:], axis=0)]
+
+    return pooled_contrast(f, moments, finish, window)
 
 
 @preprocess_and_wrap(checks={"intensity": _INTENSITY})
@@ -288,12 +253,15 @@ def speckle_variance_array(
     >>> float(speckle_variance_array(np.array([[1.0], [3.0]]), window=(1,))[0])
     1.0
     """
-    i = _series(intensity, "intensity")
+    i = checked_series(intensity, "intensity")
     d = check_int(ddof, "ddof", low=0, high=1)
     if not isinstance(log, bool):
         raise TypeError(f"log must be True or False, got {log!r}")
-    x = _db(i, "speckle_variance") if log else i
-    return _pool(np.var(x, axis=0, ddof=d), _window(window, i.ndim - 1))
+
+    def moments(i):
+        return [np.var(decibels(i, "speckle_variance") if log else i, axis=0, ddof=d)]
+
+    return pooled_contrast(i, moments, lambda p: p[0], window)
 
 
 @preprocess_and_wrap(checks={"intensity": _INTENSITY})
@@ -308,12 +276,18 @@ def liv_array(intensity: object, *, ddof: int = 0, window: object = None) -> np.
     >>> float(liv_array(np.array([[1.0], [10.0]]), window=(1,))[0])  # (10 dB)^2 / 4
     25.0
     """
-    i = _series(intensity, "intensity")
+    i = checked_series(intensity, "intensity")
     d = check_int(ddof, "ddof", low=0, high=1)
-    return _pool(np.var(_db(i, "liv"), axis=0, ddof=d), _window(window, i.ndim - 1))
+
+    def moments(i):
+        return [np.var(decibels(i, "liv"), axis=0, ddof=d)]
+
+    return pooled_contrast(i, moments, lambda p: p[0], window)
 
 
-@preprocess_and_wrap(checks={"amplitudes": ArraySpec(kind="number", ndim=tuple(range(2, 8)))})
+@preprocess_and_wrap(
+    checks={"amplitudes": ArraySpec(kind="number", ndim=tuple(range(2, 8)), lazy=True)}
+)
 def ssada_array(amplitudes: object, *, window: object = None) -> np.ndarray:
     """Split-spectrum amplitude decorrelation from sub-band amplitudes ``(band, time, ...)``.
 
@@ -328,16 +302,20 @@ def ssada_array(amplitudes: object, *, window: object = None) -> np.ndarray:
     >>> float(ssada_array(np.ones((2, 3, 4))))
     0.0
     """
-    a = np.abs(np.asarray(amplitudes))
+    a = np.abs(amplitudes if is_dask(amplitudes) else np.asarray(amplitudes))
     if a.shape[1] < 2:
         raise ValueError(
             f"amplitudes must be (band, time, ...) with at least 2 frames, got {a.shape}"
         )
+    return pooled_contrast(a, lambda b: [_decorrelation(b)], lambda p: p[0], window, core_axes=2)
+
+
+def _decorrelation(a: np.ndarray) -> np.ndarray:
+    """SSADA's per-pixel ``D`` from sub-band amplitudes ``(band, time, ...)``."""
     num = a[:, :-1] * a[:, 1:]
     den = 0.5 * (a[:, :-1] ** 2 + a[:, 1:] ** 2)
-    r = _ratio(num, den, "ssada", "zero amplitude in both frames of a band")
-    d = 1.0 - np.mean(r, axis=(0, 1))
-    return _pool(d, _window(window, a.ndim - 2))
+    r = ratio(num, den, "ssada", "zero amplitude in both frames of a band")
+    return 1.0 - np.mean(r, axis=(0, 1))
 
 
 @preprocess_and_wrap(checks={"intensity": _INTENSITY})
@@ -377,26 +355,34 @@ def ocds_array(
     >>> abs(float(ocds_array(static, [1, 2, 3], interval=0.1, delays=(0.1, 0.3)))) < 1e-9
     True
     """
-    i = _series(intensity, "intensity")
+    i = checked_series(intensity, "intensity")
     dt = check_real(interval, "interval", low=0, low_inclusive=False)
-    m = _lags_of(lags, i.shape[0])
+    m = frame_lags(lags, i.shape[0])
     sel = delay_selection(m * dt, delays)
     m = m[sel]
-    w = _window(window, i.ndim - 1)
-    x = _db(i, "ocds")
-    n = x.shape[0]
-    rho = []
-    for lag in m:
-        a, b = x[: n - lag], x[lag:]
-        ma, mb = _pool(a.mean(0), w), _pool(b.mean(0), w)
-        cov = _pool((a * b).mean(0), w) - ma * mb
-        va = _pool((a * a).mean(0), w) - ma**2
-        vb = _pool((b * b).mean(0), w) - mb**2
-        rho.append(_ratio(cov, np.sqrt(np.maximum(va * vb, 0)), "ocds", "no intensity variation"))
-    rho = np.stack(rho)
-    tau = (m * dt).reshape(-1, *[1] * (rho.ndim - 1))
-    tc = tau - tau.mean()
-    return -np.sum(tc * (rho - rho.mean(axis=0)), axis=0) / np.sum(tc**2)
+    n = i.shape[0]
+
+    def moments(i):
+        x = decibels(i, "ocds")
+        out = []
+        for lag in m:
+            a, b = x[: n - lag], x[lag:]
+            out += [a.mean(0), b.mean(0), (a * b).mean(0), (a * a).mean(0), (b * b).mean(0)]
+        return out
+
+    def finish(p):
+        rho = []
+        for j in range(0, len(p), 5):
+            ma, mb, ab, aa, bb = p[j : j + 5]
+            cov, va, vb = ab - ma * mb, aa - ma**2, bb - mb**2
+            why = "no intensity variation"
+            rho.append(ratio(cov, np.sqrt(np.maximum(va * vb, 0)), "ocds", why))
+        rho = np.stack(rho)
+        tau = (m * dt).reshape(-1, *[1] * (rho.ndim - 1))
+        tc = tau - tau.mean()
+        return -np.sum(tc * (rho - rho.mean(axis=0)), axis=0) / np.sum(tc**2)
+
+    return pooled_contrast(i, moments, finish, window)
 
 
 # ------------------------------------------------------------------------------------------
@@ -479,7 +465,7 @@ def g1(
     images : xarray.DataArray or Dataset
         Complex ``field`` with a ``time`` dim (equally spaced, s), e.g. from
         :func:`speckle.imaging.timeseries.bscan_series` or
-        :func:`~speckle.imaging.timeseries.mmode`.
+        :func:`~speckle.imaging.timeseries.mmode`; Dask-backed: lazily (module docstring).
     lags : sequence of int, optional
         Lags in frames (of the strided series); default ``0 ... T-1``.
     window : tuple of int, optional
@@ -522,8 +508,8 @@ def g1(
         if blocks is None:
             raise ValueError("block_dim is used only with blocks (the standard error)")
     n = da.sizes["time"]
-    m = np.arange(n) if lags is None else _lags_of(lags, n)
-    arr = da.values  # computed once (a Dask series is not recomputed per block)
+    m = np.arange(n) if lags is None else frame_lags(lags, n)
+    arr = series_values(da)  # numpy: loaded once (not per block); Dask: lazy
     values = g1_array.__wrapped__(arr, m, window=window)  # checked here once
     out = _lag_da(values, m, dt, da, window, "g1", ("correlation", "field autocorrelation g1"))
     if blocks is None:
@@ -568,8 +554,8 @@ def g2(
     """
     da, dt = _timed(images, "g2", complex_=False, uniform=True, stride=stride)
     n = da.sizes["time"]
-    m = np.arange(n) if lags is None else _lags_of(lags, n)
-    values = g2_array(da.values, m, window=window)
+    m = np.arange(n) if lags is None else frame_lags(lags, n)
+    values = g2_array(series_values(da), m, window=window)
     return _lag_da(values, m, dt, da, window, "g2", ("correlation", "intensity autocorrelation"))
 
 
@@ -609,7 +595,7 @@ def doppler_phase(
     0.2
     """
     da, dt = _timed(images, "doppler_phase", complex_=True, uniform=True, stride=stride)
-    v = doppler_phase_array.__wrapped__(da.values, lag=lag, window=window)
+    v = doppler_phase_array.__wrapped__(series_values(da), lag=lag, window=window)
     out = _map(v, da, window, "doppler_phase", ("phase", "Doppler phase shift (Kasai)"))
     return out.assign_attrs(interval=float(lag * dt))
 
@@ -650,7 +636,7 @@ def speckle_variance(
     1.0
     """
     da, _ = _timed(images, "speckle_variance", complex_=False, uniform=False, stride=stride)
-    v = speckle_variance_array(da.values, ddof=ddof, log=log, window=window)
+    v = speckle_variance_array(series_values(da), ddof=ddof, log=log, window=window)
     q = ("log_variance", "speckle variance of 10 log10 I") if log else ("dimensionless", "SV")
     return _map(v, da, window, "speckle_variance", q)
 
@@ -690,7 +676,7 @@ def liv(
     25.0
     """
     da, _ = _timed(images, "liv", complex_=False, uniform=False, stride=stride)
-    v = liv_array(da.values, ddof=ddof, window=window)
+    v = liv_array(series_values(da), ddof=ddof, window=window)
     return _map(v, da, window, "liv", ("log_variance", "logarithmic intensity variance"))
 
 
@@ -743,8 +729,18 @@ def ssada(
     w = subband_apodizations(
         da.sizes["depth"], n_bands, apodization=band_apodization, overlap=overlap
     )
-    looks = frequency_looks(da, w)  # (look, time, ...)
-    v = ssada_array.__wrapped__(np.abs(looks.transpose("look", *da.dims).values), window=window)
+    if is_dask(da.data):  # the looks per block of whole A-lines (the split is along depth)
+
+        def moments(block):
+            looks = frequency_looks(xr.DataArray(block, dims=da.dims), w)  # (look, time, ...)
+            return [_decorrelation(np.abs(looks.transpose("look", *da.dims).values))]
+
+        axis = da.dims.index("depth")
+        v = pooled_contrast(da.data, moments, lambda p: p[0], window, whole=(axis,))
+    else:
+        looks = frequency_looks(da, w)  # (look, time, ...)
+        amplitudes = np.abs(looks.transpose("look", *da.dims).values)
+        v = ssada_array.__wrapped__(amplitudes, window=window)
     out = _map(v, da, window, "ssada", ("dimensionless", "split-spectrum amplitude decorrelation"))
     return out.assign_attrs(
         n_bands=int(n_bands), band_apodization=band_apodization, overlap=float(overlap)
@@ -794,6 +790,6 @@ def ocds(
     """
     da, dt = _timed(images, "ocds", complex_=False, uniform=True, stride=stride)
     n = da.sizes["time"]
-    v = ocds_array(da.values, np.arange(1, n), interval=dt, delays=delays, window=window)
+    v = ocds_array(series_values(da), np.arange(1, n), interval=dt, delays=delays, window=window)
     out = _map(v, da, window, "ocds", ("decay_speed", "OCT correlation decay speed"))
     return out.assign_attrs(delay_min=float(delays[0]), delay_max=float(delays[1]))
