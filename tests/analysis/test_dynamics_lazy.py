@@ -106,3 +106,40 @@ def test_numpy_cores_take_dask_arrays_lazily():
         out = core(chunked, **kw)
         assert hasattr(out, "dask")
         np.testing.assert_allclose(np.asarray(out), expected, rtol=1e-12, atol=1e-15)
+
+
+@pytest.mark.parametrize("where", [(7, 3), (0, 0), (19, 19)], ids=["inside", "corner", "far"])
+@pytest.mark.parametrize("window", [(3, 3), (4, 2), (3, 4)])
+def test_a_pixel_without_answer_makes_nan_only_the_windows_that_hold_it(window, where):
+    """One zero-intensity pixel (no logarithm): NaN exactly where the boxcar holds it.
+
+    The boxcar of size ``w`` at output pixel ``c`` covers ``c - w//2 ... c - w//2 + w - 1``,
+    so the NaN rows are ``r0 - w + 1 + w//2 ... r0 + w//2`` (the same for columns; at the
+    edges too, the filter repeating the edge pixel). Elsewhere
+    the map does not depend on that pixel: it equals the map of the series with any other
+    value there. (Before, the running sums carried the NaN along the rest of each line: 324
+    of 400 pixels of a 3 x 3 map.)
+    """
+    i = RNG.exponential(size=(5, 20, 20))
+    r0, c0 = where
+    i[:, r0, c0] = 0.0
+    images = xr.DataArray(i, dims=("time", "depth", "x"))
+    with pytest.warns(RuntimeWarning, match="zero intensity has no logarithm"):
+        out = dy.liv(images, window=window).values
+    (wz, wx), rows, cols = window, np.arange(20)[:, None], np.arange(20)[None, :]
+    expected_nan = (
+        (rows >= r0 - wz + 1 + wz // 2)
+        & (rows <= r0 + wz // 2)
+        & (cols >= c0 - wx + 1 + wx // 2)
+        & (cols <= c0 + wx // 2)
+    )
+    np.testing.assert_array_equal(np.isnan(out), expected_nan)
+    other = i.copy()
+    other[:, r0, c0] = RNG.exponential(size=5)
+    filled = dy.liv(images.copy(data=other), window=window).values
+    np.testing.assert_allclose(out[~expected_nan], filled[~expected_nan], rtol=1e-12)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        chunked = dy.liv(images.chunk({"depth": 5, "x": 4}), window=window).values
+    np.testing.assert_array_equal(np.isnan(chunked), expected_nan)
+    np.testing.assert_allclose(chunked[~expected_nan], out[~expected_nan], rtol=1e-12)
