@@ -201,8 +201,10 @@ def _grid_of(raw: object, k0: float | None, path: Path) -> dict[str, object]:
     both: they must agree to :data:`speckle._wrap.GRID_RTOL`)."""
     stored = dict(raw.attrs) if isinstance(raw, xr.DataArray) else {}
     own = stored.get("k0")
-    if own is not None:
-        own = float(own)
+    if own is not None:  # a file's k0 is checked as a given one is
+        own = check_real(
+            np.asarray(own).item(), f"k0 stored in {path.name}", low=0, low_inclusive=False
+        )
         if k0 is not None and not np.isclose(k0, own, rtol=GRID_RTOL, atol=0):
             raise ValueError(
                 f"k0 = {k0!r} rad/µm contradicts the k0 = {own!r} rad/µm stored in "

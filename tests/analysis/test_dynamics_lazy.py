@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+import speckle
 from speckle.analysis import dynamics as dy
 
 T, Z, X = 6, 16, 12
@@ -143,3 +144,17 @@ def test_a_pixel_without_answer_makes_nan_only_the_windows_that_hold_it(window, 
         chunked = dy.liv(images.chunk({"depth": 5, "x": 4}), window=window).values
     np.testing.assert_array_equal(np.isnan(chunked), expected_nan)
     np.testing.assert_allclose(chunked[~expected_nan], out[~expected_nan], rtol=1e-12)
+
+
+def test_a_series_streamed_from_a_file_stays_out_of_memory(tmp_path):
+    """The user's path: a series on disk, opened lazily in chunks, contrasts computed lazily."""
+    path = tmp_path / "series.nc"
+    speckle.to_netcdf(FIELD.to_dataset(name="field"), path)
+    with xr.open_dataset(path, engine="netcdf4", auto_complex=True, chunks={}) as stored:
+        ds = stored.chunk({"x": 4})  # three chunks of lines
+        assert hasattr(ds.field.data, "dask")
+        liv = dy.liv(ds, window=(3, 3))
+        g1 = dy.g1(ds, lags=[1, 2])
+        assert hasattr(liv.data, "dask") and hasattr(g1.data, "dask")
+        np.testing.assert_allclose(liv.values, dy.liv(FIELD, window=(3, 3)).values, rtol=1e-12)
+        np.testing.assert_allclose(g1.values, dy.g1(FIELD, lags=[1, 2]).values, rtol=1e-12)

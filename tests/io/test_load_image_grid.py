@@ -92,3 +92,13 @@ def test_without_k0_a_measured_image_has_no_grid_attributes(pair, tmp_path):
         tmp_path / "one.npy", kind="complex", pixel_size=8.0, pitch=4.0, dims=("depth", "x")
     )
     assert not {"k0", "k0_units", "n_pixels", "depth_range"} & set(image.attrs)
+
+
+def test_a_file_storing_a_bad_k0_is_refused_naming_it(pair, tmp_path):
+    _, field = pair
+    path = tmp_path / "bad.nc"
+    field.assign_attrs(k0=-1.0).to_dataset(name="field").to_netcdf(
+        path, engine="netcdf4", auto_complex=True
+    )
+    with pytest.raises(ValueError, match=r"k0 stored in bad\.nc"):
+        speckle.load_image(path, kind="complex")
