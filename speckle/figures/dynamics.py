@@ -164,13 +164,13 @@ def plot_g1(ds: xr.Dataset) -> Figure:
 def plot_phantom(ds: xr.Dataset) -> Figure:
     """The phantom's regions, structure and contrast images (one colorbar per quantity)."""
     panels = [
-        ("labels", "regions: layers, cells, vessel", "region label", "tab10"),
-        ("structure", "structure (mean intensity)", "dB re mean signal", "gray"),
-        ("speckle_variance", "angiography: speckle variance", "var(I)/<I>²", "magma"),
-        ("ssada", "angiography: SSADA", "decorrelation D", "magma"),
-        ("liv", "angiography: LIV", "LIV (dB²)", "viridis"),
-        ("liv_doct", "dynamic OCT: LIV", "LIV (dB²)", "viridis"),
-        ("ocds", "dynamic OCT: OCDS", "OCDS (1/s)", "viridis"),
+        ("labels", "regions:\nlayers, cells, vessel", "region label", "tab10"),
+        ("structure", "structure\n(mean intensity)", "dB re mean signal", "gray"),
+        ("speckle_variance", "angiography:\nspeckle variance", "var(I)/<I>²", "magma"),
+        ("ssada", "angiography:\nSSADA", "decorrelation D", "magma"),
+        ("liv", "angiography: LIV\n(colour scale at right)", "LIV (dB²)", "viridis"),
+        ("liv_doct", "dynamic OCT:\nLIV", "LIV (dB²)", "viridis"),
+        ("ocds", "dynamic OCT:\nOCDS", "OCDS (1/s)", "viridis"),
     ]
     fig, axes = new_figure(2, 4, width=11.0, height=5.2)
     x, z = ds.x.values, ds.depth.values
