@@ -27,7 +27,7 @@ from ..studies.dynamics import (
     flow_failure,
 )
 from ..studies.dynamics_series import g1_curves, phantom_series
-from .style import new_figure
+from .style import mark_no_colorbar, new_figure
 
 __all__ = [
     "calibration_data",
@@ -213,6 +213,7 @@ def plot_phantom(ds: xr.Dataset) -> Figure:
     ax.axhline(1.0, color="k", lw=0.6)
     ax.set_yscale("log")
     ax.set_xticks(idx, ["SV", "SSADA", "LIV", "LIV dOCT", "OCDS"], rotation=30)
+    ax.set_xlabel("contrast (SV: speckle variance)")
     ax.set_ylabel("region mean / static layers' mean")
     ax.set_title("contrast of each moving region")
     ax.legend(loc="center left", bbox_to_anchor=(1.0, 0.5), frameon=False)
@@ -221,7 +222,10 @@ def plot_phantom(ds: xr.Dataset) -> Figure:
 
 def _status_image(ax, status: np.ndarray, xlabels, ylabels, xname: str, yname: str) -> None:
     cmap = ListedColormap([c for c, _ in STATUS])
-    ax.imshow(status, origin="lower", cmap=cmap, vmin=-0.5, vmax=2.5, aspect="auto")
+    # categories, told by the figure's legend of STATUS colours
+    mark_no_colorbar(
+        ax.imshow(status, origin="lower", cmap=cmap, vmin=-0.5, vmax=2.5, aspect="auto")
+    )
     ax.set_xticks(range(len(xlabels)), xlabels, rotation=60)
     ax.set_yticks(range(len(ylabels)), ylabels)
     ax.set_xlabel(xname)
