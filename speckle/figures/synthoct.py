@@ -309,8 +309,8 @@ def plot_self_consistency(ds: xr.Dataset) -> Figure:
         unit = " (dB)" if metric == "PSNR" else ""
         ax.set_xlabel(f"{metric} published{unit}")
         ax.set_ylabel(f"{metric} here{unit}")
-        if j == 0:
-            ax.legend(fontsize=6)
+        if j == 0:  # above the diagonal's upper-left end, where no point falls
+            ax.legend(loc="upper left", frameon=False)
     fig.suptitle(
         f"SynthOCT self-consistency check: {ds.attrs['shown_phantom']} (official maps); "
         "3 comparisons x 4 images scored here against the published table"

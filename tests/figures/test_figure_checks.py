@@ -43,6 +43,7 @@ MODULES = (
     "realism",
     "speed",
     "static",
+    "synthoct",
     "system",
     "twin",
     "phantom",
@@ -656,6 +657,38 @@ def _speed():
     return {"plot_speed_accuracy": (chart,), "plot_failure_map": (fmap,)}
 
 
+def _synthoct():
+    metrics = ("SSIM", "MS-SSIM", "PSNR", "MSE", "VIF", "LPIPS")
+    maps = ["Struct", "OAC", "SC", "RSC"]
+    n = 8
+    image = ("origin_scan", "depth", "x")
+    diagonal = np.linspace(0.1, 0.9, 8).reshape(2, 4)
+    consistency = _fake(
+        {
+            "origin": ["published", "recomputed", "drop-in"],
+            "experiment": ["Exp1", "Exp2"],
+            "map": maps,
+            "origin_scan": ["published", "drop-in"],
+            "phantom": ["Exp2_Layers_A"],
+            "depth": np.arange(n) * 6.0,
+            "x": (np.arange(2 * n) - n) * 6.0,
+        },
+        {
+            # as measured: each comparison's score equals the published one, on the diagonal
+            **{m: (("origin", "experiment", "map"), np.stack([diagonal] * 3)) for m in metrics},
+            "scan": ("origin_scan", "phantom", "depth", "x"),
+            **{m: image for m in ("OAC", "SC", "RSC")},
+        },
+        {"shown_phantom": "Exp2_Layers_A"},
+    )
+    batch = _fake(
+        {"boundary": [200.0, 400.0, 600.0], "energy": [0.5, 2.5, 5.0], "map": maps},
+        {m: ("boundary", "energy", "map") for m in metrics},
+        {"reference": "Exp2_Layers_A", "n_phantoms": 9, "n_pixels": 256, "n_lines": 512},
+    )
+    return {"plot_self_consistency": (consistency,), "plot_batch": (batch,)}
+
+
 def _twin():
     n_depth, n_x = 10, 24
     compare = _fake(
@@ -729,6 +762,7 @@ BUILDERS = {
     "realism": _realism,
     "speed": _speed,
     "static": _static,
+    "synthoct": _synthoct,
     "system": _system,
     "twin": _twin,
     "phantom": lambda: {
