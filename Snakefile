@@ -1,6 +1,7 @@
 # speckle: reproduce the figures of Zaitsev et al., "A model for simulating speckle-pattern
 # evolution based on close to reality procedures used in spectral-domain OCT".
 # Thin entry point: rules live in workflow/rules/*.smk, science in the speckle package.
+import os
 from pathlib import Path
 
 import yaml
@@ -66,3 +67,17 @@ rule all:
         + DYNAMICS_TARGETS
         + PHANTOM_REAL_TARGETS
         + PHANTOM_TARGETS,
+
+
+onsuccess:
+    # a newcomer's next step; spawned cluster jobs run with --no-hooks, dry runs skip it
+    again = "".join(
+        f" --configfile {os.path.relpath(c)}"
+        for c in workflow.overwrite_configfiles
+    )
+    print(
+        f"\nspeckle: the figures (PNG) and the NetCDF data each is drawn from are in "
+        f"{RESULTS}/, one folder per figure family (README.md, 'What the pipeline writes').\n"
+        f"Next, an HTML report of every figure with its caption (plus any --config of this run):\n"
+        f"    snakemake --report report.html{again}\n"
+    )

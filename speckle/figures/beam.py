@@ -367,7 +367,7 @@ def plot_bscans(ds: xr.Dataset) -> Figure:
             vmin=-20,
             vmax=10,
         )
-        ax.xaxis.set_major_locator(MaxNLocator(3))
+        ax.xaxis.set_major_locator(MaxNLocator(2))  # 3 labels overlapped on 128 lines
         ax.set_title(title)
     colorbar(fig, im, axes[0].tolist(), "intensity (dB re the image mean)", shrink=0.8)
     for ax, name in zip(axes[1, :2], ("lateral", "axial"), strict=True):

@@ -27,7 +27,7 @@ from ..studies.dynamics import (
     flow_failure,
 )
 from ..studies.dynamics_series import g1_curves, phantom_series
-from .style import new_figure
+from .style import mark_no_colorbar, new_figure
 
 __all__ = [
     "calibration_data",
@@ -164,13 +164,13 @@ def plot_g1(ds: xr.Dataset) -> Figure:
 def plot_phantom(ds: xr.Dataset) -> Figure:
     """The phantom's regions, structure and contrast images (one colorbar per quantity)."""
     panels = [
-        ("labels", "regions: layers, cells, vessel", "region label", "tab10"),
-        ("structure", "structure (mean intensity)", "dB re mean signal", "gray"),
-        ("speckle_variance", "angiography: speckle variance", "var(I)/<I>²", "magma"),
-        ("ssada", "angiography: SSADA", "decorrelation D", "magma"),
-        ("liv", "angiography: LIV", "LIV (dB²)", "viridis"),
-        ("liv_doct", "dynamic OCT: LIV", "LIV (dB²)", "viridis"),
-        ("ocds", "dynamic OCT: OCDS", "OCDS (1/s)", "viridis"),
+        ("labels", "regions:\nlayers, cells, vessel", "region label", "tab10"),
+        ("structure", "structure\n(mean intensity)", "dB re mean signal", "gray"),
+        ("speckle_variance", "angiography:\nspeckle variance", "var(I)/<I>²", "magma"),
+        ("ssada", "angiography:\nSSADA", "decorrelation D", "magma"),
+        ("liv", "angiography: LIV\n(colour scale at right)", "LIV (dB²)", "viridis"),
+        ("liv_doct", "dynamic OCT:\nLIV", "LIV (dB²)", "viridis"),
+        ("ocds", "dynamic OCT:\nOCDS", "OCDS (1/s)", "viridis"),
     ]
     fig, axes = new_figure(2, 4, width=11.0, height=5.2)
     x, z = ds.x.values, ds.depth.values
@@ -213,6 +213,7 @@ def plot_phantom(ds: xr.Dataset) -> Figure:
     ax.axhline(1.0, color="k", lw=0.6)
     ax.set_yscale("log")
     ax.set_xticks(idx, ["SV", "SSADA", "LIV", "LIV dOCT", "OCDS"], rotation=30)
+    ax.set_xlabel("contrast (SV: speckle variance)")
     ax.set_ylabel("region mean / static layers' mean")
     ax.set_title("contrast of each moving region")
     ax.legend(loc="center left", bbox_to_anchor=(1.0, 0.5), frameon=False)
@@ -221,7 +222,10 @@ def plot_phantom(ds: xr.Dataset) -> Figure:
 
 def _status_image(ax, status: np.ndarray, xlabels, ylabels, xname: str, yname: str) -> None:
     cmap = ListedColormap([c for c, _ in STATUS])
-    ax.imshow(status, origin="lower", cmap=cmap, vmin=-0.5, vmax=2.5, aspect="auto")
+    # categories, told by the figure's legend of STATUS colours
+    mark_no_colorbar(
+        ax.imshow(status, origin="lower", cmap=cmap, vmin=-0.5, vmax=2.5, aspect="auto")
+    )
     ax.set_xticks(range(len(xlabels)), xlabels, rotation=60)
     ax.set_yticks(range(len(ylabels)), ylabels)
     ax.set_xlabel(xname)

@@ -265,8 +265,8 @@ def plot_showcase(ds: xr.Dataset, dynamic_range: float = 40.0) -> Figure:
         ("pure_db", "system_db"),
         (
             "pure model (unfocused beam)",
-            f"focus at {ds.attrs['focus']:g} µm + attenuation + roll-off + noise "
-            f"({ds.attrs['snr_db']:g} dB)",
+            f"focus at {ds.attrs['focus']:g} µm + attenuation\n"
+            f"+ roll-off + noise ({ds.attrs['snr_db']:g} dB)",
         ),
         strict=True,
     ):

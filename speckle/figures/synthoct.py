@@ -309,8 +309,8 @@ def plot_self_consistency(ds: xr.Dataset) -> Figure:
         unit = " (dB)" if metric == "PSNR" else ""
         ax.set_xlabel(f"{metric} published{unit}")
         ax.set_ylabel(f"{metric} here{unit}")
-        if j == 0:
-            ax.legend(fontsize=6)
+        if j == 0:  # above the diagonal's upper-left end, where no point falls
+            ax.legend(loc="upper left", frameon=False)
     fig.suptitle(
         f"SynthOCT self-consistency check: {ds.attrs['shown_phantom']} (official maps); "
         "3 comparisons x 4 images scored here against the published table"
@@ -335,7 +335,9 @@ def plot_batch(ds: xr.Dataset, metric: str = "SSIM") -> Figure:
         ax.set_title(name)
         ax.set_xlabel("boundary depth (µm)")
         ax.set_ylabel("bottom-layer energy (%)")
-    axes[0, 0].legend(fontsize=6)
+    # outside the images (it hid a corner), on grey so that the white cross shows
+    fig.legend(*axes[0, 0].get_legend_handles_labels(), loc="outside lower center", ncols=2,
+               facecolor="0.6", framealpha=1.0)  # fmt: skip
     fig.suptitle(
         f"{ds.attrs['n_phantoms']} two-layer candidates "
         f"({ds.attrs['n_pixels']} x {ds.attrs['n_lines']} px) scored as the challenge does"

@@ -37,11 +37,13 @@ MODULES = (
     "beam",
     "deformation",
     "despeckle",
+    "dynamics",
     "elastography",
     "histograms",
     "realism",
     "speed",
     "static",
+    "synthoct",
     "system",
     "twin",
     "phantom",
@@ -471,6 +473,76 @@ def _despeckle():
     }
 
 
+def _dynamics():
+    n = 12
+    pos = {"depth": np.arange(n) * 4.0, "x": np.arange(n) * 4.0, "region": np.arange(4)}
+    names = ("speckle_variance", "ssada", "liv", "liv_doct", "ocds")
+    phantom = _fake(
+        pos,
+        {
+            "labels": (("depth", "x"), np.repeat(np.arange(n) // 3, n).reshape(n, n)),
+            "structure": ("depth", "x"),
+            **{k: ("depth", "x") for k in names},
+            **{f"{k}_region": ("region",) for k in names},
+        },
+    )
+    lag = np.arange(6) * 1e-3
+    decay = np.exp(-np.stack([lag, lag**2 / 4e-3]) / 2e-3)  # as measured: 1 at lag 0, falling
+    g1 = _fake(
+        {"model": ["brownian", "transverse_flow"], "lag": lag},
+        {
+            "g1": (("model", "lag"), decay),
+            "g1_se": (("model", "lag"), 0.01 + 0 * decay),
+            "g1_theory": (("model", "lag"), decay),
+            "diffusion": ("model",),
+            "velocity": ("model",),
+        },
+    )
+    cube = ("contrast", "snr_db", "interval", "velocity")
+    failure = _fake(
+        {
+            "contrast": ["speckle_variance", "decorrelation", "liv"],
+            "snr_db": [20.0, 40.0],
+            "interval": [1e-3, 4e-3],
+            "velocity": [0.0, 100.0, 1000.0],
+        },
+        {
+            "status": (cube, _rng().integers(0, 3, (3, 2, 2, 3))),
+            "measured": cube,
+            "measured_se": cube,
+            "theory": cube,
+            "static_floor_theory": ("contrast", "snr_db"),
+            "noise_floor_theory": ("contrast", "snr_db"),
+            "v_low": ("contrast", "snr_db", "interval"),
+            "v_high": ("contrast", "snr_db", "interval"),
+        },
+        low=0.05,
+        high=1.0,
+    )
+    v, fine = np.array([0.0, 2000.0, 4000.0, 8000.0]), np.linspace(0.0, 8000.0, 9)
+
+    def rise(u):  # as measured: from the static floor up to the noise floor
+        return 0.2 * (1 - np.exp(-((u / 3000.0) ** 2)))
+
+    calibration = _fake(
+        {"velocity": v, "velocity_fine": fine},
+        {
+            "decorrelation": (("velocity",), rise(v)),
+            "decorrelation_se": (("velocity",), 0.002 + 0 * v),
+            "theory_curve": (("velocity_fine",), rise(fine)),
+            "static_floor_theory": ((), 0.003),
+            "noise_floor_theory": ((), 0.2),
+        },
+        {"interval": 1e-3, "snr_db": 30.0},
+    )
+    return {
+        "plot_phantom": (phantom,),
+        "plot_g1": (g1,),
+        "plot_failure": (failure,),
+        "plot_calibration": (calibration,),
+    }
+
+
 def _elastography():
     from speckle.figures import elastography as el
 
@@ -585,6 +657,38 @@ def _speed():
     return {"plot_speed_accuracy": (chart,), "plot_failure_map": (fmap,)}
 
 
+def _synthoct():
+    metrics = ("SSIM", "MS-SSIM", "PSNR", "MSE", "VIF", "LPIPS")
+    maps = ["Struct", "OAC", "SC", "RSC"]
+    n = 8
+    image = ("origin_scan", "depth", "x")
+    diagonal = np.linspace(0.1, 0.9, 8).reshape(2, 4)
+    consistency = _fake(
+        {
+            "origin": ["published", "recomputed", "drop-in"],
+            "experiment": ["Exp1", "Exp2"],
+            "map": maps,
+            "origin_scan": ["published", "drop-in"],
+            "phantom": ["Exp2_Layers_A"],
+            "depth": np.arange(n) * 6.0,
+            "x": (np.arange(2 * n) - n) * 6.0,
+        },
+        {
+            # as measured: each comparison's score equals the published one, on the diagonal
+            **{m: (("origin", "experiment", "map"), np.stack([diagonal] * 3)) for m in metrics},
+            "scan": ("origin_scan", "phantom", "depth", "x"),
+            **{m: image for m in ("OAC", "SC", "RSC")},
+        },
+        {"shown_phantom": "Exp2_Layers_A"},
+    )
+    batch = _fake(
+        {"boundary": [200.0, 400.0, 600.0], "energy": [0.5, 2.5, 5.0], "map": maps},
+        {m: ("boundary", "energy", "map") for m in metrics},
+        {"reference": "Exp2_Layers_A", "n_phantoms": 9, "n_pixels": 256, "n_lines": 512},
+    )
+    return {"plot_self_consistency": (consistency,), "plot_batch": (batch,)}
+
+
 def _twin():
     n_depth, n_x = 10, 24
     compare = _fake(
@@ -652,11 +756,13 @@ BUILDERS = {
     "beam": _beam,
     "deformation": _deformation,
     "despeckle": _despeckle,
+    "dynamics": _dynamics,
     "elastography": _elastography,
     "histograms": _histograms,
     "realism": _realism,
     "speed": _speed,
     "static": _static,
+    "synthoct": _synthoct,
     "system": _system,
     "twin": _twin,
     "phantom": lambda: {
