@@ -1645,6 +1645,9 @@ ENTRIES: dict[str, Entry] = {
         why="a record built by equivalent_system",
         record="equivalent_system",
     ),
+    "phantom_score_power": E(
+        lambda: dict(cases=8, sd=0.05), cases="count", sd="positive", beyond="positive"
+    ),
     "phantom_closed_loop": E(
         lambda: dict(
             seeds=[1],

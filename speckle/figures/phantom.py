@@ -20,7 +20,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from ..conventions import attrs, coord
-from ..studies.phantom.batch import phantom_closed_loop
+from ..studies.phantom.batch import MARGIN, phantom_closed_loop, phantom_score_power
 from ..studies.phantom.limits import phantom_failure_map
 from ..sweep import sweep
 from ..synthoct.metrics import METRIC_NAMES, SYNTHOCT_MAPS
@@ -36,8 +36,6 @@ __all__ = [
     "table_csv",
 ]
 
-#: MS-SSIM margin of the issue's acceptance: the fitted phantom within 0.02 of the floor.
-MARGIN = 0.02
 _MARKERS = ("o", "s", "^", "D")
 _PER_CONFIG = ("n_pixels", "pixel_size", "n_lines", "beam_radius")
 
@@ -132,8 +130,10 @@ def score_summary(ds: xr.Dataset, metric: str = "MS-SSIM") -> xr.Dataset:
     """Mean over the scored cases of ``metric``'s difference candidate minus floor, with its SE.
 
     Returns a Dataset of ``difference`` and ``difference_se`` along ``(configuration,
-    candidate, map)`` (the floor's own row is zero) and ``within`` (1 where the mean is above
-    ``-0.02 - 2 SE``: the fitted phantom at the floor).
+    candidate, map)`` (the floor's own row is zero), ``within`` (1 where the mean is above
+    ``-0.02 - 2 SE``: the fitted phantom at the floor) and ``power``: the test's power against
+    a true mean 0.03 below the margin at the measured per-case SD
+    (:func:`speckle.phantom_score_power`; NaN with fewer than 2 cases).
     """
     values = ds[metric]
     diff = values - values.sel(candidate="floor")
@@ -141,12 +141,17 @@ def score_summary(ds: xr.Dataset, metric: str = "MS-SSIM") -> xr.Dataset:
     mean = diff.mean("case")
     se = (diff.std("case", ddof=1) / np.sqrt(n)).where(n > 1)
     within = (mean > -MARGIN - 2 * se.fillna(0.0)).astype(float)
+    sd = (se * np.sqrt(n)).values
+    ok = (n.values > 1) & np.isfinite(sd) & (sd > 0)
+    power = np.full(sd.shape, np.nan)
+    power[ok] = phantom_score_power(np.broadcast_to(n.values, sd.shape)[ok], sd[ok])
     q = attrs("dimensionless", f"mean {metric} difference, candidate minus floor")
     return xr.Dataset(
         {
             "difference": (mean.dims, mean.values, q),
             "difference_se": (se.dims, se.values, attrs("dimensionless", "its standard error")),
             "within": (mean.dims, within.values, attrs("dimensionless", "1: above -0.02 - 2 SE")),
+            "power": (mean.dims, power, attrs("dimensionless", "power at 0.03 below the margin")),
         },
         coords=mean.coords,
     )

@@ -36,6 +36,7 @@ from .phantom import (
     phantom_closed_loop,
     phantom_closed_loop_case,
     phantom_failure_map,
+    phantom_score_power,
     real_tissue_phantom,
     virtual_patient,
 )
@@ -62,6 +63,7 @@ __all__ = [
     "phantom_closed_loop",
     "phantom_closed_loop_case",
     "phantom_failure_map",
+    "phantom_score_power",
     "phantom_series",
     "polarization_looks",
     "real_tissue_phantom",

@@ -4,9 +4,16 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import xarray as xr
+from scipy import stats
 
 import speckle
-from speckle.studies.phantom.batch import MAX_LAYERS, phantom_closed_loop
+from speckle.studies.phantom.batch import (
+    MARGIN,
+    MAX_LAYERS,
+    phantom_closed_loop,
+    phantom_score_power,
+)
 
 #: A fast scanner for the batch's bookkeeping (96 x 96 pixels).
 TINY = speckle.ScannerConfig(n_pixels=96, n_lines=96, x_max=576.0, n_scatterers=20_000)
@@ -106,6 +113,10 @@ def test_fitted_within_002_of_the_floor_on_every_map(shapes, cases):
     # -0.019 (SE 0.004, 0.005, 0.010, 0.009), 22 succeed; RSC -0.021 +- 0.009 over the 22
     # (shaped boundaries within a pixel still cost RSC; flat ones do not). Earlier, 8 cases:
     # the baseline -0.17, -0.32, -0.40, -0.33 (flat) and -0.10, -0.21, -0.33, -0.24
+    # On the merged boundary fit (phscore, session 41, the same seeds and draws), every shape,
+    # 30 cases: -0.005, -0.006, +0.005, -0.007 (SE 0.003, 0.002, 0.008, 0.005), RSC -0.001 +-
+    # 0.005 over the 18 shaped ones (the RSC deficit is gone with the boundary merge); per-case
+    # SD over seeds 0-39: 0.017, 0.022, 0.040, 0.035 (phantom_score_power: 15 cases for 80 %)
     assert np.all(mean > -0.02 - 2 * se), (mean.values, se.values)
     base = ms.sel(candidate="baseline") - ms.sel(candidate="floor")
     assert np.any(base.mean("case") < -0.02 - 2 * se)
@@ -135,3 +146,57 @@ def test_a_refused_scan_is_a_row_not_a_crash(monkeypatch):
     assert int(row.n_true) == n and np.allclose(row.true_top.values[:n], truth.top_mean.values)
     assert ds.fit_attenuation.attrs["units"] == "1/um"  # the refused row first: units kept
     assert str(ds.sel(case=5).failure_class.values) in {"none", "layer count", "boundary"}
+
+
+@pytest.mark.parametrize(("cases", "sd"), [(5, 0.03), (12, 0.04), (30, 0.055)])
+def test_score_power_is_the_simulated_rejection_rate(cases, sd):
+    """The score test run on simulated normal differences (true mean 0.03 below the margin,
+    SD ``sd``): its rejection rate equals the noncentral-t power within 3 binomial SEs."""
+    rng = np.random.default_rng(np.random.SeedSequence([34, cases]))
+    trials = 20_000
+    d = rng.normal(-MARGIN - 0.03, sd, (trials, cases))
+    se = d.std(axis=1, ddof=1) / np.sqrt(cases)
+    rate = np.mean(d.mean(axis=1) < -MARGIN - 2 * se)
+    power = phantom_score_power(cases, sd)
+    assert abs(rate - power) < 3 * np.sqrt(power * (1 - power) / trials), (rate, power)
+
+
+def test_score_power_limits_and_input():
+    # many cases: the normal limit Phi(beyond sqrt(n)/sd - 2)
+    n = 2000
+    assert phantom_score_power(n, 0.5) == pytest.approx(
+        stats.norm.cdf(0.03 * np.sqrt(n) / 0.5 - 2), abs=2e-3
+    )
+    # rising with the cases from 3 on (2 cases: a t of one degree of freedom, whose heavy tail
+    # makes the SE's draw fail the test more often than 3 cases do)
+    grid = phantom_score_power(np.arange(2, 60), 0.055)
+    assert np.all(np.diff(grid[1:]) > 0) and grid[0] > grid[1] and grid.shape == (58,)
+    for kwargs, error, match in [
+        ({"cases": 1}, ValueError, "cases"),
+        ({"cases": 2.5}, ValueError, "cases"),
+        ({"cases": "8"}, TypeError, "cases"),
+        ({"sd": 0.0}, ValueError, "sd"),
+        ({"sd": np.nan}, ValueError, "sd"),
+        ({"beyond": -0.01}, ValueError, "beyond"),
+        ({"beyond": True}, TypeError, "beyond"),
+    ]:
+        args = {"cases": 8, "sd": 0.05, **kwargs}
+        with pytest.raises(error, match=match):
+            phantom_score_power(args.pop("cases"), args.pop("sd"), **args)
+
+
+def test_score_summary_states_its_power():
+    """The pipeline's summary: the power of its own test at the measured per-case SD."""
+    from speckle.figures.phantom import score_summary
+
+    rng = np.random.default_rng(3)
+    ms = rng.uniform(0.5, 0.9, (1, 10, 3, 4))  # configuration, case, candidate, map
+    ds = xr.Dataset(
+        {"MS-SSIM": (("configuration", "case", "candidate", "map"), ms)},
+        coords={"configuration": ["challenge"], "candidate": ["fitted", "floor", "baseline"],
+                "map": ["Struct", "OAC", "SC", "RSC"]},
+    )  # fmt: skip
+    out = score_summary(ds).sel(configuration="challenge", candidate="fitted")
+    diff = ms[0, :, 0] - ms[0, :, 1]
+    assert np.allclose(out.power.values, phantom_score_power(10, diff.std(axis=0, ddof=1)))
+    assert np.all(np.isnan(score_summary(ds).power.sel(candidate="floor").values))

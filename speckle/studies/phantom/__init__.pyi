@@ -14,6 +14,7 @@ from ._slab import (
 )
 from .batch import (
     phantom_closed_loop,
+    phantom_score_power,
 )
 from .limits import (
     phantom_failure_map,
@@ -38,6 +39,7 @@ __all__ = [
     "phantom_closed_loop",
     "phantom_closed_loop_case",
     "phantom_failure_map",
+    "phantom_score_power",
     "real_tissue_phantom",
     "slab_constants",
     "virtual_patient",

@@ -19,6 +19,11 @@ each: the fit is deterministic, so only the draws differ). The cases run on Dask
 seed (``numpy.random.SeedSequence``), so the table is the same whatever the scheduler, the
 workers or the order and grouping of the seeds. The case's variables along ``layer`` are padded
 with NaN (``""`` for the shapes) to :data:`MAX_LAYERS` layers, the most the fit tries.
+
+The issue's acceptance is tested on the mean over the cases of ``fitted - floor``: above
+``-MARGIN - 2 SE``, the SE from the cases' spread. :func:`phantom_score_power` is that test's
+power against a true mean ``beyond`` below the margin, for a number of cases and the per-case
+SD of the difference (a noncentral t): what sizes the closed loop.
 """
 
 from __future__ import annotations
@@ -27,6 +32,7 @@ from collections.abc import Sequence
 
 import numpy as np
 import xarray as xr
+from scipy import stats
 
 from ..._validate import check_bool, check_choice, check_int
 from ...conventions import attrs, coord
@@ -38,7 +44,7 @@ from ...synthoct.scanner import synthoct_scan
 from .loop import INCLUSION_SCALARS, PULLED, phantom_closed_loop_case
 from .patients import SHAPES, scanner_config_of, virtual_patient
 
-__all__ = ["phantom_closed_loop"]
+__all__ = ["MARGIN", "phantom_closed_loop", "phantom_score_power"]
 
 #: Named scanner configurations of the closed loop (:func:`speckle.synthoct_config`).
 CONFIGURATIONS = tuple(SYNTHOCT_CONFIGS)
@@ -50,6 +56,8 @@ MAX_LAYERS = 5
 #: a scan the fit refused (e.g. too few rows above the window's floor).
 FAILURES = ("none", "layer count", "boundary", "refused")
 FAILURE_NAME = "failure class: none, layer count, boundary (a pixel or more off), refused"
+#: MS-SSIM margin of the issue's acceptance: the fitted phantom within 0.02 of the floor.
+MARGIN = 0.02
 #: Variables of the case with the patient's layer count, padded; their fill value.
 _FILL = {"true_shape": "", "fit_shape": ""}
 
@@ -277,3 +285,62 @@ def phantom_closed_loop(
         }
     )
     return ds
+
+
+def phantom_score_power(cases: object, sd: object, *, beyond: float = 0.03) -> float | np.ndarray:
+    """Power of the closed loop's score test: the probability that it fails a fitted phantom
+    whose true mean ``fitted - floor`` lies ``beyond`` below the margin.
+
+    The test passes when the mean over ``n`` cases of the difference ``d`` (one map's MS-SSIM,
+    fitted minus floor) lies above ``-MARGIN - 2 s/sqrt(n)``, ``s`` the cases' sample SD. With
+    ``d`` normal of mean ``delta = -MARGIN - beyond`` and SD ``sd``, ``(mean + MARGIN)/(s/
+    sqrt(n))`` is noncentral t with ``n - 1`` degrees of freedom and noncentrality ``-beyond
+    sqrt(n)/sd``; the power is its probability below -2 (the margin drops out). For large ``n``
+    it tends to ``Phi(beyond sqrt(n)/sd - 2)``: 80 % needs ``n >= (2.84 sd/beyond)^2``.
+
+    Parameters
+    ----------
+    cases : int or array of int
+        Cases of the closed loop (>= 2).
+    sd : float or array
+        SD of one case's difference (> 0; measured, docs/explanation/phantom_fit.md).
+    beyond : float
+        How far below the margin the true mean lies (> 0).
+
+    Returns
+    -------
+    float or numpy.ndarray
+        The power (0..1), broadcast over ``cases`` and ``sd``.
+
+    Raises
+    ------
+    TypeError, ValueError
+        Non-numeric input, fewer than 2 cases, a non-positive SD or ``beyond``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from speckle.studies.phantom.batch import phantom_score_power
+    >>> round(float(phantom_score_power(8, 0.055)), 2)  # the former default: 8 cases
+    0.37
+    >>> n = np.arange(2, 100)
+    >>> int(n[np.argmax(phantom_score_power(n, 0.055) >= 0.8)])  # least cases for 80 %
+    28
+    """
+    arrays = {}
+    for name, value in (("cases", cases), ("sd", sd), ("beyond", beyond)):
+        if isinstance(value, (bool, str, bytes)):
+            raise TypeError(f"{name} must be numeric, got {value!r}")
+        try:
+            arrays[name] = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            raise TypeError(f"{name} must be numeric, got {value!r}") from None
+    n, s, b = arrays["cases"], arrays["sd"], arrays["beyond"]
+    if not np.all(np.isfinite(n)) or np.any(n < 2) or np.any(n != np.round(n)):
+        raise ValueError(f"cases must be integers >= 2 (an SD needs two), got {cases!r}")
+    if not np.all(np.isfinite(s)) or np.any(s <= 0):
+        raise ValueError(f"sd must be finite and > 0, got {sd!r}")
+    if b.ndim or not np.isfinite(b) or b <= 0:
+        raise ValueError(f"beyond must be a finite number > 0, got {beyond!r}")
+    power = stats.nct.cdf(-2.0, n - 1, -b * np.sqrt(n) / s)
+    return float(power) if np.ndim(power) == 0 else power
