@@ -13,12 +13,6 @@ least-squares polynomial through the blocks' own best positions, the better end 
 shape is the one of least ``BIC = -chi^2 + d ln n`` (``n`` the rows used, ``d`` the terms
 beyond ``a``, ``chi^2`` the Wald statistic of ``b`` or ``(b, c)``) among those allowed, the
 covariance (and the SEs) from the delete-one-block jackknife of the joint fit.
-The first detection's blocks smear a shaped boundary (a block spans ``b`` times its width of
-depth: up to 3.7 pixels at the 2025 configuration's largest tilt, 1.6 at the challenge's); each
-later one locates the boundaries in the lines moved up by the whole rows nearest the previous
-detection's shape (the boundary flat in them, smeared by the rounding only, at most a pixel),
-the blocks' misfits taken at ``tau_b`` minus the block's mean move; the rounds stop when the
-flattened refit agrees with the located boundaries after at least one such detection.
 The transition model mixes the layers' mean intensities ``exp(level - c)``, ``c = E ln(I/<I>)``
 of the layer's sparse speckle from its ``var ln I`` (:func:`log_offsets`).
 Two neighbouring boundaries of the flat fit merge into one tilted or curved boundary (a ramp:
@@ -210,10 +204,9 @@ def _split_rss(mb, z, t1, t2, slopes, p, model, offsets=None):
     return total
 
 
-def _joint(rss, taus, basis, start, steps, shift):
-    """Coefficients minimising ``sum_b rss_b(basis_b . theta - shift_b)`` (rss interpolated on
-    ``taus``, each block's rows moved up by ``shift_b``), Nelder-Mead from ``start``; and the
-    minimum."""
+def _joint(rss, taus, basis, start, steps):
+    """Coefficients minimising ``sum_b rss_b(basis_b . theta)`` (rss interpolated on ``taus``),
+    Nelder-Mead from ``start``; and the minimum."""
     finite = np.isfinite(rss)
     big = 10 * float(np.max(rss[finite])) if finite.any() else 1.0
     table = np.where(finite, rss, big)
@@ -224,7 +217,7 @@ def _joint(rss, taus, basis, start, steps, shift):
 
     def total(theta):
         """The blocks' misfits at ``basis . theta``, linear between the grid's positions."""
-        u = (basis[:, : theta.size] @ theta - shift - taus[0]) / step
+        u = (basis[:, : theta.size] @ theta - taus[0]) / step
         out = (u < 0) | (u > taus.size - 1)
         i = np.clip(np.floor(u), 0, taus.size - 1).astype(int)
         f = np.clip(u - i, 0.0, 1.0)
@@ -238,44 +231,41 @@ def _joint(rss, taus, basis, start, steps, shift):
     return res.x, float(res.fun)
 
 
-def _boundary_shape(rss, taus, xb, x_max, shapes, p, n_rows, shift):
+def _boundary_shape(rss, taus, xb, x_max, shapes, p, n_rows):
     """Shape, coefficients ``(a, b, c)`` and their jackknife SEs of one boundary; and the least
-    joint misfit over the shapes tried. ``rss`` on each block's rows moved up by ``shift``."""
+    joint misfit over the shapes tried."""
     basis = np.column_stack([np.ones_like(xb), xb, xb**2 - x_max**2 / 12])
     half = x_max / 2
     steps = np.array([p, p / half, p / half**2])
 
-    def chain(table, base, sh):
+    def chain(table, base):
         """Every allowed shape's fit and misfit from the blocks' misfits ``table``: the flat
         one from the best common position; the tilted and curved ones from two starts, the
         simpler shape's fit and the least-squares polynomial through the blocks' own best
         positions (a steep boundary's flat fit sits at the window's edge, a start from which
         Nelder-Mead does not reach it), the better end kept."""
-        common = np.argmin(np.sum(np.where(np.isfinite(table), table, 1e9), axis=0))
-        flat = taus[int(common)] + float(np.mean(sh))
+        flat = taus[int(np.argmin(np.sum(np.where(np.isfinite(table), table, 1e9), axis=0)))]
         finite = np.isfinite(table).any(axis=1)
         own = taus[np.argmin(np.where(np.isfinite(table), table, np.inf)[finite], axis=1)]
-        own = own + sh[finite]
 
         def best_of(d, nested):
             through = np.linalg.lstsq(base[finite, :d], own, rcond=None)[0]
-            tries = [_joint(table, taus, base, start, steps, sh) for start in (nested, through)]
+            tries = [_joint(table, taus, base, start, steps) for start in (nested, through)]
             return min(tries, key=lambda fit: fit[1])
 
         fits, misfit = {}, {}
-        fits["flat"], misfit["flat"] = _joint(table, taus, base, [flat], steps, sh)
+        fits["flat"], misfit["flat"] = _joint(table, taus, base, [flat], steps)
         if "tilted" in shapes or "curved" in shapes:
             fits["tilted"], misfit["tilted"] = best_of(2, [fits["flat"][0], 0.0])
         if "curved" in shapes:
             fits["curved"], misfit["curved"] = best_of(3, [*fits["tilted"], 0.0])
         return fits, misfit
 
-    fits, misfit = chain(rss, basis, shift)
+    fits, misfit = chain(rss, basis)
     g = xb.size
     # the delete-one-block jackknife repeats the whole chain (both starts: a replicate may
     # end in another local minimum, which the spread must show)
-    replicas = [chain(rss[np.arange(g) != b], basis[np.arange(g) != b], shift[np.arange(g) != b])[0]
-                for b in range(g)]  # fmt: skip
+    replicas = [chain(rss[np.arange(g) != b], basis[np.arange(g) != b])[0] for b in range(g)]
     cov, bic = {}, {"flat": 0.0}
     for shape in shapes:
         d = SHAPE_DEGREE[shape] + 1
@@ -320,55 +310,31 @@ def fit_shapes(
     mb = np.stack([li[:, g].mean(axis=1) for g in groups])  # (blocks, pixels)
     m1, m2 = float(np.mean(x)), float(np.mean(x**2))
 
-    def blocks_along(cf):
-        """The blocks' row-mean profiles with each line's rows moved up by the whole rows
-        nearest the shape ``cf``'s offset ``b (x - <x>) + c (x^2 - <x^2>)`` (rows beyond the
-        scan clipped), and each block's mean move (µm): a boundary of that shape is flat in
-        them, smeared within a block by the rounding only (at most a pixel)."""
-        if cf is None or (cf[1] == 0 and cf[2] == 0):
-            return mb, np.zeros(BOUNDARY_BLOCKS)
-        moves = np.rint((cf[1] * (x - m1) + cf[2] * (x**2 - m2)) / p).astype(int)
-        rows = np.clip(np.arange(n_pix)[:, None] + moves[None, :], 0, n_pix - 1)
-        moved = np.take_along_axis(li, rows, axis=0)
-        return (np.stack([moved[:, g].mean(axis=1) for g in groups]),
-                np.array([moves[g].mean() * p for g in groups]))  # fmt: skip
-
-    def locate(lo, hi, s_above, s_below, offsets, prior=None):
+    def locate(lo, hi, s_above, s_below, offsets):
         """Shape, coefficients, SEs and joint misfit of one boundary in rows ``lo..hi`` (µm)
-        between layers of slopes ``s_above``, ``s_below`` and ``E ln(I/<I>)`` ``offsets``, in
-        the lines moved along the ``prior`` shape (:func:`blocks_along`); None if the window is
-        too short."""
+        between layers of slopes ``s_above``, ``s_below`` and ``E ln(I/<I>)`` ``offsets``;
+        None if the window is too short."""
         sel = (z >= lo) & (z <= hi)
         margin = (_LEVEL_ROWS + 2) * p
         taus = np.arange(lo + margin, hi - margin + 1e-9, p / 4)
         if taus.size < 2:
             return None
-        prof, shift = blocks_along(prior)
-        rss = np.stack([_block_rss(prof[b, sel], z[sel], taus, s_above, s_below, p, cdf, offsets)
+        rss = np.stack([_block_rss(mb[b, sel], z[sel], taus, s_above, s_below, p, cdf, offsets)
                         for b in range(BOUNDARY_BLOCKS)])  # fmt: skip
         return _boundary_shape(rss, taus, xb, cfg.x_max, shapes, p,
-                               int(sel.sum()) * BOUNDARY_BLOCKS, shift)  # fmt: skip
+                               int(sel.sum()) * BOUNDARY_BLOCKS)  # fmt: skip
 
     def anchor(cf):
         """Depth of a located boundary at the central lines' mean offset."""
         return float(cf[0] + cf[1] * m1 + cf[2] * (m2 - cfg.x_max**2 / 12))
 
-    def detect(cur, prior):
+    def detect(cur):
         """Each boundary's anchor depth, shape, coefficients and SEs, located around ``cur``'s
-        tops (in the lines moved along the ``prior`` detection's nearest boundary within 3
-        pixels, if any); two neighbouring boundaries merge into one shaped boundary where that
-        fits the blocks' profiles at least as well as the two flat ones with a layer between
-        them (a tilted or curved boundary that the flat fit saw as a ramp: one level per block
-        fewer)."""
+        tops; two neighbouring boundaries merge into one shaped boundary where that fits the
+        blocks' profiles at least as well as the two flat ones with a layer between them (a
+        tilted or curved boundary that the flat fit saw as a ramp: one level per block fewer)."""
         tops, slope = cur.top.values, -2 * cur.attenuation.values
         off = log_offsets(cur.log_variance.values, cfg)
-
-        def prior_of(t):
-            if prior is None or prior[0].size < 2:
-                return None
-            i = 1 + int(np.argmin(np.abs(prior[0][1:] - t)))
-            return prior[1][i] if abs(prior[0][i] - t) < 3 * p else None
-
         end = cur.attrs["last_row"] * p  # the last fitted row
         bottom = np.append(tops, max(end, tops[-1]))
 
@@ -376,8 +342,8 @@ def fit_shapes(
             return 0.5 * (bottom[k] + bottom[k + 1])
 
         anchors, shape, coef, ses = [0.0], ["flat"], [np.zeros(3)], [np.full(3, np.nan)]
-        located = [None] + [locate(mid(k - 1), mid(k), slope[k - 1], slope[k], off[k - 1 : k + 1],
-                                   prior_of(tops[k])) for k in range(1, tops.size)]  # fmt: skip
+        located = [None] + [locate(mid(k - 1), mid(k), slope[k - 1], slope[k], off[k - 1 : k + 1])
+                            for k in range(1, tops.size)]  # fmt: skip
 
         def at_blocks(k):
             cf = located[k][1] if located[k] is not None else np.array([tops[k], 0.0, 0.0])
@@ -428,21 +394,16 @@ def fit_shapes(
         out = np.where(inside, lev[np.clip(raw, 0, n_pix - 1), np.arange(x.size)], 0)
         return out.astype(np.uint8)
 
-    # the first detection's blocks smear a shaped boundary (the 2025 configuration's 60 lines
-    # of a block span up to 3.7 pixels of the largest tilt, 7 of the largest curvature at the
-    # box's edge); the next ones locate it in lines moved along the previous shape, where the
-    # smear is the rounding's (at most a pixel), and stop when the flattened refit agrees
-    current, prior = ds, None
+    current = ds
     for _ in range(ITERATIONS):
-        tops, shape, coef, ses = detect(current, prior)
+        tops, shape, coef, ses = detect(current)
         if all(sh == "flat" for sh in shape):
             return flat_shapes(ds)
         new = refit(flatten(tops, coef))
         same = new.sizes["layer"] == tops.size and np.all(np.abs(new.top.values - tops) < p)
-        if same and prior is not None:
+        if same:
             break
-        # the next detection's boundaries are the refit's, at their shapes' anchors
-        current, prior = new, (np.array([anchor(cf) for cf in coef]), coef)
+        current = new
     # each refitted boundary takes the shape of the nearest located one (within 3 pixels)
     pick = [0] + [
         int(np.argmin(np.abs(tops - t))) if np.min(np.abs(tops[1:] - t)) < 3 * p else -1
