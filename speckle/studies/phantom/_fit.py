@@ -31,7 +31,8 @@ The fit, on the central lines (``|x| <= x_max/2 - 3 r``, where the box does not 
    boundary both agree within 3 jackknife SEs (a fluctuation of the phantom's shadowing);
 3. per layer: ``mu`` from the slope, each boundary to a fraction of a pixel from the transition
    rows (the Hann PSF's intensity weights of the two layers' scatterers, each layer's
-   exponential decay under the PSF included: ``_shapes.TransitionModel``), ``var ln I`` (minus
+   exponential decay under the PSF included, its mean intensity from its mean ``ln I`` and
+   the ``E ln(I/<I>)`` of its ``var ln I``: ``_shapes.TransitionModel``), ``var ln I`` (minus
    the shadowing spread, over rows whose predicted clipped fraction is at most 1 %, corrected
    for the lines' correlation) inverted to the density by the slab's exact sparse-speckle
    theory (its amplitudes ``exp(-y^2/r^2)``), identified where its excess over ``pi^2/6``
@@ -67,7 +68,7 @@ from ._density import (
     window_and_brightness,
 )
 from ._inclusions import fit_inclusions, no_inclusions, remove_inclusions
-from ._shapes import SHAPE_DEGREE, TransitionModel, fit_shapes, flat_shapes
+from ._shapes import SHAPE_DEGREE, TransitionModel, fit_shapes, flat_shapes, log_offsets
 from .patients import patient_table, region_volumes
 
 __all__ = ["BLOCKS", "GAP", "MAX_CLIPPED", "PhantomFit", "fit_phantom"]
@@ -514,6 +515,9 @@ def _fit_levels(lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: in
     segs = best[n_layers][1]
 
     model = TransitionModel(cfg.n_pixels)
+    # var ln I per layer first: its E ln(I/<I>) sets the transition's mixed intensity
+    v, v_jk, mu_fine = layer_variances(li, z, segs, keep, cfg)
+    offsets = log_offsets(v, cfg)
 
     def tops_of(mm, fits):
         out = [0.0]
@@ -523,8 +527,9 @@ def _fit_levels(lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: in
             idx = np.arange(lo - 1, hi + 1)
             zz = z[idx]
 
-            def misfit(t, zz=zz, idx=idx, s1=s1, i1=i1, s2_=s2_, i2=i2):
-                pred = model.log_mean(zz, t, s1, i1, s2_, i2, p)  # the PSF's share of each
+            def misfit(t, zz=zz, idx=idx, s1=s1, i1=i1, s2_=s2_, i2=i2, c=offsets[k - 1 : k + 1]):
+                # the PSF's share of each layer's mean intensity
+                pred = model.log_mean(zz, t, s1, i1, s2_, i2, p, c)
                 return float(np.sum((pred - mm[idx]) ** 2))
 
             res = optimize.minimize_scalar(
@@ -547,8 +552,7 @@ def _fit_levels(lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: in
     tops_jk = np.array([t for _, t in rep])
     top_se = np.array([_jackknife(tops_jk[:, k]) for k in range(n_layers)])
 
-    # var ln I per layer, density, energy, the window and rho E/100: _density.py
-    v, v_jk, mu_fine = layer_variances(li, z, segs, keep, cfg)
+    # density, energy, the window and rho E/100: _density.py
     dens = layer_densities(v, v_jk, mu, mu_fine, cfg)
     fitted = {"mu": mu, "mu_se": mu_se, "mu_jk": mu_jk, "tops": tops, "tops_jk": tops_jk}
     win = window_and_brightness(m, m_jk, z, segs, fitted, dens, cfg)

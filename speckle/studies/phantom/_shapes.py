@@ -13,6 +13,8 @@ least-squares polynomial through the blocks' own best positions, the better end 
 shape is the one of least ``BIC = -chi^2 + d ln n`` (``n`` the rows used, ``d`` the terms
 beyond ``a``, ``chi^2`` the Wald statistic of ``b`` or ``(b, c)``) among those allowed, the
 covariance (and the SEs) from the delete-one-block jackknife of the joint fit.
+The transition model mixes the layers' mean intensities ``exp(level - c)``, ``c = E ln(I/<I>)``
+of the layer's sparse speckle from its ``var ln I`` (:func:`log_offsets`).
 Two neighbouring boundaries of the flat fit merge into one tilted or curved boundary (a ramp:
 a steep boundary's sweep across the lines, which the flat fit cuts in two with a layer
 between) where that boundary, located between the layers above and below, sweeps at least half
@@ -40,8 +42,16 @@ from scipy import optimize
 from ...conventions import attrs
 from ...synthoct import _scan
 from ...synthoct.files import ScannerConfig
+from ._density import _equivalent, slab_inverse_density, slab_log_moments
 
-__all__ = ["BOUNDARY_BLOCKS", "SHAPE_DEGREE", "TransitionModel", "fit_shapes", "flat_shapes"]
+__all__ = [
+    "BOUNDARY_BLOCKS",
+    "SHAPE_DEGREE",
+    "TransitionModel",
+    "fit_shapes",
+    "flat_shapes",
+    "log_offsets",
+]
 
 #: Polynomial degree of each boundary shape.
 SHAPE_DEGREE = {"flat": 0, "tilted": 1, "curved": 2}
@@ -93,24 +103,52 @@ class TransitionModel:
         c = np.cumsum(tilted) - 0.5 * tilted
         return np.interp(v, self.u, c / tilted.sum(), left=0.0, right=1.0)
 
-    def log_mean_layers(self, z, tops, slopes, levels, p):
-        """``ln`` of the rows' mean intensity across several boundaries ``tops`` (µm, rising)
-        between layers ``levels + slopes z`` (``slopes`` per µm)."""
+    def log_mean_layers(self, z, tops, slopes, levels, p, offsets=None):
+        """Rows' mean ``ln I`` across several boundaries ``tops`` (µm, rising) between layers
+        whose mean ``ln I`` is ``levels + slopes z`` (``slopes`` per µm) and whose
+        ``E ln(I/<I>)`` is ``offsets`` (:func:`log_offsets`; None: all equal). Each layer's
+        mean intensity is ``exp(level + slope z - offset)``; a mixed row's ``E ln(I/<I>)`` is
+        the layers' offsets weighted by their shares of its mean intensity."""
         edges = [None, *tops, None]
         z = np.asarray(z, float)
-        logs = np.array([s * z + i for s, i in zip(slopes, levels, strict=True)])
+        off = np.zeros(len(slopes)) if offsets is None else np.asarray(offsets, float)
+        logs = np.array([s * z + i - c for s, i, c in zip(slopes, levels, off, strict=True)])
         top = logs.max(axis=0)  # factored out: no overflow
         total = np.zeros(z.shape)
+        weighted = np.zeros(z.shape)
         for j, s in enumerate(slopes):
             above = 1.0 if edges[j + 1] is None else self.cdf((edges[j + 1] - z) / p, s * p)
             below = 0.0 if edges[j] is None else self.cdf((edges[j] - z) / p, s * p)
-            total = total + np.exp(logs[j] - top) * (above - below)
-        return top + np.log(total)
+            share = np.exp(logs[j] - top) * (above - below)
+            total = total + share
+            weighted = weighted + off[j] * share
+        return top + np.log(total) + weighted / total
 
-    def log_mean(self, z, t, s1, i1, s2, i2, p):
-        """``ln`` of the rows' mean intensity (class docstring) at depths ``z`` (µm) for a
-        boundary at ``t`` (µm), layers ``i + s z`` (``s`` per µm), pixel ``p`` (µm)."""
-        return self.log_mean_layers(z, [t], [s1, s2], [i1, i2], p)
+    def log_mean(self, z, t, s1, i1, s2, i2, p, offsets=None):
+        """Rows' mean ``ln I`` (class docstring) at depths ``z`` (µm) for a boundary at ``t``
+        (µm), layers ``i + s z`` (``s`` per µm), pixel ``p`` (µm), the layers' ``E ln(I/<I>)``
+        ``offsets`` (:meth:`log_mean_layers`)."""
+        return self.log_mean_layers(z, [t], [s1, s2], [i1, i2], p, offsets)
+
+
+def log_offsets(log_variance, cfg: ScannerConfig) -> np.ndarray:
+    """``E ln(I/<I>)`` of each layer's speckle from its ``var ln I`` (shadowing removed).
+
+    The slab's sparse-speckle theory (:func:`~speckle.studies.phantom._density.slab_log_moments`
+    at the density whose ``var ln I`` is the measured one); ``-gamma`` (fully developed) where
+    the variance does not exceed ``pi^2/6`` or is NaN. Sparse speckle's ``E ln I`` lies farther
+    below ``ln <I>`` (-1.43 at 0.3 times the 2025 configuration's mean density, -0.70 at its
+    mean, -0.58 dense): two layers' mean ``ln I`` differ from their mean intensities' by
+    different offsets, which the transition between them must use.
+    """
+    out = []
+    for v in np.atleast_1d(np.asarray(log_variance, float)):
+        inv = slab_inverse_density(v, cfg) if np.isfinite(v) and v > np.pi**2 / 6 else 0.0
+        if not np.isfinite(inv) or inv <= 0:
+            out.append(-np.euler_gamma)
+        else:
+            out.append(slab_log_moments(_equivalent(cfg) / inv, cfg)[0])
+    return np.array(out)
 
 
 def _shape_variables(ds, shape, tilt, tilt_se, curv, curv_se, criterion):
@@ -133,7 +171,7 @@ def flat_shapes(ds: xr.Dataset) -> xr.Dataset:
     return _shape_variables(ds, ["flat"] * k, np.zeros(k), nan, np.zeros(k), nan, _CRITERION)
 
 
-def _block_rss(mb, z, taus, s1, s2, p, cdf):
+def _block_rss(mb, z, taus, s1, s2, p, cdf, offsets=None):
     """Least-squares misfit of one block's row-mean profile ``mb`` (rows ``z``) for each trial
     boundary position in ``taus`` (inf where a layer has fewer than 2 level rows)."""
     out = np.full(taus.size, np.inf)
@@ -143,12 +181,12 @@ def _block_rss(mb, z, taus, s1, s2, p, cdf):
             continue
         i1 = np.mean(mb[above] - s1 * z[above])
         i2 = np.mean(mb[below] - s2 * z[below])
-        pred = cdf.log_mean(z, tau, s1, i1, s2, i2, p)
+        pred = cdf.log_mean(z, tau, s1, i1, s2, i2, p, offsets)
         out[i] = float(np.sum((mb - pred) ** 2))
     return out
 
 
-def _split_rss(mb, z, t1, t2, slopes, p, model):
+def _split_rss(mb, z, t1, t2, slopes, p, model, offsets=None):
     """Least-squares misfit, summed over the blocks ``mb`` (blocks, rows ``z``), of two
     boundaries at ``t1[b] < t2[b]`` (per block) with a layer between them (the three layers'
     ``slopes``, levels free per block from the rows more than :data:`_LEVEL_ROWS` pixels from a
@@ -161,7 +199,7 @@ def _split_rss(mb, z, t1, t2, slopes, p, model):
         if min(int(mk.sum()) for mk in masks) < 2:
             return np.inf
         levels = [float(np.mean(row[mk] - s * z[mk])) for mk, s in zip(masks, slopes, strict=True)]
-        pred = model.log_mean_layers(z, [a, b], slopes, levels, p)
+        pred = model.log_mean_layers(z, [a, b], slopes, levels, p, offsets)
         total += float(np.sum((row - pred) ** 2))
     return total
 
@@ -272,15 +310,16 @@ def fit_shapes(
     mb = np.stack([li[:, g].mean(axis=1) for g in groups])  # (blocks, pixels)
     m1, m2 = float(np.mean(x)), float(np.mean(x**2))
 
-    def locate(lo, hi, s_above, s_below):
+    def locate(lo, hi, s_above, s_below, offsets):
         """Shape, coefficients, SEs and joint misfit of one boundary in rows ``lo..hi`` (µm)
-        between layers of slopes ``s_above``, ``s_below``; None if the window is too short."""
+        between layers of slopes ``s_above``, ``s_below`` and ``E ln(I/<I>)`` ``offsets``;
+        None if the window is too short."""
         sel = (z >= lo) & (z <= hi)
         margin = (_LEVEL_ROWS + 2) * p
         taus = np.arange(lo + margin, hi - margin + 1e-9, p / 4)
         if taus.size < 2:
             return None
-        rss = np.stack([_block_rss(mb[b, sel], z[sel], taus, s_above, s_below, p, cdf)
+        rss = np.stack([_block_rss(mb[b, sel], z[sel], taus, s_above, s_below, p, cdf, offsets)
                         for b in range(BOUNDARY_BLOCKS)])  # fmt: skip
         return _boundary_shape(rss, taus, xb, cfg.x_max, shapes, p,
                                int(sel.sum()) * BOUNDARY_BLOCKS)  # fmt: skip
@@ -295,6 +334,7 @@ def fit_shapes(
         blocks' profiles at least as well as the two flat ones with a layer between them (a
         tilted or curved boundary that the flat fit saw as a ramp: one level per block fewer)."""
         tops, slope = cur.top.values, -2 * cur.attenuation.values
+        off = log_offsets(cur.log_variance.values, cfg)
         end = cur.attrs["last_row"] * p  # the last fitted row
         bottom = np.append(tops, max(end, tops[-1]))
 
@@ -302,7 +342,7 @@ def fit_shapes(
             return 0.5 * (bottom[k] + bottom[k + 1])
 
         anchors, shape, coef, ses = [0.0], ["flat"], [np.zeros(3)], [np.full(3, np.nan)]
-        located = [None] + [locate(mid(k - 1), mid(k), slope[k - 1], slope[k])
+        located = [None] + [locate(mid(k - 1), mid(k), slope[k - 1], slope[k], off[k - 1 : k + 1])
                             for k in range(1, tops.size)]  # fmt: skip
 
         def at_blocks(k):
@@ -312,7 +352,8 @@ def fit_shapes(
         k = 1
         while k < tops.size:
             if k + 1 < tops.size:
-                merged = locate(mid(k - 1), mid(k + 1), slope[k - 1], slope[k + 1])
+                merged = locate(mid(k - 1), mid(k + 1), slope[k - 1], slope[k + 1],
+                                off[[k - 1, k + 1]])  # fmt: skip
                 if merged is not None and merged[0] != "flat":
                     # the merged profile must sweep at least half the layer between (a ramp
                     # is the boundary's sweep across the lines) and fit the blocks as well as
@@ -321,7 +362,8 @@ def fit_shapes(
                     sweep = np.ptp(cf[1] * x + cf[2] * x**2)
                     window = (z >= mid(k - 1)) & (z <= mid(k + 1))
                     split = _split_rss(mb[:, window], z[window], at_blocks(k),
-                                       at_blocks(k + 1), slope[k - 1 : k + 2], p, cdf)  # fmt: skip
+                                       at_blocks(k + 1), slope[k - 1 : k + 2], p, cdf,
+                                       off[k - 1 : k + 2])  # fmt: skip
                     if sweep >= 0.5 * (tops[k + 1] - tops[k]) and merged[3] <= split:
                         anchors.append(anchor(cf))
                         shape.append(merged[0])

@@ -1,0 +1,50 @@
+"""The boundary's transition model with the layers' sparse-speckle offsets (issue 34)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import speckle
+from speckle.studies.phantom._density import slab_log_moments
+from speckle.studies.phantom._shapes import TransitionModel, log_offsets
+
+CFG = speckle.synthoct_config("2025")
+
+
+@pytest.mark.parametrize("factor", [0.3, 1.0, 3.0])
+def test_log_offsets_invert_the_slab_theory(factor):
+    """``E ln(I/<I>)`` from ``var ln I`` is the slab theory's at the density of that variance
+    (both from :func:`slab_log_moments`: the inversion's round trip, to the root's accuracy)."""
+    density = factor * 255_000 / (3000.0 * 12.0 * 601 * 2.2)  # the 2025 config's mean density
+    mean, variance = slab_log_moments(density, CFG)
+    assert log_offsets([variance], CFG)[0] == pytest.approx(mean, abs=1e-6)
+
+
+def test_log_offsets_dense_and_undetermined():
+    """Fully developed speckle (``var ln I <= pi^2/6``) and NaN: ``-gamma``."""
+    out = log_offsets([np.pi**2 / 6, 1.0, np.nan], CFG)
+    np.testing.assert_allclose(out, -np.euler_gamma, rtol=0, atol=1e-12)
+
+
+def test_transition_with_offsets():
+    """Far from the boundary the model is each layer's own line, whatever the offsets; equal
+    offsets change nothing (a common factor of the mean intensities); unequal ones mix the
+    layers' mean intensities and add their intensity-weighted offsets."""
+    model = TransitionModel(CFG.n_pixels)
+    p = CFG.pixel_size
+    z = np.arange(0, 60) * p
+    t, s1, i1, s2, i2 = 30.3 * p, -0.01, -2.0, -0.02, 0.5
+    plain = model.log_mean(z, t, s1, i1, s2, i2, p)
+    same = model.log_mean(z, t, s1, i1, s2, i2, p, [-0.9, -0.9])
+    np.testing.assert_allclose(same, plain, rtol=0, atol=1e-12)
+    mixed = model.log_mean(z, t, s1, i1, s2, i2, p, [-1.4, -0.6])
+    far_up, far_down = z < t - 20 * p, z > t + 20 * p
+    np.testing.assert_allclose(mixed[far_up], (i1 + s1 * z)[far_up], rtol=0, atol=1e-6)
+    np.testing.assert_allclose(mixed[far_down], (i2 + s2 * z)[far_down], rtol=0, atol=1e-6)
+    # the mixed rows: the layers' mean intensities through the PSF's shares, plus the
+    # intensity-weighted E ln(I/<I>)
+    m1 = np.exp(i1 + s1 * z + 1.4) * model.cdf((t - z) / p, s1 * p)
+    m2 = np.exp(i2 + s2 * z + 0.6) * (1 - model.cdf((t - z) / p, s2 * p))
+    expected = np.log(m1 + m2) + (-1.4 * m1 - 0.6 * m2) / (m1 + m2)
+    np.testing.assert_allclose(mixed, expected, rtol=0, atol=1e-9)
