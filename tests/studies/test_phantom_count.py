@@ -68,7 +68,7 @@ def test_false_layer_rate_is_the_stated_level():
     of unequal scales plus a random walk, correlated along the whole profile), the randomisation
     test rejects at FALSE_LAYER_RATE (5 %) and its p-values are uniform: 400 profiles, the
     rejection rate within 3 binomial SEs (1.1 %) of 5 % (a rate of 10 % fails with probability
-    0.87) and the fraction of p <= 0.5 within 3 SEs (2.5 %) of 0.5. Measured: 3.5 % and 48 %.
+    0.87) and the fraction of p <= 0.5 within 3 SEs (2.5 %) of 0.5. Measured: 5.0 % and 52 %.
     A test of least BIC on the same profiles, or a chi-square threshold, has no such level:
     the random walk makes straight segments look like layers."""
     rng = np.random.default_rng(np.random.SeedSequence(2024))
@@ -121,3 +121,53 @@ def test_blocks_are_independent(config):
 
     assert inflation(lambda d: special.spence(1 - np.exp(-(d**2) / r**2)) / (np.pi**2 / 6)) < 1.01
     assert inflation(lambda d: np.exp(-(d**2) / r**2)) < 1.01
+
+
+# --- the fit's false-layer rate on virtual patients (slow) -----------------------------------
+
+
+def fitted_counts(config, layers, seeds):
+    """Layers fitted (flat fit, ``criterion="test"``) to flat virtual patients of ``layers``
+    layers."""
+    cfg = speckle.synthoct_config(config)
+    counts = []
+    for seed in seeds:
+        table, _ = speckle.virtual_patient(seed, config=cfg, layers=(layers, layers),
+                                           shapes=("flat",))  # fmt: skip
+        scan = speckle.synthoct_scan(table, cfg, nthreads=1)
+        fit = speckle.fit_phantom(scan, cfg, shapes=("flat",), criterion="test")
+        counts.append(fit.layers.sizes["layer"])
+    return np.array(counts)
+
+
+def rate_holds(extra: np.ndarray) -> tuple[float, float]:
+    """The fraction of scans with a false layer and its binomial SE at the stated rate."""
+    return float(np.mean(extra)), math.sqrt(FALSE_LAYER_RATE * (1 - FALSE_LAYER_RATE) / extra.size)
+
+
+@pytest.mark.slow
+def test_uniform_patients_get_a_second_layer_at_the_stated_rate():
+    """Uniform patients of the reduced box (128 x 128 pixels of 6 µm), 400 seeds: a second
+    layer in 5 % of scans within 3 binomial SEs (1.1 %; a rate of 10 % fails with probability
+    0.87). Measured: 5.3 % of seeds 1000-1599 (32 of 600); the default criterion (least BIC and
+    'distinct') 7.5 % of seeds 100-139; without the blocks' guard 7.5 % too, p-values skewed
+    low (75 % below 0.5) by the blocks' shared speckle and streaks."""
+    extra = fitted_counts("reduced", 1, range(400)) > 1
+    rate, se = rate_holds(extra)
+    assert abs(rate - FALSE_LAYER_RATE) < 3 * se, rate
+
+
+@pytest.mark.slow
+def test_uniform_challenge_and_two_layer_patients():
+    """At the challenge's configuration (256 x 512 pixels), 60 uniform patients: a second
+    layer within 3 binomial SEs (2.8 %) of 5 % (no power against 10 % at this budget: the
+    reduced box's test holds that; measured 3 of 80, seeds 1000-1079). Two flat layers (the
+    reduced box, 200 seeds): both found in every scan and a third in 5 % within 3 binomial SEs
+    (1.5 %; measured 10 of 200, seeds 1000-1199, none missed)."""
+    extra = fitted_counts("challenge", 1, range(60)) > 1
+    rate, se = rate_holds(extra)
+    assert abs(rate - FALSE_LAYER_RATE) < 3 * se, rate
+    counts = fitted_counts("reduced", 2, range(200))
+    assert np.all(counts >= 2)
+    rate, se = rate_holds(counts > 2)
+    assert abs(rate - FALSE_LAYER_RATE) < 3 * se, rate
