@@ -1554,6 +1554,7 @@ ENTRIES: dict[str, Entry] = {
         blocks="count",
         shapes="none",
         inclusions="flag",
+        criterion="choice",
         why="config: a ScannerConfig or an INI path (tests/studies/test_phantom.py); shapes: a "
         "tuple of shape names (tests/studies/test_phantom_shapes.py)",
     ),

@@ -29,6 +29,10 @@ The fit, on the central lines (``|x| <= x_max/2 - 3 r``, where the box does not 
    lines (a running median of 9 rows, times the integrated autocorrelation of 8 lags);
    fewer layers are taken while a boundary separates layers whose slopes and levels at the
    boundary both agree within 3 jackknife SEs (a fluctuation of the phantom's shadowing);
+   with ``criterion="test"``, ``K`` is chosen instead by tests of ``K + 1`` against ``K``
+   layers at a stated false-layer rate of 5 % (the best split's improvement against its
+   exact null, the sign-flip randomisation over independent lateral blocks:
+   :mod:`speckle.studies.phantom._count`);
 3. per layer: ``mu`` from the slope, each boundary to a fraction of a pixel from the transition
    rows (the Hann PSF's intensity weights of the two layers' scatterers, each layer's
    exponential decay under the PSF included, its mean intensity from its mean ``ln I`` and
@@ -60,6 +64,7 @@ from scipy import optimize
 from ...conventions import attrs, coord, units_of
 from ...synthoct import _scan
 from ...synthoct.files import ScannerConfig, read_png, read_scanner_config, write_scanner_config
+from ._count import CRITERION, count_blocks, layer_count
 from ._density import (
     SIGNIFICANCE,
     _jackknife,
@@ -215,7 +220,8 @@ class PhantomFit:
         no rows whose predicted clipped fraction is at most 1 %), ``log_variance`` (``var ln I``,
         shadowing spread removed) with its SE. Attributes: ``window_top`` (dB re ``|A| = 1``,
         the 51 dB window's top) and ``window_top_se``, ``criterion``, ``bic`` (per ``K``),
-        ``rows``.
+        ``p_values`` (``criterion="test"``: of the tests of ``K + 1`` against ``K`` layers
+        made, from ``K = 1``), ``rows``.
     config : ScannerConfig
         The scanner's configuration.
     inclusions : xarray.Dataset
@@ -345,6 +351,7 @@ def fit_phantom(
     blocks: int = BLOCKS,
     shapes: tuple[str, ...] = ("flat", "tilted", "curved"),
     inclusions: bool = False,
+    criterion: str = "bic",
 ) -> PhantomFit:
     """Fit flat layers (depth, attenuation, density, energy) to a SynthOCT scan.
 
@@ -369,6 +376,13 @@ def fit_phantom(
         Detect and fit elliptical inclusions after the layers
         (:mod:`speckle.studies.phantom._inclusions`: a stated false-alarm probability of
         0.05 per scan); False (the default): none.
+    criterion : {"bic", "test"}
+        How the number of layers is chosen: ``"bic"`` (the default), least BIC of the row-mean
+        profile's segmentation, then fewer layers while a boundary's slope and level steps are
+        both within 3 SEs (its false-layer rate measured, not derived); ``"test"``, tests of
+        ``K + 1`` against ``K`` layers at a stated false-layer rate of 5 % per scan
+        (:mod:`speckle.studies.phantom._count`: the exact sign-flip null over independent
+        lateral blocks), which needs 6 blocks of 2 beam radii in the central lines.
 
     Returns
     -------
@@ -408,6 +422,8 @@ def fit_phantom(
         )
     if not isinstance(inclusions, bool):
         raise TypeError(f"inclusions must be a bool, got {inclusions!r}")
+    if criterion not in ("bic", "test"):
+        raise ValueError(f"criterion must be 'bic' or 'test', got {criterion!r}")
     levels = _levels(scan, cfg)
     r = cfg.beam_radius
     central = np.abs(cfg.line_positions) <= cfg.x_max / 2 - 3 * r
@@ -416,14 +432,16 @@ def fit_phantom(
             f"scan has {int(central.sum())} lines farther than 3 beam radii from the box's "
             f"edges; the fit needs at least {2 * blocks} (2 per jackknife block)"
         )
+    if criterion == "test":  # refuses too few blocks for the layer count's test
+        count_blocks(cfg.line_positions[central], r)
     lev = levels[:, central]
 
     def layers_of(lev):
-        ds = _fit_levels(lev, cfg, max_layers, blocks)
+        ds = _fit_levels(lev, cfg, max_layers, blocks, criterion)
         if len(shapes) > 1 and ds.sizes["layer"] > 1:
             return fit_shapes(
                 lev, _log_intensity(lev), ds, cfg, tuple(shapes),
-                lambda lv: _fit_levels(lv, cfg, max_layers, blocks),
+                lambda lv: _fit_levels(lv, cfg, max_layers, blocks, criterion),
             )  # fmt: skip
         return flat_shapes(ds)
 
@@ -448,8 +466,11 @@ def fit_phantom(
     return PhantomFit(layers=ds, config=cfg, inclusions=found)
 
 
-def _fit_levels(lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: int) -> xr.Dataset:
-    """The flat-layer fit of the central lines' levels ``lev`` (pixels, lines)."""
+def _fit_levels(
+    lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: int, criterion: str = "bic"
+) -> xr.Dataset:
+    """The flat-layer fit of the central lines' levels ``lev`` (pixels, lines); ``criterion``
+    of the number of layers as :func:`fit_phantom` takes it."""
     p = cfg.pixel_size
     clipped = np.mean(lev == 0, axis=1)
     # rows above the floor, in runs of at least RUN_ROWS (a dim layer's bottom may reach the
@@ -509,9 +530,16 @@ def _fit_levels(lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: in
                 return False
         return True
 
-    n_layers = min(bic, key=bic.get)
-    while n_layers > 1 and not distinct(best[n_layers][1]):
-        n_layers -= 1
+    p_values = []
+    if criterion == "test":  # K + 1 against K at a stated false-layer rate (_count.py)
+        x = cfg.line_positions[np.abs(cfg.line_positions) <= cfg.x_max / 2 - 3 * cfg.beam_radius]
+        clip = float(_log_intensity(np.zeros(1, np.uint8))[0]) + 1.0  # ln of the window's floor
+        n_layers, p_values = layer_count(z, li, x, cfg.beam_radius, best, gap=GAP,
+                                         min_rows=MIN_ROWS, clip=clip)  # fmt: skip
+    else:
+        n_layers = min(bic, key=bic.get)
+        while n_layers > 1 and not distinct(best[n_layers][1]):
+            n_layers -= 1
     segs = best[n_layers][1]
 
     model = TransitionModel(cfg.n_pixels)
@@ -593,9 +621,12 @@ def _fit_levels(lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: in
             "window_top": wt * _NEPER_DB,
             "window_top_se": wt_se * _NEPER_DB,
             "window_top_units": units_of("level"),
-            "criterion": "least BIC = sum (residual/s_q)^2 + (3K - 1) ln n of the row-mean ln I "
-            "profile, fewer layers while a boundary's slope and level steps are both < 3 SE",
+            "criterion": CRITERION if criterion == "test" else (
+                "least BIC = sum (residual/s_q)^2 + (3K - 1) ln n of the row-mean ln I "
+                "profile, fewer layers while a boundary's slope and level steps are both < 3 SE"
+            ),
             "bic": [float(bic[k]) for k in sorted(bic)],
+            "p_values": [float(v) for v in p_values],
             "rows": int(rows.size),
             "last_row": int(rows[-1]),
         },
