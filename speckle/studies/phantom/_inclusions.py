@@ -71,6 +71,7 @@ from scipy import ndimage, optimize, special
 
 from ...conventions import attrs, coord
 from ...synthoct.files import ScannerConfig
+from ._density import layer_densities, layer_variances
 from ._slab import slab_constants
 from .patients import profiles
 
@@ -118,6 +119,17 @@ VARIABLES = {
     "density": ("volume_density", "scatterers per um^3 of the inclusion"),
     "energy": ("percent", "energy per scatterer of the inclusion"),
 }
+#: Bounds where the density is not identified: name -> (quantity, long name).
+BOUNDS = {
+    "density_bound": ("volume_density", "lower bound of the inclusion's density (97.7 %)"),
+    "energy_bound": ("percent", "upper bound of the inclusion's energy (from the density's)"),
+}
+#: Margins of the inclusion's density rectangle: rows (the depth PSF) and beam radii (the
+#: lateral blur) inside the inscribed rectangle of the ellipse.
+DENSITY_ROWS = 1
+DENSITY_RADII = 1.0
+#: Least lateral width of the density's jackknife blocks (beam radii: the lines' correlation).
+DENSITY_BLOCK_RADII = 2.0
 
 
 def remove_inclusions(lev: np.ndarray, model: np.ndarray, db_per_neper: float) -> np.ndarray:
@@ -144,6 +156,9 @@ def _dataset(rows: list[dict], hosts: list[int], criterion: str) -> xr.Dataset:
         ses = np.array([r[f"{name}_se"] for r in rows], float)
         data[name] = (("inclusion",), values, attrs(quantity, long_name))
         data[f"{name}_se"] = (("inclusion",), ses, attrs(quantity, f"standard error of {name}"))
+    for name, (quantity, long_name) in BOUNDS.items():
+        values = np.array([r.get(name, np.nan) for r in rows], float)
+        data[name] = (("inclusion",), values, attrs(quantity, long_name))
     data["host"] = (("inclusion",), np.array(hosts, int), attrs("label", "host layer"))
     data["significance"] = (
         ("inclusion",),
@@ -155,6 +170,63 @@ def _dataset(rows: list[dict], hosts: list[int], criterion: str) -> xr.Dataset:
         coords={"inclusion": coord("inclusion", np.arange(len(rows)))},
         attrs={"criterion": criterion, "false_alarm": FALSE_ALARM},
     )
+
+
+def inclusion_density(
+    li: np.ndarray,
+    z: np.ndarray,
+    theta: np.ndarray,
+    x: np.ndarray,
+    cfg: ScannerConfig,
+    rho_e: float,
+    rho_e_se: float,
+) -> dict:
+    """The inclusion's density and energy from its own speckle (the layers' inversion).
+
+    The pixels of the ellipse's inscribed rectangle ``|x - x_c| <= w/sqrt 2 - DENSITY_RADII r``,
+    ``|z - z_c| <= h/sqrt 2 -`` :data:`DENSITY_ROWS` pixels (whole intensity inside: ``chi = 1``
+    and no lateral blur of the edges), ``li`` there with the shadow's ``b L`` removed, are a
+    layer of their own: :func:`~speckle.studies.phantom._density.layer_variances` (``var ln I``
+    without the streaks, rows chosen by their predicted clipping, the lines' correlation) and
+    :func:`~speckle.studies.phantom._density.layer_densities` (inverted by the slab's exact
+    theory, identified at its :data:`~speckle.studies.phantom._density.IDENTIFY` SE, else NaN
+    and the lower bound), its jackknife over blocks of :data:`DENSITY_BLOCK_RADII` beam radii
+    (at least 2). The energy is ``100 rho_e/rho`` (``rho_e`` the level step's), its SE from
+    both relative SEs; where the density is a bound, the energy's is an upper bound.
+
+    ``li`` (rows, lines): ``ln I`` with the inclusion's shadow removed; ``z``, ``x`` (µm): its
+    rows' and lines' positions; ``theta``: ``(x_c, z_c, w, h)``. Returns ``density``,
+    ``density_se``, ``density_bound``, ``energy``, ``energy_se``, ``energy_bound``.
+    """
+    xc, zc, w, h = theta
+    out = dict.fromkeys(
+        ("density", "density_se", "density_bound", "energy", "energy_se", "energy_bound"), np.nan
+    )
+    half_x = w / math.sqrt(2) - DENSITY_RADII * cfg.beam_radius
+    half_z = h / math.sqrt(2) - DENSITY_ROWS * cfg.pixel_size
+    cols = np.flatnonzero(np.abs(x - xc) <= half_x)
+    rows = np.flatnonzero(np.abs(z - zc) <= half_z)
+    block = max(1, math.ceil(DENSITY_BLOCK_RADII * cfg.beam_radius / cfg.line_pitch))
+    groups = cols.size // block
+    if groups < 2 or rows.size < 2 + LAG:
+        return out
+    sub = li[np.ix_(rows, cols)]
+    keep = [np.setdiff1d(np.arange(cols.size), g) for g in np.array_split(np.arange(cols.size),
+                                                                           groups)]  # fmt: skip
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # too few rows: NaN
+        v, v_jk, mu_jk = layer_variances(sub, z[rows], [(0, rows.size)], keep, cfg)
+        if not np.isfinite(v[0]) or not np.all(np.isfinite(v_jk)):
+            return out
+        d = layer_densities(v, v_jk, mu_jk.mean(axis=0), mu_jk, cfg)
+    rho, rho_se, bound = float(d["rho"][0]), float(d["rho_se"][0]), float(d["bound"][0])
+    if bool(d["ident"][0]) and np.isfinite(rho) and rho > 0:
+        energy = 100 * rho_e / rho
+        out.update(density=rho, density_se=rho_se, energy=energy,
+                   energy_se=energy * math.hypot(rho_e_se / rho_e, rho_se / rho))  # fmt: skip
+    elif np.isfinite(bound) and bound > 0:
+        out.update(density_bound=bound, energy_bound=100 * (rho_e + 2 * rho_e_se) / bound)
+    return out
 
 
 def _threshold(z: np.ndarray, alpha: float) -> float:
@@ -521,6 +593,8 @@ def fit_inclusions(
         rho_e = re_h * math.exp(a)
         rho_e_se = rho_e * math.hypot(se[4], re_h_se / re_h)
         shadow = re_h - b / 2 / a2
+        model_b = np.zeros((n_z, n_x))  # the inclusion's own shadow, off its speckle
+        model_b[np.ix_(rws, lines)] = b * basis[1]
         shadow_se = math.hypot(re_h_se, se[5] / 2 / a2)
         found.append(
             {
@@ -528,7 +602,7 @@ def fit_inclusions(
                 "axis_x": abs(w), "axis_x_se": se[2], "axis_z": abs(h), "axis_z_se": se[3],
                 "rho_e": rho_e, "rho_e_se": rho_e_se,
                 "rho_e_shadow": shadow, "rho_e_shadow_se": shadow_se,
-                "density": np.nan, "density_se": np.nan, "energy": np.nan, "energy_se": np.nan,
+                **inclusion_density(li - model - model_b, z, theta, x, cfg, rho_e, rho_e_se),
                 "log_contrast": a, "log_contrast_se": se[4],
                 "shadow_step": -b / 2, "shadow_step_se": se[5] / 2,
                 "significance": abs(a) / se[4],
