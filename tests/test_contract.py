@@ -1859,6 +1859,10 @@ PENDING: dict[str, str] = {}
 
 #: (function, parameter, bad value) -> why the call's answer is the right one.
 ANSWERS: dict[tuple[str, str, str], str] = {
+    ("virtual_patient", "inclusions", "int"): "an int is the number of inclusions (1: the "
+    "patient of inclusions=True; tests/studies/test_phantom_patients.py)",
+    ("phantom_closed_loop", "inclusions", "int"): "an int is each patient's number of "
+    "inclusions (speckle.virtual_patient)",
     ("velocity_range", "snr_db", "inf"): "no noise: the noise floor is the static one",
     ("compounded_contrast", "mu", "one_pixel"): "one look: the contrast of one look (1)",
     ("apodization_correlation", "apodizations", "one_pixel"): "one look of one sample: [[1]]",

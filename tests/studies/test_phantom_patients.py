@@ -27,7 +27,7 @@ def test_named_configs():
 
 
 def _region_of(table, truth, cfg):
-    """Region index of each scatterer from the truth's geometry (K for the inclusion)."""
+    """Region index of each scatterer from the truth's geometry (K + j for inclusion j)."""
     from speckle.studies.phantom.patients import profiles
 
     x, z = table[:, 0], table[:, 2]
@@ -35,19 +35,21 @@ def _region_of(table, truth, cfg):
         [truth.top_mean.values, truth.top_tilt.values, truth.top_curvature.values]
     )[1:]
     region = np.sum(z[None, :] >= profiles(coefficients, x, cfg.x_max), axis=0)
-    if truth.sizes["inclusion"]:
-        xc, zc = float(truth.inclusion_x[0]), float(truth.inclusion_z[0])
-        w, h = float(truth.inclusion_width[0]), float(truth.inclusion_height[0])
-        region = np.where(((x - xc) / w) ** 2 + ((z - zc) / h) ** 2 < 1, truth.sizes["layer"],
-                          region)  # fmt: skip
+    for j in range(truth.sizes["inclusion"]):
+        xc, zc = float(truth.inclusion_x[j]), float(truth.inclusion_z[j])
+        w, h = float(truth.inclusion_width[j]), float(truth.inclusion_height[j])
+        region = np.where(((x - xc) / w) ** 2 + ((z - zc) / h) ** 2 < 1,
+                          truth.sizes["layer"] + j, region)  # fmt: skip
     return region
 
 
-@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+@pytest.mark.parametrize("seed", [0, 1, 2, 3, 4])
 def test_table_holds_the_truth(seed):
-    """Every scatterer lies in its region (by the truth's profiles and ellipse) with that
-    region's energy; each region's count against ``rho V`` within 4 binomial SEs."""
-    table, truth = speckle.virtual_patient(seed, config=SMALL, inclusions=seed % 2 == 1)
+    """Every scatterer lies in its region (by the truth's profiles and ellipses) with that
+    region's energy; each region's count against ``rho V`` within 4 binomial SEs (seed 4:
+    three inclusions)."""
+    inclusions = 3 if seed == 4 else seed % 2 == 1
+    table, truth = speckle.virtual_patient(seed, config=SMALL, inclusions=inclusions)
     assert table.shape == (SMALL.n_scatterers, 4)
     assert np.all(np.abs(table[:, 0]) <= SMALL.x_max / 2)
     assert np.all(np.abs(table[:, 1]) <= SMALL.beam_radius)
@@ -114,7 +116,8 @@ def test_named_config_and_units():
         (dict(layers=(0, 3)), "layers"),
         (dict(layers=(3, 2)), "layers"),
         (dict(shapes=("wavy",)), "shapes"),
-        (dict(inclusions=1), "inclusions"),
+        (dict(inclusions=5), "inclusions"),
+        (dict(inclusions="yes"), "inclusions"),
         (dict(energy_range=(0.0, 1.0)), "energy_range"),
         (dict(energy_range=(1.0, 200.0)), "energy_range"),
         (dict(density_range=(1.0, float("nan"))), "density_range"),

@@ -302,8 +302,8 @@ class PhantomFit:
     def _shaped_phantom(self, rng: np.random.Generator) -> np.ndarray:
         """Tilted or curved boundaries, or an inclusion: the layers' densities (as
         :meth:`layer_table` takes them) scaled to ``n_scatterers`` in the exact volumes,
-        energies ``100 rho_e/rho``; the first inclusion (the most significant: the drawing
-        holds one) at its host's density and its level step's ``rho_e``."""
+        energies ``100 rho_e/rho``; every fitted inclusion at its own density where
+        identified (else its host's) and its level step's ``rho_e``."""
         cfg, layers = self.config, self.layers
         coefficients = np.column_stack(
             [layers.top.values, layers.top_tilt.values, layers.top_curvature.values]
@@ -313,13 +313,15 @@ class PhantomFit:
         bound = np.asarray(layers.density_bound.values, float)
         rho = np.where(np.isfinite(dens) & (dens > 0), dens, np.fmax(bound, uniform))
         rho_e = np.asarray(layers.rho_e.values, float)
-        inclusion = None
-        if self.inclusions.sizes["inclusion"]:
-            first = self.inclusions.isel(inclusion=0)
-            inclusion = tuple(float(first[v]) for v in ("centre_x", "centre_z", "axis_x",
-                                                        "axis_z"))  # fmt: skip
-            rho = np.append(rho, rho[int(first.host)])
-            rho_e = np.append(rho_e, float(first.rho_e))
+        inc = self.inclusions
+        inclusion = [
+            tuple(float(inc[v][j]) for v in ("centre_x", "centre_z", "axis_x", "axis_z"))
+            for j in range(inc.sizes["inclusion"])
+        ]
+        own = np.asarray(inc.density.values, float)
+        rho = np.append(rho, np.where(np.isfinite(own) & (own > 0), own,
+                                      rho[inc.host.values.astype(int)]))  # fmt: skip
+        rho_e = np.append(rho_e, np.asarray(inc.rho_e.values, float))
         volume, _ = region_volumes(cfg, coefficients, inclusion)
         scaled = rho * cfg.n_scatterers / np.sum(rho * volume)
         energy = np.clip(100 * rho_e / scaled, 1e-12, 100.0)

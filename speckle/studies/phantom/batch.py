@@ -42,7 +42,7 @@ from ...synthoct.files import baseline_table
 from ...synthoct.metrics import METRIC_NAMES, SYNTHOCT_MAPS, synthoct_metrics
 from ...synthoct.scanner import synthoct_scan
 from .loop import INCLUSION_SCALARS, PULLED, phantom_closed_loop_case
-from .patients import SHAPES, scanner_config_of, virtual_patient
+from .patients import MAX_PATIENT_INCLUSIONS, SHAPES, scanner_config_of, virtual_patient
 
 __all__ = ["MARGIN", "phantom_closed_loop", "phantom_score_power"]
 
@@ -175,7 +175,7 @@ def phantom_closed_loop(
     *,
     layers: tuple[int, int] = (1, 3),
     shapes: Sequence[str] = SHAPES,
-    inclusions: bool = False,
+    inclusions: bool | int = False,
     rescans: int = 1,
     score: bool = True,
     lpips: bool = False,
@@ -195,8 +195,9 @@ def phantom_closed_loop(
         Fewest and most layers of the patients (1..5).
     shapes : sequence of {"flat", "tilted", "curved"}
         Boundary shapes the patients draw from (:func:`speckle.virtual_patient`).
-    inclusions : bool
-        Whether each patient holds one elliptical inclusion.
+    inclusions : bool or int
+        Elliptical inclusions of each patient: ``True`` one, or their number
+        (0..:data:`~speckle.studies.phantom.patients.MAX_PATIENT_INCLUSIONS`).
     rescans : int
         Draws (seeds) whose scores are averaged (1..16).
     score : bool
@@ -254,7 +255,8 @@ def phantom_closed_loop(
         raise TypeError(f"shapes must be a non-empty sequence of {list(SHAPES)}, got {shapes!r}")
     for i, shape in enumerate(shapes):
         check_choice(shape, f"shapes[{i}]", SHAPES)
-    inclusions = check_bool(inclusions, "inclusions")
+    if not isinstance(inclusions, bool):
+        inclusions = check_int(inclusions, "inclusions", low=0, high=MAX_PATIENT_INCLUSIONS)
     rescans = check_int(rescans, "rescans", low=1, high=16)
     check_bool(score, "score")
     check_bool(lpips, "lpips")
@@ -281,7 +283,8 @@ def phantom_closed_loop(
             "beam_radius": cfg.beam_radius,
             "rescans": rescans,
             "patients": f"{layers[0]} to {layers[1]} layers, boundaries {', '.join(shapes)}, "
-            f"inclusions {'on' if inclusions else 'off'} (speckle.virtual_patient)",
+            f"inclusions {'on' if inclusions else 'off'} (speckle.virtual_patient)"
+            + ("" if isinstance(inclusions, bool) or inclusions < 2 else f", {inclusions} each"),
         }
     )
     return ds

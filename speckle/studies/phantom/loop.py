@@ -10,12 +10,15 @@ boundary is within a pixel; otherwise ``failure`` names the first reason. With `
 case also holds the scans that the challenge's scoring compares: the fitted phantom drawn with
 ``fit_seed`` and scanned, and the floor, the true patient drawn again with ``fit_seed``.
 
-Inclusions (``inclusions=True`` of the patient; the fit looks for them when ``fit_inclusions``,
-by default when the patient holds one): the true inclusion is *found* when a fitted
-inclusion's centre lies inside the true ellipse; the case reports the count fitted, the
-fitted inclusions not matched to the true one (false alarms), the centre error (the larger of
-the lateral error in lines and the depth error in pixels) and the pulls of
-:data:`INCLUSION_PULLED`. The case's ``success`` remains the layers' (count and boundaries).
+Inclusions (``inclusions`` of the patient, one or several; the fit looks for them when
+``fit_inclusions``, by default when the patient holds any): a true inclusion is *found* when a
+fitted inclusion's centre lies inside the true ellipse (each fitted one matched at most once,
+the true ones in order, the fitted centre nearest in the ellipse's own units); the case
+reports the count fitted, the true ones found, the fitted inclusions not matched to a true one
+(false alarms), and for the first true inclusion the centre error (the larger of the lateral
+error in lines and the depth error in pixels), the pulls of :data:`INCLUSION_PULLED` and the
+density's lower bound where the density is not identified. The case's ``success`` remains the
+layers' (count and boundaries).
 """
 
 from __future__ import annotations
@@ -41,6 +44,7 @@ INCLUSION_PULLED = {
     "axis_z": "inclusion_height",
     "rho_e": "rho_e",
     "rho_e_shadow": "rho_e",
+    "density": "inclusion_density",
 }
 #: The case's inclusion scalars (NaN without a true inclusion), in order.
 INCLUSION_SCALARS = (
@@ -52,6 +56,7 @@ INCLUSION_SCALARS = (
     *(f"{k}_{p}" for p in INCLUSION_PULLED for k in ("true_inclusion", "fit_inclusion")),
     *(f"fit_inclusion_{p}_se" for p in INCLUSION_PULLED),
     *(f"inclusion_{p}_pull" for p in INCLUSION_PULLED),
+    "fit_inclusion_density_bound",
 )
 
 
@@ -63,31 +68,36 @@ def inclusion_scores(inclusions: xr.Dataset, truth: xr.Dataset, cfg) -> dict:
         "n_inclusions_true": (n_true, attrs("count", "true inclusions")),
         "n_inclusions_fit": (n_fit, attrs("count", "fitted inclusions")),
     }
-    match = -1
-    if n_true:
-        xc, zc = float(truth.inclusion_x[0]), float(truth.inclusion_z[0])
-        w, h = float(truth.inclusion_width[0]), float(truth.inclusion_height[0])
+    matches, used = [], set()
+    for j in range(n_true):
+        xc, zc = float(truth.inclusion_x[j]), float(truth.inclusion_z[j])
+        w, h = float(truth.inclusion_width[j]), float(truth.inclusion_height[j])
         inside = ((inclusions.centre_x.values - xc) / w) ** 2 + (
             (inclusions.centre_z.values - zc) / h
         ) ** 2
-        if n_fit and float(np.min(inside)) < 1:
-            match = int(np.argmin(inside))
+        inside[list(used)] = np.inf
+        matches.append(int(np.argmin(inside)) if n_fit and float(np.min(inside)) < 1 else -1)
+        used.add(matches[-1])
+    n_found = sum(m >= 0 for m in matches)
+    match = matches[0] if n_true else -1
     found = match >= 0
     out["inclusion_found"] = (
-        int(found) if n_true else -1,
-        attrs("label", "true inclusion found (1), missed (0), none in the patient (-1)"),
+        n_found if n_true else -1,
+        attrs("label", "true inclusions found (1 or 0 for one), none in the patient (-1)"),
     )
     out["inclusion_false_alarms"] = (
-        n_fit - int(found),
-        attrs("count", "fitted inclusions not matched to the true one"),
+        n_fit - n_found,
+        attrs("count", "fitted inclusions not matched to a true one"),
     )
     error = np.nan
     if found:
+        xc, zc = float(truth.inclusion_x[0]), float(truth.inclusion_z[0])
         dx = abs(float(inclusions.centre_x[match]) - xc) / cfg.line_pitch
         dz = abs(float(inclusions.centre_z[match]) - zc) / cfg.pixel_size
         error = max(dx, dz)
     out["inclusion_centre_error"] = (
-        error, attrs("pixels", "larger of the centre's lateral (lines) and depth (pixels) errors")
+        error, attrs("pixels", "larger of the first inclusion's lateral (lines) and depth "
+                     "(pixels) errors")
     )  # fmt: skip
     for p, t_name in INCLUSION_PULLED.items():
         q = inclusions[p].attrs
@@ -109,6 +119,10 @@ def inclusion_scores(inclusions: xr.Dataset, truth: xr.Dataset, cfg) -> dict:
         out[f"inclusion_{p}_pull"] = (
             pull, attrs("dimensionless", f"(fit - truth)/SE of the inclusion's {long}")
         )  # fmt: skip
+    bound = float(inclusions.density_bound[match]) if found else np.nan
+    out["fit_inclusion_density_bound"] = (
+        bound, {**inclusions.density_bound.attrs, "long_name": "fitted inclusion's density bound"}
+    )  # fmt: skip
     return {k: out[k] for k in INCLUSION_SCALARS}
 
 
@@ -146,7 +160,7 @@ def phantom_closed_loop_case(
         Most layers the fit tries (1..10).
     fit_inclusions : bool, optional
         Whether the fit looks for inclusions (:func:`speckle.fit_phantom`'s ``inclusions``);
-        default: when the patient holds one (``inclusions=True``).
+        default: when the patient holds any (``inclusions``).
     **patient
         Options of :func:`speckle.virtual_patient` (``layers``, ``shapes``, ``inclusions``,
         ...).
@@ -188,7 +202,7 @@ def phantom_closed_loop_case(
     if isinstance(max_layers, bool) or not isinstance(max_layers, int) or not 1 <= max_layers <= 10:
         raise ValueError(f"max_layers must be an integer in 1..10, got {max_layers!r}")
     if fit_inclusions is None:
-        fit_inclusions = patient.get("inclusions", False)
+        fit_inclusions = bool(patient.get("inclusions", False))
     if not isinstance(fit_inclusions, bool):
         raise TypeError(f"fit_inclusions must be None or a bool, got {fit_inclusions!r}")
     cfg = scanner_config_of(config)

@@ -7,11 +7,14 @@ A virtual patient is a SynthOCT phantom (the four-column table that
     t_k(x) = a_k + b_k x + c_k (x^2 - X^2/12)        (µm, x the lateral position, X = x_max)
 
 (``a_k`` the mean depth over the box; flat: ``b = c = 0``; tilted: ``c = 0``; curved: ``c != 0``,
-``b`` free), and at most one elliptical inclusion ``((x - x_c)/w)^2 + ((z - z_c)/h)^2 < 1``
-(through the whole slab ``|y| <= r``) inside one layer. Each region has a density ``rho``
-(scatterers per µm^3, the slab ``|y| <= r`` of :meth:`~speckle.studies.phantom.PhantomFit.phantom`)
-and an energy ``E`` (%); its one-way attenuation is ``mu = rho (E/100) A2`` with
-``A2 = (pi r^2/2) erf(sqrt 2)`` (:func:`~speckle.studies.phantom.slab_constants`).
+``b`` free), and elliptical inclusions ``((x - x_c)/w)^2 + ((z - z_c)/h)^2 < 1`` (through the
+whole slab ``|y| <= r``), each inside one layer, their bounding boxes apart by at least
+:data:`INCLUSION_GAP` pixels (drawn again until they are; the first drawn as a patient of one
+inclusion draws it, so ``inclusions=True`` and ``inclusions=1`` are the same patient). Each
+region has a density ``rho`` (scatterers per µm^3, the slab ``|y| <= r`` of
+:meth:`~speckle.studies.phantom.PhantomFit.phantom`) and an energy ``E`` (%); its one-way
+attenuation is ``mu = rho (E/100) A2`` with ``A2 = (pi r^2/2) erf(sqrt 2)``
+(:func:`~speckle.studies.phantom.slab_constants`).
 
 Drawing (all from ``SeedSequence(seed)``): the number of layers uniform in ``layers``; each
 boundary's shape from ``shapes``; relative densities log-uniform in ``density_range`` (times the
@@ -55,6 +58,10 @@ SHAPES = ("flat", "tilted", "curved")
 #: Mean intensity (neper of ln I) below the brightest region's top where the window's floor
 #: starts to clip more than 10 % of a row, minus a margin of 1 neper.
 VISIBLE_NEPER = 6.0
+#: Most inclusions of a virtual patient.
+MAX_PATIENT_INCLUSIONS = 4
+#: Least gap (pixels, in depth or laterally) between the bounding boxes of two inclusions.
+INCLUSION_GAP = 2
 _GRID = 8192
 
 
@@ -90,32 +97,44 @@ def profiles(coefficients: np.ndarray, x: np.ndarray, x_max: float) -> np.ndarra
     return a[:, None] + b[:, None] * x + c[:, None] * (x**2 - x_max**2 / 12)
 
 
+def _inclusion_list(inclusion) -> list[tuple]:
+    """Inclusions as a list of ``(x_c, z_c, w, h)``: ``None`` (none), one 4-tuple, or a
+    sequence of them."""
+    if inclusion is None:
+        return []
+    if len(inclusion) == 4 and np.ndim(inclusion[0]) == 0:
+        return [tuple(float(v) for v in inclusion)]
+    return [tuple(float(v) for v in e) for e in inclusion]
+
+
 def _region(x, z, bounds_of, inclusion):
-    """Region index of points: the layer (0..K-1), or K inside the inclusion."""
+    """Region index of points: the layer (0..K-1), or K + j inside inclusion ``j`` (the
+    inclusions do not overlap)."""
     tops = bounds_of(x)  # (K - 1, n)
     layer = np.sum(z[None, :] >= tops, axis=0) if tops.size else np.zeros(z.size, int)
-    if inclusion is not None:
-        xc, zc, w, h = inclusion
+    for j, (xc, zc, w, h) in enumerate(_inclusion_list(inclusion)):
         inside = ((x - xc) / w) ** 2 + ((z - zc) / h) ** 2 < 1
-        layer = np.where(inside, tops.shape[0] + 1, layer)
+        layer = np.where(inside, tops.shape[0] + 1 + j, layer)
     return layer
 
 
 def region_volumes(cfg: ScannerConfig, coefficients: np.ndarray, inclusion: tuple | None):
-    """Volumes (µm^3, slab ``|y| <= r``) of the layers, then the inclusion, from the exact
-    profiles on :data:`_GRID` lines; and the layers' edges on those lines."""
+    """Volumes (µm^3, slab ``|y| <= r``) of the layers, then the inclusions (``None``, one
+    ``(x_c, z_c, w, h)`` or a list of them, not overlapping), from the exact profiles on
+    :data:`_GRID` lines; and the layers' edges on those lines."""
     h, xm, r = cfg.depth_range, cfg.x_max, cfg.beam_radius
     xs = (np.arange(_GRID) + 0.5) / _GRID * xm - xm / 2
     bounds = np.clip(profiles(coefficients, xs, xm), 0, h)
     edges = np.vstack([np.zeros((1, _GRID)), bounds, np.full((1, _GRID), h)])
     area = np.diff(edges, axis=0).sum(axis=1) * xm / _GRID
-    if inclusion is not None:
-        xc, zc, w, hh = inclusion
+    inner = []
+    for xc, zc, w, hh in _inclusion_list(inclusion):
         u = np.clip(1 - ((xs - xc) / w) ** 2, 0, None)
         lo, hi = zc - hh * np.sqrt(u), zc + hh * np.sqrt(u)
         overlap = np.clip(np.minimum(hi, edges[1:]) - np.maximum(lo, edges[:-1]), 0, None)
-        area = np.append(area - overlap.sum(axis=1) * xm / _GRID, np.sum(hi - lo) * xm / _GRID)
-    return area * 2 * r, edges
+        area = area - overlap.sum(axis=1) * xm / _GRID
+        inner.append(np.sum(hi - lo) * xm / _GRID)
+    return np.append(area, inner) * 2 * r, edges
 
 
 def patient_table(
@@ -126,8 +145,9 @@ def patient_table(
     inclusion: tuple | None,
     rng: np.random.Generator,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The four-column table of a patient (regions: layers, then the inclusion) and the
-    regions' densities scaled to ``cfg.n_scatterers`` expected scatterers (per µm^3)."""
+    """The four-column table of a patient (regions: layers, then the inclusions: ``None``,
+    one ``(x_c, z_c, w, h)`` or a list of them) and the regions' densities scaled to
+    ``cfg.n_scatterers`` expected scatterers (per µm^3)."""
     xm, r = cfg.x_max, cfg.beam_radius
     volume, edges = region_volumes(cfg, coefficients, inclusion)
     n_layers = edges.shape[0] - 1
@@ -143,7 +163,7 @@ def patient_table(
         if k < n_layers:
             box = (-xm / 2, xm / 2, float(edges[k].min()), float(edges[k + 1].max()))
         else:
-            xc, zc, w, hh = inclusion
+            xc, zc, w, hh = _inclusion_list(inclusion)[k - n_layers]
             box = (xc - w, xc + w, zc - hh, zc + hh)
         got = np.empty((0, 2))
         while got.shape[0] < count:
@@ -168,7 +188,7 @@ def virtual_patient(
     config: object = "challenge",
     layers: tuple[int, int] = (1, 5),
     shapes: tuple[str, ...] = SHAPES,
-    inclusions: bool = False,
+    inclusions: bool | int = False,
     energy_range: tuple[float, float] = (0.05, 5.0),
     density_range: tuple[float, float] = (0.3, 3.0),
     min_contrast: float = 2.5,
@@ -178,7 +198,7 @@ def virtual_patient(
     visible: float = VISIBLE_NEPER,
     draw_seed: int | None = None,
 ) -> tuple[np.ndarray, xr.Dataset]:
-    """A random layered phantom (tilted or curved boundaries, an inclusion) and its truth.
+    """A random layered phantom (tilted or curved boundaries, inclusions) and its truth.
 
     Parameters
     ----------
@@ -191,8 +211,9 @@ def virtual_patient(
         Least and most layers (1..8), drawn uniformly.
     shapes : tuple of {"flat", "tilted", "curved"}
         Shapes each boundary is drawn from (uniformly).
-    inclusions : bool
-        Whether the patient holds one elliptical inclusion (module docstring).
+    inclusions : bool or int
+        Elliptical inclusions of the patient (module docstring): ``False`` none, ``True`` one,
+        or their number (0..:data:`MAX_PATIENT_INCLUSIONS`, not overlapping).
     energy_range : (float, float)
         Energies (%, in (0, 100]) drawn log-uniform, before the visibility scaling.
     density_range : (float, float)
@@ -221,7 +242,7 @@ def virtual_patient(
     phantom : numpy.ndarray
         ``(n_scatterers, 4)``: X, Y, Z (µm), Energy (%).
     truth : xarray.Dataset
-        Dims ``layer``, ``x`` (the A-lines), ``inclusion`` (0 or 1): ``top`` (layer, x; µm),
+        Dims ``layer``, ``x`` (the A-lines), ``inclusion`` (their number): ``top`` (layer, x; µm),
         ``top_mean``, ``top_tilt`` (µm per µm), ``top_curvature`` (µm^-1, ``c``), ``shape``,
         ``attenuation`` (1/µm), ``density`` (µm^-3), ``energy`` (%), ``rho_e``; the
         inclusion's ``inclusion_x``, ``inclusion_z`` (centre, µm), ``inclusion_width``,
@@ -248,8 +269,13 @@ def virtual_patient(
     k_lo, k_hi = _range("layers", layers, 1, 8, integer=True)
     if not isinstance(shapes, tuple | list) or not shapes or any(s not in SHAPES for s in shapes):
         raise ValueError(f"shapes must be a non-empty tuple of {SHAPES}, got {shapes!r}")
-    if not isinstance(inclusions, bool):
-        raise TypeError(f"inclusions must be a bool, got {inclusions!r}")
+    if not isinstance(inclusions, bool | int | np.integer):
+        raise TypeError(f"inclusions must be a bool or an int, got {inclusions!r}")
+    if not 0 <= int(inclusions) <= MAX_PATIENT_INCLUSIONS:
+        raise ValueError(
+            f"inclusions must be 0..{MAX_PATIENT_INCLUSIONS} (or a bool), got {inclusions!r}"
+        )
+    n_inclusions = int(inclusions)
     e_lo, e_hi = _range("energy_range", energy_range, 1e-6, 100.0)
     if e_lo <= 0:
         raise ValueError(f"energy_range must be > 0 %, got {energy_range!r}")
@@ -270,7 +296,7 @@ def virtual_patient(
     draw = seed if draw_seed is None else draw_seed
     rng = np.random.default_rng(np.random.SeedSequence(int(seed)))
     n_layers = int(rng.integers(k_lo, k_hi + 1))
-    n_regions = n_layers + inclusions
+    n_regions = n_layers + n_inclusions
     a2 = slab_constants(r)["A2"]
     x_lines = cfg.line_positions
     xs = np.linspace(-xm / 2, xm / 2, 257)
@@ -301,8 +327,9 @@ def virtual_patient(
             f"no {n_layers} layers at least min_thickness={t_min} µm thick fit in the depth "
             f"range {h} µm: lower layers or min_thickness"
         )
-    inclusion, host = None, -1
-    if inclusions:
+    inclusion, hosts = [], []
+    gap = INCLUSION_GAP * cfg.pixel_size
+    for _ in range(n_inclusions):
         for _ in range(1000):
             host = int(rng.integers(0, n_layers))
             w = rng.uniform(0.05, 0.15) * xm
@@ -313,8 +340,12 @@ def virtual_patient(
             near = np.abs(xs - xc) <= w
             lo, hi = top[near].max() + hh + 2 * cfg.pixel_size, bottom[near].min() - hh
             if hi > lo:
-                inclusion = (xc, float(rng.uniform(lo, hi)), w, hh)
-                break
+                zc = float(rng.uniform(lo, hi))
+                if all(abs(xc - e[0]) >= w + e[2] + gap or abs(zc - e[1]) >= hh + e[3] + gap
+                       for e in inclusion):  # fmt: skip
+                    inclusion.append((xc, zc, w, hh))
+                    hosts.append(host)
+                    break
         else:
             raise ValueError("no inclusion fits in the drawn layers: raise min_thickness")
     # visibility: energies scaled down until every layer's bottom is above the floor
@@ -327,7 +358,8 @@ def virtual_patient(
     lower = np.vstack([bounds, np.minimum(last + t_min, h - 2 * t_min)[None, :]])
     upper = np.vstack([np.zeros((1, centre.size)), bounds])
     thick = lower - upper
-    pairs = [(k, k + 1) for k in range(n_layers - 1)] + ([(host, n_layers)] if inclusions else [])
+    pairs = [(k, k + 1) for k in range(n_layers - 1)]
+    pairs += [(host, n_layers + j) for j, host in enumerate(hosts)]
 
     def is_visible(rel, energy):
         rho_guess = rel * cfg.n_scatterers / np.sum(rel * volume)
@@ -377,7 +409,7 @@ def virtual_patient(
     def per(quantity, values, long_name, dim="layer"):
         return (dim,), np.asarray(values), attrs(quantity, long_name)
 
-    centre_x = [inclusion[0]] if inclusions else []
+    ellipses = np.array(inclusion, float).reshape(-1, 4)
     truth = xr.Dataset(
         {
             "top": (("layer", "x"), top, attrs("length", "upper boundary of the layer")),
@@ -390,25 +422,25 @@ def virtual_patient(
             "density": per("volume_density", rho[lay], "scatterers per um^3 (slab |y| <= r)"),
             "energy": per("percent", energy[lay], "energy per scatterer"),
             "rho_e": per("volume_density", rho[lay] * energy[lay] / 100, "rho E/100"),
-            "inclusion_x": per("length", centre_x, "centre x of the inclusion", "inclusion"),
-            "inclusion_z": per("length", [inclusion[1]] if inclusions else [],
-                               "centre depth of the inclusion", "inclusion"),
-            "inclusion_width": per("length", [inclusion[2]] if inclusions else [],
+            "inclusion_x": per("length", ellipses[:, 0], "centre x of the inclusion",
+                               "inclusion"),
+            "inclusion_z": per("length", ellipses[:, 1], "centre depth of the inclusion",
+                               "inclusion"),
+            "inclusion_width": per("length", ellipses[:, 2],
                                    "lateral semi-axis of the inclusion", "inclusion"),
-            "inclusion_height": per("length", [inclusion[3]] if inclusions else [],
+            "inclusion_height": per("length", ellipses[:, 3],
                                     "depth semi-axis of the inclusion", "inclusion"),
             "inclusion_density": per("volume_density", rho[inc], "scatterers per um^3",
                                      "inclusion"),
             "inclusion_energy": per("percent", energy[inc], "energy per scatterer", "inclusion"),
             "inclusion_attenuation": per("attenuation", mu[inc], "one-way attenuation mu",
                                          "inclusion"),
-            "inclusion_layer": per("label", [host] if inclusions else [], "host layer",
-                                   "inclusion"),
+            "inclusion_layer": per("label", np.array(hosts, int), "host layer", "inclusion"),
         },
         coords={
             "layer": coord("layer", np.arange(n_layers)),
             "x": coord("x", x_lines),
-            "inclusion": coord("inclusion", np.arange(int(inclusions))),
+            "inclusion": coord("inclusion", np.arange(n_inclusions)),
         },
         attrs={"seed": int(seed), "draw_seed": int(draw),
                "n_scatterers": cfg.n_scatterers},
