@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 import speckle
-from speckle.studies.phantom._density import slab_log_moments
+from speckle.studies.phantom._density import slab_log_moments  # private: the slab theory
+# private: the transition model and its offsets are what is under test
 from speckle.studies.phantom._shapes import TransitionModel, log_offsets
 
 CFG = speckle.synthoct_config("2025")
