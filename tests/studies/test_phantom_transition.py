@@ -7,6 +7,7 @@ import pytest
 
 import speckle
 from speckle.studies.phantom._density import slab_log_moments  # private: the slab theory
+
 # private: the transition model and its offsets are what is under test
 from speckle.studies.phantom._shapes import TransitionModel, log_offsets
 
