@@ -97,12 +97,7 @@ def malformed() -> Malformed:
 class ConfigRuns:
     """Merge config overrides and dry-run the workflow on a copy of the repository."""
 
-    ignore = staticmethod(
-        __import__("shutil").ignore_patterns(
-            ".git", ".snakemake", "results", "__pycache__", ".pytest_cache", ".hypothesis",
-            "*.egg-info",
-        )
-    )  # fmt: skip
+    ignore = staticmethod(__import__("workflow_run").IGNORE)  # tests/ is on sys.path
 
     @classmethod
     def merge(cls, base: dict, over: dict) -> dict:

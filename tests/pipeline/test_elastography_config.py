@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 import yaml
+from workflow_run import IGNORE
 
 from speckle.pipeline.checks import check_config
 
@@ -28,9 +29,6 @@ BAD = {
 }
 #: Refused by the schema (snakemake's validate), not by check_config.
 SCHEMA_ONLY = {"elastography.tol", "elastography.failure.n_seeds"}
-IGNORE = shutil.ignore_patterns(
-    ".git", ".snakemake", "results*", "__pycache__", ".pytest_cache", ".hypothesis", "*.egg-info"
-)
 
 
 def _merge(base: dict, over: dict) -> dict:

@@ -12,13 +12,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from workflow_run import IGNORE
 
 from speckle.io import open_dataset
 
 pytestmark = [pytest.mark.pipeline, pytest.mark.slow]
-IGNORE = shutil.ignore_patterns(
-    ".git", ".snakemake", "results*", "__pycache__", ".pytest_cache", ".hypothesis", "*.egg-info"
-)
 TARGET = "elastography/sequence_large.nc"
 SCHEDULERS = {
     "threads": {"scheduler": "threads", "address": None, "n_workers": 2},

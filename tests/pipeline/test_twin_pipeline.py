@@ -17,16 +17,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from workflow_run import IGNORE
 
 from speckle.io import open_dataset
 
 pytestmark = [pytest.mark.pipeline, pytest.mark.slow]
 
 CI_CONFIG = "workflow/config/ci.yaml"
-IGNORE = shutil.ignore_patterns(
-    ".git", ".snakemake", "results*", "__pycache__", ".pytest_cache", ".hypothesis",
-    "*.egg-info", ".benchmarks", "report.html", ".ruff_cache",
-)  # fmt: skip
 RESULTS = "results_ci"  # the CI config's results folder
 TARGETS = [f"{RESULTS}/twin/" + f for f in ("fit.nc", "compare.png", "failure.png")]
 
