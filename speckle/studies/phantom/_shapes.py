@@ -237,6 +237,7 @@ def _joint(rss, taus, basis, start, steps):
     scale = np.asarray(steps[: start.size], float)
     shift = (basis[:, : start.size] * scale) / step  # u = shift . phi - taus[0] / step
     origin = taus[0] / step
+    flat, first = padded.ravel(), rows * padded.shape[1]  # padded[rows, i] = flat[first + i]
 
     def total(phi):
         """The blocks' misfits at ``basis . theta``, linear between the grid's positions."""
@@ -249,7 +250,8 @@ def _joint(rss, taus, basis, start, steps):
             return float(np.sum(np.where(out, big, v)))
         i = u.astype(int)  # u >= 0: the floor
         f = u - i
-        return float(np.sum((1 - f) * padded[rows, i] + f * padded[rows, i + 1]))
+        j = i + first
+        return float(((1 - f) * flat[j] + f * flat[j + 1]).sum())
 
     phi0 = start / scale
     simplex = np.vstack([phi0, phi0 + np.eye(start.size)])
