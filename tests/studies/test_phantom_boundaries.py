@@ -10,7 +10,10 @@ from scipy import optimize
 
 import speckle
 from speckle.studies.phantom._fit import _fit_levels  # private: the flat fit alone (the ramp)
-from speckle.studies.phantom._shapes import TransitionModel  # private: the model under test
+from speckle.studies.phantom._shapes import (
+    TransitionModel,  # private: the model under test
+    _joint,  # private: the joint search under test
+)
 from speckle.studies.phantom.loop import fit_profiles
 from speckle.studies.phantom.patients import patient_table, profiles
 from speckle.synthoct import _scan  # private: the scanner's Hann spectrum (the reference)
@@ -104,3 +107,31 @@ def test_tilted_ramp_is_one_boundary(seed, ratio):
     x = REDUCED.line_positions[central]
     got = fit_profiles(layers, x, REDUCED.x_max)[1]
     assert np.max(np.abs(got - profiles(coefficients, x, REDUCED.x_max)[0])) < REDUCED.pixel_size
+
+
+@pytest.mark.parametrize("d", [1, 2, 3])
+def test_joint_search_reaches_the_exact_shape(d):
+    """The blocks' misfits ``(tau - t_b)^2`` with every ``t_b`` on the quarter-pixel grid
+    and on a flat, tilted or curved shape: their interpolated sum is 0 at that shape only
+    (each term's interpolant vanishes at its node alone), so the search (its tolerance 1e-9
+    pixel at the blocks' edge) ends on the shape's coefficients, from a start 2 pixels off
+    at the edge, within 1e-6 pixel there (the blocks within 3e-6 pixel: misfit below
+    16 step 3e-6 p)."""
+    p, step, x_max = 2.0, 0.5, 960.0
+    taus = 100.0 + step * np.arange(160)
+    xb = (np.arange(16) - 7.5) * 60.0
+    half = x_max / 2
+    basis = np.column_stack([np.ones(16), xb, xb**2 - x_max**2 / 12])
+    # b x_b and c x_b^2 differ by whole grid steps between blocks; a puts them on the nodes
+    theta = np.array([taus[80], step / 60.0, 2 * step / 3600.0])[:d]
+    u0 = (basis[0, :d] @ theta - taus[0]) / step
+    theta[0] -= (u0 - np.rint(u0)) * step
+    t_b = basis[:, :d] @ theta
+    assert np.allclose((t_b - taus[0]) / step, np.rint((t_b - taus[0]) / step), atol=1e-9)
+    rss = (taus[None, :] - t_b[:, None]) ** 2
+    steps = np.array([p, p / half, p / half**2])
+    start = theta + 2 * steps[:d]
+    got, misfit = _joint(rss, taus, basis, start, steps)
+    assert np.max(np.abs((got - theta) / steps[:d])) < 1e-6
+    # each block's interpolant rises by step |delta| for a shift delta off its node
+    assert misfit < 16 * step * 3e-6 * p

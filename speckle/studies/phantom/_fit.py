@@ -73,7 +73,7 @@ from ._density import (
     window_and_brightness,
 )
 from ._inclusions import fit_inclusions, no_inclusions, remove_inclusions
-from ._shapes import SHAPE_DEGREE, TransitionModel, fit_shapes, flat_shapes, log_offsets
+from ._shapes import SHAPE_DEGREE, _transition_model, fit_shapes, flat_shapes, log_offsets
 from .patients import patient_table, region_volumes
 
 __all__ = ["BLOCKS", "GAP", "MAX_CLIPPED", "PhantomFit", "fit_phantom"]
@@ -456,7 +456,11 @@ def fit_phantom(
     ok = np.mean(lev == 0, axis=1) <= MAX_CLIPPED
     ok[: GAP + 1] = False
     ok[cfg.n_pixels - GAP - 1 :] = False
-    li, x, cdf = _log_intensity(lev), cfg.line_positions[central], TransitionModel(cfg.n_pixels).cdf
+    li, x, cdf = (
+        _log_intensity(lev),
+        cfg.line_positions[central],
+        _transition_model(cfg.n_pixels).cdf,
+    )
     found, model = fit_inclusions(li, np.flatnonzero(ok), ds, cfg, x, cdf)
     if found.sizes["inclusion"]:
         again = layers_of(remove_inclusions(lev, model, _NEPER_DB))
@@ -544,7 +548,7 @@ def _fit_levels(
             n_layers -= 1
     segs = best[n_layers][1]
 
-    model = TransitionModel(cfg.n_pixels)
+    model = _transition_model(cfg.n_pixels)
     # var ln I per layer first: its E ln(I/<I>) sets the transition's mixed intensity
     v, v_jk, mu_fine = layer_variances(li, z, segs, keep, cfg)
     offsets = log_offsets(v, cfg)
