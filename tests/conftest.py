@@ -151,3 +151,15 @@ class ConfigRuns:
 @pytest.fixture(scope="session")
 def config_runs() -> ConfigRuns:
     return ConfigRuns()
+
+
+@pytest.fixture(scope="session")
+def compressed_pair():
+    """One scene at 0 and 0.4 % compression, 64 x 16 px over 512 µm (pixel 8 µm), k0/dk 10:
+    ``(spectrum, bscan)`` (the README's strain call, small)."""
+    import speckle
+
+    src = speckle.spectrum(64, 512.0, k0_dk=10)
+    scene = speckle.deformable_scene(16, 4.0, n_pixels=64, depth_range=512.0, seed=1, strain=4e-3)
+    img = speckle.bscan(speckle.uniaxial_strain(scene, [0.0, 4e-3]), src, normalise="density")
+    return src, img

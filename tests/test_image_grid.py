@@ -23,12 +23,9 @@ N, H = 64, 512.0  # pixels, depth range (µm): pixel 8 µm
 
 
 @pytest.fixture(scope="module")
-def compressed():
-    """The README's call, small: a 0 and 0.4 % compression of one scene (64 x 16 px)."""
-    src = speckle.spectrum(N, H, k0_dk=10)
-    scene = speckle.deformable_scene(16, 4.0, n_pixels=N, depth_range=H, seed=1, strain=4e-3)
-    img = speckle.bscan(speckle.uniaxial_strain(scene, [0.0, 4e-3]), src, normalise="density")
-    return src, img
+def compressed(compressed_pair):
+    """The README's call, small (``tests/conftest.py``: N x 16 px over H)."""
+    return compressed_pair
 
 
 def _same(a, b):

@@ -19,11 +19,9 @@ N, H = 64, 512.0  # pixels, depth range (µm): pixel 8 µm
 
 
 @pytest.fixture(scope="module")
-def pair():
-    """A 0 and 0.4 % compression of one scene (64 x 16 px), as a (frame, depth, x) field."""
-    src = speckle.spectrum(N, H, k0_dk=10)
-    scene = speckle.deformable_scene(16, 4.0, n_pixels=N, depth_range=H, seed=1, strain=4e-3)
-    img = speckle.bscan(speckle.uniaxial_strain(scene, [0.0, 4e-3]), src, normalise="density")
+def pair(compressed_pair):
+    """A 0 and 0.4 % compression of one scene (N x 16 px over H), as a (frame, depth, x) field."""
+    src, img = compressed_pair
     return float(src.attrs["k0"]), img.field.rename(strain="frame")
 
 
