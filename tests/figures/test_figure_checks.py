@@ -47,6 +47,7 @@ MODULES = (
     "system",
     "twin",
     "phantom",
+    "phantom_real",
 )
 RNG_SEED = 37
 
@@ -752,6 +753,31 @@ def _phantom():
     )
 
 
+def _phantom_real():
+    image = ("depth", "x")
+    ds = _fake(
+        {
+            "depth": np.arange(40) * 3.0,
+            "x": np.arange(30) * 4.0,
+            "seed": [1, 2, 3],
+            "pair": [0, 1, 2],
+            "map": ["Struct", "OAC", "SC", "RSC"],
+        },
+        {
+            "measured": image,
+            "fitted": ("seed", *image),
+            "measured_SC": image,
+            "fitted_SC": image,
+            "profile_measured": ("depth",),
+            "profile_fitted": ("depth",),
+            "MS-SSIM_versus": ("seed", "map"),
+            "MS-SSIM_floor": ("pair", "map"),
+        },
+        attrs={"fitted_rows": [5, 35]},
+    )
+    return {"plot_phantom_real": (ds,)}
+
+
 BUILDERS = {
     "beam": _beam,
     "deformation": _deformation,
@@ -765,6 +791,7 @@ BUILDERS = {
     "synthoct": _synthoct,
     "system": _system,
     "twin": _twin,
+    "phantom_real": _phantom_real,
     "phantom": lambda: {
         "plot_closed_loop": (_phantom(),),
         "plot_scores": (_phantom(),),
