@@ -206,17 +206,13 @@ def _no_answer_reason(method: str, quality: np.ndarray, opts: dict, window, info
             else ""
         )
         advice = _advice(method, opts, info, decorrelated=threshold <= opts["min_quality"])
-        return (
-            head
-            + f"every window's {what} is below {limit}; highest {q.max():.3f}"
-            + (
-                lower
-                if lower and q.max() >= default  # correlated: the option alone refused it
-                else lower + advice.replace("; try ", " or ", 1)
-                if lower
-                else advice
-            )
-        )
+        if not lower:
+            tail = advice
+        elif q.max() >= default:  # correlated: the option alone refused it
+            tail = lower
+        else:
+            tail = lower + advice.replace("; try ", " or ", 1)
+        return head + f"every window's {what} is below {limit}; highest {q.max():.3f}" + tail
     why = {
         "vector": "the lag phase could not be unwrapped anywhere (strain beyond the method's "
         "range 1/(2 R), R = k0/delta_k, or the pair decorrelated)",
