@@ -20,7 +20,7 @@ import functools
 import math
 
 import numpy as np
-from scipy import special
+from scipy import optimize, special
 
 # private: the sparse-speckle theory's numerical core, shared with analysis.sparse
 from ...analysis._sparse_theory import TAU, exponent, invert_log_variance, moments_of
@@ -33,6 +33,7 @@ __all__ = [
     "BLOCK_RADII",
     "LAG",
     "MAX_PREDICTED_CLIPPED",
+    "cut_top_rho_e",
     "lateral_variance_factor",
     "layer_densities",
     "layer_variances",
@@ -324,6 +325,8 @@ def window_and_brightness(
     fitted: dict[str, np.ndarray],
     dens: dict[str, np.ndarray],
     cfg: ScannerConfig,
+    *,
+    cut_top: dict[str, np.ndarray] | None = None,
 ) -> dict[str, object]:
     """The 51 dB window's top and ``rho E/100`` of every layer.
 
@@ -332,6 +335,14 @@ def window_and_brightness(
     the observed level, weighted by rows; ``rho E/100`` is ``mu/A2`` where the slope is
     significant, else the layer's brightness under that window. Every jackknife replicate
     repeats the chain (its slopes, boundaries, window).
+
+    A top layer cut by the window's floor (``cut_top``: most of its rows had more than
+    ``MAX_CLIPPED`` of their pixels clipped, so that its fitted rows are a few rows at its
+    bottom, inside the next boundary's transition, whose slope is not the layer's) takes its
+    ``rho E/100`` from the mean *intensity* of its own rows instead (:func:`cut_top_rho_e`),
+    its attenuation ``mu = A2 rho E/100`` and the window's top with it (the top layer's shadow
+    lowers every deeper layer's level by ``2 mu (t_1 - t_0)``); where no deeper layer has a
+    significant slope to place the window, ``mu`` stays the fitted slope's, as for any layer.
 
     Parameters
     ----------
@@ -347,21 +358,26 @@ def window_and_brightness(
         :func:`layer_densities`' result (``ident``, ``rho``).
     cfg : ScannerConfig
         The scanner's configuration.
+    cut_top : dict, optional
+        The cut top layer's own rows: ``z`` (µm), ``intensity`` (their mean ``I/I_max`` over
+        the lines) and ``intensity_jk`` (``(blocks, rows)``, on the jackknife's lines).
 
     Returns
     -------
     dict
-        ``wt``, ``wt_se`` (nepers), ``wt_jk``, ``rho_e``, ``rho_e_se`` (per µm^3).
+        ``wt``, ``wt_se`` (nepers), ``wt_jk``, ``rho_e``, ``rho_e_se`` (per µm^3) and ``mu``,
+        ``mu_se``, ``mu_jk`` (1/µm; the cut top layer's from its ``rho_e``, the others as
+        ``fitted``).
     """
-    r, p = cfg.beam_radius, cfg.pixel_size
-    consts = slab_constants(r)
-    hann = _scan.hann_spectrum(cfg.n_pixels)
-    mu, mu_se, mu_jk = fitted["mu"], fitted["mu_se"], fitted["mu_jk"]
+    consts = slab_constants(cfg.beam_radius)
+    mu, mu_se, mu_jk = (np.array(fitted[k], float) for k in ("mu", "mu_se", "mu_jk"))
     tops, tops_jk = fitted["tops"], fitted["tops_jk"]
     ident, rho = dens["ident"], dens["rho"]
     n_layers, blocks = mu.size, m_jk.shape[0]
-    psf_area = float(np.sum(depth_intensity_psf(hann)) / 8 * p * r * math.sqrt(math.pi / 2))
+    psf_area = _psf_area(cfg)
     slope_ok = mu > SIGNIFICANCE * mu_se
+    if cut_top is not None:
+        slope_ok[0] = False  # its few fitted rows' slope is the transition's
 
     def cum_shadow(zz, k, mu_, tops_):
         c = sum(mu_[j] * (tops_[j + 1] - tops_[j]) for j in range(k))
@@ -393,17 +409,118 @@ def window_and_brightness(
         ln_re = mm[a:b] + wt_ + 2 * cum_shadow(zz, k, mu_, tops_) - mean_log(k)
         return float(np.exp(np.mean(ln_re))) / (consts["a2_y"] * psf_area)
 
-    wt = window_top(m, mu, tops)
-    wt_jk = np.array([window_top(m_jk[j], mu_jk[j], tops_jk[j]) for j in range(blocks)])
+    def chain(mm, mu_, tops_, intensity):
+        """The window's top, with the cut top layer's ``mu`` (``mu_`` updated in place)."""
+        if cut_top is None:
+            return window_top(mm, mu_, tops_)
+        mu_top, mu_[0] = mu_[0], 0.0  # the window without the top layer's shadow, then with it
+        wt0 = window_top(mm, mu_, tops_)
+        if not np.isfinite(wt0):  # no deeper layer places the window: mu/A2 as elsewhere
+            mu_[0] = mu_top
+            return wt0
+        mu_[0] = consts["A2"] * cut_top_rho_e(
+            intensity, cut_top["z"], tops_[1] - tops_[0], wt0, cfg, psf_area=psf_area
+        )
+        return wt0 - 2 * mu_[0] * (tops_[1] - tops_[0])
+
+    top_i, top_i_jk = (None, [None] * blocks) if cut_top is None else (
+        cut_top["intensity"], cut_top["intensity_jk"])  # fmt: skip
+    wt = chain(m, mu, tops, top_i)
+    wt_jk = np.array([chain(m_jk[j], mu_jk[j], tops_jk[j], top_i_jk[j]) for j in range(blocks)])
     wt_se = _jackknife(wt_jk)
 
     # rho E/100 per layer: from mu where the slope is significant, else from the brightness
     rho_e = mu / consts["A2"]
     rho_e_se = mu_se / consts["A2"]
+    if cut_top is not None and np.isfinite(wt):
+        rho_e_se[0] = _jackknife(np.log(mu_jk[:, 0])) * rho_e[0]
+        mu_se[0] = consts["A2"] * rho_e_se[0]
     for k in range(n_layers):
-        if slope_ok[k] or not np.isfinite(wt):
+        if slope_ok[k] or not np.isfinite(wt) or (k == 0 and cut_top is not None):
             continue
         rho_e[k] = brightness(k, m, mu, tops, wt)
         reps = [brightness(k, m_jk[j], mu_jk[j], tops_jk[j], wt_jk[j]) for j in range(blocks)]
         rho_e_se[k] = _jackknife(np.log(np.array(reps))) * rho_e[k]
-    return {"wt": wt, "wt_se": wt_se, "wt_jk": wt_jk, "rho_e": rho_e, "rho_e_se": rho_e_se}
+    return {"wt": wt, "wt_se": wt_se, "wt_jk": wt_jk, "rho_e": rho_e, "rho_e_se": rho_e_se,
+            "mu": mu, "mu_se": mu_se, "mu_jk": mu_jk}  # fmt: skip
+
+
+def cut_top_rho_e(
+    intensity: np.ndarray,
+    z: np.ndarray,
+    thickness: float,
+    window_top: float,
+    cfg: ScannerConfig,
+    *,
+    psf_area: float | None = None,
+) -> float:
+    """``rho E/100`` of a top layer from the mean intensity of its rows (per µm^3).
+
+    The layer (from ``z = 0`` to ``thickness``) shadows itself and every layer below it: with
+    ``mu = A2 rho E/100`` and ``wt0`` the window's top (nepers) as the deeper layers place it
+    without this layer's shadow, the window's top is ``wt0 - 2 mu thickness`` and the layer's
+    mean intensity ``<I>(z) = rho E/100 a2_y int|h|^2 exp(2 mu (thickness - z) - wt0)``.
+    Summed over the rows, ``ln(rho E/100) + ln sum_r exp(2 A2 rho E/100 (thickness - z_r))``
+    rises monotonically from minus infinity, so the measured sum has one root (Brent's method
+    in ``ln rho E``). The mean of ``I`` needs no speckle statistics (``E ln(I/<I>)`` of sparse
+    speckle is far below ``-gamma`` and not identified where the layer is cut by the floor).
+
+    Parameters
+    ----------
+    intensity : numpy.ndarray
+        The rows' mean ``I/I_max`` over the lines (clipped pixels at half the clip level: the
+        intensity density flat below it, as ``ln I``'s ``ln c - 1``).
+    z : numpy.ndarray
+        The rows' depths (µm), in ``[0, thickness)``.
+    thickness : float
+        The layer's thickness (µm, its fitted bottom boundary).
+    window_top : float
+        ``wt0``, the window's top without this layer's shadow (nepers re ``|A| = 1``).
+    cfg : ScannerConfig
+        The scanner's configuration.
+    psf_area : float, optional
+        ``int |h|^2`` of the scanner's PSF (µm^2; computed from ``cfg`` when not given).
+
+    Returns
+    -------
+    float
+        ``rho E/100`` (per µm^3); NaN when the rows hold no intensity.
+
+    Examples
+    --------
+    A model layer's rows (``rho E/100 = 2e-6``, 150 µm thick, ``wt0 = 3``), inverted back:
+
+    >>> import numpy as np
+    >>> import speckle
+    >>> from speckle.studies.phantom._density import _psf_area, cut_top_rho_e
+    >>> from speckle.studies.phantom._slab import slab_constants
+    >>> cfg = speckle.synthoct_config("2025")
+    >>> consts = slab_constants(cfg.beam_radius)
+    >>> z = np.arange(3, 60) * cfg.pixel_size
+    >>> mu = consts["A2"] * 2e-6
+    >>> i = 2e-6 * consts["a2_y"] * _psf_area(cfg) * np.exp(2 * mu * (150.0 - z) - 3.0)
+    >>> round(cut_top_rho_e(i, z, 150.0, 3.0, cfg) / 2e-6, 9)
+    1.0
+    """
+    consts = slab_constants(cfg.beam_radius)
+    area = _psf_area(cfg) if psf_area is None else psf_area
+    total = float(np.sum(intensity))
+    if not total > 0:
+        return np.nan
+    target = math.log(total) - math.log(consts["a2_y"] * area) + window_top
+    depth = thickness - np.asarray(z, float)
+
+    def gap(u):
+        x = math.exp(u)
+        return u + special.logsumexp(2 * consts["A2"] * x * depth) - target
+
+    # gap(target) >= ln(rows) >= 0 and gap(target - ln(rows) - 50) < 0
+    low = target - math.log(depth.size) - 50.0
+    return math.exp(optimize.brentq(gap, low, target, xtol=1e-12, rtol=1e-14))
+
+
+def _psf_area(cfg: ScannerConfig) -> float:
+    """``int |h|^2`` of the scanner's depth PSF times its lateral Gaussian (µm^2)."""
+    hann = _scan.hann_spectrum(cfg.n_pixels)
+    r, p = cfg.beam_radius, cfg.pixel_size
+    return float(np.sum(depth_intensity_psf(hann)) / 8 * p * r * math.sqrt(math.pi / 2))

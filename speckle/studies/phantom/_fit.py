@@ -41,7 +41,9 @@ The fit, on the central lines (``|x| <= x_max/2 - 3 r``, where the box does not 
    for the lines' correlation) inverted to the density by the slab's exact sparse-speckle
    theory (its amplitudes ``exp(-y^2/r^2)``), identified where its excess over ``pi^2/6``
    exceeds 5 SE (else a lower bound), the energy ``E = 100 mu/(rho A2)``, and the window's top
-   from the layers' mean levels (:mod:`speckle.studies.phantom._density`);
+   from the layers' mean levels (:mod:`speckle.studies.phantom._density`); a top layer cut
+   by the floor (its only fitted rows a few in the next boundary's transition) takes ``rho E``
+   from the mean intensity of its own rows instead (:func:`_cut_top`);
 4. standard errors: delete-one-block jackknife over :data:`BLOCKS` lateral blocks of lines
    (the line-to-line correlations of speckle and shadowing included), the segmentation fixed;
    ``var ln I`` and the density over blocks of 8 beam radii when there are more of them.
@@ -472,6 +474,34 @@ def fit_phantom(
     return PhantomFit(layers=ds, config=cfg, inclusions=found)
 
 
+def _cut_top(lev, rows, segs, tops, keep, cfg) -> dict[str, np.ndarray] | None:
+    """The top layer's own rows when the window's floor cut it, else None.
+
+    Cut: the first fitted row lies below rows dropped for their clipped pixels (more than
+    :data:`MAX_CLIPPED`) and the top segment is shorter than :data:`RUN_ROWS` (a few rows at
+    the layer's bottom, in the next boundary's transition). Its own rows are ``GAP + 1`` down
+    to :data:`GAP` rows above the fitted boundary; their mean ``I/I_max`` over the lines
+    (clipped pixels at half the clip level) and over each jackknife replicate's lines
+    (``keep``) go to :func:`~speckle.studies.phantom._density.cut_top_rho_e`.
+    """
+    a, b = segs[0]
+    if len(segs) < 2 or rows[a] <= GAP + 1 or b - a >= RUN_ROWS:
+        return None
+    p = cfg.pixel_size
+    own = np.arange(GAP + 1, cfg.n_pixels)
+    own = own[own * p < tops[1] - GAP * p]
+    if own.size == 0:
+        return None
+    step = _scan.DYNAMIC_RANGE / _scan.LEVELS
+    intensity = np.exp(_log_intensity(lev[own]))
+    intensity[lev[own] == 0] = 0.5 * math.exp((step - _scan.DYNAMIC_RANGE) / _NEPER_DB)
+    return {
+        "z": own * p,
+        "intensity": intensity.mean(axis=1),
+        "intensity_jk": np.stack([intensity[:, k].mean(axis=1) for k in keep]),
+    }
+
+
 def _fit_levels(
     lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: int, criterion: str = "bic"
 ) -> xr.Dataset:
@@ -589,10 +619,18 @@ def _fit_levels(
     # density, energy, the window and rho E/100: _density.py
     dens = layer_densities(v, v_jk, mu, mu_fine, cfg)
     fitted = {"mu": mu, "mu_se": mu_se, "mu_jk": mu_jk, "tops": tops, "tops_jk": tops_jk}
-    win = window_and_brightness(m, m_jk, z, segs, fitted, dens, cfg)
+    cut = _cut_top(lev, rows, segs, tops, keep, cfg)
+    win = window_and_brightness(m, m_jk, z, segs, fitted, dens, cfg, cut_top=cut)
     rho, rho_se, bound, v_se = dens["rho"], dens["rho_se"], dens["bound"], dens["v_se"]
     energy, energy_se, energy_bound = dens["energy"], dens["energy_se"], dens["energy_bound"]
     wt, wt_se, rho_e, rho_e_se = win["wt"], win["wt_se"], win["rho_e"], win["rho_e_se"]
+    if cut is not None and np.isfinite(
+        wt
+    ):  # the top layer's mu from its brightness: its energy (bound) with it
+        mu, mu_se = win["mu"], win["mu_se"]
+        energy_bound[0] = 100 * rho_e[0] / bound[0]
+        energy[0] = 100 * rho_e[0] / rho[0]
+        energy_se[0] = energy[0] * math.hypot(rho_e_se[0] / rho_e[0], rho_se[0] / rho[0])
 
     def var(name, values, quantity, long_name, extra=None):
         return (
