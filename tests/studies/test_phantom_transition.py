@@ -6,10 +6,12 @@ import numpy as np
 import pytest
 
 import speckle
-from speckle.studies.phantom._density import slab_log_moments  # private: the slab theory
+
+# private: the slab theory and the offsets it gives (private module _density)
+from speckle.studies.phantom._density import log_offsets, slab_log_moments
 
 # private: the transition model and its offsets are what is under test
-from speckle.studies.phantom._shapes import TransitionModel, log_offsets
+from speckle.studies.phantom._shapes import TransitionModel
 
 CFG = speckle.synthoct_config("2025")
 

@@ -37,6 +37,8 @@ __all__ = [
     "lateral_variance_factor",
     "layer_densities",
     "layer_variances",
+    "log_offset_se",
+    "log_offsets",
     "slab_inverse_density",
     "slab_log_moments",
     "window_and_brightness",
@@ -317,13 +319,53 @@ def layer_densities(
     }  # fmt: skip
 
 
+def log_offsets(log_variance, cfg: ScannerConfig) -> np.ndarray:
+    """``E ln(I/<I>)`` of each layer's speckle from its ``var ln I`` (shadowing removed).
+
+    The slab's sparse-speckle theory (:func:`slab_log_moments`
+    at the density whose ``var ln I`` is the measured one); ``-gamma`` (fully developed) where
+    the variance does not exceed ``pi^2/6`` or is NaN. Sparse speckle's ``E ln I`` lies farther
+    below ``ln <I>`` (-1.43 at 0.3 times the 2025 configuration's mean density, -0.70 at its
+    mean, -0.58 dense): two layers' mean ``ln I`` differ from their mean intensities' by
+    different offsets, which the transition between them must use.
+    """
+    out = []
+    for v in np.atleast_1d(np.asarray(log_variance, float)):
+        inv = slab_inverse_density(v, cfg) if np.isfinite(v) and v > np.pi**2 / 6 else 0.0
+        if not np.isfinite(inv) or inv <= 0:
+            out.append(-np.euler_gamma)
+        else:
+            out.append(slab_log_moments(_equivalent(cfg) / inv, cfg)[0])
+    return np.array(out)
+
+
+def log_offset_se(log_variance, log_variance_se, cfg: ScannerConfig) -> np.ndarray:
+    """SE of :func:`log_offsets` from ``var ln I``'s SE: half the change of the offset between
+    ``v - SE`` and ``v + SE`` (the central difference; one-sided where ``v - SE`` falls below
+    ``pi^2/6``, where the offset stays ``-gamma``); 0 where ``v`` or its SE is NaN (the offset
+    is then ``-gamma``, fully developed, by assumption).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import speckle
+    >>> from speckle.studies.phantom._density import log_offset_se
+    >>> cfg = speckle.synthoct_config("2025")
+    >>> log_offset_se([np.pi**2 / 6 - 1, np.nan], [0.1, 0.1], cfg)  # dense, unknown
+    array([0., 0.])
+    """
+    v = np.atleast_1d(np.asarray(log_variance, float))
+    se = np.nan_to_num(np.atleast_1d(np.asarray(log_variance_se, float)))
+    out = (log_offsets(v + se, cfg) - log_offsets(v - se, cfg)) / 2
+    return np.where(np.isfinite(v), np.abs(out), 0.0)
+
+
 def window_and_brightness(
     m: np.ndarray,
     m_jk: np.ndarray,
     z: np.ndarray,
     segs: list[tuple[int, int]],
     fitted: dict[str, np.ndarray],
-    dens: dict[str, np.ndarray],
     cfg: ScannerConfig,
     *,
     cut_top: dict[str, np.ndarray] | None = None,
@@ -333,8 +375,14 @@ def window_and_brightness(
     The window's top (nepers re ``|A| = 1``) is the predicted absolute ``E ln I`` of each
     layer with a significant slope (``ln(rho_e a2_y int|h|^2) - 2 C(z) + E ln(I/<I>)``) minus
     the observed level, weighted by rows; ``rho E/100`` is ``mu/A2`` where the slope is
-    significant, else the layer's brightness under that window. Every jackknife replicate
-    repeats the chain (its slopes, boundaries, window).
+    significant, else the layer's brightness under that window. ``E ln(I/<I>)`` is each
+    layer's own (``fitted["offsets"]``, :func:`log_offsets` of its ``var ln I``, as in the
+    transition model), not ``-gamma``: a sparse layer's mean ``ln I`` lies farther below
+    ``ln <I>`` (-1.03 at 0.0024 per µm^3 at the 2025 configuration), and with ``-gamma`` its
+    brightness came out ``exp(-1.03 + 0.58) = 0.64`` times the truth. Every jackknife replicate
+    repeats the chain (its slopes, boundaries, window); the offsets' SEs
+    (``fitted["offsets_se"]``, from ``var ln I``'s) are added in quadrature, to the window's
+    top through its row weights and to each brightness directly.
 
     A top layer cut by the window's floor (``cut_top``: most of its rows had more than
     ``MAX_CLIPPED`` of their pixels clipped, so that its fitted rows are a few rows at its
@@ -353,9 +401,8 @@ def window_and_brightness(
     segs : list of (int, int)
         Each layer's rows.
     fitted : dict
-        ``mu``, ``mu_se``, ``mu_jk``, ``tops``, ``tops_jk``.
-    dens : dict
-        :func:`layer_densities`' result (``ident``, ``rho``).
+        ``mu``, ``mu_se``, ``mu_jk``, ``tops``, ``tops_jk``, ``offsets`` and ``offsets_se``
+        (each layer's ``E ln(I/<I>)`` and its SE, :func:`log_offsets`).
     cfg : ScannerConfig
         The scanner's configuration.
     cut_top : dict, optional
@@ -372,7 +419,7 @@ def window_and_brightness(
     consts = slab_constants(cfg.beam_radius)
     mu, mu_se, mu_jk = (np.array(fitted[k], float) for k in ("mu", "mu_se", "mu_jk"))
     tops, tops_jk = fitted["tops"], fitted["tops_jk"]
-    ident, rho = dens["ident"], dens["rho"]
+    offsets, offsets_se = fitted["offsets"], fitted["offsets_se"]
     n_layers, blocks = mu.size, m_jk.shape[0]
     psf_area = _psf_area(cfg)
     slope_ok = mu > SIGNIFICANCE * mu_se
@@ -383,31 +430,29 @@ def window_and_brightness(
         c = sum(mu_[j] * (tops_[j + 1] - tops_[j]) for j in range(k))
         return c + mu_[k] * (zz - tops_[k])
 
-    def mean_log(k):
-        """``E ln(I/<I>)`` of layer ``k`` (fully developed where the density is unknown)."""
-        if not ident[k] or not np.isfinite(rho[k]):
-            return -np.euler_gamma
-        return slab_log_moments(rho[k], cfg)[0]
+    def placing(mu_):
+        """Layers that place the window (a significant, positive slope)."""
+        return [k for k in range(n_layers) if slope_ok[k] and mu_[k] > 0]
 
     def window_top(mm, mu_, tops_):
         offs, wts = [], []
-        for k, (a, b) in enumerate(segs):
-            if not slope_ok[k] or mu_[k] <= 0:
-                continue
+        for k in placing(mu_):
+            a, b = segs[k]
             rho_e = mu_[k] / consts["A2"]
             zz = z[a:b]
             pred = (np.log(rho_e * consts["a2_y"] * psf_area) - 2 * cum_shadow(zz, k, mu_, tops_)
-                    + mean_log(k))  # fmt: skip
+                    + offsets[k])  # fmt: skip
             offs.append(float(np.mean(pred - mm[a:b])))
             wts.append(b - a)
         return float(np.average(offs, weights=wts)) if offs else np.nan
 
-    def brightness(k, mm, mu_, tops_, wt_):
-        """``rho E/100`` of layer ``k`` from its mean level under the window's top ``wt_``."""
+    def brightness(k, ii, mu_, tops_, wt_):
+        """``rho E/100`` of layer ``k`` from its rows' mean intensity ``ii`` under the window's
+        top ``wt_``."""
         a, b = segs[k]
         zz = z[a:b]
-        ln_re = mm[a:b] + wt_ + 2 * cum_shadow(zz, k, mu_, tops_) - mean_log(k)
-        return float(np.exp(np.mean(ln_re))) / (consts["a2_y"] * psf_area)
+        unshadowed = ii[a:b] * np.exp(wt_ + 2 * cum_shadow(zz, k, mu_, tops_))
+        return float(np.mean(unshadowed)) / (consts["a2_y"] * psf_area)
 
     def chain(mm, mu_, tops_, intensity):
         """The window's top, with the cut top layer's ``mu`` (``mu_`` updated in place)."""
@@ -427,20 +472,27 @@ def window_and_brightness(
         cut_top["intensity"], cut_top["intensity_jk"])  # fmt: skip
     wt = chain(m, mu, tops, top_i)
     wt_jk = np.array([chain(m_jk[j], mu_jk[j], tops_jk[j], top_i_jk[j]) for j in range(blocks)])
-    wt_se = _jackknife(wt_jk)
+    # the offsets' own uncertainty (var ln I's), through the placing layers' row weights
+    rows = np.array([segs[k][1] - segs[k][0] for k in placing(mu)], float)
+    wt_var_offsets = float(np.sum((rows / rows.sum() * offsets_se[placing(mu)]) ** 2)) if (
+        rows.size) else 0.0  # fmt: skip
+    wt_se = math.hypot(_jackknife(wt_jk), math.sqrt(wt_var_offsets))
 
     # rho E/100 per layer: from mu where the slope is significant, else from the brightness
     rho_e = mu / consts["A2"]
     rho_e_se = mu_se / consts["A2"]
     if cut_top is not None and np.isfinite(wt):
-        rho_e_se[0] = _jackknife(np.log(mu_jk[:, 0])) * rho_e[0]
+        rho_e_se[0] = math.hypot(_jackknife(np.log(mu_jk[:, 0])), math.sqrt(wt_var_offsets))
+        rho_e_se[0] *= rho_e[0]
         mu_se[0] = consts["A2"] * rho_e_se[0]
     for k in range(n_layers):
         if slope_ok[k] or not np.isfinite(wt) or (k == 0 and cut_top is not None):
             continue
-        rho_e[k] = brightness(k, m, mu, tops, wt)
-        reps = [brightness(k, m_jk[j], mu_jk[j], tops_jk[j], wt_jk[j]) for j in range(blocks)]
-        rho_e_se[k] = _jackknife(np.log(np.array(reps))) * rho_e[k]
+        rho_e[k] = brightness(k, fitted["intensity"], mu, tops, wt)
+        reps = [brightness(k, fitted["intensity_jk"][j], mu_jk[j], tops_jk[j], wt_jk[j])
+                for j in range(blocks)]  # fmt: skip
+        log_se = _jackknife(np.log(np.array(reps)))
+        rho_e_se[k] = math.sqrt(log_se**2 + wt_var_offsets) * rho_e[k]
     return {"wt": wt, "wt_se": wt_se, "wt_jk": wt_jk, "rho_e": rho_e, "rho_e_se": rho_e_se,
             "mu": mu, "mu_se": mu_se, "mu_jk": mu_jk}  # fmt: skip
 

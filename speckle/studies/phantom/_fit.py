@@ -72,10 +72,12 @@ from ._density import (
     _jackknife,
     layer_densities,
     layer_variances,
+    log_offset_se,
+    log_offsets,
     window_and_brightness,
 )
 from ._inclusions import fit_inclusions, no_inclusions, remove_inclusions
-from ._shapes import SHAPE_DEGREE, _transition_model, fit_shapes, flat_shapes, log_offsets
+from ._shapes import SHAPE_DEGREE, _transition_model, fit_shapes, flat_shapes
 from .patients import patient_table, region_volumes
 
 __all__ = ["BLOCKS", "GAP", "MAX_CLIPPED", "PhantomFit", "fit_phantom"]
@@ -145,6 +147,15 @@ def _log_intensity(levels: np.ndarray) -> np.ndarray:
     out = db / _NEPER_DB
     clip = (step - _scan.DYNAMIC_RANGE) / _NEPER_DB
     out[levels == 0] = clip - 1.0
+    return out
+
+
+def _intensity(levels: np.ndarray) -> np.ndarray:
+    """``I/I_max`` of each pixel (bin midpoints; clipped pixels at half the clip level ``c``:
+    an intensity density flat below ``c``, as :func:`_log_intensity`'s ``ln c - 1``)."""
+    out = np.exp(_log_intensity(levels))
+    step = _scan.DYNAMIC_RANGE / _scan.LEVELS
+    out[levels == 0] = 0.5 * math.exp((step - _scan.DYNAMIC_RANGE) / _NEPER_DB)
     return out
 
 
@@ -492,9 +503,7 @@ def _cut_top(lev, rows, segs, tops, keep, cfg) -> dict[str, np.ndarray] | None:
     own = own[own * p < tops[1] - GAP * p]
     if own.size == 0:
         return None
-    step = _scan.DYNAMIC_RANGE / _scan.LEVELS
-    intensity = np.exp(_log_intensity(lev[own]))
-    intensity[lev[own] == 0] = 0.5 * math.exp((step - _scan.DYNAMIC_RANGE) / _NEPER_DB)
+    intensity = _intensity(lev[own])
     return {
         "z": own * p,
         "intensity": intensity.mean(axis=1),
@@ -531,6 +540,9 @@ def _fit_levels(
     keep = [np.setdiff1d(np.arange(li.shape[1]), g) for g in group]
     m = li.mean(axis=1)
     m_jk = np.stack([li[:, k].mean(axis=1) for k in keep])  # (blocks, rows)
+    intensity = _intensity(lev[rows])
+    i_rows, i_rows_jk = intensity.mean(axis=1), np.stack([intensity[:, k].mean(axis=1)
+                                                          for k in keep])  # fmt: skip
     g = blocks
     dev_jk = m_jk - m_jk.mean(0)
     s2_rows = (g - 1) / g * np.sum(dev_jk**2, axis=0)
@@ -618,9 +630,13 @@ def _fit_levels(
 
     # density, energy, the window and rho E/100: _density.py
     dens = layer_densities(v, v_jk, mu, mu_fine, cfg)
-    fitted = {"mu": mu, "mu_se": mu_se, "mu_jk": mu_jk, "tops": tops, "tops_jk": tops_jk}
+    fitted = {
+        "mu": mu, "mu_se": mu_se, "mu_jk": mu_jk, "tops": tops, "tops_jk": tops_jk,
+        "offsets": offsets, "offsets_se": log_offset_se(v, dens["v_se"], cfg),
+        "intensity": i_rows, "intensity_jk": i_rows_jk,
+    }  # fmt: skip
     cut = _cut_top(lev, rows, segs, tops, keep, cfg)
-    win = window_and_brightness(m, m_jk, z, segs, fitted, dens, cfg, cut_top=cut)
+    win = window_and_brightness(m, m_jk, z, segs, fitted, cfg, cut_top=cut)
     rho, rho_se, bound, v_se = dens["rho"], dens["rho_se"], dens["bound"], dens["v_se"]
     energy, energy_se, energy_bound = dens["energy"], dens["energy_se"], dens["energy_bound"]
     wt, wt_se, rho_e, rho_e_se = win["wt"], win["wt_se"], win["rho_e"], win["rho_e_se"]

@@ -43,7 +43,7 @@ from scipy import optimize
 from ...conventions import attrs
 from ...synthoct import _scan
 from ...synthoct.files import ScannerConfig
-from ._density import _equivalent, slab_inverse_density, slab_log_moments
+from ._density import log_offsets
 
 __all__ = [
     "BOUNDARY_BLOCKS",
@@ -51,7 +51,6 @@ __all__ = [
     "TransitionModel",
     "fit_shapes",
     "flat_shapes",
-    "log_offsets",
 ]
 
 #: Polynomial degree of each boundary shape.
@@ -146,26 +145,6 @@ def _transition_model(n_pixels: int) -> TransitionModel:
     """The :class:`TransitionModel` of ``n_pixels``, built once (0.04 s at 975 pixels) and shared
     by the fit's passes (read only, but for its tables' cache)."""
     return TransitionModel(n_pixels)
-
-
-def log_offsets(log_variance, cfg: ScannerConfig) -> np.ndarray:
-    """``E ln(I/<I>)`` of each layer's speckle from its ``var ln I`` (shadowing removed).
-
-    The slab's sparse-speckle theory (:func:`~speckle.studies.phantom._density.slab_log_moments`
-    at the density whose ``var ln I`` is the measured one); ``-gamma`` (fully developed) where
-    the variance does not exceed ``pi^2/6`` or is NaN. Sparse speckle's ``E ln I`` lies farther
-    below ``ln <I>`` (-1.43 at 0.3 times the 2025 configuration's mean density, -0.70 at its
-    mean, -0.58 dense): two layers' mean ``ln I`` differ from their mean intensities' by
-    different offsets, which the transition between them must use.
-    """
-    out = []
-    for v in np.atleast_1d(np.asarray(log_variance, float)):
-        inv = slab_inverse_density(v, cfg) if np.isfinite(v) and v > np.pi**2 / 6 else 0.0
-        if not np.isfinite(inv) or inv <= 0:
-            out.append(-np.euler_gamma)
-        else:
-            out.append(slab_log_moments(_equivalent(cfg) / inv, cfg)[0])
-    return np.array(out)
 
 
 def _shape_variables(ds, shape, tilt, tilt_se, curv, curv_se, criterion):
