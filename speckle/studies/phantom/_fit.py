@@ -41,9 +41,10 @@ The fit, on the central lines (``|x| <= x_max/2 - 3 r``, where the box does not 
    for the lines' correlation) inverted to the density by the slab's exact sparse-speckle
    theory (its amplitudes ``exp(-y^2/r^2)``), identified where its excess over ``pi^2/6``
    exceeds 5 SE (else a lower bound), the energy ``E = 100 mu/(rho A2)``, and the window's top
-   from the layers' mean levels (:mod:`speckle.studies.phantom._density`); a top layer cut
-   by the floor (its only fitted rows a few in the next boundary's transition) takes ``rho E``
-   from the mean intensity of its own rows instead (:func:`_cut_top`);
+   from the layers' mean levels (:mod:`speckle.studies.phantom._density`); a layer without a
+   significant slope takes ``rho E`` from its rows' mean intensity under that window; a top
+   layer cut by the floor (its only fitted rows a few in the next boundary's transition)
+   takes ``rho E`` from the mean intensity of its own rows instead (:func:`_cut_top`);
 4. standard errors: delete-one-block jackknife over :data:`BLOCKS` lateral blocks of lines
    (the line-to-line correlations of speckle and shadowing included), the segmentation fixed;
    ``var ln I`` and the density over blocks of 8 beam radii when there are more of them.
