@@ -71,6 +71,7 @@ from ._count import CRITERION, count_blocks, layer_count
 from ._density import (
     SIGNIFICANCE,
     _jackknife,
+    _psf_area,
     layer_densities,
     layer_variances,
     log_offset_se,
@@ -79,6 +80,7 @@ from ._density import (
 )
 from ._inclusions import fit_inclusions, no_inclusions, remove_inclusions
 from ._shapes import SHAPE_DEGREE, _transition_model, fit_shapes, flat_shapes
+from ._slab import slab_constants
 from .patients import patient_table, region_volumes
 
 __all__ = ["BLOCKS", "GAP", "MAX_CLIPPED", "PhantomFit", "fit_phantom"]
@@ -507,6 +509,10 @@ def _cut_top(lev, rows, segs, tops, keep, cfg) -> dict[str, np.ndarray] | None:
     intensity = _intensity(lev[own])
     return {
         "z": own * p,
+        # E ln(I/<I>) of its rows as the row means see them (clipped pixels at ln c - 1)
+        "log_offset": float(
+            np.mean(_log_intensity(lev[own]).mean(axis=1) - np.log(intensity.mean(axis=1)))
+        ),
         "intensity": intensity.mean(axis=1),
         "intensity_jk": np.stack([intensity[:, k].mean(axis=1) for k in keep]),
     }
@@ -596,12 +602,14 @@ def _fit_levels(
     v, v_jk, mu_fine = layer_variances(li, z, segs, keep, cfg)
     offsets = log_offsets(v, cfg)
 
-    def tops_of(mm, fits):
+    def tops_of(mm, fits, first=None):
+        """The boundaries; ``first``: the first row of boundary 1's window (a cut top layer's
+        fitted rows are the transition's), else the row above its gap."""
         out = [0.0]
         for k in range(1, len(segs)):
             (s1, i1), (s2_, i2) = fits[k - 1], fits[k]
             lo, hi = segs[k - 1][1], segs[k][0]  # gap rows lo .. hi-1
-            idx = np.arange(lo - 1, hi + 1)
+            idx = np.arange(lo - 1 if first is None or k > 1 else first, hi + 1)
             zz = z[idx]
 
             def misfit(t, zz=zz, idx=idx, s1=s1, i1=i1, s2_=s2_, i2=i2, c=offsets[k - 1 : k + 1]):
@@ -610,7 +618,7 @@ def _fit_levels(
                 return float(np.sum((pred - mm[idx]) ** 2))
 
             res = optimize.minimize_scalar(
-                misfit, bounds=(z[lo - 1] - p, z[hi] + p), method="bounded",
+                misfit, bounds=(z[idx[0]] - p, z[hi] + p), method="bounded",
                 options={"xatol": 1e-3},
             )  # fmt: skip
             out.append(float(res.x))
@@ -638,6 +646,28 @@ def _fit_levels(
     }  # fmt: skip
     cut = _cut_top(lev, rows, segs, tops, keep, cfg)
     win = window_and_brightness(m, m_jk, z, segs, fitted, cfg, cut_top=cut)
+    if cut is not None and np.isfinite(win["wt"]):
+        # the cut top layer's line is its brightness's, not its few rows' (the transition's):
+        # its boundary is located again over those rows too, then its brightness again
+        level = slab_constants(cfg.beam_radius)["a2_y"] * _psf_area(cfg)
+
+        offsets = offsets.copy()
+        offsets[0] = cut["log_offset"]  # the transition's; var ln I has no rows here
+
+        def top_line(mu0, wt_):
+            return -2 * mu0, math.log(mu0 / slab_constants(cfg.beam_radius)["A2"] * level) - (
+                wt_ - offsets[0])  # fmt: skip
+
+        tops = np.array(tops_of(m, [top_line(win["mu"][0], win["wt"]), *fits[1:]], segs[0][0]))
+        tops_jk = np.array([
+            tops_of(m_jk[j], [top_line(win["mu_jk"][j, 0], win["wt_jk"][j]), *rep[j][0][1:]],
+                    segs[0][0])
+            for j in range(blocks)
+        ])  # fmt: skip
+        top_se = np.array([_jackknife(tops_jk[:, k]) for k in range(n_layers)])
+        fitted.update(tops=tops, tops_jk=tops_jk)
+        cut = _cut_top(lev, rows, segs, tops, keep, cfg)
+        win = window_and_brightness(m, m_jk, z, segs, fitted, cfg, cut_top=cut)
     rho, rho_se, bound, v_se = dens["rho"], dens["rho_se"], dens["bound"], dens["v_se"]
     energy, energy_se, energy_bound = dens["energy"], dens["energy_se"], dens["energy_bound"]
     wt, wt_se, rho_e, rho_e_se = win["wt"], win["wt_se"], win["rho_e"], win["rho_e_se"]
