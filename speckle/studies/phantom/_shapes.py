@@ -206,13 +206,14 @@ def _block_rss(mb, z, taus, s1, s2, p, cdf, offsets=None):
     return out
 
 
-def _split_rss(mb, z, t1, t2, slopes, p, model, offsets=None):
-    """Least-squares misfit, summed over the blocks ``mb`` (blocks, rows ``z``), of two
+def _split_rss(mb, zs, t1, t2, slopes, p, model, offsets=None):
+    """Least-squares misfit, summed over the blocks' row means ``mb`` (at depths ``zs``, per
+    block), of two
     boundaries at ``t1[b] < t2[b]`` (per block) with a layer between them (the three layers'
     ``slopes``, levels free per block from the rows more than :data:`_LEVEL_ROWS` pixels from a
     boundary); inf where a layer has fewer than 2 such rows."""
     total = 0.0
-    for row, a, b in zip(mb, t1, t2, strict=True):
+    for row, z, a, b in zip(mb, zs, t1, t2, strict=True):
         edges = [-np.inf, a, b, np.inf]
         masks = [(z > edges[j] + _LEVEL_ROWS * p) & (z < edges[j + 1] - _LEVEL_ROWS * p)
                  for j in range(3)]  # fmt: skip
@@ -348,30 +349,46 @@ def fit_shapes(
     xb = np.array([x[g].mean() for g in groups])
     mb = np.stack([li[:, g].mean(axis=1) for g in groups])  # (blocks, pixels)
     m1, m2 = float(np.mean(x)), float(np.mean(x**2))
+    last = ds.attrs["last_row"] * p  # the flat fit's last row (µm): windows end there
 
     def locate(lo, hi, s_above, s_below, offsets):
-        """Shape, coefficients, SEs and joint misfit of one boundary in rows ``lo..hi`` (µm)
-        between layers of slopes ``s_above``, ``s_below`` and ``E ln(I/<I>)`` ``offsets``;
-        None if the window is too short."""
-        sel = (z >= lo) & (z <= hi)
+        """Shape, coefficients, SEs and joint misfit of one boundary in rows ``lo..hi`` (µm,
+        per block) between layers of slopes ``s_above``, ``s_below`` and ``E ln(I/<I>)``
+        ``offsets``; None if every block's window is too short."""
+        lo, hi = np.broadcast_to(lo, xb.shape), np.broadcast_to(hi, xb.shape)
         margin = (_LEVEL_ROWS + 2) * p
-        taus = np.arange(lo + margin, hi - margin + 1e-9, p / 4)
+        # one grid of trial positions over every block's window (each block's misfit inf
+        # outside its own): the joint search interpolates the blocks' misfits on one grid
+        start = float(np.min(lo)) + margin
+        taus = start + np.arange(int(np.floor((np.max(hi) - margin - start) / (p / 4) + 1e-6))
+                                 + 1) * (p / 4)  # fmt: skip
         if taus.size < 2:
             return None
-        rss = np.stack([_block_rss(mb[b, sel], z[sel], taus, s_above, s_below, p, cdf, offsets)
-                        for b in range(BOUNDARY_BLOCKS)])  # fmt: skip
-        return _boundary_shape(rss, taus, xb, cfg.x_max, shapes, p,
-                               int(sel.sum()) * BOUNDARY_BLOCKS)  # fmt: skip
+        rss = np.full((BOUNDARY_BLOCKS, taus.size), np.inf)
+        n_rows = 0
+        for b in range(BOUNDARY_BLOCKS):
+            sel = (z >= lo[b]) & (z <= hi[b])
+            inside = (taus >= lo[b] + margin - 1e-9) & (taus <= hi[b] - margin + 1e-9)
+            n_rows += int(sel.sum())
+            if inside.any():
+                rss[b, inside] = _block_rss(mb[b, sel], z[sel], taus[inside], s_above,
+                                            s_below, p, cdf, offsets)  # fmt: skip
+        if not np.isfinite(rss).any():
+            return None
+        return _boundary_shape(rss, taus, xb, cfg.x_max, shapes, p, n_rows)
 
     def anchor(cf):
         """Depth of a located boundary at the central lines' mean offset."""
         return float(cf[0] + cf[1] * m1 + cf[2] * (m2 - cfg.x_max**2 / 12))
 
-    def detect(cur):
+    def detect(cur, prev):
         """Each boundary's anchor depth, shape, coefficients and SEs, located around ``cur``'s
         tops; two neighbouring boundaries merge into one shaped boundary where that fits the
         blocks' profiles at least as well as the two flat ones with a layer between them (a
-        tilted or curved boundary that the flat fit saw as a ramp: one level per block fewer)."""
+        tilted or curved boundary that the flat fit saw as a ramp: one level per block fewer).
+        ``cur`` is the flat fit of the levels flattened along ``prev`` (anchors, coefficients;
+        None: the scan's own levels): each block's window is mapped back through that
+        flattening (:func:`window`)."""
         tops, slope = cur.top.values, -2 * cur.attenuation.values
         off = log_offsets(cur.log_variance.values, cfg)
         end = cur.attrs["last_row"] * p  # the last fitted row
@@ -380,28 +397,43 @@ def fit_shapes(
         def mid(k):
             return 0.5 * (bottom[k] + bottom[k + 1])
 
+        def window(zf):
+            """Depths (µm, per block) of the flattened levels' depth ``zf``: ``zf + delta``
+            at the block's mean offset, ``delta`` the flattening's (:func:`flatten`), within
+            the first flat fit's rows."""
+            if prev is None:
+                return np.full(xb.shape, zf)
+            p_tops, p_coef = prev
+            d = p_coef[:, 1, None] * (xb - m1) + p_coef[:, 2, None] * (xb**2 - m2)
+            d[0] = 0.0
+            moved = zf + np.array([np.interp(zf, p_tops, d[:, j]) for j in range(xb.size)])
+            return np.clip(moved, 0.0, last)
+
         anchors, shape, coef, ses = [0.0], ["flat"], [np.zeros(3)], [np.full(3, np.nan)]
-        located = [None] + [locate(mid(k - 1), mid(k), slope[k - 1], slope[k], off[k - 1 : k + 1])
-                            for k in range(1, tops.size)]  # fmt: skip
+        located = [None] + [locate(window(mid(k - 1)), window(mid(k)), slope[k - 1], slope[k],
+                                   off[k - 1 : k + 1]) for k in range(1, tops.size)]  # fmt: skip
 
         def at_blocks(k):
-            cf = located[k][1] if located[k] is not None else np.array([tops[k], 0.0, 0.0])
+            if located[k] is None:
+                return window(tops[k])
+            cf = located[k][1]
             return cf[0] + cf[1] * xb + cf[2] * (xb**2 - cfg.x_max**2 / 12)
 
         k = 1
         while k < tops.size:
             if k + 1 < tops.size:
-                merged = locate(mid(k - 1), mid(k + 1), slope[k - 1], slope[k + 1],
-                                off[[k - 1, k + 1]])  # fmt: skip
+                lo, hi = window(mid(k - 1)), window(mid(k + 1))
+                merged = locate(lo, hi, slope[k - 1], slope[k + 1], off[[k - 1, k + 1]])
                 if merged is not None and merged[0] != "flat":
                     # the merged profile must sweep at least half the layer between (a ramp
                     # is the boundary's sweep across the lines) and fit the blocks as well as
                     # the two located boundaries with the layer between them
                     cf = merged[1]
                     sweep = np.ptp(cf[1] * x + cf[2] * x**2)
-                    window = (z >= mid(k - 1)) & (z <= mid(k + 1))
-                    split = _split_rss(mb[:, window], z[window], at_blocks(k),
-                                       at_blocks(k + 1), slope[k - 1 : k + 2], p, cdf,
+                    rows = [(z >= lo[b]) & (z <= hi[b]) for b in range(BOUNDARY_BLOCKS)]
+                    split = _split_rss([mb[b, r] for b, r in enumerate(rows)],
+                                       [z[r] for r in rows], at_blocks(k), at_blocks(k + 1),
+                                       slope[k - 1 : k + 2], p, cdf,
                                        off[k - 1 : k + 2])  # fmt: skip
                     if sweep >= 0.5 * (tops[k + 1] - tops[k]) and merged[3] <= split:
                         anchors.append(anchor(cf))
@@ -433,16 +465,18 @@ def fit_shapes(
         out = np.where(inside, lev[np.clip(raw, 0, n_pix - 1), np.arange(x.size)], 0)
         return out.astype(np.uint8)
 
-    current = ds
+    current, prev = ds, None
     for _ in range(ITERATIONS):
-        tops, shape, coef, ses = detect(current)
+        tops, shape, coef, ses = detect(current, prev)
         if all(sh == "flat" for sh in shape):
             return flat_shapes(ds)
         new = refit(flatten(tops, coef))
         same = new.sizes["layer"] == tops.size and np.all(np.abs(new.top.values - tops) < p)
-        if same:
+        # the first round's windows are flat around the flat fit's depths (a steep boundary's
+        # outer blocks beyond them): one round more at least, in windows that follow the shape
+        if same and prev is not None:
             break
-        current = new
+        current, prev = new, (tops, coef)
     # each refitted boundary takes the shape of the nearest located one (within 3 pixels)
     pick = [0] + [
         int(np.argmin(np.abs(tops - t))) if np.min(np.abs(tops[1:] - t)) < 3 * p else -1
