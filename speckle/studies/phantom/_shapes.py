@@ -359,9 +359,7 @@ def fit_shapes(
         margin = (_LEVEL_ROWS + 2) * p
         # one grid of trial positions over every block's window (each block's misfit inf
         # outside its own): the joint search interpolates the blocks' misfits on one grid
-        start = float(np.min(lo)) + margin
-        taus = start + np.arange(int(np.floor((np.max(hi) - margin - start) / (p / 4) + 1e-6))
-                                 + 1) * (p / 4)  # fmt: skip
+        taus = np.arange(np.min(lo) + margin, np.max(hi) - margin + 1e-9, p / 4)
         if taus.size < 2:
             return None
         rss = np.full((BOUNDARY_BLOCKS, taus.size), np.inf)
@@ -375,20 +373,24 @@ def fit_shapes(
                                             s_below, p, cdf, offsets)  # fmt: skip
         if not np.isfinite(rss).any():
             return None
-        return _boundary_shape(rss, taus, xb, cfg.x_max, shapes, p, n_rows)
+        # a block whose least misfit is at its window's end: its position may lie beyond
+        finite = np.isfinite(rss)
+        ends = [(np.argmin(np.where(f, r, np.inf)), np.flatnonzero(f)[[0, -1]])
+                for r, f in zip(rss, finite, strict=True) if f.any()]  # fmt: skip
+        cut = any(i in end for i, end in ends)
+        return (*_boundary_shape(rss, taus, xb, cfg.x_max, shapes, p, n_rows), cut)
 
     def anchor(cf):
         """Depth of a located boundary at the central lines' mean offset."""
         return float(cf[0] + cf[1] * m1 + cf[2] * (m2 - cfg.x_max**2 / 12))
 
-    def detect(cur, prev):
+    def detect(cur):
         """Each boundary's anchor depth, shape, coefficients and SEs, located around ``cur``'s
-        tops; two neighbouring boundaries merge into one shaped boundary where that fits the
-        blocks' profiles at least as well as the two flat ones with a layer between them (a
-        tilted or curved boundary that the flat fit saw as a ramp: one level per block fewer).
-        ``cur`` is the flat fit of the levels flattened along ``prev`` (anchors, coefficients;
-        None: the scan's own levels): each block's window is mapped back through that
-        flattening (:func:`window`)."""
+        tops (again in windows that follow its shape where a block's window cut it off:
+        :func:`window`); two neighbouring boundaries merge into one shaped boundary where that
+        fits the blocks' profiles at least as well as the two flat ones with a layer between
+        them (a tilted or curved boundary that the flat fit saw as a ramp: one level per block
+        fewer)."""
         tops, slope = cur.top.values, -2 * cur.attenuation.values
         off = log_offsets(cur.log_variance.values, cfg)
         end = cur.attrs["last_row"] * p  # the last fitted row
@@ -397,21 +399,35 @@ def fit_shapes(
         def mid(k):
             return 0.5 * (bottom[k] + bottom[k + 1])
 
-        def window(zf):
-            """Depths (µm, per block) of the flattened levels' depth ``zf``: ``zf + delta``
-            at the block's mean offset, ``delta`` the flattening's (:func:`flatten`), within
-            the first flat fit's rows."""
-            if prev is None:
+        def window(zf, along=None):
+            """Depths (µm, per block) of the depth ``zf`` of ``cur``: ``zf`` itself, or with
+            ``along`` (coefficients per boundary) ``zf + delta`` at the block's mean offset,
+            ``delta`` linear in depth between the boundaries' offsets (:func:`flatten`'s), so
+            that a window half-way between two boundaries stays half-way between them; within
+            the flat fit's rows."""
+            if along is None:
                 return np.full(xb.shape, zf)
-            p_tops, p_coef = prev
-            d = p_coef[:, 1, None] * (xb - m1) + p_coef[:, 2, None] * (xb**2 - m2)
+            d = along[:, 1, None] * (xb - m1) + along[:, 2, None] * (xb**2 - m2)
             d[0] = 0.0
-            moved = zf + np.array([np.interp(zf, p_tops, d[:, j]) for j in range(xb.size)])
+            moved = zf + np.array([np.interp(zf, tops, d[:, j]) for j in range(xb.size)])
             return np.clip(moved, 0.0, last)
 
+        def place(k):
+            """Boundary ``k`` located half-way to its neighbours; where a shaped boundary's
+            block found its least misfit at its window's end (its position may lie beyond: a
+            steep boundary's outer blocks), located again in windows moved along that shape."""
+            one = locate(window(mid(k - 1)), window(mid(k)), slope[k - 1], slope[k],
+                         off[k - 1 : k + 1])  # fmt: skip
+            if one is None or one[0] == "flat" or not one[4]:
+                return one
+            along = np.zeros((tops.size, 3))
+            along[k] = one[1]
+            again = locate(window(mid(k - 1), along), window(mid(k), along), slope[k - 1],
+                           slope[k], off[k - 1 : k + 1])  # fmt: skip
+            return one if again is None else again
+
         anchors, shape, coef, ses = [0.0], ["flat"], [np.zeros(3)], [np.full(3, np.nan)]
-        located = [None] + [locate(window(mid(k - 1)), window(mid(k)), slope[k - 1], slope[k],
-                                   off[k - 1 : k + 1]) for k in range(1, tops.size)]  # fmt: skip
+        located = [None] + [place(k) for k in range(1, tops.size)]
 
         def at_blocks(k):
             if located[k] is None:
@@ -465,18 +481,16 @@ def fit_shapes(
         out = np.where(inside, lev[np.clip(raw, 0, n_pix - 1), np.arange(x.size)], 0)
         return out.astype(np.uint8)
 
-    current, prev = ds, None
+    current = ds
     for _ in range(ITERATIONS):
-        tops, shape, coef, ses = detect(current, prev)
+        tops, shape, coef, ses = detect(current)
         if all(sh == "flat" for sh in shape):
             return flat_shapes(ds)
         new = refit(flatten(tops, coef))
         same = new.sizes["layer"] == tops.size and np.all(np.abs(new.top.values - tops) < p)
-        # the first round's windows are flat around the flat fit's depths (a steep boundary's
-        # outer blocks beyond them): one round more at least, in windows that follow the shape
-        if same and prev is not None:
+        if same:
             break
-        current, prev = new, (tops, coef)
+        current = new
     # each refitted boundary takes the shape of the nearest located one (within 3 pixels)
     pick = [0] + [
         int(np.argmin(np.abs(tops - t))) if np.min(np.abs(tops[1:] - t)) < 3 * p else -1
