@@ -20,6 +20,12 @@ a steep boundary's sweep across the lines, which the flat fit cuts in two with a
 between) where that boundary, located between the layers above and below, sweeps at least half
 the layer between and fits the blocks at least as well as the two located boundaries with the
 layer between them (one level per block more).
+Where a shaped boundary's block finds its least misfit at its window's end (its position may
+lie beyond: a steep boundary's outer blocks, its depth sweeping past the window half-way to a
+neighbour), the boundary is located once more in windows moved along the located shape: the
+window edge at the flat fit's depth ``z'`` moves to ``z' + delta(x_b, z')``, ``delta`` as in
+the flattening below with this boundary's shape only, so that an edge half-way between two
+boundaries stays half-way between them (within the flat fit's rows).
 
 With any boundary not flat, the levels are flattened: line ``x``'s row at depth
 ``z' + delta(x, z')`` moves to ``z'``, ``delta`` linear in ``z'`` between the boundaries'
