@@ -20,6 +20,12 @@ a steep boundary's sweep across the lines, which the flat fit cuts in two with a
 between) where that boundary, located between the layers above and below, sweeps at least half
 the layer between and fits the blocks at least as well as the two located boundaries with the
 layer between them (one level per block more).
+Where a shaped boundary's block finds its least misfit at its window's end (its position may
+lie beyond: a steep boundary's outer blocks, its depth sweeping past the window half-way to a
+neighbour), the boundary is located once more in windows moved along the located shape: the
+window edge at the flat fit's depth ``z'`` moves to ``z' + delta(x_b, z')``, ``delta`` as in
+the flattening below with this boundary's shape only, so that an edge half-way between two
+boundaries stays half-way between them (within the flat fit's rows).
 
 With any boundary not flat, the levels are flattened: line ``x``'s row at depth
 ``z' + delta(x, z')`` moves to ``z'``, ``delta`` linear in ``z'`` between the boundaries'
@@ -185,13 +191,14 @@ def _block_rss(mb, z, taus, s1, s2, p, cdf, offsets=None):
     return out
 
 
-def _split_rss(mb, z, t1, t2, slopes, p, model, offsets=None):
-    """Least-squares misfit, summed over the blocks ``mb`` (blocks, rows ``z``), of two
+def _split_rss(mb, zs, t1, t2, slopes, p, model, offsets=None):
+    """Least-squares misfit, summed over the blocks' row means ``mb`` (at depths ``zs``, per
+    block), of two
     boundaries at ``t1[b] < t2[b]`` (per block) with a layer between them (the three layers'
     ``slopes``, levels free per block from the rows more than :data:`_LEVEL_ROWS` pixels from a
     boundary); inf where a layer has fewer than 2 such rows."""
     total = 0.0
-    for row, a, b in zip(mb, t1, t2, strict=True):
+    for row, z, a, b in zip(mb, zs, t1, t2, strict=True):
         edges = [-np.inf, a, b, np.inf]
         masks = [(z > edges[j] + _LEVEL_ROWS * p) & (z < edges[j + 1] - _LEVEL_ROWS * p)
                  for j in range(3)]  # fmt: skip
@@ -327,20 +334,36 @@ def fit_shapes(
     xb = np.array([x[g].mean() for g in groups])
     mb = np.stack([li[:, g].mean(axis=1) for g in groups])  # (blocks, pixels)
     m1, m2 = float(np.mean(x)), float(np.mean(x**2))
+    last = ds.attrs["last_row"] * p  # the flat fit's last row (µm): windows end there
 
     def locate(lo, hi, s_above, s_below, offsets):
-        """Shape, coefficients, SEs and joint misfit of one boundary in rows ``lo..hi`` (µm)
-        between layers of slopes ``s_above``, ``s_below`` and ``E ln(I/<I>)`` ``offsets``;
-        None if the window is too short."""
-        sel = (z >= lo) & (z <= hi)
+        """Shape, coefficients, SEs and joint misfit of one boundary in rows ``lo..hi`` (µm,
+        per block) between layers of slopes ``s_above``, ``s_below`` and ``E ln(I/<I>)``
+        ``offsets``; None if every block's window is too short."""
+        lo, hi = np.broadcast_to(lo, xb.shape), np.broadcast_to(hi, xb.shape)
         margin = (_LEVEL_ROWS + 2) * p
-        taus = np.arange(lo + margin, hi - margin + 1e-9, p / 4)
+        # one grid of trial positions over every block's window (each block's misfit inf
+        # outside its own): the joint search interpolates the blocks' misfits on one grid
+        taus = np.arange(np.min(lo) + margin, np.max(hi) - margin + 1e-9, p / 4)
         if taus.size < 2:
             return None
-        rss = np.stack([_block_rss(mb[b, sel], z[sel], taus, s_above, s_below, p, cdf, offsets)
-                        for b in range(BOUNDARY_BLOCKS)])  # fmt: skip
-        return _boundary_shape(rss, taus, xb, cfg.x_max, shapes, p,
-                               int(sel.sum()) * BOUNDARY_BLOCKS)  # fmt: skip
+        rss = np.full((BOUNDARY_BLOCKS, taus.size), np.inf)
+        n_rows = 0
+        for b in range(BOUNDARY_BLOCKS):
+            sel = (z >= lo[b]) & (z <= hi[b])
+            inside = (taus >= lo[b] + margin - 1e-9) & (taus <= hi[b] - margin + 1e-9)
+            n_rows += int(sel.sum())
+            if inside.any():
+                rss[b, inside] = _block_rss(mb[b, sel], z[sel], taus[inside], s_above,
+                                            s_below, p, cdf, offsets)  # fmt: skip
+        if not np.isfinite(rss).any():
+            return None
+        # a block whose least misfit is at its window's end: its position may lie beyond
+        finite = np.isfinite(rss)
+        ends = [(np.argmin(np.where(f, r, np.inf)), np.flatnonzero(f)[[0, -1]])
+                for r, f in zip(rss, finite, strict=True) if f.any()]  # fmt: skip
+        cut = any(i in end for i, end in ends)
+        return (*_boundary_shape(rss, taus, xb, cfg.x_max, shapes, p, n_rows), cut)
 
     def anchor(cf):
         """Depth of a located boundary at the central lines' mean offset."""
@@ -348,9 +371,11 @@ def fit_shapes(
 
     def detect(cur):
         """Each boundary's anchor depth, shape, coefficients and SEs, located around ``cur``'s
-        tops; two neighbouring boundaries merge into one shaped boundary where that fits the
-        blocks' profiles at least as well as the two flat ones with a layer between them (a
-        tilted or curved boundary that the flat fit saw as a ramp: one level per block fewer)."""
+        tops (again in windows that follow its shape where a block's window cut it off:
+        :func:`window`); two neighbouring boundaries merge into one shaped boundary where that
+        fits the blocks' profiles at least as well as the two flat ones with a layer between
+        them (a tilted or curved boundary that the flat fit saw as a ramp: one level per block
+        fewer)."""
         tops, slope = cur.top.values, -2 * cur.attenuation.values
         off = log_offsets(cur.log_variance.values, cfg)
         end = cur.attrs["last_row"] * p  # the last fitted row
@@ -359,28 +384,57 @@ def fit_shapes(
         def mid(k):
             return 0.5 * (bottom[k] + bottom[k + 1])
 
+        def window(zf, along=None):
+            """Depths (µm, per block) of the depth ``zf`` of ``cur``: ``zf`` itself, or with
+            ``along`` (coefficients per boundary) ``zf + delta`` at the block's mean offset,
+            ``delta`` linear in depth between the boundaries' offsets (:func:`flatten`'s), so
+            that a window half-way between two boundaries stays half-way between them; within
+            the flat fit's rows."""
+            if along is None:
+                return np.full(xb.shape, zf)
+            d = along[:, 1, None] * (xb - m1) + along[:, 2, None] * (xb**2 - m2)
+            d[0] = 0.0
+            moved = zf + np.array([np.interp(zf, tops, d[:, j]) for j in range(xb.size)])
+            return np.clip(moved, 0.0, last)
+
+        def place(k):
+            """Boundary ``k`` located half-way to its neighbours; where a shaped boundary's
+            block found its least misfit at its window's end (its position may lie beyond: a
+            steep boundary's outer blocks), located again in windows moved along that shape."""
+            one = locate(window(mid(k - 1)), window(mid(k)), slope[k - 1], slope[k],
+                         off[k - 1 : k + 1])  # fmt: skip
+            if one is None or one[0] == "flat" or not one[4]:
+                return one
+            along = np.zeros((tops.size, 3))
+            along[k] = one[1]
+            again = locate(window(mid(k - 1), along), window(mid(k), along), slope[k - 1],
+                           slope[k], off[k - 1 : k + 1])  # fmt: skip
+            return one if again is None else again
+
         anchors, shape, coef, ses = [0.0], ["flat"], [np.zeros(3)], [np.full(3, np.nan)]
-        located = [None] + [locate(mid(k - 1), mid(k), slope[k - 1], slope[k], off[k - 1 : k + 1])
-                            for k in range(1, tops.size)]  # fmt: skip
+        located = [None] + [place(k) for k in range(1, tops.size)]
 
         def at_blocks(k):
-            cf = located[k][1] if located[k] is not None else np.array([tops[k], 0.0, 0.0])
+            if located[k] is None:
+                return window(tops[k])
+            cf = located[k][1]
             return cf[0] + cf[1] * xb + cf[2] * (xb**2 - cfg.x_max**2 / 12)
 
         k = 1
         while k < tops.size:
             if k + 1 < tops.size:
-                merged = locate(mid(k - 1), mid(k + 1), slope[k - 1], slope[k + 1],
-                                off[[k - 1, k + 1]])  # fmt: skip
+                lo, hi = window(mid(k - 1)), window(mid(k + 1))
+                merged = locate(lo, hi, slope[k - 1], slope[k + 1], off[[k - 1, k + 1]])
                 if merged is not None and merged[0] != "flat":
                     # the merged profile must sweep at least half the layer between (a ramp
                     # is the boundary's sweep across the lines) and fit the blocks as well as
                     # the two located boundaries with the layer between them
                     cf = merged[1]
                     sweep = np.ptp(cf[1] * x + cf[2] * x**2)
-                    window = (z >= mid(k - 1)) & (z <= mid(k + 1))
-                    split = _split_rss(mb[:, window], z[window], at_blocks(k),
-                                       at_blocks(k + 1), slope[k - 1 : k + 2], p, cdf,
+                    rows = [(z >= lo[b]) & (z <= hi[b]) for b in range(BOUNDARY_BLOCKS)]
+                    split = _split_rss([mb[b, r] for b, r in enumerate(rows)],
+                                       [z[r] for r in rows], at_blocks(k), at_blocks(k + 1),
+                                       slope[k - 1 : k + 2], p, cdf,
                                        off[k - 1 : k + 2])  # fmt: skip
                     if sweep >= 0.5 * (tops[k + 1] - tops[k]) and merged[3] <= split:
                         anchors.append(anchor(cf))
