@@ -69,7 +69,7 @@ def test_cut_top_rho_e_refuses_nothing_silently():
 
 def test_sparse_top_layer_cut_by_the_floor():
     """2025 patient 5 (three flat layers): its top layer is sparse (0.00097 per µm^3, ``var ln
-    I`` about 11) and 7-22 % of its rows' pixels are clipped, so only 4 rows in the next
+    I`` about 11) and 7-24 % of its rows' pixels are clipped, so only 4 rows in the next
     boundary's transition were fitted; their slope read as its attenuation gave -0.33/µm and
     ``rho E`` 7.9 times the truth (pull +5.1). From its rows' mean intensity: every layer's
     ``rho E`` and attenuation within 3 SE of the truth (measured pulls +1.07, -1.55, -1.65)."""
