@@ -473,9 +473,9 @@ def window_and_brightness(
     wt = chain(m, mu, tops, top_i)
     wt_jk = np.array([chain(m_jk[j], mu_jk[j], tops_jk[j], top_i_jk[j]) for j in range(blocks)])
     # the offsets' own uncertainty (var ln I's), through the placing layers' row weights
-    rows = np.array([segs[k][1] - segs[k][0] for k in placing(mu)], float)
-    wt_var_offsets = float(np.sum((rows / rows.sum() * offsets_se[placing(mu)]) ** 2)) if (
-        rows.size) else 0.0  # fmt: skip
+    used = placing(mu)
+    rows = np.array([segs[k][1] - segs[k][0] for k in used], float)
+    wt_var_offsets = float(np.sum((rows / rows.sum() * offsets_se[used]) ** 2)) if used else 0.0
     wt_se = math.hypot(_jackknife(wt_jk), math.sqrt(wt_var_offsets))
 
     # rho E/100 per layer: from mu where the slope is significant, else from the brightness

@@ -507,12 +507,11 @@ def _cut_top(lev, rows, segs, tops, keep, cfg) -> dict[str, np.ndarray] | None:
     if own.size == 0:
         return None
     intensity = _intensity(lev[own])
+    # E ln(I/<I>) of its rows as the row means see them (clipped pixels at ln c - 1)
+    log_offset = np.mean(_log_intensity(lev[own]).mean(axis=1) - np.log(intensity.mean(axis=1)))
     return {
         "z": own * p,
-        # E ln(I/<I>) of its rows as the row means see them (clipped pixels at ln c - 1)
-        "log_offset": float(
-            np.mean(_log_intensity(lev[own]).mean(axis=1) - np.log(intensity.mean(axis=1)))
-        ),
+        "log_offset": float(log_offset),
         "intensity": intensity.mean(axis=1),
         "intensity_jk": np.stack([intensity[:, k].mean(axis=1) for k in keep]),
     }
@@ -649,14 +648,14 @@ def _fit_levels(
     if cut is not None and np.isfinite(win["wt"]):
         # the cut top layer's line is its brightness's, not its few rows' (the transition's):
         # its boundary is located again over those rows too, then its brightness again
-        level = slab_constants(cfg.beam_radius)["a2_y"] * _psf_area(cfg)
-
+        consts = slab_constants(cfg.beam_radius)
+        level = consts["a2_y"] * _psf_area(cfg)  # mean I per unit rho E/100, at the window top
         offsets = offsets.copy()
         offsets[0] = cut["log_offset"]  # the transition's; var ln I has no rows here
 
         def top_line(mu0, wt_):
-            return -2 * mu0, math.log(mu0 / slab_constants(cfg.beam_radius)["A2"] * level) - (
-                wt_ - offsets[0])  # fmt: skip
+            """Slope and intercept of the cut layer's mean ln I (the window's units)."""
+            return -2 * mu0, math.log(mu0 / consts["A2"] * level) - wt_ + offsets[0]
 
         tops = np.array(tops_of(m, [top_line(win["mu"][0], win["wt"]), *fits[1:]], segs[0][0]))
         tops_jk = np.array([
@@ -671,9 +670,8 @@ def _fit_levels(
     rho, rho_se, bound, v_se = dens["rho"], dens["rho_se"], dens["bound"], dens["v_se"]
     energy, energy_se, energy_bound = dens["energy"], dens["energy_se"], dens["energy_bound"]
     wt, wt_se, rho_e, rho_e_se = win["wt"], win["wt_se"], win["rho_e"], win["rho_e_se"]
-    if cut is not None and np.isfinite(
-        wt
-    ):  # the top layer's mu from its brightness: its energy (bound) with it
+    if cut is not None and np.isfinite(wt):
+        # the top layer's mu from its brightness: its energy (and bound) with it
         mu, mu_se = win["mu"], win["mu_se"]
         energy_bound[0] = 100 * rho_e[0] / bound[0]
         energy[0] = 100 * rho_e[0] / rho[0]
