@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from scipy import stats
 
 import speckle
 
@@ -40,15 +41,16 @@ def test_case_refuses_bad_options(kwargs, match):
 # --- the closed loop: pulls, layer counts, boundaries -----------------------------------------
 
 REDUCED = speckle.synthoct_config("reduced")
-#: Fraction of a normal distribution within 2 SD.
-NORMAL_2SD = 0.9545
+#: Fraction of a jackknife pull within 2: the fit's SEs are delete-one-block jackknifes over 16
+#: lateral blocks, so a pull is Student's t with 15 degrees of freedom, ``2 F_15(2) - 1``.
+JACKKNIFE_2SD = 2 * stats.t.cdf(2.0, 15) - 1
 
 
-def pulls_hold(pulls) -> tuple[float, float]:
-    """Fraction of finite pulls within 2 and its binomial SE under the normal distribution."""
+def pulls_hold(pulls, expected: float = JACKKNIFE_2SD) -> tuple[float, float]:
+    """Fraction of finite pulls within 2 and its binomial SE at the ``expected`` fraction."""
     pulls = np.asarray(pulls, float)
     pulls = pulls[np.isfinite(pulls)]
-    return float(np.mean(np.abs(pulls) < 2)), math.sqrt(NORMAL_2SD * (1 - NORMAL_2SD) / pulls.size)
+    return float(np.mean(np.abs(pulls) < 2)), math.sqrt(expected * (1 - expected) / pulls.size)
 
 
 def loop(cases):
@@ -70,14 +72,15 @@ def flat_cases():
 def test_closed_loop_flat(flat_cases):
     """Layer counts right in at least 7 of 8 (measured 8 of 8 here; 18 of 20 over seeds
     0-19: the failures are spurious layers, see docs/explanation/phantom_fit.md), every
-    boundary within a pixel, the pulls of the top, mu and rho E within 2 as often as a normal
-    distribution says (95.45 %) within 3 binomial SEs, and no flat boundary fitted tilted."""
+    boundary within a pixel, the pulls of the top, mu and rho E within 2 as often as the
+    jackknife's Student's t says (93.6 %) within 3 binomial SEs, and no flat boundary fitted
+    tilted."""
     n_right, bounds, pulls = loop(flat_cases)
     assert n_right >= 7
     assert np.all(bounds < 1.0)
     for name, values in pulls.items():
         fraction, se = pulls_hold(values)
-        assert abs(fraction - NORMAL_2SD) < 3 * se, (name, fraction, se)
+        assert abs(fraction - JACKKNIFE_2SD) < 3 * se, (name, fraction, se)
     for case in flat_cases:
         assert set(case.fit_shape.values) <= {"flat", "curved", "tilted"}
 
@@ -89,16 +92,18 @@ def test_closed_loop_challenge_shapes():
     (measured 10 of 10, and 39 of 40 over seeds 0-39, against 8 of 10 before ramps were
     merged into one shaped boundary: seeds 1 and 4), every boundary of those within a pixel
     on every fitted line (measured: all 31), the pulls of the top, mu and rho E within 2 as
-    often as a normal distribution says, within 3 binomial SEs (the top's measured 77 % of 31
-    before the transition model placed boundaries 1/16 pixel high; 94 % of 94 over seeds
-    0-39 after; docs/explanation/phantom_fit.md)."""
+    often as the jackknife's Student's t says (93.6 %), within 3 binomial SEs. The top's
+    measured: 26 of 31 (84 %) since the mixed rows' exact speckle (27 of 31 before; over
+    seeds 0-39 84 of 94 against 85 of 94, rms 1.16 against 1.17;
+    docs/explanation/phantom_fit.md). Against the normal distribution's 95.45 % the 26 of 31
+    fail (3.1 binomial SEs), which the 16-block jackknife's t does not promise."""
     cases = [speckle.phantom_closed_loop_case(s, config="challenge") for s in range(10)]
     n_right, bounds, pulls = loop(cases)
     assert n_right >= 9
     assert np.all(bounds < 1.0)
     for name in ("top", "attenuation", "rho_e"):
         fraction, se = pulls_hold(pulls[name])
-        assert abs(fraction - NORMAL_2SD) < 3 * se, (name, fraction, se)
+        assert abs(fraction - JACKKNIFE_2SD) < 3 * se, (name, fraction, se)
 
 
 @pytest.mark.slow
@@ -107,15 +112,15 @@ def test_closed_loop_2025_flat():
     r = 6 µm): counts right in all (measured 10 of 10), every boundary within a pixel on every
     fitted line (measured 31 of 31; the PSF's main lobe is 2 pixels in any configuration, so
     GAP, MIN_ROWS and the transition rows are in pixels), the pulls of mu within 2 as often as
-    a normal distribution says, within 3 binomial SEs (measured 100 % of 41), and those of rho
+    the jackknife's t says, within 3 binomial SEs (measured 100 % of 41), and those of rho
     E (measured 95.1 % of 41, rms 1.05, since dim layers take it from their rows' mean
-    intensity: 87.8 %, rms 2.37, from their mean ln I with E ln(I/<I>) = -gamma). Not tested
-    here, measured: the top's pulls (81 % of 31, rms 1.6, with the cut top layer's boundary
-    from its brightness; 77 %, rms 1.8 before: draw-to-draw noise that the jackknife
-    underestimates, and a systematic error at dim-over-bright boundaries), and tilted or
-    curved boundaries at this configuration (20 of 26 within a pixel, seeds 0-7,
-    ``visible=4``; 16 before session 43;
-    docs/explanation/phantom_fit.md)."""
+    intensity: 87.8 %, rms 2.37, from their mean ln I with E ln(I/<I>) = -gamma); the top's
+    pulls' mean square within 3 SE of the t's ``15/13`` (its SE from the t's fourth moment,
+    ``sqrt((E t^4 - (15/13)^2)/n)``, 0.33 at 31 pulls): measured 1.66 (rms 1.29, 84 % within
+    2) since the mixed rows' exact speckle, 2.59 before (rms 1.61, 4.3 SE: the boundaries at
+    a sparse or bright neighbour pulled into the brighter layer). Not tested here: tilted or
+    curved boundaries at this configuration (21 of 26 within a pixel, seeds 0-7,
+    ``visible=4``, before and after; docs/explanation/phantom_fit.md)."""
     cases = [speckle.phantom_closed_loop_case(s, config="2025", shapes=("flat",))
              for s in range(10)]  # fmt: skip
     n_right, bounds, pulls = loop(cases)
@@ -123,7 +128,12 @@ def test_closed_loop_2025_flat():
     assert np.all(bounds < 1.0)
     for name in ("attenuation", "rho_e"):
         fraction, se = pulls_hold(pulls[name])
-        assert abs(fraction - NORMAL_2SD) < 3 * se, (name, fraction, se)
+        assert abs(fraction - JACKKNIFE_2SD) < 3 * se, (name, fraction, se)
+    top = np.asarray(pulls["top"], float)
+    top = top[np.isfinite(top)]
+    second, fourth = 15 / 13, 3 * 15**2 / (13 * 11)  # Student's t, 15 degrees of freedom
+    se = math.sqrt((fourth - second**2) / top.size)
+    assert abs(np.mean(top**2) - second) < 3 * se, (np.mean(top**2), se)
 
 
 @pytest.mark.slow

@@ -79,6 +79,7 @@ from ._density import (
     window_and_brightness,
 )
 from ._inclusions import fit_inclusions, no_inclusions, remove_inclusions
+from ._mixing import mixing_of
 from ._shapes import SHAPE_DEGREE, _transition_model, fit_shapes, flat_shapes
 from ._slab import slab_constants
 from .patients import patient_table, region_volumes
@@ -597,6 +598,7 @@ def _fit_levels(
     segs = best[n_layers][1]
 
     model = _transition_model(cfg.n_pixels)
+    mixing = mixing_of(cfg)  # the mixed rows' own speckle (_mixing.py)
     # var ln I per layer first: its E ln(I/<I>) sets the transition's mixed intensity
     v, v_jk, mu_fine = layer_variances(li, z, segs, keep, cfg)
     offsets = log_offsets(v, cfg)
@@ -613,7 +615,7 @@ def _fit_levels(
 
             def misfit(t, zz=zz, idx=idx, s1=s1, i1=i1, s2_=s2_, i2=i2, c=offsets[k - 1 : k + 1]):
                 # the PSF's share of each layer's mean intensity
-                pred = model.log_mean(zz, t, s1, i1, s2_, i2, p, c)
+                pred = model.log_mean(zz, t, s1, i1, s2_, i2, p, c, mixing)
                 return float(np.sum((pred - mm[idx]) ** 2))
 
             res = optimize.minimize_scalar(

@@ -50,6 +50,7 @@ from ...conventions import attrs
 from ...synthoct import _scan
 from ...synthoct.files import ScannerConfig
 from ._density import log_offsets
+from ._mixing import REACH, TAPER, mixing_of
 
 __all__ = [
     "BOUNDARY_BLOCKS",
@@ -118,12 +119,15 @@ class TransitionModel:
             table = self._tables[float(s)] = c / tilted.sum()
         return np.interp(v, self.u, table, left=0.0, right=1.0)
 
-    def log_mean_layers(self, z, tops, slopes, levels, p, offsets=None):
+    def log_mean_layers(self, z, tops, slopes, levels, p, offsets=None, mixing=None):
         """Rows' mean ``ln I`` across several boundaries ``tops`` (µm, rising) between layers
         whose mean ``ln I`` is ``levels + slopes z`` (``slopes`` per µm) and whose
         ``E ln(I/<I>)`` is ``offsets`` (:func:`log_offsets`; None: all equal). Each layer's
         mean intensity is ``exp(level + slope z - offset)``; a mixed row's ``E ln(I/<I>)`` is
-        the layers' offsets weighted by their shares of its mean intensity."""
+        the exact one of its two nearest layers' speckle with ``mixing``
+        (:class:`~speckle.studies.phantom._mixing.MixedRows`, within its ``REACH`` of a
+        boundary), else the layers' offsets weighted by their shares of its mean intensity
+        (exact far from a boundary)."""
         edges = [None, *tops, None]
         z = np.asarray(z, float)
         off = np.zeros(len(slopes)) if offsets is None else np.asarray(offsets, float)
@@ -137,13 +141,29 @@ class TransitionModel:
             share = np.exp(logs[j] - top) * (above - below)
             total = total + share
             weighted = weighted + off[j] * share
-        return top + np.log(total) + weighted / total
+        out = top + np.log(total) + weighted / total
+        if mixing is None or not len(tops):
+            return out
+        # the nearest boundary's two layers, exactly (_mixing.py), blended into the weighted
+        # offset over the last TAPER pixels of its reach (no step in the misfit there)
+        out = np.array(out, float)
+        v = np.array(np.broadcast_arrays(*[(t - z) / p for t in tops], out))[:-1]
+        nearest = np.argmin(np.abs(v), axis=0)
+        for j in range(len(tops)):
+            sel = (nearest == j) & (np.abs(v[j]) < REACH)
+            if sel.any():
+                x = np.broadcast_to(logs[j + 1] - logs[j], out.shape)[sel]
+                mixed = mixing.offset(v[j][sel], x, off[j], off[j + 1])
+                plain = np.broadcast_to(weighted / total, out.shape)[sel]
+                w = np.clip((REACH - np.abs(v[j][sel])) / TAPER, 0.0, 1.0)
+                out[sel] = out[sel] + w * (mixed - plain)
+        return out
 
-    def log_mean(self, z, t, s1, i1, s2, i2, p, offsets=None):
+    def log_mean(self, z, t, s1, i1, s2, i2, p, offsets=None, mixing=None):
         """Rows' mean ``ln I`` (class docstring) at depths ``z`` (µm) for a boundary at ``t``
         (µm), layers ``i + s z`` (``s`` per µm), pixel ``p`` (µm), the layers' ``E ln(I/<I>)``
-        ``offsets`` (:meth:`log_mean_layers`)."""
-        return self.log_mean_layers(z, [t], [s1, s2], [i1, i2], p, offsets)
+        ``offsets`` and ``mixing`` (:meth:`log_mean_layers`)."""
+        return self.log_mean_layers(z, [t], [s1, s2], [i1, i2], p, offsets, mixing)
 
 
 @functools.lru_cache(maxsize=4)
@@ -173,7 +193,7 @@ def flat_shapes(ds: xr.Dataset) -> xr.Dataset:
     return _shape_variables(ds, ["flat"] * k, np.zeros(k), nan, np.zeros(k), nan, _CRITERION)
 
 
-def _block_rss(mb, z, taus, s1, s2, p, cdf, offsets=None):
+def _block_rss(mb, z, taus, s1, s2, p, cdf, offsets=None, mixing=None):
     """Least-squares misfit of one block's row-mean profile ``mb`` (rows ``z``) for each trial
     boundary position in ``taus`` (inf where a layer has fewer than 2 level rows)."""
     above = z < taus[:, None] - _LEVEL_ROWS * p  # (taus, rows)
@@ -186,12 +206,12 @@ def _block_rss(mb, z, taus, s1, s2, p, cdf, offsets=None):
     above, below, n1, n2 = above[ok], below[ok], n1[ok], n2[ok]
     i1 = np.where(above, mb - s1 * z, 0.0).sum(axis=1) / n1  # the levels' means
     i2 = np.where(below, mb - s2 * z, 0.0).sum(axis=1) / n2
-    pred = cdf.log_mean(z, taus[ok, None], s1, i1[:, None], s2, i2[:, None], p, offsets)
+    pred = cdf.log_mean(z, taus[ok, None], s1, i1[:, None], s2, i2[:, None], p, offsets, mixing)
     out[ok] = np.sum((mb - pred) ** 2, axis=1)
     return out
 
 
-def _split_rss(mb, zs, t1, t2, slopes, p, model, offsets=None):
+def _split_rss(mb, zs, t1, t2, slopes, p, model, offsets=None, mixing=None):
     """Least-squares misfit, summed over the blocks' row means ``mb`` (at depths ``zs``, per
     block), of two
     boundaries at ``t1[b] < t2[b]`` (per block) with a layer between them (the three layers'
@@ -205,7 +225,7 @@ def _split_rss(mb, zs, t1, t2, slopes, p, model, offsets=None):
         if min(int(mk.sum()) for mk in masks) < 2:
             return np.inf
         levels = [float(np.mean(row[mk] - s * z[mk])) for mk, s in zip(masks, slopes, strict=True)]
-        pred = model.log_mean_layers(z, [a, b], slopes, levels, p, offsets)
+        pred = model.log_mean_layers(z, [a, b], slopes, levels, p, offsets, mixing)
         total += float(np.sum((row - pred) ** 2))
     return total
 
@@ -330,6 +350,7 @@ def fit_shapes(
     n_pix = lev.shape[0]
     z = np.arange(n_pix) * p
     cdf = _transition_model(cfg.n_pixels)
+    mixing = mixing_of(cfg)  # the mixed rows' own speckle (_mixing.py)
     groups = np.array_split(np.arange(x.size), BOUNDARY_BLOCKS)
     xb = np.array([x[g].mean() for g in groups])
     mb = np.stack([li[:, g].mean(axis=1) for g in groups])  # (blocks, pixels)
@@ -355,7 +376,7 @@ def fit_shapes(
             n_rows += int(sel.sum())
             if inside.any():
                 rss[b, inside] = _block_rss(mb[b, sel], z[sel], taus[inside], s_above,
-                                            s_below, p, cdf, offsets)  # fmt: skip
+                                            s_below, p, cdf, offsets, mixing)  # fmt: skip
         if not np.isfinite(rss).any():
             return None
         # a block whose least misfit is at its window's end: its position may lie beyond
@@ -435,7 +456,7 @@ def fit_shapes(
                     split = _split_rss([mb[b, r] for b, r in enumerate(rows)],
                                        [z[r] for r in rows], at_blocks(k), at_blocks(k + 1),
                                        slope[k - 1 : k + 2], p, cdf,
-                                       off[k - 1 : k + 2])  # fmt: skip
+                                       off[k - 1 : k + 2], mixing)  # fmt: skip
                     if sweep >= 0.5 * (tops[k + 1] - tops[k]) and merged[3] <= split:
                         anchors.append(anchor(cf))
                         shape.append(merged[0])
