@@ -255,7 +255,7 @@ class PhantomFit:
     >>> scan = resources.files("speckle.data") / "synthoct" / "Scan_Exp2_Layers_A.png"
     >>> fit = speckle.fit_phantom(scan, speckle.ScannerConfig())  # the challenge's default scanner
     >>> fit.layers.sizes["layer"], fit.layers.top.values.round(1)  # boundary near 400 µm
-    (2, array([  0. , 400.1]))
+    (2, array([  0. , 399.9]))
     """
 
     layers: xr.Dataset
