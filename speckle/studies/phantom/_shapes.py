@@ -126,8 +126,9 @@ class TransitionModel:
         mean intensity is ``exp(level + slope z - offset)``; a mixed row's ``E ln(I/<I>)`` is
         the exact one of its two nearest layers' speckle with ``mixing``
         (:class:`~speckle.studies.phantom._mixing.MixedRows`, within its ``REACH`` of a
-        boundary), else the layers' offsets weighted by their shares of its mean intensity
-        (exact far from a boundary)."""
+        boundary; the layers' densities from ``offsets``, so not without them), else the
+        layers' offsets weighted by their shares of its mean intensity (exact far from a
+        boundary)."""
         edges = [None, *tops, None]
         z = np.asarray(z, float)
         off = np.zeros(len(slopes)) if offsets is None else np.asarray(offsets, float)
@@ -142,7 +143,7 @@ class TransitionModel:
             total = total + share
             weighted = weighted + off[j] * share
         out = top + np.log(total) + weighted / total
-        if mixing is None or not len(tops):
+        if mixing is None or offsets is None or not len(tops):  # the mixing needs densities
             return out
         # the nearest boundary's two layers, exactly (_mixing.py), blended into the weighted
         # offset over the last TAPER pixels of its reach (no step in the misfit there)
