@@ -43,7 +43,11 @@ along each axis) bounds the probability that a scan without inclusion shows one,
 most significant first (a shadow, of the other sign and below, gives way to the region above
 it); each is fitted and kept when its level step ``|a|`` exceeds ``t`` of its standard errors
 (the fit is the matched filter), its model removed, and the search repeated (at most
-:data:`MAX_INCLUSIONS` kept).
+:data:`MAX_INCLUSIONS` kept). A kept ellipse must also differ from its host by more than the
+host's Poisson count of scatterers gives (:func:`_count_significant`, where the host's density
+is identified): in sparse layers the count's voids are dark ellipses of ln contrast -2 to -7
+that the speckle's SEs call significant (the 2025 configuration's false alarms, measured in
+docs/explanation/phantom_fit.md).
 
 Fit: the ellipse's ``(x_c, z_c, w, h)`` minimise the residual sum of squares in a window
 around the region and every row below it (the shadow), ``a`` and ``b`` by Gauss-Newton for each
@@ -282,6 +286,23 @@ def _threshold(z: np.ndarray, alpha: float) -> float:
     return float(optimize.brentq(lambda t: ec(t) - alpha, 1.0, 20.0))
 
 
+def _count_significant(ratio: float, w: float, h: float, rho: float, t_eq: float, t: float) -> bool:
+    """Whether an ellipse of semi-axes ``w``, ``h`` (µm) whose mean intensity is ``ratio``
+    times its host's is more than the host's Poisson count can give: ``N = rho pi w h t_eq``
+    kurtosis-equivalent scatterers (``rho`` the host's identified density; NaN: not
+    identified, no test), ``ratio N`` seen; the probability of a count at most (``ratio <
+    1``) or at least that, as a normal deviate, above ``t`` (module docstring, Detection)."""
+    if not (np.isfinite(rho) and rho > 0 and np.isfinite(ratio)):
+        return True
+    n = rho * math.pi * abs(w) * abs(h) * t_eq
+    seen = ratio * n
+    if ratio < 1:
+        tail = special.pdtr(math.floor(seen), n)
+    else:
+        tail = special.pdtrc(math.ceil(seen) - 1, n)
+    return bool(tail < special.ndtr(-t))
+
+
 def _detrended(r: np.ndarray) -> np.ndarray:
     """``r`` minus each line's running median over :data:`DETREND_ROWS` rows (NaN left out):
     the shadowing streaks, smooth along a line, go; an inclusion (shorter) stays."""
@@ -515,7 +536,8 @@ def fit_inclusions(
     cells = max(1.0, r / pitch)
     sigma = (SMOOTH_ROWS, SMOOTH_CELLS * cells)
     sigma_lines = r / 2 / pitch
-    a2 = slab_constants(r)["A2"]
+    consts = slab_constants(r)
+    a2, t_eq = consts["A2"], consts["t_eq"]
     key = layer_of * (n_z + 1) + np.clip(depth_below, 0, n_z)
     criterion = (
         f"connected regions of |Z| > t, Z the residual ln I smoothed ({SMOOTH_ROWS} rows, "
@@ -664,6 +686,15 @@ def fit_inclusions(
             continue
         xc, zc, w, h = theta
         host = int(np.sum(zc >= profiles(coefficients[1:], [xc], cfg.x_max)[:, 0]))
+        # the ellipse's mean intensity over its host's at the same rows (linear in the count)
+        inside = np.zeros((n_z, n_x), bool)
+        inside[np.ix_(rws, lines)] = (basis[0] > 0.5) & valid
+        level_rows = inside.any(axis=1)
+        host_px = usable & ~mask & ~footprint & level_rows[:, None]
+        ratio = float(np.mean(np.exp(li[inside])) / np.mean(np.exp(li[host_px])))
+        if not _count_significant(ratio, w, h, float(layers.density.values[host]), t_eq, t):
+            mask[tuple(reg.coords.T)] = True  # a void (or cluster) of the host's scatterers
+            continue
         re_h = float(layers.rho_e.values[host])
         re_h_se = float(layers.rho_e_se.values[host])
         rho_e = re_h * math.exp(a)
