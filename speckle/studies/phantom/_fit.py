@@ -79,7 +79,7 @@ from ._density import (
     window_and_brightness,
 )
 from ._inclusions import fit_inclusions, no_inclusions, remove_inclusions
-from ._mixing import mixing_of
+from ._mixing import mixed_rows
 from ._shapes import SHAPE_DEGREE, _transition_model, fit_shapes, flat_shapes
 from ._slab import slab_constants
 from .patients import patient_table, region_volumes
@@ -598,7 +598,7 @@ def _fit_levels(
     segs = best[n_layers][1]
 
     model = _transition_model(cfg.n_pixels)
-    mixing = mixing_of(cfg)  # the mixed rows' own speckle (_mixing.py)
+    mixing = mixed_rows(cfg)  # the mixed rows' own speckle (_mixing.py)
     # var ln I per layer first: its E ln(I/<I>) sets the transition's mixed intensity
     v, v_jk, mu_fine = layer_variances(li, z, segs, keep, cfg)
     offsets = log_offsets(v, cfg)

@@ -39,15 +39,11 @@ from scipy import optimize
 
 # private: the sparse-speckle theory's numerical core, shared with analysis.sparse
 from ...analysis._sparse_theory import TAU, _lateral
-from ...synthoct import _scan
 from ...synthoct.files import ScannerConfig
 from ._density import slab_log_moments
-from ._slab import slab_constants
+from ._slab import depth_psf, slab_constants
 
-__all__ = ["EXACT", "REACH", "TAPER", "MixedRows", "mixed_rows", "mixing_of"]
-
-#: Whether the fit uses the exact mixed rows (else the weighted offsets of earlier sessions).
-EXACT = True
+__all__ = ["REACH", "TAPER", "MixedRows", "mixed_rows"]
 
 #: PSF samples per pixel of the split (the boundary's position within a sample interpolated).
 SAMPLES = 16
@@ -80,11 +76,8 @@ class MixedRows:
 
     def __init__(self, cfg: ScannerConfig):
         self.cfg = cfg
-        n, r, pitch = cfg.n_pixels, cfg.beam_radius, cfg.line_pitch
-        spectrum = _scan.hann_spectrum(n)
-        orders = np.arange(n) - n // 2
-        u = (np.arange(-16 * SAMPLES, 16 * SAMPLES) + 0.5) / SAMPLES
-        w = np.abs(np.exp(-2j * np.pi * np.outer(u, orders) / n) @ spectrum) ** 2
+        r, pitch = cfg.beam_radius, cfg.line_pitch
+        u, w = depth_psf(cfg.n_pixels, SAMPLES)
         waist = math.sqrt(2) * r / pitch
         per_area = waist * math.sqrt(math.pi) / 2 / SAMPLES  # int dx of |h|^2, per sample
         self.area = float(np.sum(w) * per_area)  # int |h|^2 (pixels x pitches)
@@ -100,15 +93,14 @@ class MixedRows:
         ln_h = 0.5 * np.log(np.maximum(w, 1e-300))
         per = np.interp(ln_t[:, None] + ln_h[None, :], s, g, left=0.0) * waist / SAMPLES
         # cumulative over u at the samples' edges: the upper layer's exponent for v on a grid
-        self.edges = np.concatenate([u - 0.5 / SAMPLES, [u[-1] + 0.5 / SAMPLES]])
-        self.cum = np.concatenate([np.zeros((self.tau.size, 1)), np.cumsum(per, axis=1)], axis=1)
+        edges = np.concatenate([u - 0.5 / SAMPLES, [u[-1] + 0.5 / SAMPLES]])
+        cum = np.concatenate([np.zeros((self.tau.size, 1)), np.cumsum(per, axis=1)], axis=1)
         share = np.concatenate([[0.0], np.cumsum(w)])
-        self.share = share / share[-1]  # the upper layer's share of the PSF at each edge
-        near = np.abs(self.edges) <= REACH + 1e-9
-        self.v = self.edges[near]
-        self._upper = self.cum[:, near]  # the upper layer's exponent at each v, (tau, v)
-        self._lower = self.cum[:, -1:] - self._upper
-        self._share = self.share[near]
+        near = np.abs(edges) <= REACH + 1e-9
+        self.v = edges[near]  # the boundary's offsets of the table (pixels)
+        self._upper = cum[:, near]  # the upper layer's exponent at each v, (tau, v)
+        self._lower = cum[:, -1:] - self._upper
+        self._share = share[near] / share[-1]  # the upper layer's share of the PSF at each v
         self.a2y = slab_constants(r)["a2_y"]
         self._columns: dict = {}
         self._densities: dict = {}
@@ -198,8 +190,3 @@ class MixedRows:
 def mixed_rows(cfg: ScannerConfig) -> MixedRows:
     """The :class:`MixedRows` of ``cfg``, built once (~0.1 s) and shared by the fit's passes."""
     return MixedRows(cfg)
-
-
-def mixing_of(cfg: ScannerConfig) -> MixedRows | None:
-    """:func:`mixed_rows` of ``cfg`` where :data:`EXACT`, else None (the weighted offsets)."""
-    return mixed_rows(cfg) if EXACT else None

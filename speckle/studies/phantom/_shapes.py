@@ -47,10 +47,10 @@ import xarray as xr
 from scipy import optimize
 
 from ...conventions import attrs
-from ...synthoct import _scan
 from ...synthoct.files import ScannerConfig
 from ._density import log_offsets
-from ._mixing import REACH, TAPER, mixing_of
+from ._mixing import REACH, TAPER, mixed_rows
+from ._slab import depth_psf
 
 __all__ = [
     "BOUNDARY_BLOCKS",
@@ -101,11 +101,8 @@ class TransitionModel:
     """
 
     def __init__(self, n_pixels: int):
-        spectrum = _scan.hann_spectrum(n_pixels)
-        n = np.arange(n_pixels) - n_pixels // 2
         # the main lobe and 15 side lobes each way, on a midpoint grid of 1/SAMPLES pixel
-        self.u = (np.arange(-16 * _SAMPLES, 16 * _SAMPLES) + 0.5) / _SAMPLES
-        self.w = np.abs(np.exp(-2j * np.pi * np.outer(self.u, n) / n_pixels) @ spectrum) ** 2
+        self.u, self.w = depth_psf(n_pixels, _SAMPLES)
         self._tables = {}  # G(u; s) on the grid, per slope s (a fit uses a few slopes)
 
     def cdf(self, v, s: float = 0.0):
@@ -351,7 +348,7 @@ def fit_shapes(
     n_pix = lev.shape[0]
     z = np.arange(n_pix) * p
     cdf = _transition_model(cfg.n_pixels)
-    mixing = mixing_of(cfg)  # the mixed rows' own speckle (_mixing.py)
+    mixing = mixed_rows(cfg)  # the mixed rows' own speckle (_mixing.py)
     groups = np.array_split(np.arange(x.size), BOUNDARY_BLOCKS)
     xb = np.array([x[g].mean() for g in groups])
     mb = np.stack([li[:, g].mean(axis=1) for g in groups])  # (blocks, pixels)

@@ -1,12 +1,16 @@
-"""The slab's integrals of the scanner's double-pass weight (private): ``slab_constants``."""
+"""The slab's integrals of the scanner's double-pass weight (private): ``slab_constants``, and
+the depth PSF on a fine grid (``depth_psf``)."""
 
 from __future__ import annotations
 
 import math
 
+import numpy as np
 from scipy import special
 
-__all__ = ["ERF2", "slab_constants"]
+from ...synthoct import _scan
+
+__all__ = ["ERF2", "depth_psf", "slab_constants"]
 
 #: ``erf(sqrt 2)``: the slab ``|y| <= r``'s cut of the beam's ``W^2``.
 ERF2 = special.erf(math.sqrt(2.0))
@@ -28,3 +32,13 @@ def slab_constants(radius: float) -> dict[str, float]:
         "a2_y": a2y,
         "t_eq": a2y**2 / a4y,
     }
+
+
+def depth_psf(n_pixels: int, samples: int) -> tuple[np.ndarray, np.ndarray]:
+    """The scanner's depth intensity PSF ``|sum_n S_n exp(-2 pi i n u/N)|^2`` (Eq. 4, the Hann
+    spectrum ``S``) on the midpoints ``u`` of a grid of ``1/samples`` pixel over the main lobe
+    and 15 side lobes each way (``|u| < 16`` pixels): returns ``(u, w)``."""
+    spectrum = _scan.hann_spectrum(n_pixels)
+    orders = np.arange(n_pixels) - n_pixels // 2
+    u = (np.arange(-16 * samples, 16 * samples) + 0.5) / samples
+    return u, np.abs(np.exp(-2j * np.pi * np.outer(u, orders) / n_pixels) @ spectrum) ** 2
