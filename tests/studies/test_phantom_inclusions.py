@@ -14,6 +14,7 @@ from scipy import special
 import speckle
 from speckle.studies.phantom import _inclusions as inc  # private: the model's pieces, tested
 from speckle.studies.phantom._shapes import TransitionModel  # private: the depth PSF the model uses
+from speckle.studies.phantom._slab import speckle_cell  # private: the count test's speckle cells
 
 #: The reduced closed-loop scanner: 128 x 128 pixels of 6 µm, radius 10 µm.
 SMALL = speckle.synthoct_config("reduced")
@@ -73,17 +74,103 @@ def test_count_gate_is_the_hosts_poisson_tail():
     0.142: ``N`` = 12.8, 1.8 seen, ``P(N <= 1) = e^-N (1 + N)`` = 3.9e-5, 3.95 SDs) is refused
     at its t = 5.11; the 2025 patients' smallest true ellipse (157 x 10 µm, ``N`` = 135) at
     ratio 0.2 is kept (11.4 SDs), as is any ellipse in a host whose density is not identified
-    (NaN: dense). Twice the host's intensity needs the upper tail: 3.2 SDs at ``N`` = 12.8
-    (refused), 10.2 at 135 (kept)."""
+    but bounded (NaN with a lower bound: dense). Twice the host's intensity needs the upper
+    tail: 3.2 SDs at ``N`` = 12.8 (refused), 10.2 at 135 (kept). A host without density or
+    bound (its rows clipped by the floor) has no count to test: a dark ellipse there is
+    refused (2025 patients 5 and 17: voids of a cut top layer and of a dim layer), a bright
+    one kept."""
     t_eq = speckle.studies.phantom.slab_constants(6.0)["t_eq"]
     n = 0.00281 * math.pi * 19.8 * 7.5 * t_eq
     tail = math.exp(-n) * (1 + n)  # floor(0.142 N) = 1
     assert abs(-special.ndtri(tail) - 3.95) < 0.01
     assert not inc._count_significant(0.142, 19.8, 7.5, 0.00281, t_eq, 5.11)
     assert inc._count_significant(0.2, 157, 10, 0.00281, t_eq, 5.11)
-    assert inc._count_significant(0.142, 19.8, 7.5, math.nan, t_eq, 5.11)
+    assert inc._count_significant(0.142, 19.8, 7.5, math.nan, t_eq, 5.11, bound=0.01)
+    assert not inc._count_significant(0.142, 19.8, 7.5, math.nan, t_eq, 5.11)
+    assert inc._count_significant(2.0, 19.8, 7.5, math.nan, t_eq, 5.11)
     assert not inc._count_significant(2.0, 19.8, 7.5, 0.00281, t_eq, 5.11)
     assert inc._count_significant(2.0, 157, 10, 0.00281, t_eq, 5.11)
+
+    # the count's intensity has its own speckle: patient 9's void (23 x 10 µm, ratio 0.30, N
+    # = 52 expected; 106.7 pixels of 2.2 x 3.08 µm, 15.9 speckle cells) passed the count
+    # alone (5.4 SDs against t = 5.19) and is refused with the cells' gamma (3.6 SDs)
+    rho = 52 / (math.pi * 23 * 10 * t_eq)
+    cells = math.pi * 23 * 10 / (2.2 * 3.0769) / speckle_cell(601, 6.0, 3.0769)
+    assert abs(cells - 15.9) < 0.1
+    assert inc._count_significant(0.30, 23, 10, rho, t_eq, 5.19)
+    assert not inc._count_significant(0.30, 23, 10, rho, t_eq, 5.19, cells=cells)
+    assert inc._count_significant(0.2, 157, 10, 0.00281, t_eq, 5.11, cells=cells * 6.8)
+
+
+TAIL_CASES = [(12.8, 5.0, 0.3), (12.8, math.inf, 0.3), (52, 16, 0.3), (52, 16, 2.0), (3, 2.5, 2.5)]
+
+
+@pytest.mark.parametrize(("n_exp", "cells", "ratio"), TAIL_CASES)
+def test_count_tail_is_the_compound_poisson_gamma(n_exp, cells, ratio):
+    """``_count_tail`` against 400,000 draws of ``R = (n/N) S``, ``n ~ Poisson(N)``, ``S ~
+    Gamma(cells)/cells``: within 4 binomial SEs of the draws' tail (5 cases)."""
+    rng = np.random.default_rng(7)
+    n = rng.poisson(n_exp, 400_000)
+    r = n / n_exp * (rng.gamma(cells, 1 / cells, n.size) if math.isfinite(cells) else 1.0)
+    mc = float(np.mean(r <= ratio) if ratio < 1 else np.mean(r >= ratio))
+    se = math.sqrt(max(mc, 1e-5) * (1 - mc) / n.size)
+    assert abs(inc._count_tail(ratio, n_exp, cells) - mc) < 4 * se
+
+
+def test_speckle_cell_is_the_intensity_correlation_sum():
+    """``speckle_cell``: the sum over all lags of the intensity's correlation coefficient,
+    ``|sum S^2 e^{-2 pi i n d/N}|^2/(sum S^2)^2`` along depth (Parseval: 35/18 pixels for the
+    continuous Hann window) times ``exp(-d^2 pitch^2/r^2)`` across lines (``r sqrt(pi)/pitch``
+    when the lines are dense)."""
+    for n, r, pitch in [(601, 6.0, 3.0769), (256, 10.0, 6.0), (128, 10.0, 6.0)]:
+        s2 = np.hanning(n) ** 2
+        along = np.sum(np.abs(np.fft.fft(s2)) ** 2) / np.sum(s2) ** 2
+        lags = np.arange(-200, 201)
+        across = np.sum(np.exp(-((lags * pitch / r) ** 2)))
+        assert speckle_cell(n, r, pitch) == pytest.approx(along * across, rel=1e-12)
+        assert along == pytest.approx(35 / 18, rel=0.02)
+    assert speckle_cell(4096, 30.0, 1.0) / (35 / 18 * 30 * math.sqrt(math.pi)) == pytest.approx(
+        1, rel=1e-3
+    )
+
+
+@pytest.mark.slow
+def test_speckle_cell_holds_for_the_scanners_block_means():
+    """The variance of ``I``'s mean over 8 x 8 pixels of the scanner's field (reduced box,
+    1.6 million scatterers in ``|y| <= 2r``, no shadowing: fully developed) against the
+    Gaussian field's exact ``sum_{d} rho_z(d) rho_x(d') (1 - |d|/8)(1 - |d'|/8) / 64`` from the
+    same correlations as ``speckle_cell`` (0.0753; the infinite lags' ``speckle_cell/64`` is
+    0.0905: a finite block holds a little more than ``n/speckle_cell`` cells, so the count
+    test's ``cells`` errs low, on the side of fewer detections). 4 scans of 144 blocks:
+    within 3 SE (measured 0.0744 +- 0.0044)."""
+    import dataclasses
+
+    from speckle.synthoct import _scan  # private: the scanner's spectrum
+
+    m, a = 1_600_000, 8
+    cfg = dataclasses.replace(SMALL, n_scatterers=m)
+    r, pitch, n_pix = cfg.beam_radius, cfg.line_pitch, cfg.n_pixels
+    s2 = _scan.hann_spectrum(n_pix) ** 2
+    rz = np.abs(np.fft.fft(s2)) ** 2 / np.sum(s2) ** 2
+    d = np.arange(-(a - 1), a)
+    expected = (np.sum(rz[d % n_pix] * (1 - abs(d) / a)) / a) * (
+        np.sum(np.exp(-((d * pitch / r) ** 2)) * (1 - abs(d) / a)) / a
+    )
+    assert expected == pytest.approx(0.0753, abs=1e-4)
+    means = []
+    for seed in range(4):
+        rng = np.random.default_rng(seed)
+        table = np.column_stack([
+            rng.uniform(-cfg.x_max - 4 * r, cfg.x_max + 4 * r, m), rng.uniform(-2 * r, 2 * r, m),
+            rng.uniform(0, n_pix * cfg.pixel_size, m), np.full(m, 1e-6),
+        ])  # fmt: skip
+        field = speckle.synthoct_scan(table, cfg, field=True, shadowing="none", nthreads=1)
+        i = np.abs(np.asarray(field)[16:112, 16:112]) ** 2
+        blocks = i.reshape(96 // a, a, 96 // a, a).mean(axis=(1, 3))
+        means.append(blocks.ravel() / i.mean())
+    v = np.concatenate(means)
+    var = np.var(v, ddof=1)
+    assert abs(var - expected) < 3 * var * math.sqrt(2 / (v.size - 1)), var
 
 
 @pytest.fixture(scope="module")

@@ -47,7 +47,9 @@ it); each is fitted and kept when its level step ``|a|`` exceeds ``t`` of its st
 host's Poisson count of scatterers gives (:func:`_count_significant`, where the host's density
 is identified): in sparse layers the count's voids are dark ellipses of ln contrast -2 to -7
 that the speckle's SEs call significant (the 2025 configuration's false alarms, measured in
-docs/explanation/phantom_fit.md).
+docs/explanation/phantom_fit.md). A host that gives neither its density nor a bound (its rows
+clipped by the window's floor: a dim layer, or a top layer cut by it) leaves no test of the
+count, and a dark ellipse there is not kept (it cannot be told from a void).
 
 Fit: the ellipse's ``(x_c, z_c, w, h)`` minimise the residual sum of squares in a window
 around the region and every row below it (the shadow), ``a`` and ``b`` by Gauss-Newton for each
@@ -92,7 +94,7 @@ from ._density import (
     layer_variances,
     slab_inverse_density,
 )
-from ._slab import slab_constants
+from ._slab import slab_constants, speckle_cell
 from .patients import profiles
 
 __all__ = [
@@ -286,21 +288,47 @@ def _threshold(z: np.ndarray, alpha: float) -> float:
     return float(optimize.brentq(lambda t: ec(t) - alpha, 1.0, 20.0))
 
 
-def _count_significant(ratio: float, w: float, h: float, rho: float, t_eq: float, t: float) -> bool:
-    """Whether an ellipse of semi-axes ``w``, ``h`` (µm) whose mean intensity is ``ratio``
-    times its host's is more than the host's Poisson count can give: ``N = rho pi w h t_eq``
-    kurtosis-equivalent scatterers (``rho`` the host's identified density; NaN: not
-    identified, no test), ``ratio N`` seen; the probability of a count at most (``ratio <
-    1``) or at least that, as a normal deviate, above ``t`` (module docstring, Detection)."""
-    if not (np.isfinite(rho) and rho > 0 and np.isfinite(ratio)):
-        return True
-    n = rho * math.pi * abs(w) * abs(h) * t_eq
-    seen = ratio * n
+def _count_tail(ratio: float, n_exp: float, cells: float = math.inf) -> float:
+    """``P(R <= ratio)`` (``ratio < 1``) or ``P(R >= ratio)``: ``R = (n/N) S`` the mean
+    intensity over its expectation of ``n ~ Poisson(N = n_exp)`` scatterers, ``S`` the mean of
+    ``cells`` independent speckle cells (gamma of mean 1 and shape ``cells``; infinite: 1)."""
+    n = np.arange(1, math.ceil(n_exp + 12 * math.sqrt(n_exp) + 30))
+    pmf = np.exp(n * math.log(n_exp) - n_exp - special.gammaln(n + 1))
+    s = ratio * n_exp / n  # the speckle factor that count needs
+    below = special.gammainc(cells, cells * s) if math.isfinite(cells) else (s >= 1) * 1.0
     if ratio < 1:
-        tail = special.pdtr(math.floor(seen), n)
-    else:
-        tail = special.pdtrc(math.ceil(seen) - 1, n)
-    return bool(tail < special.ndtr(-t))
+        return math.exp(-n_exp) + float(np.sum(pmf * below))  # no scatterer: the darkest
+    return float(np.sum(pmf * (1 - below)))
+
+
+def _count_significant(
+    ratio: float,
+    w: float,
+    h: float,
+    rho: float,
+    t_eq: float,
+    t: float,
+    *,
+    cells: float = math.inf,
+    bound: float = math.nan,
+) -> bool:
+    """Whether an ellipse of semi-axes ``w``, ``h`` (µm) whose mean intensity is ``ratio``
+    times its host's is more than the host's Poisson count and its speckle can give.
+
+    ``N = rho pi w h t_eq`` kurtosis-equivalent scatterers are expected (``rho`` the host's
+    identified density); a count ``n`` gives the mean intensity ``(n/N) S``, ``S`` the mean of
+    ``cells`` speckle cells (:func:`_count_tail`; the interference of the ``n``). The
+    probability of a ratio at most (``ratio < 1``) or at least the one seen, as a normal
+    deviate, must exceed ``t`` (module docstring, Detection). ``rho`` NaN: no test, except
+    where the host gives no ``bound`` either (its rows clipped by the window's floor or too
+    few: no ``var ln I``), where a dark ellipse (``ratio < 1``) cannot be told from a void of
+    the host's scatterers and is not significant."""
+    if not np.isfinite(ratio):
+        return True
+    if not (np.isfinite(rho) and rho > 0):
+        return bool(ratio >= 1 or np.isfinite(bound))
+    n_exp = rho * math.pi * abs(w) * abs(h) * t_eq
+    return bool(_count_tail(ratio, n_exp, cells) < special.ndtr(-t))
 
 
 def _detrended(r: np.ndarray) -> np.ndarray:
@@ -537,6 +565,7 @@ def fit_inclusions(
     sigma = (SMOOTH_ROWS, SMOOTH_CELLS * cells)
     sigma_lines = r / 2 / pitch
     consts = slab_constants(r)
+    cell = speckle_cell(cfg.n_pixels, r, pitch)  # pixels x lines of one speckle cell
     a2, t_eq = consts["A2"], consts["t_eq"]
     key = layer_of * (n_z + 1) + np.clip(depth_below, 0, n_z)
     criterion = (
@@ -692,7 +721,9 @@ def fit_inclusions(
         level_rows = inside.any(axis=1)
         host_px = usable & ~mask & ~footprint & level_rows[:, None]
         ratio = float(np.mean(np.exp(li[inside])) / np.mean(np.exp(li[host_px])))
-        if not _count_significant(ratio, w, h, float(layers.density.values[host]), t_eq, t):
+        rho_h, bound_h = (float(layers[v].values[host]) for v in ("density", "density_bound"))
+        m = np.count_nonzero(inside) / cell
+        if not _count_significant(ratio, w, h, rho_h, t_eq, t, cells=m, bound=bound_h):
             mask[tuple(reg.coords.T)] = True  # a void (or cluster) of the host's scatterers
             continue
         re_h = float(layers.rho_e.values[host])

@@ -1,5 +1,5 @@
-"""The slab's integrals of the scanner's double-pass weight (private): ``slab_constants``, and
-the depth PSF on a fine grid (``depth_psf``)."""
+"""The slab's integrals of the scanner's double-pass weight (private): ``slab_constants``, the
+depth PSF on a fine grid (``depth_psf``) and the speckle's correlation area (``speckle_cell``)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from scipy import special
 
 from ...synthoct import _scan
 
-__all__ = ["ERF2", "depth_psf", "slab_constants"]
+__all__ = ["ERF2", "depth_psf", "slab_constants", "speckle_cell"]
 
 #: ``erf(sqrt 2)``: the slab ``|y| <= r``'s cut of the beam's ``W^2``.
 ERF2 = special.erf(math.sqrt(2.0))
@@ -42,3 +42,19 @@ def depth_psf(n_pixels: int, samples: int) -> tuple[np.ndarray, np.ndarray]:
     orders = np.arange(n_pixels) - n_pixels // 2
     u = (np.arange(-16 * samples, 16 * samples) + 0.5) / samples
     return u, np.abs(np.exp(-2j * np.pi * np.outer(u, orders) / n_pixels) @ spectrum) ** 2
+
+
+def speckle_cell(n_pixels: int, radius: float, pitch: float) -> float:
+    """The intensity's correlation area in pixels x lines: the sum of its correlation
+    coefficient over every lag, so that a mean over ``n`` pixels has the variance of ``n /
+    speckle_cell`` independent ones (fully developed speckle).
+
+    Along depth the field's autocorrelation is ``sum_n S_n^2 exp(-2 pi i n d/N)`` (Eq. 4), and
+    by Parseval the intensity's ``sum_d |rho(d)|^2 = N sum S^4/(sum S^2)^2`` (35/18 pixels for
+    the Hann spectrum); across lines ``d`` apart (amplitude ``exp(-x^2/r^2)``) it is
+    ``exp(-d^2/r^2)``, summed over the lines' lags (``r sqrt(pi)/pitch`` when ``r >> pitch``).
+    """
+    s2 = _scan.hann_spectrum(n_pixels) ** 2
+    along = n_pixels * float(np.sum(s2**2)) / float(np.sum(s2)) ** 2
+    lags = np.arange(-math.ceil(6 * radius / pitch), math.ceil(6 * radius / pitch) + 1)
+    return along * float(np.sum(np.exp(-((lags * pitch / radius) ** 2))))
