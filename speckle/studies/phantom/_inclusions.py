@@ -44,9 +44,10 @@ most significant first (a shadow, of the other sign and below, gives way to the 
 it); each is fitted and kept when its level step ``|a|`` exceeds ``t`` of its standard errors
 (the fit is the matched filter), its model removed, and the search repeated (at most
 :data:`MAX_INCLUSIONS` kept). A kept ellipse must also differ from its host by more than the
-host's Poisson count of scatterers gives (:func:`_count_significant`, where the host's density
-is identified): in sparse layers the count's voids are dark ellipses of ln contrast -2 to -7
-that the speckle's SEs call significant (the 2025 configuration's false alarms, measured in
+host's Poisson count of scatterers and the ellipse's own speckle cells give
+(:func:`_count_significant`, :func:`_count_tail`, where the host's density is identified):
+in sparse layers the count's voids are dark ellipses of ln contrast -2 to -7 that the
+speckle's SEs call significant (the 2025 configuration's false alarms, measured in
 docs/explanation/phantom_fit.md). A host that gives neither its density nor a bound (its rows
 clipped by the window's floor: a dim layer, or a top layer cut by it) leaves no test of the
 count, and a dark ellipse there is not kept (it cannot be told from a void).
@@ -303,8 +304,7 @@ def _count_tail(ratio: float, n_exp: float, cells: float = math.inf) -> float:
 
 def _count_significant(
     ratio: float,
-    w: float,
-    h: float,
+    area: float,
     rho: float,
     t_eq: float,
     t: float,
@@ -312,10 +312,10 @@ def _count_significant(
     cells: float = math.inf,
     bound: float = math.nan,
 ) -> bool:
-    """Whether an ellipse of semi-axes ``w``, ``h`` (µm) whose mean intensity is ``ratio``
-    times its host's is more than the host's Poisson count and its speckle can give.
+    """Whether an ellipse's pixels (``area`` µm^2 of them) whose mean intensity is ``ratio``
+    times their host's is more than the host's Poisson count and its speckle can give.
 
-    ``N = rho pi w h t_eq`` kurtosis-equivalent scatterers are expected (``rho`` the host's
+    ``N = rho area t_eq`` kurtosis-equivalent scatterers are expected (``rho`` the host's
     identified density); a count ``n`` gives the mean intensity ``(n/N) S``, ``S`` the mean of
     ``cells`` speckle cells (:func:`_count_tail`; the interference of the ``n``). The
     probability of a ratio at most (``ratio < 1``) or at least the one seen, as a normal
@@ -327,8 +327,7 @@ def _count_significant(
         return True
     if not (np.isfinite(rho) and rho > 0):
         return bool(ratio >= 1 or np.isfinite(bound))
-    n_exp = rho * math.pi * abs(w) * abs(h) * t_eq
-    return bool(_count_tail(ratio, n_exp, cells) < special.ndtr(-t))
+    return bool(_count_tail(ratio, rho * area * t_eq, cells) < special.ndtr(-t))
 
 
 def _detrended(r: np.ndarray) -> np.ndarray:
@@ -722,8 +721,9 @@ def fit_inclusions(
         host_px = usable & ~mask & ~footprint & level_rows[:, None]
         ratio = float(np.mean(np.exp(li[inside])) / np.mean(np.exp(li[host_px])))
         rho_h, bound_h = (float(layers[v].values[host]) for v in ("density", "density_bound"))
-        m = np.count_nonzero(inside) / cell
-        if not _count_significant(ratio, w, h, rho_h, t_eq, t, cells=m, bound=bound_h):
+        n_in = np.count_nonzero(inside)  # the pixels the ratio is measured on
+        area, m = n_in * p * pitch, n_in / cell
+        if not _count_significant(ratio, area, rho_h, t_eq, t, cells=m, bound=bound_h):
             mask[tuple(reg.coords.T)] = True  # a void (or cluster) of the host's scatterers
             continue
         re_h = float(layers.rho_e.values[host])
