@@ -5,6 +5,7 @@ The physics and the statistics are in :mod:`speckle.studies.phantom._inclusions`
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -91,15 +92,20 @@ def test_count_gate_is_the_hosts_poisson_tail():
     assert not inc._count_significant(2.0, math.pi * 19.8 * 7.5, 0.00281, t_eq, 5.11)
     assert inc._count_significant(2.0, math.pi * 157 * 10, 0.00281, t_eq, 5.11)
 
-    # the count's intensity has its own speckle: patient 9's void (23 x 10 µm, ratio 0.30, N
-    # = 52 expected; 106.7 pixels of 2.2 x 3.08 µm, 15.9 speckle cells) passed the count
-    # alone (5.4 SDs against t = 5.19) and is refused with the cells' gamma (3.6 SDs)
+    # the count's intensity has its own speckle: a void like patient 9's (23 x 10 µm, ratio
+    # 0.30, N = 52 expected; 106.7 pixels of 2.2 x 3.08 µm, 15.9 speckle cells) passes the
+    # count alone (5.9 SDs; session 44's fit, with its own N: 5.4) against t = 5.19 and is
+    # refused with the cells' gamma (3.6 SDs); the smallest true ellipse's 108 cells keep it
+    def cells_of(w, h):
+        return math.pi * w * h / (2.2 * 3.0769) / speckle_cell(601, 6.0, 3.0769)
+
     rho = 52 / (math.pi * 23 * 10 * t_eq)
-    cells = math.pi * 23 * 10 / (2.2 * 3.0769) / speckle_cell(601, 6.0, 3.0769)
-    assert abs(cells - 15.9) < 0.1
+    assert abs(cells_of(23, 10) - 15.9) < 0.1
     assert inc._count_significant(0.30, math.pi * 23 * 10, rho, t_eq, 5.19)
-    assert not inc._count_significant(0.30, math.pi * 23 * 10, rho, t_eq, 5.19, cells=cells)
-    assert inc._count_significant(0.2, math.pi * 157 * 10, 0.00281, t_eq, 5.11, cells=cells * 6.8)
+    void = inc._count_significant(0.30, math.pi * 23 * 10, rho, t_eq, 5.19, cells=cells_of(23, 10))
+    assert not void
+    true = math.pi * 157 * 10, 0.00281, t_eq, 5.11
+    assert inc._count_significant(0.2, *true, cells=cells_of(157, 10))
 
 
 TAIL_CASES = [(12.8, 5.0, 0.3), (12.8, math.inf, 0.3), (52, 16, 0.3), (52, 16, 2.0), (3, 2.5, 2.5)]
@@ -143,8 +149,6 @@ def test_speckle_cell_holds_for_the_scanners_block_means():
     0.0905: a finite block holds a little more than ``n/speckle_cell`` cells, so the count
     test's ``cells`` errs low, on the side of fewer detections). 4 scans of 144 blocks:
     within 3 SE (measured 0.0744 +- 0.0044)."""
-    import dataclasses
-
     from speckle.synthoct import _scan  # private: the scanner's spectrum
 
     m, a = 1_600_000, 8
@@ -247,8 +251,6 @@ def test_phantom_draws_every_inclusion(patient_fit):
     each ellipse's scatterers at one energy ``100 rho_e/rho``, the counts inside in proportion
     to ``rho V`` (multinomial, within 4 SEs), the first at its host's density (not
     identified)."""
-    import dataclasses
-
     import xarray as xr
 
     from speckle.studies.phantom.patients import region_volumes

@@ -564,7 +564,7 @@ def fit_inclusions(
     sigma = (SMOOTH_ROWS, SMOOTH_CELLS * cells)
     sigma_lines = r / 2 / pitch
     consts = slab_constants(r)
-    cell = speckle_cell(cfg.n_pixels, r, pitch)  # pixels x lines of one speckle cell
+    cell_px = speckle_cell(cfg.n_pixels, r, pitch)  # pixels x lines of one speckle cell
     a2, t_eq = consts["A2"], consts["t_eq"]
     key = layer_of * (n_z + 1) + np.clip(depth_below, 0, n_z)
     criterion = (
@@ -722,7 +722,7 @@ def fit_inclusions(
         ratio = float(np.mean(np.exp(li[inside])) / np.mean(np.exp(li[host_px])))
         rho_h, bound_h = (float(layers[v].values[host]) for v in ("density", "density_bound"))
         n_in = np.count_nonzero(inside)  # the pixels the ratio is measured on
-        area, m = n_in * p * pitch, n_in / cell
+        area, m = n_in * p * pitch, n_in / cell_px
         if not _count_significant(ratio, area, rho_h, t_eq, t, cells=m, bound=bound_h):
             mask[tuple(reg.coords.T)] = True  # a void (or cluster) of the host's scatterers
             continue
