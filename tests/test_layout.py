@@ -57,8 +57,9 @@ ALLOWED = {
         "zarr",
         "tifffile",
     },
-    # experiments on methods: scenes, images and measurements, on Dask
-    "studies": {"numpy", "xarray", "dask", "distributed", "scipy"},
+    # experiments on methods: scenes, images and measurements, on Dask; the phantom fit's
+    # compiled boundary search (numba: speckle.studies.phantom._shape_kernels)
+    "studies": {"numpy", "xarray", "dask", "distributed", "scipy", "numba"},
     # the challenge's files (PNG: Pillow), its scanner (finufft) and maps (scipy, skimage);
     # its LPIPS metric (lpips, torch) only where the optional extra speckle-oct[lpips] is installed
     "synthoct": {"numpy", "xarray", "scipy", "finufft", "PIL", "skimage", "dask", "lpips", "torch"},

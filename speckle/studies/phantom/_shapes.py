@@ -44,12 +44,12 @@ import math
 
 import numpy as np
 import xarray as xr
-from scipy import optimize
 
 from ...conventions import attrs
 from ...synthoct.files import ScannerConfig
 from ._density import log_offsets
 from ._mixing import REACH, TAPER, mixed_rows
+from ._shape_kernels import argsort_table, nelder_mead
 from ._slab import depth_psf
 
 __all__ = [
@@ -252,26 +252,12 @@ def _joint(rss, taus, basis, start, steps):
     shift = (basis[:, : start.size] * scale) / step  # u = shift . phi - taus[0] / step
     origin = taus[0] / step
     flat, first = padded.ravel(), rows * padded.shape[1]  # padded[rows, i] = flat[first + i]
-
-    def total(phi):
-        """The blocks' misfits at ``basis . theta``, linear between the grid's positions."""
-        u = shift @ phi - origin
-        if u.min() < 0 or u.max() > last:
-            out = (u < 0) | (u > last)
-            i = np.clip(np.floor(u), 0, last).astype(int)
-            f = np.clip(u - i, 0.0, 1.0)
-            v = (1 - f) * padded[rows, i] + f * padded[rows, i + 1]
-            return float(np.sum(np.where(out, big, v)))
-        i = u.astype(int)  # u >= 0: the floor
-        f = u - i
-        j = i + first
-        return float(((1 - f) * flat[j] + f * flat[j + 1]).sum())
-
     phi0 = start / scale
     simplex = np.vstack([phi0, phi0 + np.eye(start.size)])
-    options = {"initial_simplex": simplex, "xatol": _XATOL, "fatol": np.inf}
-    res = optimize.minimize(total, phi0, method="Nelder-Mead", options=options)
-    return res.x * scale, float(res.fun)
+    n = start.size  # scipy's defaults: 200 iterations and evaluations per coefficient
+    phi, fun, _ = nelder_mead(np.ascontiguousarray(shift), origin, flat, first, last, big, simplex,
+                              _XATOL, np.inf, 200 * n, 200 * n, argsort_table(n + 1))  # fmt: skip
+    return phi * scale, float(fun)
 
 
 def _boundary_shape(rss, taus, xb, x_max, shapes, p, n_rows):
