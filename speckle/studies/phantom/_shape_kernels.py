@@ -116,9 +116,20 @@ def _sort(sim, fsim, table):
                 rank += 1
         key += rank * power
         power *= m
-    order = table[key]
-    sim[:] = sim[order].copy()
-    fsim[:] = fsim[order].copy()
+    old_sim = sim.copy()
+    old_f = fsim.copy()
+    for k in range(m):
+        q = table[key, k]
+        fsim[k] = old_f[q]
+        for i in range(sim.shape[1]):
+            sim[k, i] = old_sim[q, i]
+
+
+@numba.njit(cache=True)
+def _step(out, xbar, worst, a, b):
+    """``out = a xbar - b worst`` elementwise (scipy's moves, in its order of rounding)."""
+    for k in range(out.size):
+        out[k] = a * xbar[k] - b * worst[k]
 
 
 @numba.njit(cache=True)
@@ -131,7 +142,9 @@ def nelder_mead(
     n = sim.shape[1]
     m = n + 1
     work = np.empty(shift.shape[0])
-    fsim = np.full(m, np.inf)
+    fsim = np.empty(m)
+    fsim[:] = np.inf
+    xbar, xr, xe, xc = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     fcalls = 0
     for k in range(m):
         if fcalls >= maxfun:
@@ -155,62 +168,66 @@ def nelder_mead(
                 spread = max(spread, d)
         if span <= xatol and spread <= fatol:
             break
-        xbar = sim[0].copy()
-        for j in range(1, n):
-            xbar += sim[j]
-        xbar = xbar / n
-        xr = (1 + rho) * xbar - rho * sim[-1]
+        for k in range(n):  # np.add.reduce(sim[:-1], 0) / N: row by row
+            acc = sim[0, k]
+            for j in range(1, n):
+                acc += sim[j, k]
+            xbar[k] = acc / n
+        worst = sim[n]
+        _step(xr, xbar, worst, 1 + rho, rho)
         if fcalls >= maxfun:
             _sort(sim, fsim, table)
             continue
         fcalls += 1
         fxr = _total(xr, shift, origin, flat, first, last, big, work)
         if fxr < fsim[0]:
-            xe = (1 + rho * chi) * xbar - rho * chi * sim[-1]
+            _step(xe, xbar, worst, 1 + rho * chi, rho * chi)
             if fcalls >= maxfun:
                 _sort(sim, fsim, table)
                 continue
             fcalls += 1
             fxe = _total(xe, shift, origin, flat, first, last, big, work)
             if fxe < fxr:
-                sim[-1] = xe
-                fsim[-1] = fxe
+                sim[n] = xe
+                fsim[n] = fxe
             else:
-                sim[-1] = xr
-                fsim[-1] = fxr
-        elif fxr < fsim[-2]:
-            sim[-1] = xr
-            fsim[-1] = fxr
+                sim[n] = xr
+                fsim[n] = fxr
+        elif fxr < fsim[n - 1]:
+            sim[n] = xr
+            fsim[n] = fxr
         else:
             doshrink = False
-            if fxr < fsim[-1]:  # contraction outside
-                xc = (1 + psi * rho) * xbar - psi * rho * sim[-1]
+            if fxr < fsim[n]:  # contraction outside
+                _step(xc, xbar, worst, 1 + psi * rho, psi * rho)
                 if fcalls >= maxfun:
                     _sort(sim, fsim, table)
                     continue
                 fcalls += 1
                 fxc = _total(xc, shift, origin, flat, first, last, big, work)
                 if fxc <= fxr:
-                    sim[-1] = xc
-                    fsim[-1] = fxc
+                    sim[n] = xc
+                    fsim[n] = fxc
                 else:
                     doshrink = True
-            else:  # contraction inside
-                xcc = (1 - psi) * xbar + psi * sim[-1]
+            else:  # contraction inside: (1 - psi) xbar + psi worst
+                for k in range(n):
+                    xc[k] = (1 - psi) * xbar[k] + psi * worst[k]
                 if fcalls >= maxfun:
                     _sort(sim, fsim, table)
                     continue
                 fcalls += 1
-                fxcc = _total(xcc, shift, origin, flat, first, last, big, work)
-                if fxcc < fsim[-1]:
-                    sim[-1] = xcc
-                    fsim[-1] = fxcc
+                fxcc = _total(xc, shift, origin, flat, first, last, big, work)
+                if fxcc < fsim[n]:
+                    sim[n] = xc
+                    fsim[n] = fxcc
                 else:
                     doshrink = True
             if doshrink:
                 stopped = False
                 for j in range(1, m):
-                    sim[j] = sim[0] + sigma * (sim[j] - sim[0])
+                    for k in range(n):
+                        sim[j, k] = sim[0, k] + sigma * (sim[j, k] - sim[0, k])
                     if fcalls >= maxfun:
                         stopped = True
                         break
@@ -221,4 +238,10 @@ def nelder_mead(
                     continue
         iterations += 1
         _sort(sim, fsim, table)
-    return sim[0].copy(), np.min(fsim), fcalls
+    best = fsim[0]  # np.min(fsim), NaN first
+    for k in range(m):
+        if fsim[k] != fsim[k]:
+            best = fsim[k]
+            break
+        best = min(best, fsim[k])
+    return sim[0].copy(), best, fcalls

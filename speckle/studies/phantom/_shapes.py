@@ -9,9 +9,9 @@ from the rows more than 3 pixels from ``tau``, the least squares over every row 
 The blocks' misfits are summed along ``tau_b = a``, ``a + b x_b`` and
 ``a + b x_b + c (x_b^2 - X^2/12)`` (``x_b`` the blocks' mean ``x``) and minimised jointly
 (Nelder-Mead, compiled with its objective in :mod:`._shape_kernels`: scipy's steps one for
-one, the same fits bitwise on the published scans and 2025 patients 0-3, 25 times faster than
-scipy's; the tilted and curved fits start from the simpler shape's fit and from the
-least-squares polynomial through the blocks' own best positions, the better end kept); the
+one, the same fits bitwise on the published scans and 2025 patients 0-3, about 30 times
+faster than scipy's; the tilted and curved fits start from the simpler shape's fit and from
+the least-squares polynomial through the blocks' own best positions, the better end kept); the
 shape is the one of least ``BIC = -chi^2 + d ln n`` (``n`` the rows used, ``d`` the terms
 beyond ``a``, ``chi^2`` the Wald statistic of ``b`` or ``(b, c)``) among those allowed, the
 covariance (and the SEs) from the delete-one-block jackknife of the joint fit.
@@ -236,8 +236,8 @@ def _joint(rss, taus, basis, start, steps):
 
     The search is scipy's Nelder-Mead (non-adaptive, its default limits of ``200 n``
     iterations and evaluations) compiled with the misfit (:func:`._shape_kernels.nelder_mead`:
-    the same steps and order of rounding, so the same end; 0.16-0.22 ms a search against
-    scipy's 4.1-5.6 ms, session 46).
+    the same steps and order of rounding, so the same end; 0.14-0.19 ms a search against
+    scipy's 4.1-5.7 ms, session 46).
 
     The search runs on ``theta / steps`` (each term's displacement at the blocks' edge, in
     pixels for the ``steps`` of :func:`_boundary_shape`: Nelder-Mead's moves are unchanged by
