@@ -49,11 +49,11 @@ host's Poisson count of scatterers and the ellipse's own speckle cells give
 in sparse layers the count's voids are dark ellipses of ln contrast -2 to -7 that the
 speckle's SEs call significant (the 2025 configuration's false alarms, measured in
 docs/explanation/phantom_fit.md). A dark ellipse in a host whose density is not identified is
-tested with its lower bound (a wider count); where ``var ln I`` gives no bound either (its rows clipped by the
-window's floor: a dim layer, or a top layer cut by it), the bound is the host's intensity
-kurtosis's (:func:`~speckle.studies.phantom._density.kurtosis_density`: ``E I^2`` lives in the
-bright tail the floor leaves), and without any bound a dark ellipse is not kept (it cannot be
-told from a void).
+tested with its lower bound (a wider count); where ``var ln I`` gives no bound either (its
+rows clipped by the window's floor: a dim layer, or a top layer cut by it), the bound is the
+host's intensity kurtosis's (:func:`~speckle.studies.phantom._density.kurtosis_density`: ``E
+I^2`` lives in the bright tail the floor leaves), and without any bound a dark ellipse is not
+kept (it cannot be told from a void).
 
 Fit: the ellipse's ``(x_c, z_c, w, h)`` minimise the residual sum of squares in a window
 around the region and every row below it (the shadow), ``a`` and ``b`` by Gauss-Newton for each
