@@ -48,9 +48,12 @@ host's Poisson count of scatterers and the ellipse's own speckle cells give
 (:func:`_count_significant`, :func:`_count_tail`, where the host's density is identified):
 in sparse layers the count's voids are dark ellipses of ln contrast -2 to -7 that the
 speckle's SEs call significant (the 2025 configuration's false alarms, measured in
-docs/explanation/phantom_fit.md). A host that gives neither its density nor a bound (its rows
-clipped by the window's floor: a dim layer, or a top layer cut by it) leaves no test of the
-count, and a dark ellipse there is not kept (it cannot be told from a void).
+docs/explanation/phantom_fit.md). A dark ellipse in a host whose density is not identified is
+tested with its lower bound (a wider count); where ``var ln I`` gives no bound either (its
+rows clipped by the window's floor: a dim layer, or a top layer cut by it), the bound is the
+host's intensity kurtosis's (:func:`~speckle.studies.phantom._density.kurtosis_density`: ``E
+I^2`` lives in the bright tail the floor leaves), and without any bound a dark ellipse is not
+kept (it cannot be told from a void).
 
 Fit: the ellipse's ``(x_c, z_c, w, h)`` minimise the residual sum of squares in a window
 around the region and every row below it (the shadow), ``a`` and ``b`` by Gauss-Newton for each
@@ -91,6 +94,7 @@ from ...synthoct.files import ScannerConfig
 from ._density import (
     BOUND_SE,
     _equivalent,
+    kurtosis_density,
     layer_densities,
     layer_variances,
     slab_inverse_density,
@@ -293,6 +297,9 @@ def _count_tail(ratio: float, n_exp: float, cells: float = math.inf) -> float:
     """``P(R <= ratio)`` (``ratio < 1``) or ``P(R >= ratio)``: ``R = (n/N) S`` the mean
     intensity over its expectation of ``n ~ Poisson(N = n_exp)`` scatterers, ``S`` the mean of
     ``cells`` independent speckle cells (gamma of mean 1 and shape ``cells``; infinite: 1)."""
+    if not math.isfinite(n_exp):  # dense: the speckle alone
+        below = special.gammainc(cells, cells * ratio) if math.isfinite(cells) else ratio >= 1
+        return float(below if ratio < 1 else 1 - below)
     n = np.arange(1, math.ceil(n_exp + 12 * math.sqrt(n_exp) + 30))
     pmf = np.exp(n * math.log(n_exp) - n_exp - special.gammaln(n + 1))
     s = ratio * n_exp / n  # the speckle factor that count needs
@@ -319,14 +326,19 @@ def _count_significant(
     identified density); a count ``n`` gives the mean intensity ``(n/N) S``, ``S`` the mean of
     ``cells`` speckle cells (:func:`_count_tail`; the interference of the ``n``). The
     probability of a ratio at most (``ratio < 1``) or at least the one seen, as a normal
-    deviate, must exceed ``t`` (module docstring, Detection). ``rho`` NaN: no test, except
-    where the host gives no ``bound`` either (its rows clipped by the window's floor or too
-    few: no ``var ln I``), where a dark ellipse (``ratio < 1``) cannot be told from a void of
-    the host's scatterers and is not significant."""
+    deviate, must exceed ``t`` (module docstring, Detection). ``rho`` NaN: a bright ellipse
+    (``ratio >= 1``) is kept; a dark one (where the voids of a sparse host's Poisson process
+    lie: every false alarm measured) is tested with the host's lower ``bound`` of the density
+    (fewer scatterers: a wider count, a larger tail, so the test errs on the side of fewer
+    detections), and without a bound it cannot be told from a void and is not significant.
+    (The bound taken for bright ellipses too refused a true one: reduced patient 0, ``rho E``
+    8.9 times its host's, whose bound was 11 times below the host's density.)"""
     if not np.isfinite(ratio):
         return True
     if not (np.isfinite(rho) and rho > 0):
-        return bool(ratio >= 1 or np.isfinite(bound))
+        if ratio >= 1 or not bound > 0:
+            return bool(ratio >= 1)
+        rho = bound
     return bool(_count_tail(ratio, rho * area * t_eq, cells) < special.ndtr(-t))
 
 
@@ -565,6 +577,7 @@ def fit_inclusions(
     sigma_lines = r / 2 / pitch
     consts = slab_constants(r)
     cell_px = speckle_cell(cfg.n_pixels, r, pitch)  # pixels x lines of one speckle cell
+    density_block = max(1, math.ceil(DENSITY_BLOCK_RADII * r / pitch))
     a2, t_eq = consts["A2"], consts["t_eq"]
     key = layer_of * (n_z + 1) + np.clip(depth_below, 0, n_z)
     criterion = (
@@ -721,6 +734,10 @@ def fit_inclusions(
         host_px = usable & ~mask & ~footprint & level_rows[:, None]
         ratio = float(np.mean(np.exp(li[inside])) / np.mean(np.exp(li[host_px])))
         rho_h, bound_h = (float(layers[v].values[host]) for v in ("density", "density_bound"))
+        if not np.isfinite(rho_h) and not np.isfinite(bound_h):  # no var ln I: the kurtosis
+            own = usable & ~mask & ~footprint & (layer_of == host)
+            bound_h = kurtosis_density(np.where(own, np.exp(li), np.nan), cfg,
+                                       block_lines=density_block)[2]  # fmt: skip
         n_in = np.count_nonzero(inside)  # the pixels the ratio is measured on
         area, m = n_in * p * pitch, n_in / cell_px
         if not _count_significant(ratio, area, rho_h, t_eq, t, cells=m, bound=bound_h):
