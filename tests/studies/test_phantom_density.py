@@ -19,6 +19,7 @@ from speckle.studies.phantom._density import (
     kurtosis_density,
     kurtosis_volume,
     lateral_variance_factor,
+    log_offsets,
     slab_inverse_density,
     slab_log_moments,
 )
@@ -260,3 +261,23 @@ def test_kurtosis_density_refuses_and_gives_nan():
     i = np.random.default_rng(0).exponential(size=(40, 96))
     kappa, se, bound = kurtosis_density(i, SMALL, block_lines=4)
     assert abs(kappa) < 3 * se and np.isfinite(bound) and bound > 0
+
+
+def test_log_offsets_from_the_kurtosis_where_var_ln_i_has_no_rows():
+    """``E ln(I/<I>)`` of a layer whose ``var ln I`` is NaN (the floor leaves it no rows) is
+    the slab theory's at the kurtosis's density ``1/(V kappa)``; a measured ``var ln I`` still
+    rules where there is one; ``-gamma`` where neither shows sparse speckle. The fit stores
+    what its transitions used as ``log_offset``."""
+    cfg = speckle.synthoct_config("2025")
+    rho = 1e-3
+    kappa = 1 / (rho * kurtosis_volume(cfg))
+    expected = slab_log_moments(rho, cfg)[0]
+    v = slab_log_moments(3e-3, cfg)[1]
+    got = log_offsets([np.nan, v, np.nan, np.nan], cfg, kurtosis=[kappa, kappa, -0.1, np.nan])
+    assert got[0] == pytest.approx(expected, rel=1e-9)
+    assert got[1] == pytest.approx(slab_log_moments(3e-3, cfg)[0], abs=1e-4)
+    assert got[2] == got[3] == -np.euler_gamma
+    assert expected < -0.9  # sparse: far below the dense -gamma
+    table, _ = speckle.virtual_patient(1, config=SMALL, layers=(2, 2), shapes=("flat",))
+    layers = speckle.fit_phantom(speckle.synthoct_scan(table, SMALL, nthreads=1), SMALL).layers
+    assert layers.log_offset.dims == ("layer",) and layers.log_offset.attrs["units"] == "1"

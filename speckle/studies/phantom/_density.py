@@ -323,7 +323,7 @@ def layer_densities(
     }  # fmt: skip
 
 
-def log_offsets(log_variance, cfg: ScannerConfig) -> np.ndarray:
+def log_offsets(log_variance, cfg: ScannerConfig, *, kurtosis=None) -> np.ndarray:
     """``E ln(I/<I>)`` of each layer's speckle from its ``var ln I`` (shadowing removed).
 
     The slab's sparse-speckle theory (:func:`slab_log_moments`
@@ -331,10 +331,19 @@ def log_offsets(log_variance, cfg: ScannerConfig) -> np.ndarray:
     the variance does not exceed ``pi^2/6`` or is NaN. Sparse speckle's ``E ln I`` lies farther
     below ``ln <I>`` (-1.43 at 0.3 times the 2025 configuration's mean density, -0.70 at its
     mean, -0.58 dense): two layers' mean ``ln I`` differ from their mean intensities' by
-    different offsets, which the transition between them must use.
+    different offsets, which the transition between them must use. Where ``var ln I`` is NaN
+    (the floor leaves the layer no rows for it) and its intensity excess ``kurtosis``
+    (:func:`kurtosis_density`) is positive, at the density ``1/(V kurtosis)``
+    (:func:`kurtosis_volume`): the 2025 configuration's flat loop (seeds 0-9) placed its
+    boundaries next to such sparse, dim layers 2-3 SE deep with ``-gamma`` (session 46).
     """
     out = []
-    for v in np.atleast_1d(np.asarray(log_variance, float)):
+    v_all = np.atleast_1d(np.asarray(log_variance, float))
+    kap = np.full(v_all.size, np.nan) if kurtosis is None else np.asarray(kurtosis, float)
+    for v, k in zip(v_all, kap, strict=True):
+        if not np.isfinite(v) and k > 0:  # no var ln I: the kurtosis's density
+            out.append(slab_log_moments(1.0 / (kurtosis_volume(cfg) * k), cfg)[0])
+            continue
         inv = slab_inverse_density(v, cfg) if np.isfinite(v) and v > np.pi**2 / 6 else 0.0
         if not np.isfinite(inv) or inv <= 0:
             out.append(-np.euler_gamma)

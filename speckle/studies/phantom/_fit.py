@@ -36,7 +36,8 @@ The fit, on the central lines (``|x| <= x_max/2 - 3 r``, where the box does not 
 3. per layer: ``mu`` from the slope, each boundary to a fraction of a pixel from the transition
    rows (the Hann PSF's intensity weights of the two layers' scatterers, each layer's
    exponential decay under the PSF included, its mean intensity from its mean ``ln I`` and
-   the ``E ln(I/<I>)`` of its ``var ln I``: ``_shapes.TransitionModel``), ``var ln I`` (minus
+   the ``E ln(I/<I>)`` of its ``var ln I``, or of its intensity kurtosis where the floor
+   leaves no rows for ``var ln I``: ``_shapes.TransitionModel``), ``var ln I`` (minus
    the shadowing spread, over rows whose predicted clipped fraction is at most 1 %, corrected
    for the lines' correlation) inverted to the density by the slab's exact sparse-speckle
    theory (its amplitudes ``exp(-y^2/r^2)``), identified where its excess over ``pi^2/6``
@@ -69,9 +70,11 @@ from ...synthoct import _scan
 from ...synthoct.files import ScannerConfig, read_png, read_scanner_config, write_scanner_config
 from ._count import CRITERION, count_blocks, layer_count
 from ._density import (
+    LAG,
     SIGNIFICANCE,
     _jackknife,
     _psf_area,
+    kurtosis_density,
     layer_densities,
     layer_variances,
     log_offset_se,
@@ -86,6 +89,9 @@ from .patients import patient_table, region_volumes
 
 __all__ = ["BLOCKS", "GAP", "MAX_CLIPPED", "PhantomFit", "fit_phantom"]
 
+#: Width (beam radii) of the lateral blocks of a layer's kurtosis jackknife (the speckle and
+#: the shadowing streaks are correlated over about a beam radius).
+KURTOSIS_BLOCK_RADII = 2.0
 #: Lateral blocks of the jackknife.
 BLOCKS = 16
 #: Transition rows left out at each boundary (the Hann PSF's main lobe).
@@ -235,7 +241,10 @@ class PhantomFit:
         2 SE lower, as ``density`` falls convexly with it); ``density_bound`` (lower bound where
         ``density`` is NaN) and ``energy_bound`` (upper bound; both NaN too where the layer has
         no rows whose predicted clipped fraction is at most 1 %), ``log_variance`` (``var ln I``,
-        shadowing spread removed) with its SE. Attributes: ``window_top`` (dB re ``|A| = 1``,
+        shadowing spread removed) with its SE, ``log_offset`` (``E ln(I/<I>)`` of the layer's
+        sparse speckle, which the boundaries' transitions use: from ``var ln I``, or from the
+        intensity kurtosis where the floor leaves no rows for it, ``-gamma`` where neither
+        shows sparse speckle). Attributes: ``window_top`` (dB re ``|A| = 1``,
         the 51 dB window's top) and ``window_top_se``, ``criterion``, ``bic`` (per ``K``),
         ``p_values`` (``criterion="test"``: of the tests of ``K + 1`` against ``K`` layers
         made, from ``K = 1``), ``rows``.
@@ -518,6 +527,18 @@ def _cut_top(lev, rows, segs, tops, keep, cfg) -> dict[str, np.ndarray] | None:
     }
 
 
+def _layer_kurtosis(intensity, segs, v, cfg) -> np.ndarray:
+    """Each layer's intensity excess kurtosis (:func:`kurtosis_density`, jackknife blocks of
+    :data:`KURTOSIS_BLOCK_RADII` beam radii) where its ``var ln I`` is NaN (no rows that the
+    floor leaves whole), else NaN."""
+    out = np.full(len(segs), np.nan)
+    block = max(1, math.ceil(KURTOSIS_BLOCK_RADII * cfg.beam_radius / cfg.line_pitch))
+    for k, (a, b) in enumerate(segs):
+        if not np.isfinite(v[k]) and b - a >= LAG + 2:
+            out[k] = kurtosis_density(intensity[a:b], cfg, block_lines=block)[0]
+    return out
+
+
 def _fit_levels(
     lev: np.ndarray, cfg: ScannerConfig, max_layers: int, blocks: int, criterion: str = "bic"
 ) -> xr.Dataset:
@@ -601,7 +622,7 @@ def _fit_levels(
     mixing = mixed_rows(cfg)  # the mixed rows' own speckle (_mixing.py)
     # var ln I per layer first: its E ln(I/<I>) sets the transition's mixed intensity
     v, v_jk, mu_fine = layer_variances(li, z, segs, keep, cfg)
-    offsets = log_offsets(v, cfg)
+    offsets = log_offsets(v, cfg, kurtosis=_layer_kurtosis(intensity, segs, v, cfg))
 
     def tops_of(mm, fits, first=None):
         """The boundaries; ``first``: the first row of boundary 1's window (a cut top layer's
@@ -706,6 +727,8 @@ def _fit_levels(
             "log_variance": var("v", v, "dimensionless",
                                 "var ln I of the layer (shadowing spread removed)"),
             "log_variance_se": var("v", v_se, "dimensionless", "standard error of log_variance"),
+            "log_offset": var("c", offsets, "dimensionless",
+                              "E ln(I/<I>) of the layer's speckle, as the transitions take it"),
         },
         coords={"layer": coord("layer", np.arange(n_layers))},
         attrs={

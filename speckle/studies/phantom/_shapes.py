@@ -16,7 +16,8 @@ shape is the one of least ``BIC = -chi^2 + d ln n`` (``n`` the rows used, ``d`` 
 beyond ``a``, ``chi^2`` the Wald statistic of ``b`` or ``(b, c)``) among those allowed, the
 covariance (and the SEs) from the delete-one-block jackknife of the joint fit.
 The transition model mixes the layers' mean intensities ``exp(level - c)``, ``c = E ln(I/<I>)``
-of the layer's sparse speckle from its ``var ln I`` (:func:`log_offsets`).
+of the layer's sparse speckle (the flat fit's ``log_offset``:
+:func:`~speckle.studies.phantom._density.log_offsets`).
 Two neighbouring boundaries of the flat fit merge into one tilted or curved boundary (a ramp:
 a steep boundary's sweep across the lines, which the flat fit cuts in two with a layer
 between) where that boundary, located between the layers above and below, sweeps at least half
@@ -49,7 +50,6 @@ import xarray as xr
 
 from ...conventions import attrs
 from ...synthoct.files import ScannerConfig
-from ._density import log_offsets
 from ._mixing import REACH, TAPER, mixed_rows
 from ._shape_kernels import argsort_table, nelder_mead
 from ._slab import depth_psf
@@ -121,7 +121,7 @@ class TransitionModel:
     def log_mean_layers(self, z, tops, slopes, levels, p, offsets=None, mixing=None):
         """Rows' mean ``ln I`` across several boundaries ``tops`` (µm, rising) between layers
         whose mean ``ln I`` is ``levels + slopes z`` (``slopes`` per µm) and whose
-        ``E ln(I/<I>)`` is ``offsets`` (:func:`log_offsets`; None: all equal). Each layer's
+        ``E ln(I/<I>)`` is ``offsets`` (``log_offset``; None: all equal). Each layer's
         mean intensity is ``exp(level + slope z - offset)``; a mixed row's ``E ln(I/<I>)`` is
         the exact one of its two nearest layers' speckle with ``mixing``
         (:class:`~speckle.studies.phantom._mixing.MixedRows`, within its ``REACH`` of a
@@ -389,7 +389,7 @@ def fit_shapes(
         them (a tilted or curved boundary that the flat fit saw as a ramp: one level per block
         fewer)."""
         tops, slope = cur.top.values, -2 * cur.attenuation.values
-        off = log_offsets(cur.log_variance.values, cfg)
+        off = cur.log_offset.values
         end = cur.attrs["last_row"] * p  # the last fitted row
         bottom = np.append(tops, max(end, tops[-1]))
 
