@@ -168,14 +168,24 @@ class MixedRows:
         """``E ln(I/<I>)`` of rows whose boundary lies ``v`` pixels below them (``|v| <=``
         :data:`REACH`), ``x = ln(<I_below>/<I_above>)`` at the rows (arrays, broadcast)."""
         v, x = np.broadcast_arrays(np.asarray(v, float), np.asarray(x, float))
+        return self.offset_at(self.v_index(v), x, c_above, c_below)
+
+    def v_index(self, v) -> tuple[np.ndarray, np.ndarray]:
+        """The table's interval and fraction at offsets ``v`` (:meth:`offset_at`): computed once
+        for rows whose ``x`` differs (a boundary's blocks at the same trial positions)."""
+        iv = np.clip((np.asarray(v, float) - self.v[0]) * SAMPLES, 0, self.v.size - 1 - 1e-9)
+        j0 = iv.astype(int)
+        return j0, iv - j0
+
+    def offset_at(self, at, x, c_above: float, c_below: float) -> np.ndarray:
+        """:meth:`offset` at the offsets ``at = v_index(v)`` (``x`` of their shape)."""
+        j0, fv = at
+        x = np.asarray(x, float)
         k1, k2 = self.density(c_above), self.density(c_below)
         pos = x / X_STEP
         ix0 = np.floor(pos).astype(int)
         fx = pos - ix0
-        iv = np.clip((v - self.v[0]) * SAMPLES, 0, self.v.size - 1 - 1e-9)
-        j0 = iv.astype(int)
-        fv = iv - j0
-        out = np.empty(v.shape)
+        out = np.empty(x.shape)
         for ix in np.unique(ix0):
             sel = ix0 == ix
             a, b = self._column(k1, k2, int(ix)), self._column(k1, k2, int(ix) + 1)
