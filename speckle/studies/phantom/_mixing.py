@@ -185,15 +185,15 @@ class MixedRows:
         pos = x / X_STEP
         ix0 = np.floor(pos).astype(int)
         fx = pos - ix0
-        out = np.empty(x.shape)
-        for ix in np.unique(ix0):
-            sel = ix0 == ix
-            a, b = self._column(k1, k2, int(ix)), self._column(k1, k2, int(ix) + 1)
-            j, f = j0[sel], fv[sel]
-            at_a = a[j] * (1 - f) + a[j + 1] * f
-            at_b = b[j] * (1 - f) + b[j + 1] * f
-            out[sel] = at_a * (1 - fx[sel]) + at_b * fx[sel]
-        return out
+        if not x.size:
+            return np.empty(x.shape)
+        nodes = np.unique(np.concatenate([ix0.ravel(), ix0.ravel() + 1]))  # the x nodes used
+        table = np.stack([self._column(k1, k2, int(ix)) for ix in nodes]).ravel()
+        a = np.searchsorted(nodes, ix0) * self.v.size + j0  # (x node, v) in the table
+        b = np.searchsorted(nodes, ix0 + 1) * self.v.size + j0
+        at_a = table[a] * (1 - fv) + table[a + 1] * fv
+        at_b = table[b] * (1 - fv) + table[b + 1] * fv
+        return at_a * (1 - fx) + at_b * fx
 
 
 @functools.lru_cache(maxsize=4)
