@@ -187,10 +187,14 @@ class MixedRows:
         fx = pos - ix0
         if not x.size:
             return np.empty(x.shape)
-        nodes = np.unique(np.concatenate([ix0.ravel(), ix0.ravel() + 1]))  # the x nodes used
-        table = np.stack([self._column(k1, k2, int(ix)) for ix in nodes]).ravel()
-        a = np.searchsorted(nodes, ix0) * self.v.size + j0  # (x node, v) in the table
-        b = np.searchsorted(nodes, ix0 + 1) * self.v.size + j0
+        low = int(ix0.min())
+        used = np.bincount((ix0 - low).ravel()) > 0
+        used = np.concatenate([used, [False]]) | np.concatenate([[False], used])
+        nodes = np.flatnonzero(used)  # the x nodes used (each node's and the next), - low
+        table = np.stack([self._column(k1, k2, int(ix) + low) for ix in nodes]).ravel()
+        row = np.cumsum(used) - 1  # each node's column in the table
+        a = row[ix0 - low] * self.v.size + j0  # (x node, v) in the table
+        b = row[ix0 - low + 1] * self.v.size + j0
         at_a = table[a] * (1 - fv) + table[a + 1] * fv
         at_b = table[b] * (1 - fv) + table[b + 1] * fv
         return at_a * (1 - fx) + at_b * fx

@@ -229,27 +229,55 @@ def _blocks_rss(mbs, z, taus, s1, s2, p, model, offsets=None, mixing=None):
     g2 = 1.0 - model._cdf_within(v, within, s2 * p)  # the lower layer's
     c1, c2 = (0.0, 0.0) if offsets is None else np.asarray(offsets, float)
     mixed_rows = mixing is not None and offsets is not None
-    if mixed_rows:  # the mixed rows near the boundary (log_mean_layers)
-        sel = np.abs(v) < REACH
+    sel = (np.abs(v) < REACH) if mixed_rows else np.zeros(v.shape, bool)  # the mixed rows
+    # the rows' levels change only where a row enters or leaves a layer's level rows (every
+    # fourth trial position): the levels, their lines and the PSF-free shares per group
+    new = np.concatenate([[True], (n1[1:] != n1[:-1]) | (n2[1:] != n2[:-1])])
+    group, rep = np.cumsum(new) - 1, np.flatnonzero(new)
+    # rows beyond the PSF (the shares exactly 1 and 0: the same prediction at each of the
+    # group's positions, from the group's) and the rows within it or mixed (each its own)
+    own = within | sel
+    own_t, own_r = np.nonzero(own)
+    at_own = group[own_t] * z.size + own_r  # in the groups' (flattened) arrays
+    own_at = np.flatnonzero(own)
+    # each row's prediction in the groups' below-the-PSF ones followed by the above-the-PSF
+    far = np.where(v > model.u[-1], rep.size * z.size, 0) + group[:, None] * z.size
+    far += np.arange(z.size)
+    g1, g2 = g1[own], g2[own]
+    mixed = sel[own]
+    at_mixed = at_own[mixed]
+    if mixed_rows:
         near = v[sel]
         at = mixing.v_index(near)
         w = np.clip((REACH - np.abs(near)) / TAPER, 0.0, 1.0)
+    above, below, n1, n2 = above[rep], below[rep], n1[rep], n2[rep]
     for b, mb in enumerate(mbs):
         i1 = np.where(above, mb - s1 * z, 0.0).sum(axis=1) / n1  # the levels' means
         i2 = np.where(below, mb - s2 * z, 0.0).sum(axis=1) / n2
         log1 = s1 * z + i1[:, None] - c1
         log2 = s2 * z + i2[:, None] - c2
         top = np.maximum(log1, log2)  # factored out: no overflow
-        share1 = np.exp(log1 - top) * g1
-        share2 = np.exp(log2 - top) * g2
-        total = share1 + share2
-        plain = (0.0 + c1 * share1 + c2 * share2) / total  # the weighted offset
-        pred = top + np.log(total) + plain
+        e1, e2 = np.exp(log1 - top), np.exp(log2 - top)
+        pred = np.concatenate([_predict(top, e1, e2, g, 1.0 - g, c1, c2)[0].ravel()
+                               for g in (0.0, 1.0)]).take(far)  # fmt: skip
+        mine, plain = _predict(top.take(at_own), e1.take(at_own), e2.take(at_own), g1, g2, c1,
+                               c2)  # fmt: skip
         if mixed_rows:
-            mixed = mixing.offset_at(at, log2[sel] - log1[sel], c1, c2)
-            pred[sel] = pred[sel] + w * (mixed - plain[sel])
-        out[b, ok] = np.sum((mb - pred) ** 2, axis=1)
+            x = log2.take(at_mixed) - log1.take(at_mixed)
+            mine[mixed] = mine[mixed] + w * (mixing.offset_at(at, x, c1, c2) - plain[mixed])
+        pred.ravel()[own_at] = mine
+        out[b, ok] = np.sum(np.square(np.subtract(mb, pred, out=pred), out=pred), axis=1)
     return out
+
+
+def _predict(top, e1, e2, g1, g2, c1, c2):
+    """:meth:`TransitionModel.log_mean_layers`'s mean ``ln I`` of rows (one boundary, no mixed
+    rows) from ``top`` (the larger layer line), ``e = exp(line - top)``, the PSF's shares ``g``
+    of the layers and their offsets ``c``; and the weighted offset (the same operations)."""
+    share1, share2 = e1 * g1, e2 * g2
+    total = share1 + share2
+    plain = (0.0 + c1 * share1 + c2 * share2) / total
+    return top + np.log(total) + plain, plain
 
 
 def _split_rss(mb, zs, t1, t2, slopes, p, model, offsets=None, mixing=None):
