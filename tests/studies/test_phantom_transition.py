@@ -52,3 +52,33 @@ def test_transition_with_offsets():
     m2 = np.exp(i2 + s2 * z + 0.6) * (1 - model.cdf((t - z) / p, s2 * p))
     expected = np.log(m1 + m2) + (-1.4 * m1 - 0.6 * m2) / (m1 + m2)
     np.testing.assert_allclose(mixed, expected, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("offsets", [None, (-0.9, -0.6)])
+def test_blocks_rss_is_log_means(offsets):
+    """The blocks' misfit tables (computed per group of trial positions, the PSF's shares only
+    near each) are, bit for bit, the least squares of :meth:`TransitionModel.log_mean` at the
+    trial positions (all at once) with the levels from the rows more than 3 pixels away."""
+    # private: the blocks' misfit tables, their constants and the mixed rows under test
+    from speckle.studies.phantom._mixing import mixed_rows
+    from speckle.studies.phantom._shapes import _LEVEL_ROWS, _blocks_rss
+
+    model, mixing = TransitionModel(CFG.n_pixels), mixed_rows(CFG)
+    p, s1, s2 = CFG.pixel_size, -0.01, -0.05
+    z = np.arange(40, 100) * p
+    rng = np.random.default_rng(3)
+    mbs = np.where(z < 70.3 * p, 2.0 + s1 * z, -1.0 + s2 * z) + rng.normal(0, 0.3, (3, z.size))
+    taus = np.arange(z[0], z[-1], p / 4)
+    got = _blocks_rss(mbs, z, taus, s1, s2, p, model, offsets, mixing)
+    above = z < taus[:, None] - _LEVEL_ROWS * p  # (taus, rows)
+    below = z > taus[:, None] + _LEVEL_ROWS * p
+    n1, n2 = above.sum(axis=1), below.sum(axis=1)
+    ok = (n1 >= 2) & (n2 >= 2)
+    assert np.all(got[:, ~ok] == np.inf)
+    above, below, n1, n2 = above[ok], below[ok], n1[ok], n2[ok]
+    for mb, row in zip(mbs, got, strict=True):
+        i1 = np.where(above, mb - s1 * z, 0.0).sum(axis=1) / n1
+        i2 = np.where(below, mb - s2 * z, 0.0).sum(axis=1) / n2
+        t, i1, i2 = taus[ok, None], i1[:, None], i2[:, None]
+        pred = model.log_mean(z, t, s1, i1, s2, i2, p, offsets, mixing)
+        np.testing.assert_array_equal(row[ok], np.sum((mb - pred) ** 2, axis=1))
