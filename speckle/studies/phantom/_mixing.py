@@ -103,6 +103,7 @@ class MixedRows:
         self._share = share[near] / share[-1]  # the upper layer's share of the PSF at each v
         self.a2y = slab_constants(r)["a2_y"]
         self._columns: dict = {}
+        self._uppers: dict = {}  # the upper layer's ln Phi per density (:meth:`_column`)
         self._densities: dict = {}
 
     def density(self, offset: float) -> float:
@@ -155,7 +156,12 @@ class MixedRows:
         if col is None:
             upper, lower, s_up = self._upper, self._lower, self._share
             ratio = math.exp(ix * X_STEP)
-            ln_phi = self._term(k1, upper, 1.0, s_up) + self._term(k2, lower, ratio, 1 - s_up)
+            above = self._uppers.get(k1)  # the upper layer's part: the same at every x
+            if above is None:
+                if len(self._uppers) >= 64:
+                    self._uppers.clear()
+                above = self._uppers[k1] = self._term(k1, upper, 1.0, s_up)
+            ln_phi = above + self._term(k2, lower, ratio, 1 - s_up)
             s2 = s_up + ratio * (1 - s_up)
             dphi = np.exp(ln_phi) - np.exp(-s2[None, :] * self.t2[:, None] / 4)
             col = -np.euler_gamma - 2 * np.trapezoid(dphi, self.tau, axis=0)
