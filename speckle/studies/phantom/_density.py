@@ -237,25 +237,39 @@ def layer_variances(
             line = np.polyval(np.polyfit(z[a:b], m[a:b], 1), z[a:b])
             var_ok[a:b] = -np.expm1(-np.exp(clip - line - np.euler_gamma)) <= MAX_PREDICTED_CLIPPED
 
-    def layer_var(cols, a, b):
-        sel = np.arange(a, b)[var_ok[a:b]]
-        sel = sel[np.isin(sel + LAG, sel)]
-        if sel.size < 2:
+    rows: dict = {}
+
+    def layer_var(cols, factor, a, b, drop=None):
+        """The segment's ``var ln I`` over the lines ``cols`` (all but ``drop``'s, a slice)."""
+        if (a, b) not in rows:  # the segment's row pairs, every line (gathered once)
+            sel = np.arange(a, b)[var_ok[a:b]]
+            sel = sel[np.isin(sel + LAG, sel)]
+            rows[a, b] = (li[sel], li[sel + LAG]) if sel.size >= 2 else None
+        if rows[a, b] is None:
             return np.nan
-        d = li[np.ix_(sel, cols)]
+        d, e = rows[a, b]
+        if drop is not None:
+            d = np.concatenate([d[:, : drop.start], d[:, drop.stop :]], axis=1)
+            e = np.concatenate([e[:, : drop.start], e[:, drop.stop :]], axis=1)
         d = d - d.mean(axis=1, keepdims=True)
-        e = li[np.ix_(sel + LAG, cols)]
         e = e - e.mean(axis=1, keepdims=True)
         n = len(cols) - 1
         v = (np.sum(d * d, axis=1) + np.sum(e * e, axis=1)) / (2 * n) - np.sum(d * e, axis=1) / n
-        return float(np.mean(v)) / lateral_variance_factor(cols, cfg)
+        return float(np.mean(v)) / factor
 
     all_cols = np.arange(li.shape[1])
     width = BLOCK_RADII * cfg.beam_radius / cfg.line_pitch
     blocks = max(len(keep), int(all_cols.size // width))
-    keep = [np.setdiff1d(all_cols, g) for g in np.array_split(all_cols, blocks)]
-    v = np.array([layer_var(all_cols, a, b) for a, b in segs])
-    v_jk = np.array([[layer_var(k, a, b) for a, b in segs] for k in keep])
+    groups = np.array_split(all_cols, blocks)  # contiguous: a replicate drops a slice
+    keep = [np.setdiff1d(all_cols, g) for g in groups]
+    factor = lateral_variance_factor(all_cols, cfg)
+    v = np.array([layer_var(all_cols, factor, a, b) for a, b in segs])
+    v_jk = []
+    for k, g in zip(keep, groups, strict=True):
+        factor = lateral_variance_factor(k, cfg)
+        drop = slice(int(g[0]), int(g[-1]) + 1)
+        v_jk.append([layer_var(k, factor, a, b, drop) for a, b in segs])
+    v_jk = np.array(v_jk)
     mu_jk = np.array(
         [[-np.polyfit(z[a:b], li[a:b][:, k].mean(axis=1), 1)[0] / 2 for a, b in segs]
          for k in keep]
