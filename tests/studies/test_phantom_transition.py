@@ -59,8 +59,10 @@ def test_blocks_rss_is_log_means(offsets):
     """The blocks' misfit tables (computed per group of trial positions, the PSF's shares only
     near each) are, bit for bit, the least squares of :meth:`TransitionModel.log_mean` at the
     trial positions (all at once) with the levels from the rows more than 3 pixels away."""
-    # private: the blocks' misfit tables, their constants and the mixed rows under test
+    # private: the mixed rows the blocks' misfit tables use
     from speckle.studies.phantom._mixing import mixed_rows
+
+    # private: the blocks' misfit tables and their constants are under test
     from speckle.studies.phantom._shapes import _LEVEL_ROWS, _blocks_rss
 
     model, mixing = TransitionModel(CFG.n_pixels), mixed_rows(CFG)
