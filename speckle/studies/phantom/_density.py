@@ -41,6 +41,7 @@ __all__ = [
     "lateral_variance_factor",
     "layer_densities",
     "layer_variances",
+    "lines_per_block",
     "log_offset_se",
     "log_offsets",
     "slab_inverse_density",
@@ -603,6 +604,11 @@ def _psf_area(cfg: ScannerConfig) -> float:
     hann = _scan.hann_spectrum(cfg.n_pixels)
     r, p = cfg.beam_radius, cfg.pixel_size
     return float(np.sum(depth_intensity_psf(hann)) / 8 * p * r * math.sqrt(math.pi / 2))
+
+
+def lines_per_block(radii: float, cfg: ScannerConfig) -> int:
+    """Lines in a lateral jackknife block ``radii`` beam radii wide (at least one)."""
+    return max(1, math.ceil(radii * cfg.beam_radius / cfg.line_pitch))
 
 
 def kurtosis_volume(cfg: ScannerConfig) -> float:

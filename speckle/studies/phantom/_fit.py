@@ -77,6 +77,7 @@ from ._density import (
     kurtosis_density,
     layer_densities,
     layer_variances,
+    lines_per_block,
     log_offset_se,
     log_offsets,
     window_and_brightness,
@@ -532,7 +533,7 @@ def _layer_kurtosis(intensity, segs, v, cfg) -> np.ndarray:
     :data:`KURTOSIS_BLOCK_RADII` beam radii) where its ``var ln I`` is NaN (no rows that the
     floor leaves whole), else NaN."""
     out = np.full(len(segs), np.nan)
-    block = max(1, math.ceil(KURTOSIS_BLOCK_RADII * cfg.beam_radius / cfg.line_pitch))
+    block = lines_per_block(KURTOSIS_BLOCK_RADII, cfg)
     for k, (a, b) in enumerate(segs):
         if not np.isfinite(v[k]) and b - a >= LAG + 2:
             out[k] = kurtosis_density(intensity[a:b], cfg, block_lines=block)[0]

@@ -97,6 +97,7 @@ from ._density import (
     kurtosis_density,
     layer_densities,
     layer_variances,
+    lines_per_block,
     slab_inverse_density,
 )
 from ._slab import slab_constants, speckle_cell
@@ -245,7 +246,7 @@ def inclusion_density(
     half_z = h / math.sqrt(2) - DENSITY_ROWS * cfg.pixel_size
     cols = np.flatnonzero(np.abs(x - xc) <= half_x)
     rows = np.flatnonzero(np.abs(z - zc) <= half_z)
-    block = max(1, math.ceil(DENSITY_BLOCK_RADII * cfg.beam_radius / cfg.line_pitch))
+    block = lines_per_block(DENSITY_BLOCK_RADII, cfg)
     groups = cols.size // block
     if groups < 2 or rows.size < 2 + LAG:
         return out
@@ -577,7 +578,7 @@ def fit_inclusions(
     sigma_lines = r / 2 / pitch
     consts = slab_constants(r)
     cell_px = speckle_cell(cfg.n_pixels, r, pitch)  # pixels x lines of one speckle cell
-    density_block = max(1, math.ceil(DENSITY_BLOCK_RADII * r / pitch))
+    density_block = lines_per_block(DENSITY_BLOCK_RADII, cfg)
     a2, t_eq = consts["A2"], consts["t_eq"]
     key = layer_of * (n_z + 1) + np.clip(depth_below, 0, n_z)
     criterion = (
