@@ -12,6 +12,7 @@ import speckle
 from speckle.studies.phantom._fit import _fit_levels  # private: the flat fit alone (the ramp)
 from speckle.studies.phantom._shapes import (
     TransitionModel,  # private: the model under test
+    _contrast_rss,  # private: the contrast's change-point misfit under test
     _joint,  # private: the joint search under test
 )
 from speckle.studies.phantom.loop import fit_profiles
@@ -135,3 +136,25 @@ def test_joint_search_reaches_the_exact_shape(d):
     assert np.max(np.abs((got - theta) / steps[:d])) < 1e-6
     # each block's interpolant rises by step |delta| for a shift delta off its node
     assert misfit < 16 * step * 3e-6 * p
+
+
+def test_contrast_change_point_is_the_two_level_least_squares():
+    """The contrast's misfit at each trial position is the least squares of one level above
+    and one below (brute force: the two sides' sums of squared deviations), inf where a side
+    has fewer than 2 rows; least at the step of a noiseless profile."""
+    rng = np.random.default_rng(3)
+    z = np.arange(40) * 2.2
+    lv = rng.normal(size=z.size) + np.where(z > 50.0, 1.5, 0.0)
+    taus = np.arange(-3.0, 90.0, 0.55)
+    got = _contrast_rss(lv, z, taus)
+    for tau, value in zip(taus, got, strict=True):
+        above, below = lv[z < tau], lv[z >= tau]
+        if min(above.size, below.size) < 2:
+            assert value == np.inf
+        else:
+            want = np.sum((above - above.mean()) ** 2) + np.sum((below - below.mean()) ** 2)
+            assert value == pytest.approx(want, rel=1e-9, abs=1e-9)
+    step = np.where(z > 50.0, 1.5, 0.0)
+    clean = _contrast_rss(step, z, taus)
+    assert np.min(clean) == pytest.approx(0.0, abs=1e-9)
+    assert np.all((taus[clean < 1e-9] > z[z <= 50.0][-1]) & (taus[clean < 1e-9] <= 52.8))

@@ -29,6 +29,12 @@ neighbour), the boundary is located once more in windows moved along the located
 window edge at the flat fit's depth ``z'`` moves to ``z' + delta(x_b, z')``, ``delta`` as in
 the flattening below with this boundary's shape only, so that an edge half-way between two
 boundaries stays half-way between them (within the flat fit's rows).
+A boundary whose mean ``ln I`` level step is within 3 SEs but whose speckle contrast (the
+rows' ``ln var ln I`` in each block) steps by more than 3 (the SEs from the spread over the
+blocks) is located by both statistics: each block's misfit table is the transition model's
+over its least misfit per row plus the contrast's change point (a level above, one below)
+over its own, and the flattening takes that boundary's located depth (the flat fit's can be
+far: a dense dim layer over a sparse bright one, whose mean ``ln I`` hardly steps).
 
 With any boundary not flat, the levels are flattened: line ``x``'s row at depth
 ``z' + delta(x, z')`` moves to ``z'``, ``delta`` linear in ``z'`` between the boundaries'
@@ -75,6 +81,10 @@ _SAMPLES = 64
 _XATOL = 1e-9
 #: Rows (pixels) from the trial position beyond which a row sets a layer's level.
 _LEVEL_ROWS = 3
+#: SEs of a boundary's steps: a mean ``ln I`` level step within this many and a ``ln var ln
+#: I`` step beyond it locate the boundary by its contrast too (as the flat fit's
+#: ``SIGNIFICANCE``).
+_CONTRAST_SE = 3.0
 _CRITERION = (
     "least BIC = n ln(RSS/n) + (d + 1) ln n of the boundary's positions in 16 lateral blocks, "
     "d = 0 (flat), 1 (tilted), 2 (curved)"
@@ -275,6 +285,23 @@ def _blocks_rss(mbs, z, taus, s1, s2, p, model, offsets=None, mixing=None):
     return out
 
 
+def _contrast_rss(lv, z, taus):
+    """Change-point misfit of one block's row ``ln var ln I`` ``lv`` (rows at depths ``z``,
+    ascending) for each trial boundary position in ``taus``: a constant level above and one
+    below (the rows' means), the squares summed over every row; inf where a side has fewer
+    than 2 rows."""
+    out = np.full(taus.size, np.inf)
+    c1, c2 = np.cumsum(lv), np.cumsum(lv**2)
+    n = lv.size
+    k = np.searchsorted(z, taus)  # rows above: 0..k-1
+    ok = (k >= 2) & (k <= n - 2)
+    k = k[ok]
+    sa, qa = c1[k - 1], c2[k - 1]
+    sb, qb = c1[-1] - sa, c2[-1] - qa
+    out[ok] = qa - sa**2 / k + qb - sb**2 / (n - k)
+    return out
+
+
 def _predict(top, e1, e2, g1, g2, c1, c2):
     """:meth:`TransitionModel.log_mean_layers`'s mean ``ln I`` of rows (one boundary, no mixed
     rows) from ``top`` (the larger layer line), ``e = exp(line - top)``, the PSF's shares ``g``
@@ -419,10 +446,13 @@ def fit_shapes(
     groups = np.array_split(np.arange(x.size), BOUNDARY_BLOCKS)
     xb = np.array([x[g].mean() for g in groups])
     mb = np.stack([li[:, g].mean(axis=1) for g in groups])  # (blocks, pixels)
+    # each block's rows' ln var ln I: the speckle contrast, which steps with the density
+    with np.errstate(divide="ignore"):
+        lv = np.log(np.stack([li[:, g].var(axis=1) for g in groups]))
     m1, m2 = float(np.mean(x)), float(np.mean(x**2))
     last = ds.attrs["last_row"] * p  # the flat fit's last row (µm): windows end there
 
-    def locate(lo, hi, s_above, s_below, offsets):
+    def locate(lo, hi, s_above, s_below, offsets, contrast=False):
         """Shape, coefficients, SEs and joint misfit of one boundary in rows ``lo..hi`` (µm,
         per block) between layers of slopes ``s_above``, ``s_below`` and ``E ln(I/<I>)``
         ``offsets``; None if every block's window is too short."""
@@ -448,6 +478,19 @@ def fit_shapes(
                                                         offsets, mixing)  # fmt: skip
         if not np.isfinite(rss).any():
             return None
+        if contrast:
+            # both misfits, each over its block's residual variance (its least misfit per
+            # row): the sum of the two statistics' chi-squares
+            rows = [(z >= lo[b]) & (z <= hi[b]) for b in range(BOUNDARY_BLOCKS)]
+            rc = np.stack([_contrast_rss(lv[b, r], z[r], taus) for b, r in enumerate(rows)])
+            both = np.isfinite(rss) & np.isfinite(rc)
+            n_b = np.maximum(1, np.sum(rows, axis=1))[:, None]
+            s_m = np.min(np.where(both, rss, np.inf), axis=1, keepdims=True) / n_b
+            s_c = np.min(np.where(both, rc, np.inf), axis=1, keepdims=True) / n_b
+            with np.errstate(divide="ignore", invalid="ignore"):
+                rss = np.where(both, rss / s_m + rc / s_c, np.inf)
+            if not np.isfinite(rss).any():
+                return None
         # a block whose least misfit is at its window's end: its position may lie beyond
         finite = np.isfinite(rss)
         ends = [(np.argmin(np.where(f, r, np.inf)), np.flatnonzero(f)[[0, -1]])
@@ -474,6 +517,23 @@ def fit_shapes(
         def mid(k):
             return 0.5 * (bottom[k] + bottom[k + 1])
 
+        def step_z(k):
+            """Boundary ``k``'s steps in SEs: of the mean ``ln I`` level at the boundary (the
+            two layers' lines of the flat fit's slopes, levels per block) and of the rows'
+            ``ln var ln I`` (per block); the SEs from the spread over the (independent)
+            lateral blocks. NaN where a layer has fewer than 2 rows."""
+            margin = (_LEVEL_ROWS + 2) * p
+            ra = (z > bottom[k - 1] + margin) & (z < tops[k] - margin) & (z <= last)
+            rb = (z > tops[k] + margin) & (z < bottom[k + 1] - margin) & (z <= last)
+            if ra.sum() < 2 or rb.sum() < 2:
+                return np.nan, np.nan
+            above = np.mean(mb[:, ra] - slope[k - 1] * z[ra], axis=1)
+            below = np.mean(mb[:, rb] - slope[k] * z[rb], axis=1)
+            level = (slope[k] - slope[k - 1]) * tops[k] + below - above
+            contrast = lv[:, rb].mean(axis=1) - lv[:, ra].mean(axis=1)
+            return tuple(abs(d.mean()) * math.sqrt(d.size) / d.std(ddof=1)
+                         for d in (level, contrast))  # fmt: skip
+
         def window(zf, along=None):
             """Depths (µm, per block) of the depth ``zf`` of ``cur``: ``zf`` itself, or with
             ``along`` (coefficients per boundary) ``zf + delta`` at the block's mean offset,
@@ -491,15 +551,17 @@ def fit_shapes(
             """Boundary ``k`` located half-way to its neighbours; where a shaped boundary's
             block found its least misfit at its window's end (its position may lie beyond: a
             steep boundary's outer blocks), located again in windows moved along that shape."""
+            z_level, z_contrast = step_z(k)
+            con = bool(z_level < _CONTRAST_SE < z_contrast)
             one = locate(window(mid(k - 1)), window(mid(k)), slope[k - 1], slope[k],
-                         off[k - 1 : k + 1])  # fmt: skip
+                         off[k - 1 : k + 1], con)  # fmt: skip
             if one is None or one[0] == "flat" or not one[4]:
-                return one
+                return one if one is None else (*one, con)
             along = np.zeros((tops.size, 3))
             along[k] = one[1]
             again = locate(window(mid(k - 1), along), window(mid(k), along), slope[k - 1],
-                           slope[k], off[k - 1 : k + 1])  # fmt: skip
-            return one if again is None else again
+                           slope[k], off[k - 1 : k + 1], con)  # fmt: skip
+            return (*one, con) if again is None else (*again, con)
 
         anchors, shape, coef, ses = [0.0], ["flat"], [np.zeros(3)], [np.full(3, np.nan)]
         located = [None] + [place(k) for k in range(1, tops.size)]
@@ -534,7 +596,8 @@ def fit_shapes(
                         k += 2
                         continue
             one = located[k]
-            anchors.append(tops[k])
+            # a boundary located by its contrast too: its own depth (the flat fit's may be far)
+            anchors.append(anchor(one[1]) if one is not None and one[5] else tops[k])
             if one is None:
                 shape.append("flat")
                 coef.append(np.array([tops[k], 0.0, 0.0]))
