@@ -11,6 +11,9 @@ import pytest
 
 import speckle
 from speckle.studies.phantom import PhantomFit, fit_phantom, slab_constants
+from speckle.studies.phantom._density import (
+    kurtosis_volume,  # private: the kurtosis's exact volume V, kappa = 1/(rho V)
+)
 
 DATA = files("speckle.data") / "synthoct"
 CFG = speckle.ScannerConfig()
@@ -84,8 +87,14 @@ def test_published_density_not_identified_gives_a_bound(published):
         for k in range(layers.sizes["layer"]):
             d, bound = float(layers.density[k]), float(layers.density_bound[k])
             if np.isnan(d) and np.isnan(float(layers.log_variance[k])):
-                # no row far enough above the floor (Layers_B's dim top layer): no bound
-                assert np.isnan(bound)
+                # no row far enough above the floor (Layers_B's dim top layer): the bound is
+                # the intensity kurtosis's, 1/(V (kappa + 2 SE)); kappa = 1/(rho V) exactly
+                # (Campbell), within 3 SE (measured: pull -2.1, so this 97.7 % bound lies
+                # 2.6 % above the baseline's density here)
+                kappa, se = float(layers.kurtosis[k]), float(layers.kurtosis_se[k])
+                volume = kurtosis_volume(CFG)
+                assert bound == pytest.approx(1 / (volume * (kappa + 2 * se)), rel=1e-12)
+                assert abs(kappa - 1 / (rho * volume)) < 3 * se
             elif np.isnan(d):
                 assert np.isfinite(bound) and bound < rho
                 assert np.isnan(float(layers.energy[k]))

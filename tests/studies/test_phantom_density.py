@@ -281,3 +281,30 @@ def test_log_offsets_from_the_kurtosis_where_var_ln_i_has_no_rows():
     table, _ = speckle.virtual_patient(1, config=SMALL, layers=(2, 2), shapes=("flat",))
     layers = speckle.fit_phantom(speckle.synthoct_scan(table, SMALL, nthreads=1), SMALL).layers
     assert layers.log_offset.dims == ("layer",) and layers.log_offset.attrs["units"] == "1"
+
+
+def test_layers_without_var_ln_i_take_the_kurtosis_bound():
+    """2025 patient 3 (five layers): the floor leaves its two deepest layers no rows for ``var
+    ln I``; their ``density_bound`` is the intensity kurtosis's ``1/(V (kappa + 2 SE))``,
+    ``kappa`` within 3 SE of Campbell's exact ``1/(rho V)`` (measured pulls +1.00 and -0.75)
+    and each bound below the true density (0.00347 < 0.00434, 0.00204 < 0.00222 per µm^3).
+    Layers with ``var ln I`` have no kurtosis (NaN)."""
+    cfg = speckle.synthoct_config("2025")
+    table, truth = speckle.virtual_patient(3, config=cfg)
+    layers = speckle.fit_phantom(speckle.synthoct_scan(table, cfg, nthreads=1), cfg,
+                                 shapes=("flat",)).layers  # fmt: skip
+    assert layers.sizes["layer"] == truth.sizes["layer"] == 5
+    has = np.isfinite(layers.kurtosis.values)
+    assert list(np.flatnonzero(has)) == [3, 4]
+    assert np.all(np.isnan(layers.log_variance.values[has]))
+    assert np.all(np.isfinite(layers.log_variance.values[~has]))
+    volume = kurtosis_volume(cfg)
+    for k in (3, 4):
+        kappa, se = float(layers.kurtosis[k]), float(layers.kurtosis_se[k])
+        rho = float(truth.density[k])
+        assert np.isnan(float(layers.density[k]))
+        bound = float(layers.density_bound[k])
+        assert bound == pytest.approx(1 / (volume * (kappa + 2 * se)), rel=1e-12)
+        assert abs(kappa - 1 / (rho * volume)) < 3 * se
+        assert bound < rho
+    assert layers.kurtosis.attrs["units"] == "1"

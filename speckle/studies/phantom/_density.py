@@ -284,6 +284,8 @@ def layer_densities(
     mu: np.ndarray,
     mu_jk: np.ndarray,
     cfg: ScannerConfig,
+    *,
+    kurtosis_bound: np.ndarray | None = None,
 ) -> dict[str, np.ndarray]:
     """Each layer's density and energy from its ``var ln I`` and attenuation.
 
@@ -291,6 +293,8 @@ def layer_densities(
     density is identified where the excess over ``pi^2/6`` exceeds :data:`IDENTIFY` jackknife
     SEs, else NaN with the lower bound of the density whose ``var ln I`` is ``max(v, pi^2/6) +``
     :data:`BOUND_SE` SEs (the excess's one-sided 97.7 % upper limit); ``E = 100 mu/(rho A2)``.
+    A layer without ``var ln I`` (NaN: the floor clips its rows) takes ``kurtosis_bound``
+    (:func:`kurtosis_density`'s, per layer; NaN: none) as its bound.
 
     Returns
     -------
@@ -327,6 +331,8 @@ def layer_densities(
         [np.nan if ident[k] else invert(max(v[k], np.pi**2 / 6) + BOUND_SE * v_se[k]) * to_3d
          for k in range(n_layers)]
     )  # fmt: skip
+    if kurtosis_bound is not None:  # no var ln I: the intensity kurtosis's bound
+        bound = np.where(np.isnan(v), np.asarray(kurtosis_bound, float), bound)
     e_jk = mu_jk / (rho_jk * consts["A2"])
     energy = 100 * energy_frac
     energy_se = 100 * np.array([_jackknife(e_jk[:, k]) if ident[k] else np.nan

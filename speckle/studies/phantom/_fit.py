@@ -240,8 +240,12 @@ class PhantomFit:
         ``energy`` (%), ``rho_e`` (``rho E/100``, per µm^3, what the scan identifies at high
         density), each with ``*_se`` (``density_se``: half the way to the density of ``var ln I``
         2 SE lower, as ``density`` falls convexly with it); ``density_bound`` (lower bound where
-        ``density`` is NaN) and ``energy_bound`` (upper bound; both NaN too where the layer has
-        no rows whose predicted clipped fraction is at most 1 %), ``log_variance`` (``var ln I``,
+        ``density`` is NaN: from ``var ln I``, or where the layer has no rows whose predicted
+        clipped fraction is at most 1 % from its intensity kurtosis; NaN where neither gives
+        one) and ``energy_bound`` (the upper bound it gives), ``kurtosis`` (the intensity's
+        excess kurtosis ``1/(rho V)`` with its SE, where the layer has no ``var ln I``: the
+        bound's source, ``V`` :func:`~speckle.studies.phantom._density.kurtosis_volume`),
+        ``log_variance`` (``var ln I``,
         shadowing spread removed) with its SE, ``log_offset`` (``E ln(I/<I>)`` of the layer's
         sparse speckle, which the boundaries' transitions use: from ``var ln I``, or from the
         intensity kurtosis where the floor leaves no rows for it, ``-gamma`` where neither
@@ -529,14 +533,14 @@ def _cut_top(lev, rows, segs, tops, keep, cfg) -> dict[str, np.ndarray] | None:
 
 
 def _layer_kurtosis(intensity, segs, v, cfg) -> np.ndarray:
-    """Each layer's intensity excess kurtosis (:func:`kurtosis_density`, jackknife blocks of
-    :data:`KURTOSIS_BLOCK_RADII` beam radii) where its ``var ln I`` is NaN (no rows that the
-    floor leaves whole), else NaN."""
-    out = np.full(len(segs), np.nan)
+    """Each layer's intensity excess kurtosis, its SE and the density's lower bound it gives
+    (:func:`kurtosis_density`, jackknife blocks of :data:`KURTOSIS_BLOCK_RADII` beam radii)
+    where its ``var ln I`` is NaN (no rows that the floor leaves whole), else NaN: ``(3, K)``."""
+    out = np.full((3, len(segs)), np.nan)
     block = lines_per_block(KURTOSIS_BLOCK_RADII, cfg)
     for k, (a, b) in enumerate(segs):
         if not np.isfinite(v[k]) and b - a >= LAG + 2:
-            out[k] = kurtosis_density(intensity[a:b], cfg, block_lines=block)[0]
+            out[:, k] = kurtosis_density(intensity[a:b], cfg, block_lines=block)
     return out
 
 
@@ -623,7 +627,8 @@ def _fit_levels(
     mixing = mixed_rows(cfg)  # the mixed rows' own speckle (_mixing.py)
     # var ln I per layer first: its E ln(I/<I>) sets the transition's mixed intensity
     v, v_jk, mu_fine = layer_variances(li, z, segs, keep, cfg)
-    offsets = log_offsets(v, cfg, kurtosis=_layer_kurtosis(intensity, segs, v, cfg))
+    kappa, kappa_se, kappa_bound = _layer_kurtosis(intensity, segs, v, cfg)
+    offsets = log_offsets(v, cfg, kurtosis=kappa)
 
     def tops_of(mm, fits, first=None):
         """The boundaries; ``first``: the first row of boundary 1's window (a cut top layer's
@@ -661,7 +666,7 @@ def _fit_levels(
     top_se = np.array([_jackknife(tops_jk[:, k]) for k in range(n_layers)])
 
     # density, energy, the window and rho E/100: _density.py
-    dens = layer_densities(v, v_jk, mu, mu_fine, cfg)
+    dens = layer_densities(v, v_jk, mu, mu_fine, cfg, kurtosis_bound=kappa_bound)
     fitted = {
         "mu": mu, "mu_se": mu_se, "mu_jk": mu_jk, "tops": tops, "tops_jk": tops_jk,
         "offsets": offsets, "offsets_se": log_offset_se(v, dens["v_se"], cfg),
@@ -718,7 +723,8 @@ def _fit_levels(
             "density": var("d", rho, "volume_density", "scatterers per um^3 (slab |y| <= r)"),
             "density_se": var("d", rho_se, "volume_density", "standard error of density"),
             "density_bound": var("d", bound, "volume_density",
-                                 "lower bound of the density where it is not identified"),
+                                 "lower bound of the density where it is not identified "
+                                 "(from var ln I, else from the intensity kurtosis)"),
             "energy": var("e", energy, "percent", "energy per scatterer"),
             "energy_se": var("e", energy_se, "percent", "standard error of energy"),
             "energy_bound": var("e", energy_bound, "percent",
@@ -730,6 +736,10 @@ def _fit_levels(
             "log_variance_se": var("v", v_se, "dimensionless", "standard error of log_variance"),
             "log_offset": var("c", offsets, "dimensionless",
                               "E ln(I/<I>) of the layer's speckle, as the transitions take it"),
+            "kurtosis": var("k", kappa, "dimensionless",
+                            "excess intensity kurtosis E I^2/(E I)^2 - 2 = 1/(rho V) (streaks "
+                            "removed), where var ln I has no rows"),
+            "kurtosis_se": var("k", kappa_se, "dimensionless", "standard error of kurtosis"),
         },
         coords={"layer": coord("layer", np.arange(n_layers))},
         attrs={

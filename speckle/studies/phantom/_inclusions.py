@@ -735,7 +735,7 @@ def fit_inclusions(
         host_px = usable & ~mask & ~footprint & level_rows[:, None]
         ratio = float(np.mean(np.exp(li[inside])) / np.mean(np.exp(li[host_px])))
         rho_h, bound_h = (float(layers[v].values[host]) for v in ("density", "density_bound"))
-        if not np.isfinite(rho_h) and not np.isfinite(bound_h):  # no var ln I: the kurtosis
+        if not np.isfinite(layers.log_variance.values[host]):  # no var ln I: the kurtosis
             own = usable & ~mask & ~footprint & (layer_of == host)
             bound_h = kurtosis_density(np.where(own, np.exp(li), np.nan), cfg,
                                        block_lines=density_block)[2]  # fmt: skip
