@@ -11,9 +11,7 @@ import pytest
 
 import speckle
 from speckle.studies.phantom import PhantomFit, fit_phantom, slab_constants
-from speckle.studies.phantom._density import (
-    kurtosis_volume,  # private: the kurtosis's exact volume V, kappa = 1/(rho V)
-)
+from speckle.studies.phantom._density import kurtosis_volume  # private: kappa = 1/(rho V)
 
 DATA = files("speckle.data") / "synthoct"
 CFG = speckle.ScannerConfig()
