@@ -464,9 +464,8 @@ def fit_shapes(
         if taus.size < 2:
             return None
         rss = np.full((BOUNDARY_BLOCKS, taus.size), np.inf)
-        n_rows = 0
-        for b in range(BOUNDARY_BLOCKS):
-            n_rows += int(np.sum((z >= lo[b]) & (z <= hi[b])))
+        rows = (z >= lo[:, None]) & (z <= hi[:, None])  # each block's window (blocks, pixels)
+        n_rows = int(rows.sum())
         # the blocks of one window together (all of them in a flat window)
         for w_lo, w_hi in dict.fromkeys(zip(lo.tolist(), hi.tolist(), strict=True)):
             same = np.flatnonzero((lo == w_lo) & (hi == w_hi))
@@ -481,10 +480,9 @@ def fit_shapes(
         if contrast:
             # both misfits, each over its block's residual variance (its least misfit per
             # row): the sum of the two statistics' chi-squares
-            rows = [(z >= lo[b]) & (z <= hi[b]) for b in range(BOUNDARY_BLOCKS)]
             rc = np.stack([_contrast_rss(lv[b, r], z[r], taus) for b, r in enumerate(rows)])
             both = np.isfinite(rss) & np.isfinite(rc)
-            n_b = np.maximum(1, np.sum(rows, axis=1))[:, None]
+            n_b = np.maximum(1, rows.sum(axis=1, keepdims=True))
             s_m = np.min(np.where(both, rss, np.inf), axis=1, keepdims=True) / n_b
             s_c = np.min(np.where(both, rc, np.inf), axis=1, keepdims=True) / n_b
             with np.errstate(divide="ignore", invalid="ignore"):
@@ -555,13 +553,13 @@ def fit_shapes(
             con = bool(z_level < _CONTRAST_SE < z_contrast)
             one = locate(window(mid(k - 1)), window(mid(k)), slope[k - 1], slope[k],
                          off[k - 1 : k + 1], con)  # fmt: skip
-            if one is None or one[0] == "flat" or not one[4]:
-                return one if one is None else (*one, con)
-            along = np.zeros((tops.size, 3))
-            along[k] = one[1]
-            again = locate(window(mid(k - 1), along), window(mid(k), along), slope[k - 1],
-                           slope[k], off[k - 1 : k + 1], con)  # fmt: skip
-            return (*one, con) if again is None else (*again, con)
+            if one is not None and one[0] != "flat" and one[4]:
+                along = np.zeros((tops.size, 3))
+                along[k] = one[1]
+                again = locate(window(mid(k - 1), along), window(mid(k), along), slope[k - 1],
+                               slope[k], off[k - 1 : k + 1], con)  # fmt: skip
+                one = one if again is None else again
+            return None if one is None else (*one, con)  # [5]: located by the contrast too
 
         anchors, shape, coef, ses = [0.0], ["flat"], [np.zeros(3)], [np.full(3, np.nan)]
         located = [None] + [place(k) for k in range(1, tops.size)]
