@@ -23,9 +23,11 @@ a steep boundary's sweep across the lines, which the flat fit cuts in two with a
 between) where that boundary, located between the layers above and below, sweeps at least half
 the layer between and fits the blocks at least as well as the two located boundaries with the
 layer between them (one level per block more).
-Where a shaped boundary's block finds its least misfit at its window's end (its position may
-lie beyond: a steep boundary's outer blocks, its depth sweeping past the window half-way to a
-neighbour), the boundary is located once more in windows moved along the located shape: the
+Where a shaped boundary's block finds its least misfit at its window's end, or the joint fit
+places it at that end (its position may lie beyond: a steep boundary's outer blocks, its depth
+sweeping past the window half-way to a neighbour; such a block finds a spurious least misfit
+inside its window, which the joint fit follows to the window's end), the boundary is located
+once more in windows moved along the located shape: the
 window edge at the flat fit's depth ``z'`` moves to ``z' + delta(x_b, z')``, ``delta`` as in
 the flattening below with this boundary's shape only, so that an edge half-way between two
 boundaries stays half-way between them (within the flat fit's rows).
@@ -34,7 +36,11 @@ rows' ``ln var ln I`` in each block) steps by more than 3 (the SEs from the spre
 blocks) is located by both statistics: each block's misfit table is the transition model's
 over its least misfit per row plus the contrast's change point (a level above, one below)
 over its own, and the flattening takes that boundary's located depth (the flat fit's can be
-far: a dense dim layer over a sparse bright one, whose mean ``ln I`` hardly steps).
+far: a dense dim layer over a sparse bright one, whose mean ``ln I`` hardly steps). A boundary
+whose mean ``ln I`` steps but locates it to worse than a pixel (its depth's jackknife SE) is
+located by both statistics too where the contrast steps by more than 3 SEs, and the more
+precise of the two kept (2025 patient 7's sparse bright layer over a dense dim one: the
+blocks' own positions by the mean scatter over 120 µm, its depth's SE 40 µm).
 
 With any boundary not flat, the levels are flattened: line ``x``'s row at depth
 ``z' + delta(x, z')`` moves to ``z'``, ``delta`` linear in ``z'`` between the boundaries'
@@ -85,6 +91,10 @@ _LEVEL_ROWS = 3
 #: I`` step beyond it locate the boundary by its contrast too (as the flat fit's
 #: ``SIGNIFICANCE``).
 _CONTRAST_SE = 3.0
+#: Jackknife SE (pixels) of a boundary's depth located by the mean ``ln I`` beyond which a
+#: boundary whose contrast steps (beyond :data:`_CONTRAST_SE`) is located by both statistics
+#: too, the more precise kept.
+_PRECISE_PIXELS = 1.0
 _CRITERION = (
     "least BIC = n ln(RSS/n) + (d + 1) ln n of the boundary's positions in 16 lateral blocks, "
     "d = 0 (flat), 1 (tilted), 2 (curved)"
@@ -489,12 +499,19 @@ def fit_shapes(
                 rss = np.where(both, rss / s_m + rc / s_c, np.inf)
             if not np.isfinite(rss).any():
                 return None
-        # a block whose least misfit is at its window's end: its position may lie beyond
-        finite = np.isfinite(rss)
-        ends = [(np.argmin(np.where(f, r, np.inf)), np.flatnonzero(f)[[0, -1]])
-                for r, f in zip(rss, finite, strict=True) if f.any()]  # fmt: skip
-        cut = any(i in end for i, end in ends)
-        return (*_boundary_shape(rss, taus, xb, cfg.x_max, shapes, p, n_rows), cut)
+        fit = _boundary_shape(rss, taus, xb, cfg.x_max, shapes, p, n_rows)
+        # a block whose least misfit, or whose place on the joint fit, is at its window's
+        # end: its position may lie beyond (a block whose boundary lies outside its window
+        # finds a spurious least misfit inside it, which the joint fit follows to the end)
+        cf = fit[1]
+        joint = (cf[0] + cf[1] * xb + cf[2] * (xb**2 - cfg.x_max**2 / 12) - taus[0]) / (p / 4)
+        cut = False
+        for r, f, j in zip(rss, np.isfinite(rss), joint, strict=True):
+            if f.any():
+                end = np.flatnonzero(f)[[0, -1]]
+                cut |= np.argmin(np.where(f, r, np.inf)) in end
+                cut |= not end[0] + 0.5 < j < end[1] - 0.5
+        return (*fit, cut)
 
     def anchor(cf):
         """Depth of a located boundary at the central lines' mean offset."""
@@ -545,12 +562,10 @@ def fit_shapes(
             moved = zf + np.array([np.interp(zf, tops, d[:, j]) for j in range(xb.size)])
             return np.clip(moved, 0.0, last)
 
-        def place(k):
-            """Boundary ``k`` located half-way to its neighbours; where a shaped boundary's
-            block found its least misfit at its window's end (its position may lie beyond: a
-            steep boundary's outer blocks), located again in windows moved along that shape."""
-            z_level, z_contrast = step_z(k)
-            con = bool(z_level < _CONTRAST_SE < z_contrast)
+        def place_by(k, con):
+            """Boundary ``k`` located half-way to its neighbours (by the contrast too with
+            ``con``); where a shaped boundary's block was cut by its window (:func:`locate`),
+            located again in windows moved along that shape."""
             one = locate(window(mid(k - 1)), window(mid(k)), slope[k - 1], slope[k],
                          off[k - 1 : k + 1], con)  # fmt: skip
             if one is not None and one[0] != "flat" and one[4]:
@@ -560,6 +575,21 @@ def fit_shapes(
                                slope[k], off[k - 1 : k + 1], con)  # fmt: skip
                 one = one if again is None else again
             return None if one is None else (*one, con)  # [5]: located by the contrast too
+
+        def place(k):
+            """Boundary ``k`` located by the mean ``ln I``, or by its contrast too: where the
+            level hardly steps (:data:`_CONTRAST_SE`), or where the mean locates it to worse
+            than :data:`_PRECISE_PIXELS` (its depth's jackknife SE) and the contrast steps,
+            the more precise of the two."""
+            z_level, z_contrast = step_z(k)
+            if z_level < _CONTRAST_SE < z_contrast:
+                return place_by(k, True)
+            one = place_by(k, False)
+            if z_contrast > _CONTRAST_SE and (one is None or one[2][0] > _PRECISE_PIXELS * p):
+                both = place_by(k, True)
+                if both is not None and (one is None or both[2][0] < one[2][0]):
+                    return both
+            return one
 
         anchors, shape, coef, ses = [0.0], ["flat"], [np.zeros(3)], [np.full(3, np.nan)]
         located = [None] + [place(k) for k in range(1, tops.size)]
