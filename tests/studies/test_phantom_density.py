@@ -15,6 +15,7 @@ from speckle.studies.phantom import slab_constants
 
 # private: the fit's density model (the private module _density) is what these tests check
 from speckle.studies.phantom._density import (
+    _clip_rate,
     _equivalent,
     kurtosis_density,
     kurtosis_volume,
@@ -308,3 +309,31 @@ def test_layers_without_var_ln_i_take_the_kurtosis_bound():
         assert abs(kappa - 1 / (rho * volume)) < 3 * se
         assert bound < rho
     assert layers.kurtosis.attrs["units"] == "1"
+
+
+def test_clip_rate_of_fully_developed_and_sparse_speckle():
+    """The clipped-fraction rate ``A`` of ``1 - exp(-A c/exp(line))``: fully developed speckle
+    (exponential intensities of mean ``<I> = exp(line + gamma)``, ``line = E ln I``) clips
+    ``1 - exp(-c/<I>)``, so ``A = exp(-gamma)`` exactly, and the pooled count stays within its
+    Poisson 3 SDs (the function returns that rate). Sparse speckle of the same mean intensity
+    (a Poisson(1) count of unit phasors per pixel: a pixel without a scatterer is dark) clips
+    far more: the pooled rate ``sum counts / sum exposure``."""
+    rng = np.random.default_rng(7)
+    n_rows, n = 40, 4000
+    clip = math.log(1e-3)
+    line = np.linspace(4.0, 5.0, n_rows) + clip  # fully developed: 1.0-0.4 % clipped
+    exposure = n * np.exp(clip - line)
+    mean_i = np.exp(line + np.euler_gamma)
+    dense = rng.exponential(mean_i[:, None], (n_rows, n))
+    counts = np.sum(dense < math.exp(clip), axis=1)
+    assert _clip_rate(counts, exposure) == math.exp(-np.euler_gamma)
+    # sparse: Poisson(1) unit phasors per pixel, scaled to the same mean intensity
+    k = rng.poisson(1.0, (n_rows, n))
+    field = np.zeros((n_rows, n), complex)
+    for j in range(k.max()):
+        field += np.where(k > j, np.exp(2j * np.pi * rng.random((n_rows, n))), 0)
+    sparse = np.abs(field) ** 2 * mean_i[:, None]  # E |field|^2 = 1: the same mean intensity
+    counts = np.sum(sparse < math.exp(clip), axis=1)
+    rate = _clip_rate(counts, exposure)
+    assert rate == pytest.approx(counts.sum() / exposure.sum(), rel=1e-12)
+    assert rate > 10 * math.exp(-np.euler_gamma)

@@ -33,19 +33,20 @@ The fit, on the central lines (``|x| <= x_max/2 - 3 r``, where the box does not 
    layers at a stated false-layer rate of 5 % (the best split's improvement against its
    exact null, the sign-flip randomisation over independent lateral blocks:
    :mod:`speckle.studies.phantom._count`);
-3. per layer: ``mu`` from the slope, each boundary to a fraction of a pixel from the transition
-   rows (the Hann PSF's intensity weights of the two layers' scatterers, each layer's
-   exponential decay under the PSF included, its mean intensity from its mean ``ln I`` and
-   the ``E ln(I/<I>)`` of its ``var ln I``, or of its intensity kurtosis where the floor
-   leaves no rows for ``var ln I``: ``_shapes.TransitionModel``), ``var ln I`` (minus
-   the shadowing spread, over rows whose predicted clipped fraction is at most 1 %, corrected
-   for the lines' correlation) inverted to the density by the slab's exact sparse-speckle
-   theory (its amplitudes ``exp(-y^2/r^2)``), identified where its excess over ``pi^2/6``
-   exceeds 5 SE (else a lower bound), the energy ``E = 100 mu/(rho A2)``, and the window's top
-   from the layers' mean levels (:mod:`speckle.studies.phantom._density`); a layer without a
-   significant slope takes ``rho E`` from its rows' mean intensity under that window; a top
-   layer cut by the floor (its only fitted rows a few in the next boundary's transition)
-   takes ``rho E`` from the mean intensity of its own rows instead (:func:`_cut_top`);
+3. per layer: ``mu`` from the slope, each boundary to a fraction of a pixel from the transition rows
+   (the Hann PSF's intensity weights of the two layers' scatterers, each layer's exponential decay
+   under the PSF included, its mean intensity from its mean ``ln I`` and the ``E ln(I/<I>)`` of its
+   ``var ln I``, or of its intensity kurtosis where the floor leaves no rows for ``var ln I``:
+   ``_shapes.TransitionModel``), ``var ln I`` (minus the shadowing spread, over rows whose predicted
+   clipped fraction is at most 1 %, fully developed speckle's for the transitions, the layer's own
+   rate of clipped pixels for the density; corrected for the lines' correlation) inverted to the
+   density by the slab's exact sparse-speckle theory (its amplitudes ``exp(-y^2/r^2)``), identified
+   where its excess over ``pi^2/6`` exceeds 5 SE (else a lower bound), the energy
+   ``E = 100 mu/(rho A2)``, and the window's top from the layers' mean levels
+   (:mod:`speckle.studies.phantom._density`); a layer without a significant slope takes ``rho E``
+   from its rows' mean intensity under that window; a top layer cut by the floor (its only fitted
+   rows a few in the next boundary's transition) takes ``rho E`` from the mean intensity of its own
+   rows instead (:func:`_cut_top`);
 4. standard errors: delete-one-block jackknife over :data:`BLOCKS` lateral blocks of lines
    (the line-to-line correlations of speckle and shadowing included), the segmentation fixed;
    ``var ln I`` and the density over blocks of 8 beam radii when there are more of them.
@@ -245,14 +246,15 @@ class PhantomFit:
         one) and ``energy_bound`` (the upper bound it gives), ``kurtosis`` (the intensity's
         excess kurtosis ``1/(rho V)`` with its SE, where the layer has no ``var ln I``: the
         bound's source, ``V`` :func:`~speckle.studies.phantom._density.kurtosis_volume`),
-        ``log_variance`` (``var ln I``,
-        shadowing spread removed) with its SE, ``log_offset`` (``E ln(I/<I>)`` of the layer's
-        sparse speckle, which the boundaries' transitions use: from ``var ln I``, or from the
-        intensity kurtosis where the floor leaves no rows for it, ``-gamma`` where neither
-        shows sparse speckle). Attributes: ``window_top`` (dB re ``|A| = 1``,
-        the 51 dB window's top) and ``window_top_se``, ``criterion``, ``bic`` (per ``K``),
-        ``p_values`` (``criterion="test"``: of the tests of ``K + 1`` against ``K`` layers
-        made, from ``K = 1``), ``rows``.
+        ``log_variance`` (``var ln I``, shadowing spread removed, over the rows whose predicted
+        clipped fraction at the layer's own rate of clipped pixels is at most 1 %; NaN where
+        none) with its SE, ``log_offset`` (``E ln(I/<I>)`` of the layer's sparse speckle, which
+        the boundaries' transitions use: from ``var ln I`` over the rows of fully developed
+        speckle's rate, or from the intensity kurtosis where the floor leaves no rows for it,
+        ``-gamma`` where neither shows sparse speckle). Attributes: ``window_top`` (dB re
+        ``|A| = 1``, the 51 dB window's top) and ``window_top_se``, ``criterion``, ``bic``
+        (per ``K``), ``p_values`` (``criterion="test"``: of the tests of ``K + 1`` against
+        ``K`` layers made, from ``K = 1``), ``rows``.
     config : ScannerConfig
         The scanner's configuration.
     inclusions : xarray.Dataset
@@ -626,8 +628,11 @@ def _fit_levels(
     model = _transition_model(cfg.n_pixels)
     mixing = mixed_rows(cfg)  # the mixed rows' own speckle (_mixing.py)
     # var ln I per layer first: its E ln(I/<I>) sets the transition's mixed intensity
+    # (the rows the fully developed clip allows: their E ln(I/<I>), censored as the transitions'
+    # row means); the density's from the rows above the floor at each layer's own clipped rate
     v, v_jk, mu_fine = layer_variances(li, z, segs, keep, cfg)
-    kappa, kappa_se, kappa_bound = _layer_kurtosis(intensity, segs, v, cfg)
+    v_own, v_own_jk, _ = layer_variances(li, z, segs, keep, cfg, own_rate=True)
+    kappa, kappa_se, kappa_bound = _layer_kurtosis(intensity, segs, v_own, cfg)
     offsets = log_offsets(v, cfg, kurtosis=kappa)
 
     def tops_of(mm, fits, first=None):
@@ -666,10 +671,11 @@ def _fit_levels(
     top_se = np.array([_jackknife(tops_jk[:, k]) for k in range(n_layers)])
 
     # density, energy, the window and rho E/100: _density.py
-    dens = layer_densities(v, v_jk, mu, mu_fine, cfg, kurtosis_bound=kappa_bound)
+    dens = layer_densities(v_own, v_own_jk, mu, mu_fine, cfg, kurtosis_bound=kappa_bound)
+    v_se = np.array([_jackknife(v_jk[:, k]) for k in range(n_layers)])
     fitted = {
         "mu": mu, "mu_se": mu_se, "mu_jk": mu_jk, "tops": tops, "tops_jk": tops_jk,
-        "offsets": offsets, "offsets_se": log_offset_se(v, dens["v_se"], cfg),
+        "offsets": offsets, "offsets_se": log_offset_se(v, v_se, cfg),
         "intensity": i_rows, "intensity_jk": i_rows_jk,
     }  # fmt: skip
     cut = _cut_top(lev, rows, segs, tops, keep, cfg)
@@ -696,7 +702,7 @@ def _fit_levels(
         fitted.update(tops=tops, tops_jk=tops_jk)
         cut = _cut_top(lev, rows, segs, tops, keep, cfg)
         win = window_and_brightness(m, m_jk, z, segs, fitted, cfg, cut_top=cut)
-    rho, rho_se, bound, v_se = dens["rho"], dens["rho_se"], dens["bound"], dens["v_se"]
+    rho, rho_se, bound = dens["rho"], dens["rho_se"], dens["bound"]
     energy, energy_se, energy_bound = dens["energy"], dens["energy_se"], dens["energy_bound"]
     wt, wt_se, rho_e, rho_e_se = win["wt"], win["wt_se"], win["rho_e"], win["rho_e_se"]
     if cut is not None and np.isfinite(wt):
@@ -731,9 +737,10 @@ def _fit_levels(
                                 "upper bound of the energy where the density is not identified"),
             "rho_e": var("re", rho_e, "volume_density", "rho E/100 (energy-weighted density)"),
             "rho_e_se": var("re", rho_e_se, "volume_density", "standard error of rho_e"),
-            "log_variance": var("v", v, "dimensionless",
+            "log_variance": var("v", v_own, "dimensionless",
                                 "var ln I of the layer (shadowing spread removed)"),
-            "log_variance_se": var("v", v_se, "dimensionless", "standard error of log_variance"),
+            "log_variance_se": var("v", dens["v_se"], "dimensionless",
+                                   "standard error of log_variance"),
             "log_offset": var("c", offsets, "dimensionless",
                               "E ln(I/<I>) of the layer's speckle, as the transitions take it"),
             "kurtosis": var("k", kappa, "dimensionless",
