@@ -172,13 +172,13 @@ def test_closed_loop_2025_block_cut_by_its_window(seed, boundaries):
 
 @pytest.mark.slow
 def test_closed_loop_2025_boundary_the_mean_cannot_locate():
-    """2025 patient 7 (``visible=4``): a sparse, bright layer (0.0014 per µm^3, 0.47 %) over
-    a dense, dim one (0.0072, 0.025 %) whose curved boundary sweeps 75 µm. The mean ``ln I``
-    steps by 13 SEs there, but locates the boundary to 40 µm (its depth's jackknife SE: the
-    blocks' positions scatter over 120 µm) and fits it flat, 32 pixels off; its contrast
-    steps by 67 SEs. Located by both statistics where the mean's SE exceeds a pixel (the more
-    precise kept: 1.3 µm), it is fitted curved, 1.23 pixels off at worst (measured), and the
-    boundary above it 0.67 (2.65 before)."""
+    """2025 patient 7 (``visible=4``): a sparse, bright layer (0.0014 per µm^3, 0.47 %) over a
+    dense, dim one (0.0072, 0.025 %) whose curved boundary sweeps 75 µm. The mean ``ln I`` steps
+    by 12-13 SEs there, but locates the boundary to 40 µm (its depth's jackknife SE: the blocks'
+    positions scatter over 120 µm) and fits it flat, 32 pixels off; its contrast steps by 56-67
+    SEs. Located by both statistics where the mean's SE exceeds a pixel (the more precise kept:
+    1.3 µm), it is fitted curved, 1.23 pixels off at worst (measured), and the boundary above it
+    0.67 (2.65 before)."""
     case = speckle.phantom_closed_loop_case(7, config="2025", visible=4)
     assert bool(case.layers_right)
     assert str(case.fit_shape.values[3]) == "curved"
