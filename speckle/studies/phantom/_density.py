@@ -33,8 +33,10 @@ from ._slab import depth_psf, slab_constants
 
 __all__ = [
     "BLOCK_RADII",
+    "DENSE_CLIP_RATE",
     "LAG",
     "MAX_PREDICTED_CLIPPED",
+    "clip_rates",
     "cut_top_rho_e",
     "kurtosis_density",
     "kurtosis_volume",
@@ -44,6 +46,7 @@ __all__ = [
     "lines_per_block",
     "log_offset_se",
     "log_offsets",
+    "own_rate_variances",
     "slab_inverse_density",
     "slab_log_moments",
     "window_and_brightness",
@@ -52,6 +55,11 @@ __all__ = [
 #: Rows whose predicted clipped fraction (fully developed speckle at the layer's fitted mean
 #: level) exceeds this give no ``var ln I`` (:func:`layer_variances`).
 MAX_PREDICTED_CLIPPED = 0.01
+#: Fully developed speckle's rate ``A`` of clipped pixels, ``1 - exp(-A c/exp(E ln I))``:
+#: ``exp(-gamma)`` (``<I> = exp(E ln I + gamma)``).
+DENSE_CLIP_RATE = math.exp(-np.euler_gamma)
+#: ``ln c`` of the window's floor (the top of level 0), relative to the window's top.
+_CLIP = (_scan.DYNAMIC_RANGE / _scan.LEVELS - _scan.DYNAMIC_RANGE) * math.log(10) / 10
 #: Row lag whose covariance estimates the shadowing streaks' variance.
 LAG = 4
 #: Significance (in SE) for a usable slope (and the layer criterion's steps).
@@ -184,7 +192,7 @@ def layer_variances(
     keep: list[np.ndarray],
     cfg: ScannerConfig,
     *,
-    own_rate: bool = False,
+    rates: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``var ln I`` of each layer's speckle, its delete-one-block replicates and the layers'
     attenuations on the same replicates.
@@ -201,11 +209,9 @@ def layer_variances(
     line through the row means, independent of a row's own tail): the fully developed
     fraction below the clip ``c``, ``1 - exp(-c/<I>)`` with ``ln <I> = E ln I + gamma``, at most
     :data:`MAX_PREDICTED_CLIPPED`. Sparse speckle has more intensities near 0 than that: with
-    ``own_rate`` the fraction is ``1 - exp(-A c/<I>)`` with the layer's own rate ``A``
-    (:func:`_clip_rate`, pooled over its rows: no row is chosen by its own tail), which the
-    density needs (the censored low tail lowers ``var ln I``: 2025 patient 5's sparse layer,
-    6.4 % of its pixels clipped in rows where fully developed speckle predicts at most 1 %,
-    gave a density 11.6 % high, pull +9.8); without it, the rows' ``var ln I`` as the
+    ``rates`` (per layer, :func:`clip_rates`) the fraction is ``1 - exp(-A c/exp(line))`` with
+    the layer's own rate ``A``, which the density needs (:func:`own_rate_variances`); without
+    them, fully developed speckle's ``A = exp(-gamma)``: the rows' ``var ln I`` as the
     transitions' row means see it (their ``E ln(I/<I>)``, censored too).
 
     The replicates drop one of at least ``len(keep)`` lateral blocks, as many as fit blocks of
@@ -227,6 +233,9 @@ def layer_variances(
         Lines kept by each replicate of the fit's jackknife (their number is the least).
     cfg : ScannerConfig
         The scanner (line pitch, beam radius).
+    rates : numpy.ndarray, optional
+        Each layer's rate ``A`` of clipped pixels (:func:`clip_rates`); None: fully developed
+        speckle's.
 
     Returns
     -------
@@ -238,17 +247,11 @@ def layer_variances(
         ``(blocks, K)``: ``-slope/2`` of each layer's row-mean ``ln I`` on the same replicates.
     """
 
-    m = li.mean(axis=1)
-    clip = (_scan.DYNAMIC_RANGE / _scan.LEVELS - _scan.DYNAMIC_RANGE) * math.log(10) / 10
-    clipped = np.sum(li < clip - 0.5, axis=1)  # each row's clipped pixels (at ln c - 1)
-    var_ok = np.zeros(m.size, bool)
-    for a, b in segs:
+    var_ok = np.zeros(li.shape[0], bool)
+    for k, (a, b) in enumerate(segs):
         if b - a >= 2:
-            line = np.polyval(np.polyfit(z[a:b], m[a:b], 1), z[a:b])
-            rate = math.exp(-np.euler_gamma)  # fully developed speckle's
-            if own_rate:
-                rate = _clip_rate(clipped[a:b], np.exp(clip - line) * li.shape[1])
-            var_ok[a:b] = -np.expm1(-rate * np.exp(clip - line)) <= MAX_PREDICTED_CLIPPED
+            rate = DENSE_CLIP_RATE if rates is None else rates[k]
+            var_ok[a:b] = -np.expm1(-rate * _floor_ratio(li, z, a, b)) <= MAX_PREDICTED_CLIPPED
 
     rows: dict = {}
 
@@ -290,6 +293,51 @@ def layer_variances(
     return v, v_jk, mu_jk
 
 
+def _floor_ratio(li: np.ndarray, z: np.ndarray, a: int, b: int) -> np.ndarray:
+    """``c/exp(line)`` of the rows ``a .. b-1``: the clip ``c`` over the layer's straight line
+    through its row-mean ``ln I`` (independent of a row's own tail)."""
+    m = li[a:b].mean(axis=1)
+    return np.exp(_CLIP - np.polyval(np.polyfit(z[a:b], m, 1), z[a:b]))
+
+
+def clip_rates(li: np.ndarray, z: np.ndarray, segs: list[tuple[int, int]]) -> np.ndarray:
+    """Each layer's rate ``A`` of clipped pixels (:func:`_clip_rate` over its rows; fully
+    developed speckle's :data:`DENSE_CLIP_RATE` for a layer of fewer than 2 rows); ``li``,
+    ``z``, ``segs`` as :func:`layer_variances` takes them."""
+    out = np.full(len(segs), DENSE_CLIP_RATE)
+    for k, (a, b) in enumerate(segs):
+        if b - a >= 2:
+            clipped = np.sum(li[a:b] < _CLIP - 0.5, axis=1)  # clipped pixels are at ln c - 1
+            out[k] = _clip_rate(clipped, li.shape[1] * _floor_ratio(li, z, a, b))
+    return out
+
+
+def own_rate_variances(
+    li: np.ndarray,
+    z: np.ndarray,
+    segs: list[tuple[int, int]],
+    keep: list[np.ndarray],
+    cfg: ScannerConfig,
+    v: np.ndarray,
+    v_jk: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``var ln I`` and its replicates over the rows at each layer's own rate of clipped
+    pixels (:func:`clip_rates`), which the density needs: the censored low tail lowers ``var
+    ln I`` (2025 patient 5's sparse layer, 6.4 % of its pixels clipped in rows where fully
+    developed speckle predicts at most 1 %, gave a density 11.6 % high, pull +9.8). ``v``,
+    ``v_jk``: :func:`layer_variances`'s at fully developed speckle's rate, kept for the layers
+    whose own rate is that one (computed again only for the others: each layer's variance is
+    its own rows')."""
+    rates = clip_rates(li, z, segs)
+    own = np.flatnonzero(rates != DENSE_CLIP_RATE)
+    v, v_jk = v.copy(), v_jk.copy()
+    if own.size:
+        sub, sub_jk, _ = layer_variances(li, z, [segs[k] for k in own], keep, cfg,
+                                         rates=rates[own])  # fmt: skip
+        v[own], v_jk[:, own] = sub, sub_jk
+    return v, v_jk
+
+
 def _clip_rate(counts: np.ndarray, exposure: np.ndarray) -> float:
     """The rate ``A`` of a layer's clipped fraction ``1 - exp(-A c/<I>_q)``, ``<I>_q`` from
     its rows' fitted line (``exp(line)``: ``exposure`` is ``n c/exp(line)`` per row, ``n`` the
@@ -299,10 +347,9 @@ def _clip_rate(counts: np.ndarray, exposure: np.ndarray) -> float:
     that no row is chosen by its own tail). Sparse speckle has more intensities near 0 than
     fully developed speckle (2025 patient 5's sparse layer, 0.0011 per µm^3: 6.4 % of its
     pixels clipped in rows where fully developed speckle predicts at most 1 %)."""
-    dense = math.exp(-np.euler_gamma)
-    expected = dense * float(np.sum(exposure))
+    expected = DENSE_CLIP_RATE * float(np.sum(exposure))
     if float(np.sum(counts)) <= expected + 3.0 * math.sqrt(expected):
-        return dense
+        return DENSE_CLIP_RATE
     return float(np.sum(counts)) / float(np.sum(exposure))
 
 
