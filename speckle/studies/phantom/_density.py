@@ -36,6 +36,7 @@ __all__ = [
     "DENSE_CLIP_RATE",
     "LAG",
     "MAX_PREDICTED_CLIPPED",
+    "both_rule_variances",
     "clip_rates",
     "cut_top_rho_e",
     "kurtosis_density",
@@ -46,7 +47,6 @@ __all__ = [
     "lines_per_block",
     "log_offset_se",
     "log_offsets",
-    "own_rate_variances",
     "slab_inverse_density",
     "slab_log_moments",
     "window_and_brightness",
@@ -210,7 +210,7 @@ def layer_variances(
     fraction below the clip ``c``, ``1 - exp(-c/<I>)`` with ``ln <I> = E ln I + gamma``, at most
     :data:`MAX_PREDICTED_CLIPPED`. Sparse speckle has more intensities near 0 than that: with
     ``rates`` (per layer, :func:`clip_rates`) the fraction is ``1 - exp(-A c/exp(line))`` with
-    the layer's own rate ``A``, which the density needs (:func:`own_rate_variances`); without
+    the layer's own rate ``A``, which the density needs (:func:`both_rule_variances`); without
     them, fully developed speckle's ``A = exp(-gamma)``: the rows' ``var ln I`` as the
     transitions' row means see it (their ``E ln(I/<I>)``, censored too).
 
@@ -247,23 +247,37 @@ def layer_variances(
         ``(blocks, K)``: ``-slope/2`` of each layer's row-mean ``ln I`` on the same replicates.
     """
 
-    var_ok = np.zeros(li.shape[0], bool)
+    (out,), mu_jk = _rule_variances(li, z, segs, keep, cfg, [rates])
+    return (*out, mu_jk)
+
+
+def _paired_rows(li: np.ndarray, z: np.ndarray, segs: list[tuple[int, int]], rates) -> np.ndarray:
+    """The rows whose ``var ln I`` a row rule uses (bool, ``(rows,)``): a predicted clipped
+    fraction of at most :data:`MAX_PREDICTED_CLIPPED` at the layer's rate (``rates`` per layer,
+    None: fully developed speckle's), there and :data:`LAG` rows deeper in the same layer."""
+    out = np.zeros(li.shape[0], bool)
     for k, (a, b) in enumerate(segs):
-        if b - a >= 2:
+        if b - a > LAG:  # a row pair needs LAG + 1 rows
             rate = DENSE_CLIP_RATE if rates is None else rates[k]
-            var_ok[a:b] = -np.expm1(-rate * _floor_ratio(li, z, a, b)) <= MAX_PREDICTED_CLIPPED
+            ok = -np.expm1(-rate * _floor_ratio(li, z, a, b)) <= MAX_PREDICTED_CLIPPED
+            out[a : b - LAG] = ok[:-LAG] & ok[LAG:]
+    return out
 
-    rows: dict = {}
 
-    def layer_var(cols, factor, a, b, drop=None):
-        """The segment's ``var ln I`` over the lines ``cols`` (all but ``drop``'s, a slice)."""
-        if (a, b) not in rows:  # the segment's row pairs, every line (gathered once)
-            sel = np.arange(a, b)[var_ok[a:b]]
-            sel = sel[np.isin(sel + LAG, sel)]
-            rows[a, b] = (li[sel], li[sel + LAG]) if sel.size >= 2 else None
-        if rows[a, b] is None:
-            return np.nan
-        d, e = rows[a, b]
+def _rule_variances(li, z, segs, keep, cfg, rules) -> tuple[list, np.ndarray]:
+    """:func:`layer_variances`'s ``(v, v_jk)`` for each of ``rules`` (per-layer rates, None:
+    fully developed speckle's), and its ``mu_jk``. A row's variance (with the row :data:`LAG`
+    deeper) does not depend on the other rows chosen: each is computed once, on every
+    replicate's lines, and a rule's ``var ln I`` is the mean over its rows."""
+    chosen = [_paired_rows(li, z, segs, r) for r in rules]
+    rows = np.flatnonzero(np.logical_or.reduce(chosen))  # any rule's rows, ascending
+    pairs = li[rows], li[rows + LAG]
+    ends = np.searchsorted(rows, segs)  # each layer's span of ``rows``
+    picks = [[lo + np.flatnonzero(c[rows[lo:hi]]) for lo, hi in ends] for c in chosen]
+
+    def rule_means(cols, drop=None):
+        """Each rule's ``var ln I`` per layer over the lines ``cols`` (all but ``drop``'s)."""
+        d, e = pairs
         if drop is not None:
             d = np.concatenate([d[:, : drop.start], d[:, drop.stop :]], axis=1)
             e = np.concatenate([e[:, : drop.start], e[:, drop.stop :]], axis=1)
@@ -271,26 +285,23 @@ def layer_variances(
         e = e - e.mean(axis=1, keepdims=True)
         n = len(cols) - 1
         v = (np.sum(d * d, axis=1) + np.sum(e * e, axis=1)) / (2 * n) - np.sum(d * e, axis=1) / n
-        return float(np.mean(v)) / factor
+        factor = lateral_variance_factor(cols, cfg)
+        return [[float(np.mean(v[i])) / factor if i.size >= 2 else np.nan for i in pick]
+                for pick in picks]  # fmt: skip
 
     all_cols = np.arange(li.shape[1])
     width = BLOCK_RADII * cfg.beam_radius / cfg.line_pitch
     blocks = max(len(keep), int(all_cols.size // width))
     groups = np.array_split(all_cols, blocks)  # contiguous: a replicate drops a slice
     keep = [np.setdiff1d(all_cols, g) for g in groups]
-    factor = lateral_variance_factor(all_cols, cfg)
-    v = np.array([layer_var(all_cols, factor, a, b) for a, b in segs])
-    v_jk = []
-    for k, g in zip(keep, groups, strict=True):
-        factor = lateral_variance_factor(k, cfg)
-        drop = slice(int(g[0]), int(g[-1]) + 1)
-        v_jk.append([layer_var(k, factor, a, b, drop) for a, b in segs])
-    v_jk = np.array(v_jk)
+    full = rule_means(all_cols)
+    reps = [rule_means(k, slice(int(g[0]), int(g[-1]) + 1))
+            for k, g in zip(keep, groups, strict=True)]  # fmt: skip
     mu_jk = np.array(
         [[-np.polyfit(z[a:b], li[a:b][:, k].mean(axis=1), 1)[0] / 2 for a, b in segs]
          for k in keep]
     )  # fmt: skip
-    return v, v_jk, mu_jk
+    return [(np.array(f), np.array([rep[r] for rep in reps])) for r, f in enumerate(full)], mu_jk
 
 
 def _floor_ratio(li: np.ndarray, z: np.ndarray, a: int, b: int) -> np.ndarray:
@@ -312,30 +323,22 @@ def clip_rates(li: np.ndarray, z: np.ndarray, segs: list[tuple[int, int]]) -> np
     return out
 
 
-def own_rate_variances(
+def both_rule_variances(
     li: np.ndarray,
     z: np.ndarray,
     segs: list[tuple[int, int]],
     keep: list[np.ndarray],
     cfg: ScannerConfig,
-    v: np.ndarray,
-    v_jk: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray]:
-    """``var ln I`` and its replicates over the rows at each layer's own rate of clipped
-    pixels (:func:`clip_rates`), which the density needs: the censored low tail lowers ``var
-    ln I`` (2025 patient 5's sparse layer, 6.4 % of its pixels clipped in rows where fully
-    developed speckle predicts at most 1 %, gave a density 11.6 % high, pull +9.8). ``v``,
-    ``v_jk``: :func:`layer_variances`'s at fully developed speckle's rate, kept for the layers
-    whose own rate is that one (computed again only for the others: each layer's variance is
-    its own rows')."""
-    rates = clip_rates(li, z, segs)
-    own = np.flatnonzero(rates != DENSE_CLIP_RATE)
-    v, v_jk = v.copy(), v_jk.copy()
-    if own.size:
-        sub, sub_jk, _ = layer_variances(li, z, [segs[k] for k in own], keep, cfg,
-                                         rates=rates[own])  # fmt: skip
-        v[own], v_jk[:, own] = sub, sub_jk
-    return v, v_jk
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`layer_variances`'s ``v, v_jk, mu_jk`` (fully developed speckle's rate of clipped
+    pixels), then ``v_own, v_own_jk``: ``var ln I`` and its replicates over the rows at each
+    layer's own rate (:func:`clip_rates`; the same numbers where that is fully developed
+    speckle's), which the density needs: the censored low tail lowers ``var ln I`` (2025 patient
+    5's sparse layer, 6.4 % of its pixels clipped in rows where fully developed speckle predicts
+    at most 1 %, gave a density 11.6 % high, pull +9.8). Each row's variance is computed once
+    for both row rules; the arguments as :func:`layer_variances` takes them."""
+    (dense, own), mu_jk = _rule_variances(li, z, segs, keep, cfg, [None, clip_rates(li, z, segs)])
+    return (*dense, mu_jk, *own)
 
 
 def _clip_rate(counts: np.ndarray, exposure: np.ndarray) -> float:

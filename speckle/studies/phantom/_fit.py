@@ -75,13 +75,12 @@ from ._density import (
     SIGNIFICANCE,
     _jackknife,
     _psf_area,
+    both_rule_variances,
     kurtosis_density,
     layer_densities,
-    layer_variances,
     lines_per_block,
     log_offset_se,
     log_offsets,
-    own_rate_variances,
     window_and_brightness,
 )
 from ._inclusions import fit_inclusions, no_inclusions, remove_inclusions
@@ -631,8 +630,7 @@ def _fit_levels(
     # var ln I per layer first: its E ln(I/<I>) sets the transition's mixed intensity
     # (the rows the fully developed clip allows: their E ln(I/<I>), censored as the transitions'
     # row means); the density's from the rows above the floor at each layer's own clipped rate
-    v, v_jk, mu_fine = layer_variances(li, z, segs, keep, cfg)
-    v_own, v_own_jk = own_rate_variances(li, z, segs, keep, cfg, v, v_jk)
+    v, v_jk, mu_fine, v_own, v_own_jk = both_rule_variances(li, z, segs, keep, cfg)
     kappa, kappa_se, kappa_bound = _layer_kurtosis(intensity, segs, v_own, cfg)
     offsets = log_offsets(v, cfg, kurtosis=kappa)
 
