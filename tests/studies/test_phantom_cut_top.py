@@ -12,8 +12,17 @@ import pytest
 import speckle
 from speckle.studies.phantom import slab_constants
 
+# private: the censored row means' slope, the fit's own step (the private module _censoring)
+from speckle.studies.phantom._censoring import slope_gains
+
 # private: the window-and-brightness chain of the fit (the private module _density) is the unit
 from speckle.studies.phantom._density import _psf_area, cut_top_rho_e, window_and_brightness
+
+# private: the rows above the floor are the fit's first step (the private module _fit)
+from speckle.studies.phantom._fit import MAX_CLIPPED, _above_floor, _log_intensity
+
+# private: the scanner's own 8-bit window makes the levels
+from speckle.synthoct._scan import DYNAMIC_RANGE, LEVELS, to_levels
 
 CFG = speckle.synthoct_config("2025")
 
@@ -72,7 +81,10 @@ def test_sparse_top_layer_cut_by_the_floor():
     I`` about 11) and 7-24 % of its rows' pixels are clipped, so only 4 rows in the next
     boundary's transition were fitted; their slope read as its attenuation gave -0.33/µm and
     ``rho E`` 7.9 times the truth (pull +5.1). From its rows' mean intensity: every layer's
-    ``rho E`` and attenuation within 3 SE of the truth (measured pulls +1.07, -1.55, -1.65)."""
+    ``rho E`` and attenuation within 3 SE of the truth (measured pulls +1.07, -1.55, -1.65).
+    Since its clipped pixels are known for sparse speckle's empty ones (each lateral block's
+    mean intensity puts fully developed speckle's clip under 5 %), its rows are fitted and the
+    cut top's path is not taken: measured ``rho E`` pulls +0.31, -1.64, -1.44."""
     case = speckle.phantom_closed_loop_case(5, config="2025", shapes=("flat",), layers=(1, 3))
     assert int(case.n_fit) == int(case.n_true) == 3
     assert float(case.fit_attenuation[0]) > 0
@@ -97,7 +109,68 @@ def test_cut_top_layer_boundary_from_its_brightness():
     5.3e-7 over 2.35e-5) is cut by the floor. Its boundary was located with the line of the
     few rows the floor left, in the transition: 0.70 pixel off, pull +4.8. Located again with
     the layer's line from its brightness (and the ``E ln(I/<I>)`` its rows show), over those
-    rows too: within 3 SE (measured 0.003 pixel, pull +0.06)."""
+    rows too: within 3 SE (measured 0.003 pixel, pull +0.06). Its rows are fitted as sparse
+    speckle now (the cut top's path is not taken): 0.02 pixel, pull +0.51."""
     case = speckle.phantom_closed_loop_case(1, config="2025", shapes=("flat",), layers=(1, 5))
     assert int(case.n_fit) == int(case.n_true) == 3
     assert abs(float(case.top_pull[1])) < 3, float(case.top_pull[1])
+
+
+def test_rows_above_the_floor_keep_sparse_speckle_not_a_floor():
+    """Which rows the fit keeps (964 lines, 16 lateral blocks of 60; ``c`` the clip, the
+    intensity of level 1's lower edge 51 dB - 1 level below the peak).
+
+    - Fully developed speckle of ``<I> = c/0.16`` clips ``1 - exp(-0.16) = 14.8 %`` (SD 1.1 %
+      over 964 pixels: 4.3 SD above :data:`MAX_CLIPPED`) and a block's mean (CV 13 %) never
+      puts it under 5 %: left out, the floor.
+    - Fully developed speckle of ``<I> = c/0.03``: 3.0 % clipped, kept.
+    - Sparse speckle: 15 % of the pixels empty (``c/100``), the others exponential of mean
+      ``200 c``: 15.4 % clipped, but every block's mean (about ``170 c``) puts fully developed
+      speckle's clip at 0.6 %: kept.
+    - Half the lines at the floor and half of mean ``1000 c``: the row's mean would pass
+      (0.2 %), the floor's blocks do not: left out.
+    - A bright row (holds the peak): kept."""
+    rng = np.random.default_rng(11)
+    n = 964
+    c = 10 ** ((DYNAMIC_RANGE / LEVELS - DYNAMIC_RANGE) / 10)  # I/I_max of level 1's edge
+    dense_floor = rng.exponential(c / 0.16, n)
+    dense = rng.exponential(c / 0.03, n)
+    sparse = np.where(rng.random(n) < 0.15, c / 100, rng.exponential(200 * c, n))
+    half = np.where(np.arange(n) < n // 2, c / 100, rng.exponential(1000 * c, n))
+    bright = rng.exponential(0.05, n)
+    bright[0] = 1.0
+    intensity = np.stack([dense_floor, dense, sparse, half, bright])
+    assert intensity[:4].max() < 1.0
+    levels = to_levels(np.sqrt(intensity))
+    clipped = np.mean(levels == 0, axis=1)
+    assert clipped[0] > MAX_CLIPPED and clipped[2] > MAX_CLIPPED and clipped[3] >= 0.5
+    assert _above_floor(levels).tolist() == [False, True, True, False, True]
+
+
+@pytest.mark.parametrize("empty", [0.0, 0.15])
+def test_censored_row_means_fall_by_the_slope_gain(empty):
+    """A layer of exponential speckle decaying as ``exp(-2 mu z)`` (``u = c/<I>`` 0.005 to
+    0.037 over 100 rows of 4000 lines), a share ``empty`` of its pixels far under the clip
+    (``c/100``: a sparse layer's empty pixels). Its censored row means (clipped pixels at
+    ``ln c - 1``) fall as ``-2 mu g``, ``g = (1 - empty) exp(-u) (1 + u)``: 0.85 within 0.1 %
+    with 15 % empty (the gain the fit measures, within 3 of the slope's SEs; ``-2 mu``
+    itself more than 10 SEs off), and fully developed speckle's gain is 1 exactly (its
+    clipped count is fully developed speckle's: no gain taken)."""
+    rng = np.random.default_rng(5)
+    n_rows, n, p, mu = 100, 4000, 2.2, 0.0045
+    z = np.arange(n_rows) * p
+    c = 10 ** ((DYNAMIC_RANGE / LEVELS - DYNAMIC_RANGE) / 10)
+    mean = c / 0.005 * np.exp(-2 * mu * z)
+    intensity = rng.exponential(mean[:, None], (n_rows, n))
+    intensity[rng.random((n_rows, n)) < empty] = c / 100
+    levels = to_levels(np.sqrt(np.vstack([intensity, np.ones((1, n))])))[:n_rows]
+    li = _log_intensity(levels)
+    gain = slope_gains(levels, li, z, [(0, n_rows)])
+    if empty == 0.0:
+        assert gain.tolist() == [1.0]
+        return
+    assert float(gain[0]) == pytest.approx(1 - empty, abs=0.003)
+    (slope, _), cov = np.polyfit(z, li.mean(axis=1), 1, cov=True)
+    se = math.sqrt(cov[0, 0])
+    assert abs(slope + 2 * mu * gain[0]) < 3 * se, (slope, -2 * mu * gain[0], se)
+    assert abs(slope + 2 * mu) > 10 * se

@@ -46,7 +46,8 @@ a uniform scan is given a second layer in 5 % of scans, and a scan of ``K`` laye
 ``(K + 1)``-th in 5 % (there the ``K`` boundaries are estimated; the rows beyond the ``gap``
 must hold no transition).
 
-**Rows near the floor.** Rows enter the fit when at most 10 % of their pixels are clipped,
+**Rows near the floor.** Rows enter the fit when at most 10 % of their pixels are clipped
+(or a sparse layer's empty pixels: :func:`~speckle.studies.phantom._fit._above_floor`),
 judged on their own pixels: near the floor that choice keeps the rows that fluctuated up (a
 dip of 0.155 ± 0.028 at the first row left out, +0.04 in the last 4 kept, over 105 uniform
 reduced scans reaching the floor), and a clipped pixel's value ``ln c - 1`` assumes a density

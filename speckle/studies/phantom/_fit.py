@@ -18,7 +18,9 @@ The fit, on the central lines (``|x| <= x_max/2 - 3 r``, where the box does not 
 1. each pixel's ``ln I`` relative to the window's top from its 8-bit level (bin midpoints;
    a clipped pixel, level 0, gets ``ln c - 1``, the mean of ``ln I`` below the clip ``c`` of any
    intensity density flat near 0); rows with more than :data:`MAX_CLIPPED` of their pixels
-   clipped are below the floor and left out, as are the first and last ``GAP + 1``
+   clipped are below the floor and left out unless their mean intensity puts the clip where
+   fully developed speckle would clip at most :data:`SPARSE_CLIPPED` (the clipped pixels are
+   then a sparse layer's empty ones: :func:`_above_floor`), as are the first and last ``GAP + 1``
    rows (the surface's transition, seen at the bottom through the periodic PSF); below a
    floor region, only runs of at least :data:`RUN_ROWS` rows above the floor are fitted (a
    faint layer's bottom may reach the floor above a brighter layer);
@@ -33,7 +35,8 @@ The fit, on the central lines (``|x| <= x_max/2 - 3 r``, where the box does not 
    layers at a stated false-layer rate of 5 % (the best split's improvement against its
    exact null, the sign-flip randomisation over independent lateral blocks:
    :mod:`speckle.studies.phantom._count`);
-3. per layer: ``mu`` from the slope, each boundary to a fraction of a pixel from the transition rows
+3. per layer: ``mu`` from the slope (over a sparse layer's censored-slope gain: ``_censoring``),
+   each boundary to a fraction of a pixel from the transition rows
    (the Hann PSF's intensity weights of the two layers' scatterers, each layer's exponential decay
    under the PSF included, its mean intensity from its mean ``ln I`` and the ``E ln(I/<I>)`` of its
    ``var ln I``, or of its intensity kurtosis where the floor leaves no rows for ``var ln I``:
@@ -69,6 +72,7 @@ from scipy import optimize
 from ...conventions import attrs, coord, units_of
 from ...synthoct import _scan
 from ...synthoct.files import ScannerConfig, read_png, read_scanner_config, write_scanner_config
+from ._censoring import slope_gains
 from ._count import CRITERION, count_blocks, layer_count
 from ._density import (
     LAG,
@@ -98,8 +102,14 @@ KURTOSIS_BLOCK_RADII = 2.0
 BLOCKS = 16
 #: Transition rows left out at each boundary (the Hann PSF's main lobe).
 GAP = 2
-#: Rows with more clipped (level 0) pixels than this fraction are below the floor.
+#: Rows with more clipped (level 0) pixels than this fraction are below the floor, unless
+#: their mean intensity sets the clip below fully developed speckle's :data:`SPARSE_CLIPPED`.
 MAX_CLIPPED = 0.1
+#: Fully developed speckle's clipped fraction (``1 - exp(-c/<I>)``, ``<I>`` the row's mean
+#: intensity) below which a row is above the floor however many of its pixels are clipped
+#: (sparse speckle's empty pixels: a fully developed row there clips 5 +- 0.7 % of 964 lines,
+#: never 10 %).
+SPARSE_CLIPPED = 0.05
 #: Lags of the row means' integrated autocorrelation (BIC's variance inflation).
 ACF_LAGS = 8
 #: Shortest layer, rows (fitted rows of a segment).
@@ -160,6 +170,25 @@ def _log_intensity(levels: np.ndarray) -> np.ndarray:
     clip = (step - _scan.DYNAMIC_RANGE) / _NEPER_DB
     out[levels == 0] = clip - 1.0
     return out
+
+
+def _above_floor(levels: np.ndarray) -> np.ndarray:
+    """Rows of ``levels`` (pixels, lines) above the window's floor: at most :data:`MAX_CLIPPED`
+    of their pixels clipped, or so in each of :data:`BLOCKS` lateral blocks of lines or with a
+    block mean intensity over which fully developed speckle would clip at most
+    :data:`SPARSE_CLIPPED` of them. The clipped pixels are then a sparse layer's empty ones,
+    spread over the lines, whose ``ln c - 1`` is the mean ``ln I`` below the clip of a density
+    flat near 0 (2025 patient 4 of ``layers=(1, 3)``: a layer of 0.0012 scatterers per µm^3
+    under a dim one clips 12-20 % of its pixels where its mean is 150-200 times the clip, and
+    was left out whole), not a floor that holds some of the lines (a boundary sweeping into
+    it, or the rows that flattening brings from beyond the scan)."""
+    clipped = levels == 0
+    c = 2.0 * _intensity(np.zeros(1, np.uint8))[0]
+    sparse = np.ones(levels.shape[0], bool)
+    for g in np.array_split(np.arange(levels.shape[1]), BLOCKS):
+        fully_developed = -np.expm1(-c / _intensity(levels[:, g]).mean(axis=1))
+        sparse &= (clipped[:, g].mean(axis=1) <= MAX_CLIPPED) | (fully_developed <= SPARSE_CLIPPED)
+    return (clipped.mean(axis=1) <= MAX_CLIPPED) | sparse
 
 
 def _intensity(levels: np.ndarray) -> np.ndarray:
@@ -486,7 +515,7 @@ def fit_phantom(
     # inclusions in the residual against the layers; with some found, the layers are fitted
     # again to the levels without the inclusions' model (their level step and shadow bias
     # the hosts' row means and slopes), and the inclusions again against those layers
-    ok = np.mean(lev == 0, axis=1) <= MAX_CLIPPED
+    ok = _above_floor(lev)
     ok[: GAP + 1] = False
     ok[cfg.n_pixels - GAP - 1 :] = False
     li, x, cdf = (
@@ -508,8 +537,8 @@ def fit_phantom(
 def _cut_top(lev, rows, segs, tops, keep, cfg) -> dict[str, np.ndarray] | None:
     """The top layer's own rows when the window's floor cut it, else None.
 
-    Cut: the first fitted row lies below rows dropped for their clipped pixels (more than
-    :data:`MAX_CLIPPED`) and the top segment is shorter than :data:`RUN_ROWS` (a few rows at
+    Cut: the first fitted row lies below rows dropped at the floor (:func:`_above_floor`)
+    and the top segment is shorter than :data:`RUN_ROWS` (a few rows at
     the layer's bottom, in the next boundary's transition). Its own rows are ``GAP + 1`` down
     to :data:`GAP` rows above the fitted boundary; their mean ``I/I_max`` over the lines
     (clipped pixels at half the clip level) and over each jackknife replicate's lines
@@ -552,11 +581,10 @@ def _fit_levels(
     """The flat-layer fit of the central lines' levels ``lev`` (pixels, lines); ``criterion``
     of the number of layers as :func:`fit_phantom` takes it."""
     p = cfg.pixel_size
-    clipped = np.mean(lev == 0, axis=1)
     # rows above the floor, in runs of at least RUN_ROWS (a dim layer's bottom may reach the
     # floor above a bright layer); the first and last GAP + 1 rows are left out (the last
     # see the top through the periodic PSF)
-    ok = clipped <= MAX_CLIPPED
+    ok = _above_floor(lev)
     ok[: GAP + 1] = False
     ok[cfg.n_pixels - GAP - 1 :] = False
     edges = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(int), [0]])))
@@ -662,15 +690,16 @@ def _fit_levels(
 
     fits, tops = estimates(m)
     rep = [estimates(m_jk[j]) for j in range(blocks)]
-    mu = np.array([-f[0] / 2 for f in fits])
-    mu_jk = np.array([[-f[0] / 2 for f in fr] for fr, _ in rep])
+    gain = slope_gains(lev[rows], li, z, segs)  # the censored row means' slope over -2 mu
+    mu = np.array([-f[0] / 2 for f in fits]) / gain
+    mu_jk = np.array([[-f[0] / 2 for f in fr] for fr, _ in rep]) / gain
     mu_se = np.array([_jackknife(mu_jk[:, k]) for k in range(n_layers)])
     tops = np.array(tops)
     tops_jk = np.array([t for _, t in rep])
     top_se = np.array([_jackknife(tops_jk[:, k]) for k in range(n_layers)])
 
     # density, energy, the window and rho E/100: _density.py
-    dens = layer_densities(v_own, v_own_jk, mu, mu_fine, cfg, kurtosis_bound=kappa_bound)
+    dens = layer_densities(v_own, v_own_jk, mu, mu_fine / gain, cfg, kurtosis_bound=kappa_bound)
     v_se = np.array([_jackknife(v_jk[:, k]) for k in range(n_layers)])
     fitted = {
         "mu": mu, "mu_se": mu_se, "mu_jk": mu_jk, "tops": tops, "tops_jk": tops_jk,
@@ -678,6 +707,8 @@ def _fit_levels(
         "intensity": i_rows, "intensity_jk": i_rows_jk,
     }  # fmt: skip
     cut = _cut_top(lev, rows, segs, tops, keep, cfg)
+    if cut is not None:
+        gain[0] = 1.0  # its line is its brightness's (below)
     win = window_and_brightness(m, m_jk, z, segs, fitted, cfg, cut_top=cut)
     if cut is not None and np.isfinite(win["wt"]):
         # the cut top layer's line is its brightness's, not its few rows' (the transition's):
@@ -740,6 +771,8 @@ def _fit_levels(
                                 "var ln I of the layer (shadowing spread removed)"),
             "log_variance_se": var("v", dens["v_se"], "dimensionless",
                                    "standard error of log_variance"),
+            "log_slope_gain": var("g", gain, "dimensionless",
+                                  "row-mean ln I slope over -2 attenuation (clipped pixels)"),
             "log_offset": var("c", offsets, "dimensionless",
                               "E ln(I/<I>) of the layer's speckle, as the transitions take it"),
             "kurtosis": var("k", kappa, "dimensionless",

@@ -524,7 +524,8 @@ def fit_shapes(
         fits the blocks' profiles at least as well as the two flat ones with a layer between
         them (a tilted or curved boundary that the flat fit saw as a ramp: one level per block
         fewer)."""
-        tops, slope = cur.top.values, -2 * cur.attenuation.values
+        # the row means' slopes (a sparse layer's clipped pixels make them shallower)
+        tops, slope = cur.top.values, -2 * cur.attenuation.values * cur.log_slope_gain.values
         off = cur.log_offset.values
         end = cur.attrs["last_row"] * p  # the last fitted row
         bottom = np.append(tops, max(end, tops[-1]))

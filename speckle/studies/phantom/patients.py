@@ -26,10 +26,10 @@ change over the box), redrawn until layers are at least ``min_thickness`` thick 
 Then every energy is scaled down (by 0.8 at a time, ratios kept) until every layer's bottom sits
 at least 1 neper of mean intensity above the floor of the 51 dB window (the mean level 7 neper
 below the brightest region's top: the window's top is the image's maximum, about
-``ln(n_pixels)`` above its mean; the fit drops rows with more than 10 % clipped pixels,
-``ln(1/0.105) = 2.25`` neper above the clip): every boundary is visible. The scatterers: a
-multinomial count per region (``rho V``, ``V`` its volume from the exact profiles on 8192 lines),
-uniform in each region by rejection.
+``ln(n_pixels)`` above its mean; the fit drops rows of fully developed speckle with more than
+10 % clipped pixels, ``ln(1/0.105) = 2.25`` neper above the clip): every boundary is visible.
+The scatterers: a multinomial count per region (``rho V``, ``V`` its volume from the exact
+profiles on 8192 lines), uniform in each region by rejection.
 """
 
 from __future__ import annotations

@@ -16,7 +16,8 @@ maps it onto the scanner's terms, stating each choice:
   51 dB above its noise, the top at the brightest pixel, as the scanner puts it, and the
   bottom above the noise). A pixel at or below the bottom is clipped (as the scanner clips
   below its window), so :func:`speckle.fit_phantom` leaves out the rows where more than 10 %
-  of the pixels are (signal less than ~7 dB above the noise's mean ``ln I``) and its fitted
+  of the pixels are (signal less than ~7 dB above the noise's mean ``ln I``; unless each
+  block's mean is far above the floor, as a sparse layer's is) and its fitted
   ``window_top`` places the phantom's field on the measured scale;
 * **the noise**: complex Gaussian noise of the measured mean power (``<|n|^2> = exp(<ln I_n>
   + gamma)``, Euler's gamma) added to the fitted phantom's field (:meth:`EquivalentSystem.scan`),
