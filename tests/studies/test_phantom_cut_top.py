@@ -5,6 +5,7 @@ layer without a significant slope takes ``rho E`` from its rows' mean intensity 
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -145,6 +146,9 @@ def test_rows_above_the_floor_keep_sparse_speckle_not_a_floor():
     clipped = np.mean(levels == 0, axis=1)
     assert clipped[0] > MAX_CLIPPED and clipped[2] > MAX_CLIPPED and clipped[3] >= 0.5
     assert _above_floor(levels).tolist() == [False, True, True, False, True]
+    with warnings.catch_warnings():  # fewer lines than blocks: a line a block, no empty block
+        warnings.simplefilter("error")
+        assert _above_floor(levels[:, :8])[4]
 
 
 @pytest.mark.parametrize("empty", [0.0, 0.15])

@@ -174,8 +174,8 @@ def _log_intensity(levels: np.ndarray) -> np.ndarray:
 
 def _above_floor(levels: np.ndarray) -> np.ndarray:
     """Rows of ``levels`` (pixels, lines) above the window's floor: at most :data:`MAX_CLIPPED`
-    of their pixels clipped, or so in each of :data:`BLOCKS` lateral blocks of lines or with a
-    block mean intensity over which fully developed speckle would clip at most
+    of their pixels clipped; or, in each of :data:`BLOCKS` lateral blocks of lines, at most
+    that many or a block mean intensity over which fully developed speckle would clip at most
     :data:`SPARSE_CLIPPED` of them. The clipped pixels are then a sparse layer's empty ones,
     spread over the lines, whose ``ln c - 1`` is the mean ``ln I`` below the clip of a density
     flat near 0 (2025 patient 4 of ``layers=(1, 3)``: a layer of 0.0012 scatterers per µm^3
@@ -185,7 +185,7 @@ def _above_floor(levels: np.ndarray) -> np.ndarray:
     clipped = levels == 0
     c = 2.0 * _intensity(np.zeros(1, np.uint8))[0]
     sparse = np.ones(levels.shape[0], bool)
-    for g in np.array_split(np.arange(levels.shape[1]), BLOCKS):
+    for g in np.array_split(np.arange(levels.shape[1]), min(BLOCKS, levels.shape[1])):
         fully_developed = -np.expm1(-c / _intensity(levels[:, g]).mean(axis=1))
         sparse &= (clipped[:, g].mean(axis=1) <= MAX_CLIPPED) | (fully_developed <= SPARSE_CLIPPED)
     return (clipped.mean(axis=1) <= MAX_CLIPPED) | sparse
