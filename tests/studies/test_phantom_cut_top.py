@@ -17,7 +17,12 @@ from speckle.studies.phantom import slab_constants
 from speckle.studies.phantom._censoring import slope_gains
 
 # private: the window-and-brightness chain of the fit (the private module _density) is the unit
-from speckle.studies.phantom._density import _psf_area, cut_top_rho_e, window_and_brightness
+from speckle.studies.phantom._density import (
+    _psf_area,
+    clip_rates,
+    cut_top_rho_e,
+    window_and_brightness,
+)
 
 # private: the rows above the floor are the fit's first step (the private module _fit)
 from speckle.studies.phantom._fit import MAX_CLIPPED, _above_floor, _log_intensity
@@ -169,7 +174,7 @@ def test_censored_row_means_fall_by_the_slope_gain(empty):
     intensity[rng.random((n_rows, n)) < empty] = c / 100
     levels = to_levels(np.sqrt(np.vstack([intensity, np.ones((1, n))])))[:n_rows]
     li = _log_intensity(levels)
-    gain = slope_gains(levels, li, z, [(0, n_rows)])
+    gain = slope_gains(levels, [(0, n_rows)], clip_rates(li, z, [(0, n_rows)]))
     if empty == 0.0:
         assert gain.tolist() == [1.0]
         return

@@ -28,22 +28,20 @@ import math
 import numpy as np
 
 from ...synthoct import _scan
-from ._density import DENSE_CLIP_RATE, clip_rates
+from ._density import DENSE_CLIP_RATE
 
 #: Level 1's width in ``ln I`` (nepers of intensity).
 LEVEL_WIDTH = _scan.DYNAMIC_RANGE / _scan.LEVELS * math.log(10.0) / 10.0
 
 
-def slope_gains(
-    levels: np.ndarray, li: np.ndarray, z: np.ndarray, segs: list[tuple[int, int]]
-) -> np.ndarray:
+def slope_gains(levels: np.ndarray, segs: list[tuple[int, int]], rates: np.ndarray) -> np.ndarray:
     """Each layer's ``g``: its row-mean ``ln I`` falls as ``-2 g mu`` (module docstring).
 
-    ``levels`` and ``li`` are the fitted rows' 8-bit levels and ``ln I`` ``(rows, lines)``,
-    ``z`` their depths (µm) and ``segs`` each layer's rows ``a .. b-1``; ``(K,)``, 1 where the
-    layer clips as fully developed speckle does.
+    ``levels`` are the fitted rows' 8-bit levels ``(rows, lines)``, ``segs`` each layer's rows
+    ``a .. b-1`` and ``rates`` each layer's rate of clipped pixels
+    (:func:`~speckle.studies.phantom._density.clip_rates`); ``(K,)``, 1 where the layer clips
+    as fully developed speckle does.
     """
-    rates = clip_rates(li, z, segs)
     out = np.ones(len(segs))
     for k, (a, b) in enumerate(segs):
         if rates[k] != DENSE_CLIP_RATE:

@@ -329,15 +329,16 @@ def both_rule_variances(
     segs: list[tuple[int, int]],
     keep: list[np.ndarray],
     cfg: ScannerConfig,
+    rates: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """:func:`layer_variances`'s ``v, v_jk, mu_jk`` (fully developed speckle's rate of clipped
     pixels), then ``v_own, v_own_jk``: ``var ln I`` and its replicates over the rows at each
-    layer's own rate (:func:`clip_rates`; the same numbers where that is fully developed
+    layer's own rate (``rates``, :func:`clip_rates`; the same numbers where that is fully developed
     speckle's), which the density needs: the censored low tail lowers ``var ln I`` (2025 patient
     5's sparse layer, 6.4 % of its pixels clipped in rows where fully developed speckle predicts
     at most 1 %, gave a density 11.6 % high, pull +9.8). Each row's variance is computed once
     for both row rules; the arguments as :func:`layer_variances` takes them."""
-    (dense, own), mu_jk = _rule_variances(li, z, segs, keep, cfg, [None, clip_rates(li, z, segs)])
+    (dense, own), mu_jk = _rule_variances(li, z, segs, keep, cfg, [None, rates])
     return (*dense, mu_jk, *own)
 
 

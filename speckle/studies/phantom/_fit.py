@@ -75,11 +75,13 @@ from ...synthoct.files import ScannerConfig, read_png, read_scanner_config, writ
 from ._censoring import slope_gains
 from ._count import CRITERION, count_blocks, layer_count
 from ._density import (
+    _CLIP,
     LAG,
     SIGNIFICANCE,
     _jackknife,
     _psf_area,
     both_rule_variances,
+    clip_rates,
     kurtosis_density,
     layer_densities,
     lines_per_block,
@@ -182,11 +184,10 @@ def _above_floor(levels: np.ndarray) -> np.ndarray:
     under a dim one clips 12-20 % of its pixels where its mean is 150-200 times the clip, and
     was left out whole), not a floor that holds some of the lines (a boundary sweeping into
     it, or the rows that flattening brings from beyond the scan)."""
-    clipped = levels == 0
-    c = 2.0 * _intensity(np.zeros(1, np.uint8))[0]
+    clipped, intensity = levels == 0, _intensity(levels)
     sparse = np.ones(levels.shape[0], bool)
     for g in np.array_split(np.arange(levels.shape[1]), min(BLOCKS, levels.shape[1])):
-        fully_developed = -np.expm1(-c / _intensity(levels[:, g]).mean(axis=1))
+        fully_developed = -np.expm1(-math.exp(_CLIP) / intensity[:, g].mean(axis=1))
         sparse &= (clipped[:, g].mean(axis=1) <= MAX_CLIPPED) | (fully_developed <= SPARSE_CLIPPED)
     return (clipped.mean(axis=1) <= MAX_CLIPPED) | sparse
 
@@ -658,7 +659,8 @@ def _fit_levels(
     # var ln I per layer first: its E ln(I/<I>) sets the transition's mixed intensity
     # (the rows the fully developed clip allows: their E ln(I/<I>), censored as the transitions'
     # row means); the density's from the rows above the floor at each layer's own clipped rate
-    v, v_jk, mu_fine, v_own, v_own_jk = both_rule_variances(li, z, segs, keep, cfg)
+    rates = clip_rates(li, z, segs)  # each layer's rate of clipped pixels
+    v, v_jk, mu_fine, v_own, v_own_jk = both_rule_variances(li, z, segs, keep, cfg, rates)
     kappa, kappa_se, kappa_bound = _layer_kurtosis(intensity, segs, v_own, cfg)
     offsets = log_offsets(v, cfg, kurtosis=kappa)
 
@@ -690,7 +692,10 @@ def _fit_levels(
 
     fits, tops = estimates(m)
     rep = [estimates(m_jk[j]) for j in range(blocks)]
-    gain = slope_gains(lev[rows], li, z, segs)  # the censored row means' slope over -2 mu
+    gain = slope_gains(lev[rows], segs, rates)  # the censored row means' slope over -2 mu
+    cut = _cut_top(lev, rows, segs, tops, keep, cfg)
+    if cut is not None:
+        gain[0] = 1.0  # its line is its brightness's (below)
     mu = np.array([-f[0] / 2 for f in fits]) / gain
     mu_jk = np.array([[-f[0] / 2 for f in fr] for fr, _ in rep]) / gain
     mu_se = np.array([_jackknife(mu_jk[:, k]) for k in range(n_layers)])
@@ -706,9 +711,6 @@ def _fit_levels(
         "offsets": offsets, "offsets_se": log_offset_se(v, v_se, cfg),
         "intensity": i_rows, "intensity_jk": i_rows_jk,
     }  # fmt: skip
-    cut = _cut_top(lev, rows, segs, tops, keep, cfg)
-    if cut is not None:
-        gain[0] = 1.0  # its line is its brightness's (below)
     win = window_and_brightness(m, m_jk, z, segs, fitted, cfg, cut_top=cut)
     if cut is not None and np.isfinite(win["wt"]):
         # the cut top layer's line is its brightness's, not its few rows' (the transition's):
