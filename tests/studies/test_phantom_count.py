@@ -174,3 +174,32 @@ def test_uniform_challenge_and_two_layer_patients():
     assert np.all(counts >= 2)
     rate, se = rate_holds(counts > 2)
     assert abs(rate - FALSE_LAYER_RATE) < 3 * se, rate
+
+
+def test_segments_never_rise_with_depth():
+    """The segmentation's lines have slopes <= 0 (a layer's mean ln I falls as its shadowing
+    grows): a segment's cost is the weighted RSS of the least-squares line where that falls
+    (lstsq), of the weighted mean where it would rise."""
+    # private: the segmentation's cost matrix
+    from speckle.studies.phantom._fit import _segment_rss
+
+    rng = np.random.default_rng(2)
+    z = np.arange(60) * 6.0
+    w = rng.uniform(0.5, 2.0, z.size)
+    for slope in (-0.01, 0.01):
+        y = slope * z + rng.normal(0, 0.1, z.size)
+        rss = _segment_rss(z, y, w)
+        mean = np.sum(w * y) / np.sum(w)
+        expected = wls_rss(z, y, w) if slope < 0 else float(np.sum(w * (y - mean) ** 2))
+        assert rss[0, z.size] == pytest.approx(expected, rel=1e-9)
+        assert np.all(np.isinf(rss[0, 1:4])) and np.isfinite(rss[0, 4])  # MIN_ROWS rows
+
+
+def test_challenge_uniform_patient_whose_bottom_rows_rise_is_one_layer():
+    """Challenge patient 23, uniform (mu = 4.0e-4/µm): its last 5 fitted rows fluctuate up
+    (-4.29 to -3.92), which free segment slopes cut off as a fourth-row layer rising with depth
+    (attenuation -0.0075 +- 0.0024/µm, BIC 184.6 against 188.0 for one layer); with slopes
+    <= 0 it is one layer (docs/explanation/phantom_fit.md)."""
+    case = speckle.phantom_closed_loop_case(23, config="challenge")
+    assert int(case.n_true) == 1 and int(case.n_fit) == 1
+    assert abs(float(case.attenuation_pull[0])) < 3

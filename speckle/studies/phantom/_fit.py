@@ -24,8 +24,9 @@ The fit, on the central lines (``|x| <= x_max/2 - 3 r``, where the box does not 
    rows (the surface's transition, seen at the bottom through the periodic PSF); below a
    floor region, only runs of at least :data:`RUN_ROWS` rows above the floor are fitted (a
    faint layer's bottom may reach the floor above a brighter layer);
-2. the row-mean profile is cut into ``K = 1 .. max_layers`` linear segments, each boundary
-   leaving out :data:`GAP` transition rows (the PSF's main lobe), by dynamic programming; ``K``
+2. the row-mean profile is cut into ``K = 1 .. max_layers`` linear segments of slope <= 0 (a
+   layer's mean ln I falls with depth), each boundary leaving out :data:`GAP` transition rows
+   (the PSF's main lobe), by dynamic programming; ``K``
    is the one of least BIC, ``sum_q (residual_q/s_q)^2 + (3K - 1) ln n`` (weighted least
    squares), ``s_q^2`` the row means' variance from the jackknife over lateral blocks of
    lines (a running median of 9 rows, times the integrated autocorrelation of 8 lags);
@@ -205,8 +206,9 @@ def _intensity(levels: np.ndarray) -> np.ndarray:
 
 
 def _segment_rss(z: np.ndarray, m: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """``rss[a, b]``: weighted residual sum of squares of the weighted least-squares line
-    fitted to rows ``a .. b-1`` (weights ``w``)."""
+    """``rss[a, b]``: weighted residual sum of squares of the weighted least-squares line of
+    slope <= 0 fitted to rows ``a .. b-1`` (weights ``w``): a layer's mean ln I cannot rise
+    with depth (its shadowing only grows), so where the free line would rise, the mean's."""
     n = z.size
     terms = (w, w * z, w * m, w * z * z, w * z * m, w * m * m)
     c = [np.concatenate([[0.0], np.cumsum(v)]) for v in terms]
@@ -217,7 +219,7 @@ def _segment_rss(z: np.ndarray, m: np.ndarray, w: np.ndarray) -> np.ndarray:
         vzz = szz - sz * sz / s0
         vzm = szm - sz * sm / s0
         vmm = smm - sm * sm / s0
-        rss = vmm - np.where(vzz > 0, vzm * vzm / vzz, 0.0)
+        rss = vmm - np.where((vzz > 0) & (vzm < 0), vzm * vzm / vzz, 0.0)  # slope <= 0
     rss[(count[b] - count[a]) < MIN_ROWS] = np.inf
     return np.maximum(rss, 0.0)
 
@@ -745,11 +747,7 @@ def _fit_levels(
         energy_se[0] = energy[0] * math.hypot(rho_e_se[0] / rho_e[0], rho_se[0] / rho[0])
 
     def var(name, values, quantity, long_name, extra=None):
-        return (
-            ("layer",),
-            np.asarray(values, float),
-            attrs(quantity, long_name, **(extra or {})),
-        )
+        return ("layer",), np.asarray(values, float), attrs(quantity, long_name, **(extra or {}))
 
     ds = xr.Dataset(
         {
