@@ -95,8 +95,11 @@ def two_layers(tilt, curvature, seed, ratio):
     return speckle.synthoct_scan(table, REDUCED).values, coefficients
 
 
-@pytest.mark.parametrize("seed, ratio, flat_layers", [(5, 4.0, 2), (6, 0.25, 3)])
-def test_tilted_ramp_is_one_boundary(seed, ratio, flat_layers):
+@pytest.mark.parametrize(
+    "seed, ratio, flat_layers, shapes",
+    [(5, 4.0, 2, ("tilted", "curved")), (6, 0.25, 3, ("tilted",))],
+)
+def test_tilted_ramp_is_one_boundary(seed, ratio, flat_layers, shapes):
     """A steep tilt (0.15: 106 µm, 18 pixels, across the fitted lines) is fitted as one
     tilted boundary: two layers, the boundary within a pixel on every fitted line. The flat
     fit sees the dimming sweep as a ramp between two boundaries (three layers), not the
@@ -104,13 +107,14 @@ def test_tilted_ramp_is_one_boundary(seed, ratio, flat_layers):
     There (seed 5) the shapes' BIC takes curved, its curvature -1.5e-5 +- 4.1e-5 /µm (the
     Wald of ``(b, c)`` together: ``b^2/(var b (1 - rho^2))`` where they correlate; the nested
     Wald of ``c`` alone, tried, placed 159 against 163 of 170 challenge boundaries within a
-    pixel): its curvature within 2 SE of 0."""
+    pixel): its curvature within 2 SE of 0. The dimming sweep (seed 6) stays tilted."""
     scan, coefficients = two_layers(0.15, 0.0, seed, ratio)
     central = np.abs(REDUCED.line_positions) <= REDUCED.x_max / 2 - 3 * REDUCED.beam_radius
     assert _fit_levels(scan[:, central], REDUCED, 5, 16).sizes["layer"] == flat_layers
     layers = speckle.fit_phantom(scan, REDUCED).layers
-    assert layers.sizes["layer"] == 2 and str(layers.shape.values[1]) in ("tilted", "curved")
-    assert abs(float(layers.top_curvature[1])) <= 2 * float(layers.top_curvature_se.fillna(0)[1])
+    assert layers.sizes["layer"] == 2 and str(layers.shape.values[1]) in shapes
+    if str(layers.shape.values[1]) == "curved":
+        assert abs(float(layers.top_curvature[1])) <= 2 * float(layers.top_curvature_se[1])
     x = REDUCED.line_positions[central]
     got = fit_profiles(layers, x, REDUCED.x_max)[1]
     assert np.max(np.abs(got - profiles(coefficients, x, REDUCED.x_max)[0])) < REDUCED.pixel_size
