@@ -16,16 +16,14 @@ from speckle.studies.phantom import slab_constants
 # private: the censored row means' slope, the fit's own step (the private module _censoring)
 from speckle.studies.phantom._censoring import slope_gains
 
-# private: the window-and-brightness chain of the fit (the private module _density) is the unit
-from speckle.studies.phantom._density import (
-    _psf_area,
-    clip_rates,
-    cut_top_rho_e,
-    window_and_brightness,
-)
+# private: the PSF's area and the layers' clipped rates are the fit's own steps (_density)
+from speckle.studies.phantom._density import _psf_area, clip_rates
 
 # private: the rows above the floor are the fit's first step (the private module _fit)
 from speckle.studies.phantom._fit import MAX_CLIPPED, _above_floor, _log_intensity
+
+# private: the window-and-brightness chain of the fit (the private module _window) is the unit
+from speckle.studies.phantom._window import cut_top_rho_e, window_and_brightness
 
 # private: the scanner's own 8-bit window makes the levels
 from speckle.synthoct._scan import DYNAMIC_RANGE, LEVELS, to_levels

@@ -1,10 +1,10 @@
-"""Density, energy and the window of the phantom fit (private): each layer's ``var ln I``
-(shadowing spread removed), its inversion to the density, the energy, the 51 dB window's top
-and the brightness of layers without a measurable slope.
+"""Density and energy of the phantom fit (private): each layer's ``var ln I`` (shadowing
+spread removed), its inversion to the density and the energy (the window's top and the
+brightness of layers without a measurable slope: :mod:`speckle.studies.phantom._window`).
 
 The physics is in :mod:`speckle.studies.phantom._fit`'s docstring (steps 3 and 4); this module
 holds the part of :func:`~speckle.studies.phantom._fit._fit_levels` after the segmentation and
-the boundaries: ``layer_variances``, ``layer_densities``, ``window_and_brightness``. What it
+the boundaries: ``layer_variances``, ``layer_densities``. What it
 adds to that model (each measured against the scanner, docs/explanation/phantom_fit.md, "The
 density"): the slab's exact sparse-speckle theory (:func:`slab_log_moments`, amplitudes
 ``exp(-y^2/r^2)`` integrated in the characteristic function); the row variance's loss to the
@@ -22,7 +22,7 @@ import functools
 import math
 
 import numpy as np
-from scipy import optimize, special
+from scipy import special
 
 # private: the sparse-speckle theory's numerical core, shared with analysis.sparse
 from ...analysis._sparse_theory import TAU, exponent, invert_log_variance, moments_of
@@ -38,7 +38,6 @@ __all__ = [
     "MAX_PREDICTED_CLIPPED",
     "both_rule_variances",
     "clip_rates",
-    "cut_top_rho_e",
     "kurtosis_density",
     "kurtosis_volume",
     "lateral_variance_factor",
@@ -49,7 +48,6 @@ __all__ = [
     "log_offsets",
     "slab_inverse_density",
     "slab_log_moments",
-    "window_and_brightness",
 ]  # fmt: skip
 
 #: Rows whose predicted clipped fraction (fully developed speckle at the layer's fitted mean
@@ -471,217 +469,6 @@ def log_offset_se(log_variance, log_variance_se, cfg: ScannerConfig) -> np.ndarr
     se = np.nan_to_num(np.atleast_1d(np.asarray(log_variance_se, float)))
     out = (log_offsets(v + se, cfg) - log_offsets(v - se, cfg)) / 2
     return np.where(np.isfinite(v), np.abs(out), 0.0)
-
-
-def window_and_brightness(
-    m: np.ndarray,
-    m_jk: np.ndarray,
-    z: np.ndarray,
-    segs: list[tuple[int, int]],
-    fitted: dict[str, np.ndarray],
-    cfg: ScannerConfig,
-    *,
-    cut_top: dict[str, np.ndarray] | None = None,
-) -> dict[str, object]:
-    """The 51 dB window's top and ``rho E/100`` of every layer.
-
-    The window's top (nepers re ``|A| = 1``) is the predicted absolute ``E ln I`` of each
-    layer with a significant slope (``ln(rho_e a2_y int|h|^2) - 2 C(z) + E ln(I/<I>)``) minus
-    the observed level, weighted by rows; ``rho E/100`` is ``mu/A2`` where the slope is
-    significant, else the layer's brightness under that window. ``E ln(I/<I>)`` is each
-    layer's own (``fitted["offsets"]``, :func:`log_offsets` of its ``var ln I``, as in the
-    transition model), not ``-gamma``: a sparse layer's mean ``ln I`` lies farther below
-    ``ln <I>`` (-1.03 at 0.0024 per µm^3 at the 2025 configuration), and with ``-gamma`` its
-    brightness came out ``exp(-1.03 + 0.58) = 0.64`` times the truth. Every jackknife replicate
-    repeats the chain (its slopes, boundaries, window); the offsets' SEs
-    (``fitted["offsets_se"]``, from ``var ln I``'s) are added in quadrature, to the window's
-    top through its row weights and to each brightness directly.
-
-    A top layer cut by the window's floor (``cut_top``: most of its rows had more than
-    ``MAX_CLIPPED`` of their pixels clipped, so that its fitted rows are a few rows at its
-    bottom, inside the next boundary's transition, whose slope is not the layer's) takes its
-    ``rho E/100`` from the mean *intensity* of its own rows instead (:func:`cut_top_rho_e`),
-    its attenuation ``mu = A2 rho E/100`` and the window's top with it (the top layer's shadow
-    lowers every deeper layer's level by ``2 mu (t_1 - t_0)``); where no deeper layer has a
-    significant slope to place the window, ``mu`` stays the fitted slope's, as for any layer.
-
-    Parameters
-    ----------
-    m, m_jk : numpy.ndarray
-        Row-mean ``ln I`` ``(rows,)`` and its replicates ``(blocks, rows)``.
-    z : numpy.ndarray
-        The rows' depths (µm).
-    segs : list of (int, int)
-        Each layer's rows.
-    fitted : dict
-        ``mu``, ``mu_se``, ``mu_jk``, ``tops``, ``tops_jk``, ``offsets`` and ``offsets_se``
-        (each layer's ``E ln(I/<I>)`` and its SE, :func:`log_offsets`).
-    cfg : ScannerConfig
-        The scanner's configuration.
-    cut_top : dict, optional
-        The cut top layer's own rows: ``z`` (µm), ``intensity`` (their mean ``I/I_max`` over
-        the lines) and ``intensity_jk`` (``(blocks, rows)``, on the jackknife's lines).
-
-    Returns
-    -------
-    dict
-        ``wt``, ``wt_se`` (nepers), ``wt_jk``, ``rho_e``, ``rho_e_se`` (per µm^3) and ``mu``,
-        ``mu_se``, ``mu_jk`` (1/µm; the cut top layer's from its ``rho_e``, the others as
-        ``fitted``).
-    """
-    consts = slab_constants(cfg.beam_radius)
-    mu, mu_se, mu_jk = (np.array(fitted[k], float) for k in ("mu", "mu_se", "mu_jk"))
-    tops, tops_jk = fitted["tops"], fitted["tops_jk"]
-    offsets, offsets_se = fitted["offsets"], fitted["offsets_se"]
-    n_layers, blocks = mu.size, m_jk.shape[0]
-    psf_area = _psf_area(cfg)
-    slope_ok = mu > SIGNIFICANCE * mu_se
-    if cut_top is not None:
-        slope_ok[0] = False  # its few fitted rows' slope is the transition's
-
-    def cum_shadow(zz, k, mu_, tops_):
-        c = sum(mu_[j] * (tops_[j + 1] - tops_[j]) for j in range(k))
-        return c + mu_[k] * (zz - tops_[k])
-
-    def placing(mu_):
-        """Layers that place the window (a significant, positive slope)."""
-        return [k for k in range(n_layers) if slope_ok[k] and mu_[k] > 0]
-
-    def window_top(mm, mu_, tops_):
-        offs, wts = [], []
-        for k in placing(mu_):
-            a, b = segs[k]
-            rho_e = mu_[k] / consts["A2"]
-            zz = z[a:b]
-            pred = (np.log(rho_e * consts["a2_y"] * psf_area) - 2 * cum_shadow(zz, k, mu_, tops_)
-                    + offsets[k])  # fmt: skip
-            offs.append(float(np.mean(pred - mm[a:b])))
-            wts.append(b - a)
-        return float(np.average(offs, weights=wts)) if offs else np.nan
-
-    def brightness(k, ii, mu_, tops_, wt_):
-        """``rho E/100`` of layer ``k`` from its rows' mean intensity ``ii`` under the window's
-        top ``wt_``."""
-        a, b = segs[k]
-        zz = z[a:b]
-        unshadowed = ii[a:b] * np.exp(wt_ + 2 * cum_shadow(zz, k, mu_, tops_))
-        return float(np.mean(unshadowed)) / (consts["a2_y"] * psf_area)
-
-    def chain(mm, mu_, tops_, intensity):
-        """The window's top, with the cut top layer's ``mu`` (``mu_`` updated in place)."""
-        if cut_top is None:
-            return window_top(mm, mu_, tops_)
-        mu_top, mu_[0] = mu_[0], 0.0  # the window without the top layer's shadow, then with it
-        wt0 = window_top(mm, mu_, tops_)
-        if not np.isfinite(wt0):  # no deeper layer places the window: mu/A2 as elsewhere
-            mu_[0] = mu_top
-            return wt0
-        mu_[0] = consts["A2"] * cut_top_rho_e(
-            intensity, cut_top["z"], tops_[1] - tops_[0], wt0, cfg, psf_area=psf_area
-        )
-        return wt0 - 2 * mu_[0] * (tops_[1] - tops_[0])
-
-    top_i, top_i_jk = (None, [None] * blocks) if cut_top is None else (
-        cut_top["intensity"], cut_top["intensity_jk"])  # fmt: skip
-    wt = chain(m, mu, tops, top_i)
-    wt_jk = np.array([chain(m_jk[j], mu_jk[j], tops_jk[j], top_i_jk[j]) for j in range(blocks)])
-    # the offsets' own uncertainty (var ln I's), through the placing layers' row weights
-    used = placing(mu)
-    rows = np.array([segs[k][1] - segs[k][0] for k in used], float)
-    wt_var_offsets = float(np.sum((rows / rows.sum() * offsets_se[used]) ** 2)) if used else 0.0
-    wt_se = math.hypot(_jackknife(wt_jk), math.sqrt(wt_var_offsets))
-
-    # rho E/100 per layer: from mu where the slope is significant, else from the brightness
-    rho_e = mu / consts["A2"]
-    rho_e_se = mu_se / consts["A2"]
-    if cut_top is not None and np.isfinite(wt):
-        rho_e_se[0] = math.hypot(_jackknife(np.log(mu_jk[:, 0])), math.sqrt(wt_var_offsets))
-        rho_e_se[0] *= rho_e[0]
-        mu_se[0] = consts["A2"] * rho_e_se[0]
-    for k in range(n_layers):
-        if slope_ok[k] or not np.isfinite(wt) or (k == 0 and cut_top is not None):
-            continue
-        rho_e[k] = brightness(k, fitted["intensity"], mu, tops, wt)
-        reps = [brightness(k, fitted["intensity_jk"][j], mu_jk[j], tops_jk[j], wt_jk[j])
-                for j in range(blocks)]  # fmt: skip
-        log_se = _jackknife(np.log(np.array(reps)))
-        rho_e_se[k] = math.sqrt(log_se**2 + wt_var_offsets) * rho_e[k]
-    return {"wt": wt, "wt_se": wt_se, "wt_jk": wt_jk, "rho_e": rho_e, "rho_e_se": rho_e_se,
-            "mu": mu, "mu_se": mu_se, "mu_jk": mu_jk}  # fmt: skip
-
-
-def cut_top_rho_e(
-    intensity: np.ndarray,
-    z: np.ndarray,
-    thickness: float,
-    window_top: float,
-    cfg: ScannerConfig,
-    *,
-    psf_area: float | None = None,
-) -> float:
-    """``rho E/100`` of a top layer from the mean intensity of its rows (per µm^3).
-
-    The layer (from ``z = 0`` to ``thickness``) shadows itself and every layer below it: with
-    ``mu = A2 rho E/100`` and ``wt0`` the window's top (nepers) as the deeper layers place it
-    without this layer's shadow, the window's top is ``wt0 - 2 mu thickness`` and the layer's
-    mean intensity ``<I>(z) = rho E/100 a2_y int|h|^2 exp(2 mu (thickness - z) - wt0)``.
-    Summed over the rows, ``ln(rho E/100) + ln sum_r exp(2 A2 rho E/100 (thickness - z_r))``
-    rises monotonically from minus infinity, so the measured sum has one root (Brent's method
-    in ``ln rho E``). The mean of ``I`` needs no speckle statistics (``E ln(I/<I>)`` of sparse
-    speckle is far below ``-gamma`` and not identified where the layer is cut by the floor).
-
-    Parameters
-    ----------
-    intensity : numpy.ndarray
-        The rows' mean ``I/I_max`` over the lines (clipped pixels at half the clip level: the
-        intensity density flat below it, as ``ln I``'s ``ln c - 1``).
-    z : numpy.ndarray
-        The rows' depths (µm), in ``[0, thickness)``.
-    thickness : float
-        The layer's thickness (µm, its fitted bottom boundary).
-    window_top : float
-        ``wt0``, the window's top without this layer's shadow (nepers re ``|A| = 1``).
-    cfg : ScannerConfig
-        The scanner's configuration.
-    psf_area : float, optional
-        ``int |h|^2`` of the scanner's PSF (µm^2; computed from ``cfg`` when not given).
-
-    Returns
-    -------
-    float
-        ``rho E/100`` (per µm^3); NaN when the rows hold no intensity.
-
-    Examples
-    --------
-    A model layer's rows (``rho E/100 = 2e-6``, 150 µm thick, ``wt0 = 3``), inverted back:
-
-    >>> import numpy as np
-    >>> import speckle
-    >>> from speckle.studies.phantom._density import _psf_area, cut_top_rho_e
-    >>> from speckle.studies.phantom._slab import slab_constants
-    >>> cfg = speckle.synthoct_config("2025")
-    >>> consts = slab_constants(cfg.beam_radius)
-    >>> z = np.arange(3, 60) * cfg.pixel_size
-    >>> mu = consts["A2"] * 2e-6
-    >>> i = 2e-6 * consts["a2_y"] * _psf_area(cfg) * np.exp(2 * mu * (150.0 - z) - 3.0)
-    >>> round(cut_top_rho_e(i, z, 150.0, 3.0, cfg) / 2e-6, 9)
-    1.0
-    """
-    consts = slab_constants(cfg.beam_radius)
-    area = _psf_area(cfg) if psf_area is None else psf_area
-    total = float(np.sum(intensity))
-    if not total > 0:
-        return np.nan
-    target = math.log(total) - math.log(consts["a2_y"] * area) + window_top
-    depth = thickness - np.asarray(z, float)
-
-    def gap(u):
-        x = math.exp(u)
-        return u + special.logsumexp(2 * consts["A2"] * x * depth) - target
-
-    # gap(target) >= ln(rows) >= 0 and gap(target - ln(rows) - 50) < 0
-    low = target - math.log(depth.size) - 50.0
-    return math.exp(optimize.brentq(gap, low, target, xtol=1e-12, rtol=1e-14))
 
 
 def _psf_area(cfg: ScannerConfig) -> float:

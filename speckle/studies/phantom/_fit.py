@@ -88,12 +88,12 @@ from ._density import (
     lines_per_block,
     log_offset_se,
     log_offsets,
-    window_and_brightness,
 )
 from ._inclusions import fit_inclusions, no_inclusions, remove_inclusions
 from ._mixing import mixed_rows
 from ._shapes import SHAPE_DEGREE, _transition_model, fit_shapes, flat_shapes
 from ._slab import slab_constants
+from ._window import window_and_brightness
 from .patients import patient_table, region_volumes
 
 __all__ = ["BLOCKS", "GAP", "MAX_CLIPPED", "PhantomFit", "fit_phantom"]
@@ -545,7 +545,7 @@ def _cut_top(lev, rows, segs, tops, keep, cfg) -> dict[str, np.ndarray] | None:
     the layer's bottom, in the next boundary's transition). Its own rows are ``GAP + 1`` down
     to :data:`GAP` rows above the fitted boundary; their mean ``I/I_max`` over the lines
     (clipped pixels at half the clip level) and over each jackknife replicate's lines
-    (``keep``) go to :func:`~speckle.studies.phantom._density.cut_top_rho_e`.
+    (``keep``) go to :func:`~speckle.studies.phantom._window.cut_top_rho_e`.
     """
     a, b = segs[0]
     if len(segs) < 2 or rows[a] <= GAP + 1 or b - a >= RUN_ROWS:
