@@ -199,6 +199,7 @@ def plot_closed_loop(ds: xr.Dataset) -> Figure:
         ("attenuation_pull", "attenuation µ", "C0"),
         ("rho_e_pull", "ρE/100", "C1"),
         ("top_pull", "boundary depth", "C2"),
+        ("window_top_pull", "window top", "C3"),
     ):
         pulls = np.asarray(ds[name].values, float)[right]
         pulls = pulls[np.isfinite(pulls)]

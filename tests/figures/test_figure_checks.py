@@ -739,6 +739,7 @@ def _phantom():
             "attenuation_pull": layer,
             "rho_e_pull": layer,
             "top_pull": layer,
+            "window_top_pull": ("configuration", "case"),
             "pixel_size": ("configuration",),
             "MS-SSIM": ("configuration", "case", "candidate", "map"),
         },

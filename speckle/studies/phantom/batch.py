@@ -41,7 +41,7 @@ from ...synthoct.configs import SYNTHOCT_CONFIGS
 from ...synthoct.files import baseline_table
 from ...synthoct.metrics import METRIC_NAMES, SYNTHOCT_MAPS, synthoct_metrics
 from ...synthoct.scanner import synthoct_scan
-from .loop import INCLUSION_SCALARS, PULLED, phantom_closed_loop_case
+from .loop import INCLUSION_SCALARS, PULLED, WINDOW_SCALARS, phantom_closed_loop_case
 from .patients import MAX_PATIENT_INCLUSIONS, SHAPES, scanner_config_of, virtual_patient
 
 __all__ = ["MARGIN", "phantom_closed_loop", "phantom_score_power"]
@@ -108,7 +108,7 @@ def _refused(seed, why, *, config, patient, score) -> xr.Dataset:
     data["fit_shape"] = xr.DataArray(np.full(MAX_LAYERS, "", dtype=object), dims="layer")
     data["n_true"] = xr.DataArray(n, attrs=attrs("count", "true layers"))
     data["n_fit"] = xr.DataArray(0, attrs=attrs("count", "fitted layers"))
-    for k in INCLUSION_SCALARS:  # the fit's: none
+    for k in (*INCLUSION_SCALARS, *WINDOW_SCALARS):  # the fit's: none
         data[k] = xr.DataArray(np.nan, attrs=attrs("label", k.replace("_", " ")))
     data["n_inclusions_true"] = xr.DataArray(truth.sizes["inclusion"])
     for k in ("layers_right", "boundaries_right", "success"):
@@ -136,7 +136,7 @@ def _case(case, *, config, patient, rescans, score, lpips) -> xr.Dataset:
     except ValueError as err:  # the options were checked: the fit refused this scan
         return _refused(seed, str(err), config=config, patient=patient, score=score)
     data = {k: _padded(v) for k, v in case.data_vars.items() if v.dims == ("layer",)}
-    for k in ("n_true", "n_fit", *INCLUSION_SCALARS):
+    for k in ("n_true", "n_fit", *INCLUSION_SCALARS, *WINDOW_SCALARS):
         data[k] = case[k]
     for k in ("layers_right", "boundaries_right", "success"):  # NetCDF has no bool: 0/1
         data[k] = xr.DataArray(int(bool(case[k])), attrs=case[k].attrs)
@@ -224,9 +224,11 @@ def phantom_closed_loop(
         ``failure_class`` (``"none"``, ``"layer count"``, ``"boundary"`` or ``"refused"``: the
         fit refused the scan, its reason in ``failure``, NaN for the fit and the scores);
         the inclusion scalars of :func:`speckle.phantom_closed_loop_case` (found, false alarms,
-        centre error, pulls; the fit looks for inclusions when ``inclusions``);
-        with ``score`` each metric of :data:`speckle.METRIC_NAMES` along ``(case, candidate,
-        map)``, candidates ``fitted``, ``floor``, ``baseline``.
+        centre error, pulls; the fit looks for inclusions when ``inclusions``); the window's
+        top, fitted and true, in dB, and its pull
+        (:data:`~speckle.studies.phantom.loop.WINDOW_SCALARS`); with ``score`` each metric of
+        :data:`speckle.METRIC_NAMES` along ``(case, candidate, map)``, candidates ``fitted``,
+        ``floor``, ``baseline``.
 
     Raises
     ------

@@ -19,6 +19,10 @@ reports the count fitted, the true ones found, the fitted inclusions not matched
 error in lines and the depth error in pixels), the pulls of :data:`INCLUSION_PULLED` and the
 density's lower bound where the density is not identified. The case's ``success`` remains the
 layers' (count and boundaries).
+
+The window's top (:data:`WINDOW_SCALARS`): the fit's ``window_top`` and its SE against the true
+one, ``20 log10 max |A|`` of the target's own complex field (the scanner puts its 51 dB
+window's top at the image's maximum), in dB, and their pull.
 """
 
 from __future__ import annotations
@@ -27,11 +31,18 @@ import numpy as np
 import xarray as xr
 
 from ...conventions import attrs, coord
+from ...synthoct import _scan
 from ...synthoct.scanner import synthoct_scan
 from ._fit import fit_phantom
 from .patients import scanner_config_of, virtual_patient
 
-__all__ = ["INCLUSION_PULLED", "PULLED", "fit_profiles", "phantom_closed_loop_case"]
+__all__ = [
+    "INCLUSION_PULLED",
+    "PULLED",
+    "WINDOW_SCALARS",
+    "fit_profiles",
+    "phantom_closed_loop_case",
+]
 
 #: Parameters whose pulls the case reports (the fit's and the truth's variable names).
 PULLED = ("top", "attenuation", "rho_e", "density", "energy")
@@ -58,6 +69,8 @@ INCLUSION_SCALARS = (
     *(f"inclusion_{p}_pull" for p in INCLUSION_PULLED),
     "fit_inclusion_density_bound",
 )
+#: The case's window scalars (dB re ``|A| = 1``; the pull dimensionless), in order.
+WINDOW_SCALARS = ("true_window_top", "fit_window_top", "fit_window_top_se", "window_top_pull")
 
 
 def inclusion_scores(inclusions: xr.Dataset, truth: xr.Dataset, cfg) -> dict:
@@ -175,7 +188,8 @@ def phantom_closed_loop_case(
         ``n_inclusions_fit``, ``inclusion_found``, ``inclusion_false_alarms``,
         ``inclusion_centre_error`` in pixels, ``true_inclusion_<p>``, ``fit_inclusion_<p>``,
         ``fit_inclusion_<p>_se``, ``inclusion_<p>_pull`` for ``p`` in
-        :data:`INCLUSION_PULLED`); scalars ``n_true``, ``n_fit``, ``layers_right``,
+        :data:`INCLUSION_PULLED`); the window's top (:data:`WINDOW_SCALARS`, dB: the true
+        one from the target's complex field); scalars ``n_true``, ``n_fit``, ``layers_right``,
         ``boundaries_right``,
         ``success`` and ``failure`` (empty on success); ``target_scan`` ``(depth, x)`` and, with
         ``fit_seed``, ``fitted_scan`` and ``floor_scan``. Attributes: ``seed``, ``fit_seed``
@@ -207,8 +221,9 @@ def phantom_closed_loop_case(
         raise TypeError(f"fit_inclusions must be None or a bool, got {fit_inclusions!r}")
     cfg = scanner_config_of(config)
     table, truth = virtual_patient(seed, config=cfg, **patient)
-    scan = synthoct_scan(table, cfg, nthreads=1)
-    fit = fit_phantom(scan, cfg, max_layers=max_layers, inclusions=fit_inclusions)
+    field = synthoct_scan(table, cfg, field=True, nthreads=1)  # the scan is its 8-bit window
+    scan = field.copy(data=_scan.to_levels(field.values))
+    fit = fit_phantom(scan.values, cfg, max_layers=max_layers, inclusions=fit_inclusions)
     layers = fit.layers
     n_true, n_fit = truth.sizes["layer"], layers.sizes["layer"]
     if n_fit == n_true:
@@ -260,6 +275,13 @@ def phantom_closed_loop_case(
     )  # fmt: skip
     for name, (value, attr) in inclusion_scores(fit.inclusions, truth, cfg).items():
         data[name] = ((), value, attr)
+    window = (20 * np.log10(np.abs(field.values).max()), layers.attrs["window_top"],
+              layers.attrs["window_top_se"])  # fmt: skip
+    for name, value, long in zip(WINDOW_SCALARS, (*window, (window[1] - window[0]) / window[2]),
+                                 ("true window top (20 log10 max |A|)", "fitted window top",
+                                  "standard error of fitted window top",
+                                  "(fit - truth)/SE of window top"), strict=True):  # fmt: skip
+        data[name] = ((), float(value), attrs("dimensionless" if "pull" in name else "level", long))
     if fit_seed is not None:
         floor_table, _ = virtual_patient(seed, config=cfg, draw_seed=int(fit_seed), **patient)
         data["fitted_scan"] = (("depth", "x"), fit.render(int(fit_seed), nthreads=1).values,
