@@ -221,9 +221,9 @@ def phantom_closed_loop_case(
         raise TypeError(f"fit_inclusions must be None or a bool, got {fit_inclusions!r}")
     cfg = scanner_config_of(config)
     table, truth = virtual_patient(seed, config=cfg, **patient)
-    field = synthoct_scan(table, cfg, field=True, nthreads=1)  # the scan is its 8-bit window
-    scan = field.copy(data=_scan.to_levels(field.values))
-    fit = fit_phantom(scan.values, cfg, max_layers=max_layers, inclusions=fit_inclusions)
+    field = synthoct_scan(table, cfg, field=True, nthreads=1)
+    scan = _scan.to_levels(field.values)  # the scan: the field's 8-bit window
+    fit = fit_phantom(scan, cfg, max_layers=max_layers, inclusions=fit_inclusions)
     layers = fit.layers
     n_true, n_fit = truth.sizes["layer"], layers.sizes["layer"]
     if n_fit == n_true:
@@ -271,13 +271,14 @@ def phantom_closed_loop_case(
         boundaries_right=((), boundaries_right, attrs("label", "every boundary within a pixel")),
         success=((), layers_right and boundaries_right, attrs("label", "case succeeded")),
         failure=((), failure, attrs("label", "why the case failed (empty on success)")),
-        target_scan=(("depth", "x"), np.asarray(scan.values), attrs("label", "target scan")),
+        target_scan=(("depth", "x"), scan, attrs("label", "target scan")),
     )  # fmt: skip
     for name, (value, attr) in inclusion_scores(fit.inclusions, truth, cfg).items():
         data[name] = ((), value, attr)
     window = (20 * np.log10(np.abs(field.values).max()), layers.attrs["window_top"],
               layers.attrs["window_top_se"])  # fmt: skip
-    for name, value, long in zip(WINDOW_SCALARS, (*window, (window[1] - window[0]) / window[2]),
+    pull = (window[1] - window[0]) / window[2] if window[2] > 0 else np.nan
+    for name, value, long in zip(WINDOW_SCALARS, (*window, pull),
                                  ("true window top (20 log10 max |A|)", "fitted window top",
                                   "standard error of fitted window top",
                                   "(fit - truth)/SE of window top"), strict=True):  # fmt: skip
@@ -292,8 +293,8 @@ def phantom_closed_loop_case(
         data,
         coords={
             "layer": coord("layer", np.arange(n_true)),
-            "depth": scan["depth"],
-            "x": scan["x"],
+            "depth": field["depth"],
+            "x": field["x"],
         },
         attrs={
             "seed": int(seed),
