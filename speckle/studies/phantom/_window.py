@@ -111,22 +111,20 @@ def window_and_brightness(
                 out[i] = float(np.mean(pred - mm[a:b]))
         return out
 
-    # the weights, from the layers' estimates without a cut top layer's shadow (which moves
-    # every estimate alike)
+    # each layer's estimate on the fit and on every replicate, without a cut top layer's
+    # shadow (which moves every estimate alike: added in chain below); the weights from them
     mu_w, mu_jk_w = mu.copy(), mu_jk.copy()
     if cut_top is not None:
         mu_w[0], mu_jk_w[:, 0] = 0.0, 0.0
-    weights = window_weights(
-        layer_windows(m, mu_w, tops),
-        [layer_windows(m_jk[j], mu_jk_w[j], tops_jk[j]) for j in range(blocks)],
-        offsets_se[used],
-    )
+    est = layer_windows(m, mu_w, tops)
+    est_jk = [layer_windows(m_jk[j], mu_jk_w[j], tops_jk[j]) for j in range(blocks)]
+    weights = window_weights(est, est_jk, offsets_se[used])
     share = weights / weights.sum() if weights.sum() > 0 else weights
 
-    def window_top(mm, mu_, tops_):
-        est = layer_windows(mm, mu_, tops_)
-        w = np.where(np.isfinite(est), weights, 0.0)
-        return float(np.sum(w * np.nan_to_num(est)) / w.sum()) if w.sum() > 0 else np.nan
+    def combined(e):
+        """The weighted mean of the layers' estimates ``e`` (NaN where none has weight)."""
+        w = np.where(np.isfinite(e), weights, 0.0)
+        return float(np.sum(w * np.nan_to_num(e)) / w.sum()) if w.sum() > 0 else np.nan
 
     def brightness(k, ii, mu_, tops_, wt_):
         """``rho E/100`` of layer ``k`` from its rows' mean intensity ``ii`` under the window's
@@ -136,14 +134,10 @@ def window_and_brightness(
         unshadowed = ii[a:b] * np.exp(wt_ + 2 * cum_shadow(zz, k, mu_, tops_))
         return float(np.mean(unshadowed)) / (consts["a2_y"] * psf_area)
 
-    def chain(mm, mu_, tops_, intensity):
-        """The window's top, with the cut top layer's ``mu`` (``mu_`` updated in place)."""
-        if cut_top is None:
-            return window_top(mm, mu_, tops_)
-        mu_top, mu_[0] = mu_[0], 0.0  # the window without the top layer's shadow, then with it
-        wt0 = window_top(mm, mu_, tops_)
-        if not np.isfinite(wt0):  # no deeper layer places the window: mu/A2 as elsewhere
-            mu_[0] = mu_top
+    def chain(wt0, mu_, tops_, intensity):
+        """The window's top from ``wt0``, the layers' without a cut top layer's shadow, and
+        that layer's ``mu`` from its brightness (``mu_`` updated in place)."""
+        if cut_top is None or not np.isfinite(wt0):  # no deeper layer places it: mu stays
             return wt0
         mu_[0] = consts["A2"] * cut_top_rho_e(
             intensity, cut_top["z"], tops_[1] - tops_[0], wt0, cfg, psf_area=psf_area
@@ -152,8 +146,9 @@ def window_and_brightness(
 
     top_i, top_i_jk = (None, [None] * blocks) if cut_top is None else (
         cut_top["intensity"], cut_top["intensity_jk"])  # fmt: skip
-    wt = chain(m, mu, tops, top_i)
-    wt_jk = np.array([chain(m_jk[j], mu_jk[j], tops_jk[j], top_i_jk[j]) for j in range(blocks)])
+    wt = chain(combined(est), mu, tops, top_i)
+    wt_jk = np.array([chain(combined(est_jk[j]), mu_jk[j], tops_jk[j], top_i_jk[j])
+                      for j in range(blocks)])  # fmt: skip
     # the offsets' own uncertainty (var ln I's), through the placing layers' weights
     wt_var_offsets = float(np.sum((share * offsets_se[used]) ** 2))
     wt_se = math.hypot(_jackknife(wt_jk), math.sqrt(wt_var_offsets))
