@@ -28,8 +28,9 @@ The fit, on the central lines (``|x| <= x_max/2 - 3 r``, where the box does not 
    layer's mean ln I falls with depth), each boundary leaving out :data:`GAP` transition rows
    (the PSF's main lobe), by dynamic programming; ``K``
    is the one of least BIC, ``sum_q (residual_q/s_q)^2 + (3K - 1) ln n`` (weighted least
-   squares), ``s_q^2`` the row means' variance from the jackknife over lateral blocks of
-   lines (a running median of 9 rows, times the integrated autocorrelation of 8 lags);
+   squares), ``s_q^2`` the row means' variance from lateral blocks of lines about their
+   quadratic trend across the lines (a shaped boundary's shift is not noise; a running median
+   of 9 rows, times the integrated autocorrelation of 8 lags: ``_count.bic_row_variance``);
    fewer layers are taken while a boundary separates layers whose slopes and levels at the
    boundary both agree within 3 jackknife SEs (a fluctuation of the phantom's shadowing);
    with ``criterion="test"``, ``K`` is chosen instead by tests of ``K + 1`` against ``K``
@@ -74,7 +75,7 @@ from ...conventions import attrs, coord, units_of
 from ...synthoct import _scan
 from ...synthoct.files import ScannerConfig, read_png, read_scanner_config, write_scanner_config
 from ._censoring import slope_gains
-from ._count import CRITERION, count_blocks, layer_count
+from ._count import CRITERION, bic_row_variance, count_blocks, layer_count
 from ._density import (
     _CLIP,
     LAG,
@@ -89,7 +90,7 @@ from ._density import (
     log_offset_se,
     log_offsets,
 )
-from ._inclusions import fit_inclusions, no_inclusions, remove_inclusions
+from ._inclusions import fit_inclusions, no_inclusions, remove_inclusions, untouched_lines
 from ._mixing import mixed_rows
 from ._shapes import SHAPE_DEGREE, _transition_model, fit_shapes, flat_shapes
 from ._slab import slab_constants
@@ -113,8 +114,6 @@ MAX_CLIPPED = 0.1
 #: (sparse speckle's empty pixels: a fully developed row there clips 5 +- 0.7 % of 964 lines,
 #: never 10 %).
 SPARSE_CLIPPED = 0.05
-#: Lags of the row means' integrated autocorrelation (BIC's variance inflation).
-ACF_LAGS = 8
 #: Shortest layer, rows (fitted rows of a segment).
 MIN_ROWS = 4
 #: Shortest run of rows above the floor that is fitted below a floor region.
@@ -529,9 +528,14 @@ def fit_phantom(
     found, model = fit_inclusions(li, np.flatnonzero(ok), ds, cfg, x, cdf)
     if found.sizes["inclusion"]:
         again = layers_of(remove_inclusions(lev, model, _NEPER_DB))
-        # removing an inclusion explains structure; a refit with more layers is the removal's
-        # artefact (a shadow that clipped the rows below it cannot be undone): kept as it was
-        if again.sizes["layer"] <= ds.sizes["layer"]:
+        # a refit with more layers may be the removal's artefact (a shadow that clipped the
+        # rows below it cannot be undone): kept where the lines the inclusions do not reach,
+        # fitted flat (BIC), show as many layers (an inclusion hid a boundary from the first)
+        far = untouched_lines(x, found, r)
+        k_far = 0
+        if again.sizes["layer"] > ds.sizes["layer"] and far.sum() >= 2 * blocks:
+            k_far = _fit_levels(lev[:, far], cfg, max_layers, blocks).sizes["layer"]
+        if again.sizes["layer"] <= max(ds.sizes["layer"], k_far):
             ds = again
             found, _ = fit_inclusions(li, np.flatnonzero(ok), ds, cfg, x, cdf)
     return PhantomFit(layers=ds, config=cfg, inclusions=found)
@@ -609,19 +613,7 @@ def _fit_levels(
     intensity = _intensity(lev[rows])
     i_rows, i_rows_jk = intensity.mean(axis=1), np.stack([intensity[:, k].mean(axis=1)
                                                           for k in keep])  # fmt: skip
-    g = blocks
-    dev_jk = m_jk - m_jk.mean(0)
-    s2_rows = (g - 1) / g * np.sum(dev_jk**2, axis=0)
-    # per-row variance (it grows with depth: shadowing streaks), a running median of 9 rows;
-    # row means are correlated along depth (PSF, streaks): inflated by the integrated
-    # autocorrelation 1 + 2 sum_{L=1..ACF_LAGS} rho_L of their jackknife deviations
-    pad = np.pad(s2_rows, 4, mode="edge")
-    s2_rows = np.median(np.lib.stride_tricks.sliding_window_view(pad, 9), axis=1)
-    acf = [
-        np.sum(dev_jk[:, :-lag] * dev_jk[:, lag:]) / np.sum(dev_jk**2)
-        for lag in range(1, ACF_LAGS + 1)
-    ]
-    s2_rows = s2_rows * max(1.0, 1.0 + 2.0 * float(np.sum(acf)))
+    s2_rows = bic_row_variance(li, group)
     best = _segment(z, m, 1.0 / s2_rows, max_layers)
     bic = {k: rss + (3 * k - 1) * math.log(z.size) for k, (rss, _) in best.items()}
 
