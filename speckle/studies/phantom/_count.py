@@ -62,6 +62,8 @@ import itertools
 
 import numpy as np
 
+from ._shapes import SHAPE_DEGREE
+
 __all__ = [
     "ACF_LAGS",
     "COUNT_BLOCKS",
@@ -104,9 +106,9 @@ CRITERION = (
 _SMOOTH = 9
 #: Lags of the row means' integrated autocorrelation (BIC's variance inflation).
 ACF_LAGS = 8
-#: Degree of the trend across the lateral blocks that BIC's row variance leaves out (the
-#: boundaries' shapes: :data:`speckle.studies.phantom._shapes.SHAPE_DEGREE`).
-TREND_DEGREE = 2
+#: Degree of the trend across the lateral blocks that BIC's row variance leaves out: the
+#: most curved boundary shape's (:data:`speckle.studies.phantom._shapes.SHAPE_DEGREE`).
+TREND_DEGREE = max(SHAPE_DEGREE.values())
 #: Entropy of the sign vectors' seed: the same draws for every scan (the test is exact for
 #: any set of draws drawn independently of the data).
 _SEED = 3_420_527
@@ -151,10 +153,10 @@ def bic_row_variance(li: np.ndarray, groups: list[np.ndarray]) -> np.ndarray:
         of degree :data:`TREND_DEGREE` in the blocks' mean line, ``sum_b r_bq^2 / (g (g - 3))``
         (for independent blocks of equal size an unbiased variance of the row mean with
         ``g - 3`` degrees of freedom; the delete-one-block jackknife about the blocks' mean
-        has ``g - 1``), a running
-        median of :data:`_SMOOTH` rows (it grows with depth: the streaks), times the
-        integrated autocorrelation ``1 + 2 sum_{L=1..ACF_LAGS} rho_L`` (at least 1) of the
-        residuals along depth (the PSF and the streaks correlate the row means).
+        has ``g - 1``), a running median of :data:`_SMOOTH` rows (it grows with depth: the
+        streaks), times the integrated autocorrelation ``1 + 2 sum_{L=1..ACF_LAGS} rho_L``
+        (at least 1) of the residuals along depth (the PSF and the streaks correlate the row
+        means).
 
     Notes
     -----

@@ -534,7 +534,10 @@ def fit_phantom(
         far = untouched_lines(x, found, r)
         k_far = 0
         if again.sizes["layer"] > ds.sizes["layer"] and far.sum() >= 2 * blocks:
-            k_far = _fit_levels(lev[:, far], cfg, max_layers, blocks).sizes["layer"]
+            try:
+                k_far = _fit_levels(lev[:, far], cfg, max_layers, blocks).sizes["layer"]
+            except ValueError:  # too few of their rows above the floor: no confirmation
+                k_far = 0
         if again.sizes["layer"] <= max(ds.sizes["layer"], k_far):
             ds = again
             found, _ = fit_inclusions(li, np.flatnonzero(ok), ds, cfg, x, cdf)
