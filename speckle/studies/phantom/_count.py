@@ -54,6 +54,10 @@ reduced scans reaching the floor), and a clipped pixel's value ``ln c - 1`` assu
 flat near zero. The test uses each segment's rows whose *predicted* clipped fraction (fully
 developed speckle at the segment's line, ``1 - exp(-c/<I>)``) is at most
 :data:`TEST_CLIPPED`, where that choice is all but certain.
+
+**BIC's row variance** (:func:`bic_row_variance`): the default criterion's (``"bic"``) weights,
+the blocks' row means about their quadratic trend across the lines, so that a tilted or curved
+boundary's depth in each block does not count as noise.
 """
 
 from __future__ import annotations
