@@ -441,7 +441,8 @@ def fit_phantom(
     inclusions : bool
         Detect and fit elliptical inclusions after the layers
         (:mod:`speckle.studies.phantom._inclusions`: a stated false-alarm probability of
-        0.05 per scan); False (the default): none.
+        0.05 per scan), then the layers again without them (a refit with more layers kept
+        where the lines the inclusions do not reach show as many); False (the default): none.
     criterion : {"bic", "test"}
         How the number of layers is chosen: ``"bic"`` (the default), least BIC of the row-mean
         profile's segmentation, then fewer layers while a boundary's slope and level steps are
