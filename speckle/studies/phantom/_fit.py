@@ -538,7 +538,7 @@ def fit_phantom(
             try:
                 k_far = _fit_levels(lev[:, far], cfg, max_layers, blocks).sizes["layer"]
             except ValueError:  # too few of their rows above the floor: no confirmation
-                k_far = 0
+                pass
         if again.sizes["layer"] <= max(ds.sizes["layer"], k_far):
             ds = again
             found, _ = fit_inclusions(li, np.flatnonzero(ok), ds, cfg, x, cdf)
