@@ -183,14 +183,14 @@ def test_segments_never_rise_with_depth():
     grows): a segment's cost is the weighted RSS of the least-squares line where that falls
     (lstsq), of the weighted mean where it would rise."""
     # private: the segmentation's cost matrix
-    from speckle.studies.phantom._fit import _segment_rss
+    from speckle.studies.phantom._count import segment_rss
 
     rng = np.random.default_rng(2)
     z = np.arange(60) * 6.0
     w = rng.uniform(0.5, 2.0, z.size)
     for slope in (-0.01, 0.01):
         y = slope * z + rng.normal(0, 0.1, z.size)
-        rss = _segment_rss(z, y, w)
+        rss = segment_rss(z, y, w, min_rows=4)
         mean = np.sum(w * y) / np.sum(w)
         expected = wls_rss(z, y, w) if slope < 0 else float(np.sum(w * (y - mean) ** 2))
         assert rss[0, z.size] == pytest.approx(expected, rel=1e-9)

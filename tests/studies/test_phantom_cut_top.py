@@ -20,7 +20,7 @@ from speckle.studies.phantom._censoring import slope_gains
 from speckle.studies.phantom._density import _psf_area, clip_rates
 
 # private: the rows above the floor are the fit's first step (the private module _fit)
-from speckle.studies.phantom._fit import MAX_CLIPPED, _above_floor, _log_intensity
+from speckle.studies.phantom._floor import MAX_CLIPPED, _above_floor, _log_intensity
 
 # private: the window-and-brightness chain of the fit (the private module _window) is the unit
 from speckle.studies.phantom._window import cut_top_rho_e, window_and_brightness

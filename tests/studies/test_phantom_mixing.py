@@ -138,7 +138,7 @@ def test_scanner_rows_across_a_boundary(mixed):
     is the exact mixed rows' within 3 SE of the draws' mean (measured +0.05 and -0.01 neper,
     SE 0.025), and more than 3 SE from the weighted offset's (measured +0.12 and -0.13)."""
     # private: the fit's ln I of 8-bit levels, the same conversion as the fit's
-    from speckle.studies.phantom._fit import _log_intensity
+    from speckle.studies.phantom._floor import _log_intensity
 
     p = CFG.pixel_size
     top = 200.3  # µm: 0.05 pixel below row 91

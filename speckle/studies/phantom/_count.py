@@ -1,7 +1,7 @@
 """The number of layers of the phantom fit (private): a change-point test of stated level.
 
 The row-mean ``ln I`` profile of the central lines is cut into ``K`` straight segments by
-dynamic programming (:func:`speckle.studies.phantom._fit._segment`, each boundary leaving out
+dynamic programming (:func:`segment`, each boundary leaving out
 ``gap`` rows, the PSF's main lobe). The number of layers is chosen by a sequence of tests,
 ``K + 1`` against ``K`` for ``K = 1, 2, ...``, each at the level :data:`FALSE_LAYER_RATE`,
 stopping at the first that does not reject.
@@ -47,7 +47,7 @@ a uniform scan is given a second layer in 5 % of scans, and a scan of ``K`` laye
 must hold no transition).
 
 **Rows near the floor.** Rows enter the fit when at most 10 % of their pixels are clipped
-(or a sparse layer's empty pixels: :func:`~speckle.studies.phantom._fit._above_floor`),
+(or a sparse layer's empty pixels: :func:`~speckle.studies.phantom._floor._above_floor`),
 judged on their own pixels: near the floor that choice keeps the rows that fluctuated up (a
 dip of 0.155 ± 0.028 at the first row left out, +0.04 in the last 4 kept, over 105 uniform
 reduced scans reaching the floor), and a clipped pixel's value ``ln c - 1`` assumes a density
@@ -80,6 +80,8 @@ __all__ = [
     "count_blocks",
     "layer_count",
     "running_median",
+    "segment",
+    "segment_rss",
     "split_p_value",
 ]  # fmt: skip
 
@@ -341,9 +343,11 @@ def layer_count(
     level: float = FALSE_LAYER_RATE,
     draws: int = DRAWS,
     clip: float | None = None,
+    start: int = 1,
 ) -> tuple[int, list[float]]:
-    """The number of layers: ``K + 1`` against ``K`` from ``K = 1`` at ``level`` until a test
-    does not reject (module docstring). ``z`` (rows, µm) and ``li`` ``(rows, lines)`` the
+    """The number of layers: ``K + 1`` against ``K`` from ``K = start`` (the fewest ``best``
+    holds: 1 but for forced cuts) at ``level`` until a test does not reject (module
+    docstring). ``z`` (rows, µm) and ``li`` ``(rows, lines)`` the
     fitted rows' ``ln I`` on the central lines at ``x`` (µm), ``radius`` the beam radius (µm),
     ``best`` ``{K: (rss, segs)}`` of the segmentation; returns ``(K, p-values of the tests
     made)``."""
@@ -352,7 +356,7 @@ def layer_count(
     c = np.array([g.size for g in blocks], float)
     c /= c.sum()
     m = c @ mb
-    k, p_values = 1, []
+    k, p_values = start, []
     while k + 1 in best:
         ok = None
         if clip is not None:
@@ -367,3 +371,87 @@ def layer_count(
             break
         k += 1
     return k, p_values
+
+
+# --- the segmentation ---------------------------------------------------------------------
+
+
+def segment_rss(z: np.ndarray, m: np.ndarray, w: np.ndarray, *, min_rows: int) -> np.ndarray:
+    """``rss[a, b]``: weighted residual sum of squares of the weighted least-squares line of
+    slope <= 0 fitted to rows ``a .. b-1`` (weights ``w``; infinite below ``min_rows`` rows): a
+    layer's mean ln I cannot rise with depth (its shadowing only grows), so where the free line
+    would rise, the mean's."""
+    n = z.size
+    terms = (w, w * z, w * m, w * z * z, w * z * m, w * m * m)
+    c = [np.concatenate([[0.0], np.cumsum(v)]) for v in terms]
+    count = np.concatenate([[0], np.arange(1, n + 1)])
+    a, b = np.meshgrid(np.arange(n + 1), np.arange(n + 1), indexing="ij")
+    s0, sz, sm, szz, szm, smm = (cc[b] - cc[a] for cc in c)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        vzz = szz - sz * sz / s0
+        vzm = szm - sz * sm / s0
+        vmm = smm - sm * sm / s0
+        rss = vmm - np.where((vzz > 0) & (vzm < 0), vzm * vzm / vzz, 0.0)  # slope <= 0
+    rss[(count[b] - count[a]) < min_rows] = np.inf
+    return np.maximum(rss, 0.0)
+
+
+def segment(
+    z: np.ndarray,
+    m: np.ndarray,
+    w: np.ndarray,
+    max_layers: int,
+    *,
+    gap: int,
+    min_rows: int,
+    cuts: tuple[int, ...] = (),
+) -> dict[int, tuple[float, list[tuple[int, int]]]]:
+    """Best cuts of the profile ``m`` (rows at ``z``, weights ``w``) for each ``K``:
+    ``{K: (rss, [(a, b), ...])}``, segments of row indices into ``z``, consecutive segments
+    separated by ``gap`` rows, each of at least ``min_rows``. ``cuts``: rows where a segment
+    must begin, the segment above ending there, with no ``gap`` left out (the first row below
+    a layer under the window's floor,
+    :mod:`speckle.studies.phantom._floor`); ``K`` then starts at ``len(cuts) + 1``."""
+    n = z.size
+    rss = segment_rss(z, m, w, min_rows=min_rows)
+    forced = np.zeros(n + 1, bool)
+    forced[list(cuts)] = True
+    blocked = np.zeros(n + 1, bool)  # ends that would leave out rows at a forced cut
+    for c in cuts:  # no segment holds rows on both sides of a forced cut
+        rss[:c, c + 1 :] = np.inf
+        blocked[max(c - gap, 0) : c] = True
+    best = {1: (rss[0, n], [(0, n)])} if not cuts else {}
+    # cost[b]: best rss of k segments covering rows 0 .. b-1 (last segment ends at b)
+    cost = rss[0].copy()
+    back = []
+    for k in range(2, max_layers + 1):
+        new = np.full(n + 1, np.inf)
+        arg = np.zeros(n + 1, int)
+        for b in range(n + 1):
+            # previous segment ends at e, this one is e + gap .. b - 1 (e at a forced cut)
+            e = np.arange(0, max(b - gap, 0) + 1)
+            if e.size == 0:
+                continue
+            total = np.where(blocked[e], np.inf, cost[e] + rss[_starts(e, forced, gap, n), b])
+            i = int(np.argmin(total))
+            new[b], arg[b] = total[i], e[i]
+        back.append(arg)
+        cost = new
+        if not np.isfinite(cost[n]):
+            if k > len(cuts):  # too few rows for more segments
+                break
+            continue
+        segs, b = [], n
+        for kk in range(k, 1, -1):
+            e = back[kk - 2][b]
+            segs.append((int(_starts(np.array([e]), forced, gap, n)[0]), int(b)))
+            b = e
+        segs.append((0, int(b)))
+        best[k] = (cost[n], segs[::-1])
+    return best
+
+
+def _starts(e: np.ndarray, forced: np.ndarray, gap: int, n: int) -> np.ndarray:
+    """The first row of the segment after one ending at ``e``: ``e + gap``, or ``e`` at a
+    forced cut."""
+    return np.where(forced[e], e, np.minimum(e + gap, n))

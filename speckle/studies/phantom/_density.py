@@ -32,6 +32,7 @@ from ...synthoct.files import ScannerConfig
 from ._slab import depth_psf, slab_constants
 
 __all__ = [
+    "BLOCKS",
     "BLOCK_RADII",
     "DENSE_CLIP_RATE",
     "LAG",
@@ -73,6 +74,8 @@ IDENTIFY = 5.0
 BOUND_SE = 2.0
 #: Least width (beam radii) of the lateral blocks of ``var ln I``'s own jackknife.
 BLOCK_RADII = 8.0
+#: Lateral blocks of the jackknife.
+BLOCKS = 16
 
 
 def _jackknife(values: np.ndarray) -> float:

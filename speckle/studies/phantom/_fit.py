@@ -23,7 +23,9 @@ The fit, on the central lines (``|x| <= x_max/2 - 3 r``, where the box does not 
    then a sparse layer's empty ones: :func:`_above_floor`), as are the first and last ``GAP + 1``
    rows (the surface's transition, seen at the bottom through the periodic PSF); below a
    floor region, only runs of at least :data:`RUN_ROWS` rows above the floor are fitted (a
-   faint layer's bottom may reach the floor above a brighter layer);
+   faint layer's bottom may reach the floor above a brighter layer); a floor gap entered by
+   the PSF's step is a layer under the floor, fitted from its censored pixels
+   (:mod:`speckle.studies.phantom._floor`);
 2. the row-mean profile is cut into ``K = 1 .. max_layers`` linear segments of slope <= 0 (a
    layer's mean ln I falls with depth), each boundary leaving out :data:`GAP` transition rows
    (the PSF's main lobe), by dynamic programming; ``K``
@@ -63,6 +65,7 @@ Tilted and curved boundaries: :mod:`speckle.studies.phantom._shapes`. Inclusions
 from __future__ import annotations
 
 import dataclasses
+import functools
 import itertools
 import math
 import os
@@ -72,12 +75,11 @@ import xarray as xr
 from scipy import optimize
 
 from ...conventions import attrs, coord, units_of
-from ...synthoct import _scan
 from ...synthoct.files import ScannerConfig, read_png, read_scanner_config, write_scanner_config
 from ._censoring import slope_gains
-from ._count import CRITERION, bic_row_variance, count_blocks, layer_count
+from ._count import CRITERION, bic_row_variance, count_blocks, layer_count, segment
 from ._density import (
-    _CLIP,
+    BLOCKS,
     LAG,
     SIGNIFICANCE,
     _jackknife,
@@ -89,6 +91,16 @@ from ._density import (
     lines_per_block,
     log_offset_se,
     log_offsets,
+)
+from ._floor import (
+    _NEPER_DB,
+    MAX_CLIPPED,
+    _above_floor,
+    _intensity,
+    _log_intensity,
+    dark_gaps,
+    floor_layers,
+    with_floor_layers,
 )
 from ._inclusions import fit_inclusions, no_inclusions, remove_inclusions, untouched_lines
 from ._mixing import mixed_rows
@@ -102,23 +114,12 @@ __all__ = ["BLOCKS", "GAP", "MAX_CLIPPED", "PhantomFit", "fit_phantom"]
 #: Width (beam radii) of the lateral blocks of a layer's kurtosis jackknife (the speckle and
 #: the shadowing streaks are correlated over about a beam radius).
 KURTOSIS_BLOCK_RADII = 2.0
-#: Lateral blocks of the jackknife.
-BLOCKS = 16
 #: Transition rows left out at each boundary (the Hann PSF's main lobe).
 GAP = 2
-#: Rows with more clipped (level 0) pixels than this fraction are below the floor, unless
-#: their mean intensity sets the clip below fully developed speckle's :data:`SPARSE_CLIPPED`.
-MAX_CLIPPED = 0.1
-#: Fully developed speckle's clipped fraction (``1 - exp(-c/<I>)``, ``<I>`` the row's mean
-#: intensity) below which a row is above the floor however many of its pixels are clipped
-#: (sparse speckle's empty pixels: a fully developed row there clips 5 +- 0.7 % of 964 lines,
-#: never 10 %).
-SPARSE_CLIPPED = 0.05
 #: Shortest layer, rows (fitted rows of a segment).
 MIN_ROWS = 4
 #: Shortest run of rows above the floor that is fitted below a floor region.
 RUN_ROWS = MIN_ROWS + 2 * GAP
-_NEPER_DB = 10.0 / math.log(10.0)  # dB per neper of intensity
 
 # --- input ------------------------------------------------------------------------------
 
@@ -164,99 +165,6 @@ def _levels(scan: object, cfg: ScannerConfig) -> np.ndarray:
     return levels
 
 
-def _log_intensity(levels: np.ndarray) -> np.ndarray:
-    """``ln I - ln I_max`` of each pixel (bin midpoints; clipped pixels ``ln c - 1``)."""
-    step = _scan.DYNAMIC_RANGE / _scan.LEVELS
-    db = (levels.astype(np.float64) + 0.5) * step - _scan.DYNAMIC_RANGE
-    out = db / _NEPER_DB
-    clip = (step - _scan.DYNAMIC_RANGE) / _NEPER_DB
-    out[levels == 0] = clip - 1.0
-    return out
-
-
-def _above_floor(levels: np.ndarray) -> np.ndarray:
-    """Rows of ``levels`` (pixels, lines) above the window's floor: at most :data:`MAX_CLIPPED`
-    of their pixels clipped; or, in each of :data:`BLOCKS` lateral blocks of lines, at most
-    that many or a block mean intensity over which fully developed speckle would clip at most
-    :data:`SPARSE_CLIPPED` of them. The clipped pixels are then a sparse layer's empty ones,
-    spread over the lines, whose ``ln c - 1`` is the mean ``ln I`` below the clip of a density
-    flat near 0 (2025 patient 4 of ``layers=(1, 3)``: a layer of 0.0012 scatterers per µm^3
-    under a dim one clips 12-20 % of its pixels where its mean is 150-200 times the clip, and
-    was left out whole), not a floor that holds some of the lines (a boundary sweeping into
-    it, or the rows that flattening brings from beyond the scan)."""
-    clipped, intensity = levels == 0, _intensity(levels)
-    sparse = np.ones(levels.shape[0], bool)
-    for g in np.array_split(np.arange(levels.shape[1]), min(BLOCKS, levels.shape[1])):
-        fully_developed = -np.expm1(-math.exp(_CLIP) / intensity[:, g].mean(axis=1))
-        sparse &= (clipped[:, g].mean(axis=1) <= MAX_CLIPPED) | (fully_developed <= SPARSE_CLIPPED)
-    return (clipped.mean(axis=1) <= MAX_CLIPPED) | sparse
-
-
-def _intensity(levels: np.ndarray) -> np.ndarray:
-    """``I/I_max`` of each pixel (bin midpoints; clipped pixels at half the clip level ``c``:
-    an intensity density flat below ``c``, as :func:`_log_intensity`'s ``ln c - 1``)."""
-    out = np.exp(_log_intensity(levels))
-    step = _scan.DYNAMIC_RANGE / _scan.LEVELS
-    out[levels == 0] = 0.5 * math.exp((step - _scan.DYNAMIC_RANGE) / _NEPER_DB)
-    return out
-
-
-# --- segmentation -----------------------------------------------------------------------
-
-
-def _segment_rss(z: np.ndarray, m: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """``rss[a, b]``: weighted residual sum of squares of the weighted least-squares line of
-    slope <= 0 fitted to rows ``a .. b-1`` (weights ``w``): a layer's mean ln I cannot rise
-    with depth (its shadowing only grows), so where the free line would rise, the mean's."""
-    n = z.size
-    terms = (w, w * z, w * m, w * z * z, w * z * m, w * m * m)
-    c = [np.concatenate([[0.0], np.cumsum(v)]) for v in terms]
-    count = np.concatenate([[0], np.arange(1, n + 1)])
-    a, b = np.meshgrid(np.arange(n + 1), np.arange(n + 1), indexing="ij")
-    s0, sz, sm, szz, szm, smm = (cc[b] - cc[a] for cc in c)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        vzz = szz - sz * sz / s0
-        vzm = szm - sz * sm / s0
-        vmm = smm - sm * sm / s0
-        rss = vmm - np.where((vzz > 0) & (vzm < 0), vzm * vzm / vzz, 0.0)  # slope <= 0
-    rss[(count[b] - count[a]) < MIN_ROWS] = np.inf
-    return np.maximum(rss, 0.0)
-
-
-def _segment(z: np.ndarray, m: np.ndarray, w: np.ndarray, max_layers: int):
-    """Best cuts for each ``K``: ``{K: (rss, [(a, b), ...])}``, segments of row indices into
-    ``z``, consecutive segments separated by :data:`GAP` rows."""
-    n = z.size
-    rss = _segment_rss(z, m, w)
-    best = {1: (rss[0, n], [(0, n)])}
-    # cost[k][b]: best rss of k segments covering rows 0 .. b-1 (last segment ends at b)
-    cost = rss[0].copy()
-    back = []
-    for k in range(2, max_layers + 1):
-        new = np.full(n + 1, np.inf)
-        arg = np.zeros(n + 1, int)
-        for b in range(n + 1):
-            # previous segment ends at e, this one is e + GAP .. b - 1
-            e = np.arange(0, max(b - GAP, 0) + 1)
-            if e.size == 0:
-                continue
-            total = cost[e] + rss[np.minimum(e + GAP, n), b]
-            i = int(np.argmin(total))
-            new[b], arg[b] = total[i], e[i]
-        back.append(arg)
-        cost = new
-        if not np.isfinite(cost[n]):
-            break
-        segs, b = [], n
-        for kk in range(k, 1, -1):
-            e = back[kk - 2][b]
-            segs.append((e + GAP, b))
-            b = e
-        segs.append((0, b))
-        best[k] = (cost[n], segs[::-1])
-    return best
-
-
 # --- the fit ----------------------------------------------------------------------------
 
 
@@ -282,7 +190,10 @@ class PhantomFit:
         none) with its SE, ``log_offset`` (``E ln(I/<I>)`` of the layer's sparse speckle, which
         the boundaries' transitions use: from ``var ln I`` over the rows of fully developed
         speckle's rate, or from the intensity kurtosis where the floor leaves no rows for it,
-        ``-gamma`` where neither shows sparse speckle). Attributes: ``window_top`` (dB re
+        ``-gamma`` where neither shows sparse speckle); ``floor`` (a layer under the window's
+        floor: ``rho_e`` from its clipped and unclipped pixels, no density,
+        :mod:`~speckle.studies.phantom._floor`) and ``rho_e_bound`` (its upper bound where
+        every pixel is clipped, else NaN). Attributes: ``window_top`` (dB re
         ``|A| = 1``, the 51 dB window's top) and ``window_top_se``, ``criterion``, ``bic``
         (per ``K``), ``p_values`` (``criterion="test"``: of the tests of ``K + 1`` against
         ``K`` layers made, from ``K = 1``), ``rows``.
@@ -505,7 +416,7 @@ def fit_phantom(
 
     def layers_of(lev):
         ds = _fit_levels(lev, cfg, max_layers, blocks, criterion)
-        if len(shapes) > 1 and ds.sizes["layer"] > 1:
+        if len(shapes) > 1 and ds.sizes["layer"] > 1 and not ds.floor.any():  # floor: flat
             return fit_shapes(
                 lev, _log_intensity(lev), ds, cfg, tuple(shapes),
                 lambda lv: _fit_levels(lv, cfg, max_layers, blocks, criterion),
@@ -599,10 +510,19 @@ def _fit_levels(
     ok[: GAP + 1] = False
     ok[cfg.n_pixels - GAP - 1 :] = False
     edges = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(int), [0]])))
-    rows = np.concatenate(
-        [np.arange(a, b) for a, b in zip(edges[::2], edges[1::2], strict=True)
-         if b - a >= RUN_ROWS or a == GAP + 1] or [np.arange(0)]
-    )  # fmt: skip
+    runs = [(a, b) for a, b in zip(edges[::2], edges[1::2], strict=True)
+            if b - a >= RUN_ROWS or a == GAP + 1]  # fmt: skip
+    li_all = _log_intensity(lev)
+    # boundaries into layers under the floor (_floor.py): their transition rows left out, the
+    # segmentation cut there (when max_layers allows the layers)
+    dark = dark_gaps(li_all.mean(axis=1), runs, cfg.n_pixels, gap=GAP)
+    n_cut = sum(hi < cfg.n_pixels - GAP - 1 for _, hi in dark)
+    if len(dark) + n_cut + 1 > max_layers:
+        dark = []
+    runs = [(a + GAP * any(a == hi for _, hi in dark), b - GAP * any(b == lo for lo, _ in dark))
+            for a, b in runs]  # fmt: skip
+    rows = np.concatenate([np.arange(a, b) for a, b in runs] or [np.arange(0)])
+    cuts = tuple(int(np.searchsorted(rows, hi + GAP)) for _, hi in dark if hi + GAP in rows)
     if rows.size < MIN_ROWS + 1:
         raise ValueError(
             f"scan has {rows.size} rows above the floor (<= {MAX_CLIPPED:.0%} clipped); "
@@ -618,7 +538,8 @@ def _fit_levels(
     i_rows, i_rows_jk = intensity.mean(axis=1), np.stack([intensity[:, k].mean(axis=1)
                                                           for k in keep])  # fmt: skip
     s2_rows = bic_row_variance(li, group)
-    best = _segment(z, m, 1.0 / s2_rows, max_layers)
+    best = segment(z, m, 1.0 / s2_rows, max_layers - len(dark), gap=GAP, min_rows=MIN_ROWS,
+                   cuts=cuts)  # fmt: skip
     bic = {k: rss + (3 * k - 1) * math.log(z.size) for k, (rss, _) in best.items()}
 
     def line_fit(mm, a, b):
@@ -629,6 +550,8 @@ def _fit_levels(
         """Every boundary separates layers whose slopes or levels at the boundary differ by
         more than SIGNIFICANCE jackknife SEs (else a fluctuation of the phantom's shadowing)."""
         for (a1, b1), (a2, b2) in itertools.pairwise(segs):
+            if any(b1 <= c <= a2 for c in cuts):  # a floor layer between them
+                continue
             zb = 0.5 * (z[b1 - 1] + z[a2])
             stats = []
             for mm in (m, *m_jk):
@@ -644,11 +567,11 @@ def _fit_levels(
     if criterion == "test":  # K + 1 against K at a stated false-layer rate (_count.py)
         x = cfg.line_positions[np.abs(cfg.line_positions) <= cfg.x_max / 2 - 3 * cfg.beam_radius]
         clip = float(_log_intensity(np.zeros(1, np.uint8))[0]) + 1.0  # ln of the window's floor
-        n_layers, p_values = layer_count(z, li, x, cfg.beam_radius, best, gap=GAP,
-                                         min_rows=MIN_ROWS, clip=clip)  # fmt: skip
+        n_layers, p_values = layer_count(z, li, x, cfg.beam_radius, best, gap=GAP, clip=clip,
+                                         min_rows=MIN_ROWS, start=len(cuts) + 1)  # fmt: skip
     else:
         n_layers = min(bic, key=bic.get)
-        while n_layers > 1 and not distinct(best[n_layers][1]):
+        while n_layers > len(cuts) + 1 and not distinct(best[n_layers][1]):
             n_layers -= 1
     segs = best[n_layers][1]
 
@@ -669,6 +592,9 @@ def _fit_levels(
         for k in range(1, len(segs)):
             (s1, i1), (s2_, i2) = fits[k - 1], fits[k]
             lo, hi = segs[k - 1][1], segs[k][0]  # gap rows lo .. hi-1
+            if any(lo <= c <= hi for c in cuts):  # a floor layer's (_floor.py)
+                out.append(math.nan)
+                continue
             idx = np.arange(lo - 1 if first is None or k > 1 else first, hi + 1)
             zz = z[idx]
 
@@ -691,7 +617,7 @@ def _fit_levels(
     fits, tops = estimates(m)
     rep = [estimates(m_jk[j]) for j in range(blocks)]
     gain = slope_gains(lev[rows], segs, rates)  # the censored row means' slope over -2 mu
-    cut = _cut_top(lev, rows, segs, tops, keep, cfg)
+    cut = None if dark else _cut_top(lev, rows, segs, tops, keep, cfg)  # not with a floor layer
     if cut is not None:
         gain[0] = 1.0  # its line is its brightness's (below)
     mu = np.array([-f[0] / 2 for f in fits]) / gain
@@ -704,12 +630,36 @@ def _fit_levels(
     # density, energy, the window and rho E/100: _density.py
     dens = layer_densities(v_own, v_own_jk, mu, mu_fine / gain, cfg, kurtosis_bound=kappa_bound)
     v_se = np.array([_jackknife(v_jk[:, k]) for k in range(n_layers)])
+    offsets_se, is_floor = log_offset_se(v, v_se, cfg), np.zeros(n_layers, bool)
+    segs_w, floor = segs, {}
+    if dark:  # layers under the floor between (or below) the row layers: _floor.py
+        m_all_jk = np.stack([li_all[:, k].mean(axis=1) for k in keep])
+        fl = floor_layers(dark, segs, cuts, li_all.mean(axis=1), m_all_jk, _intensity(lev),
+                          lev == 0, (fits, tops), rep, offsets, keep, model, p, gap=GAP,
+                          cells=lev.shape[1] / lines_per_block(KURTOSIS_BLOCK_RADII, cfg),
+                          mixing=mixing)  # fmt: skip
+        ins, floor = functools.partial(with_floor_layers, after=fl["after"]), fl["floor"]
+        mu, mu_jk, offsets_se = ins(mu, fill=0.0), ins(mu_jk, fill=0.0), ins(offsets_se, fill=0.0)
+        mu_se, gain = ins(mu_se), ins(gain)
+        offsets, is_floor = ins(offsets, fill=-np.euler_gamma), ins(is_floor, fill=True)
+        v_own, kappa, kappa_se = ins(v_own), ins(kappa), ins(kappa_se)
+        dens = {key: ins(val) for key, val in dens.items()}
+        tops, tops_jk = fl["tops"], fl["tops_jk"]
+        rows_of = iter(segs)
+        n_layers, segs_w = tops.size, [None if f else next(rows_of) for f in is_floor]
+        top_se = np.array([_jackknife(tops_jk[:, k]) for k in range(n_layers)])
     fitted = {
         "mu": mu, "mu_se": mu_se, "mu_jk": mu_jk, "tops": tops, "tops_jk": tops_jk,
-        "offsets": offsets, "offsets_se": log_offset_se(v, v_se, cfg),
+        "offsets": offsets, "offsets_se": offsets_se, "floor": floor,
         "intensity": i_rows, "intensity_jk": i_rows_jk,
     }  # fmt: skip
-    win = window_and_brightness(m, m_jk, z, segs, fitted, cfg, cut_top=cut)
+    win = window_and_brightness(m, m_jk, z, segs_w, fitted, cfg, cut_top=cut)
+    if floor and np.isfinite(win["wt"]):  # the floor layers' shadows from their brightness
+        a2 = slab_constants(cfg.beam_radius)["A2"]
+        for k in floor:
+            mu[k], mu_se[k] = a2 * np.nan_to_num(win["rho_e"][k]), a2 * win["rho_e_se"][k]
+            mu_jk[:, k] = mu[k]
+        win = window_and_brightness(m, m_jk, z, segs_w, fitted, cfg, cut_top=cut)
     if cut is not None and np.isfinite(win["wt"]):
         # the cut top layer's line is its brightness's, not its few rows' (the transition's):
         # its boundary is located again over those rows too, then its brightness again
@@ -763,6 +713,10 @@ def _fit_levels(
                                 "upper bound of the energy where the density is not identified"),
             "rho_e": var("re", rho_e, "volume_density", "rho E/100 (energy-weighted density)"),
             "rho_e_se": var("re", rho_e_se, "volume_density", "standard error of rho_e"),
+            "rho_e_bound": var("re", win["rho_e_bound"], "volume_density",
+                               "upper bound of rho_e where a floor layer's is not identified"),
+            "floor": var("f", is_floor, "label", "layer under the window's floor (its rho_e "
+                         "from its clipped pixels: _floor.py)"),
             "log_variance": var("v", v_own, "dimensionless",
                                 "var ln I of the layer (shadowing spread removed)"),
             "log_variance_se": var("v", dens["v_se"], "dimensionless",

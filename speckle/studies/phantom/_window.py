@@ -68,7 +68,10 @@ def window_and_brightness(
         Each layer's rows.
     fitted : dict
         ``mu``, ``mu_se``, ``mu_jk``, ``tops``, ``tops_jk``, ``offsets`` and ``offsets_se``
-        (each layer's ``E ln(I/<I>)`` and its SE, :func:`log_offsets`).
+        (each layer's ``E ln(I/<I>)`` and its SE, :func:`log_offsets`); ``floor`` (optional):
+        the layers under the window's floor, ``{layer: {"z", "theta", "theta_jk", "bound"}}``
+        (:func:`~speckle.studies.phantom._floor.floor_layers`; their ``segs`` entry None),
+        whose ``rho E/100`` is their censored mean intensity's.
     cfg : ScannerConfig
         The scanner's configuration.
     cut_top : dict, optional
@@ -80,7 +83,7 @@ def window_and_brightness(
     dict
         ``wt``, ``wt_se`` (nepers), ``wt_jk``, ``rho_e``, ``rho_e_se`` (per µm^3) and ``mu``,
         ``mu_se``, ``mu_jk`` (1/µm; the cut top layer's from its ``rho_e``, the others as
-        ``fitted``).
+        ``fitted``), ``rho_e_bound`` (a floor layer's upper bound where its ``theta`` is NaN).
     """
     consts = slab_constants(cfg.beam_radius)
     mu, mu_se, mu_jk = (np.array(fitted[k], float) for k in ("mu", "mu_se", "mu_jk"))
@@ -88,7 +91,8 @@ def window_and_brightness(
     offsets, offsets_se = fitted["offsets"], fitted["offsets_se"]
     n_layers, blocks = mu.size, m_jk.shape[0]
     psf_area = _psf_area(cfg)
-    slope_ok = mu > SIGNIFICANCE * mu_se
+    floor = fitted.get("floor", {})  # layers under the window's floor (_floor.py): no rows
+    slope_ok = (mu > SIGNIFICANCE * mu_se) & np.array([s_ is not None for s_ in segs])
     if cut_top is not None:
         slope_ok[0] = False  # its few fitted rows' slope is the transition's
 
@@ -128,10 +132,14 @@ def window_and_brightness(
 
     def brightness(k, ii, mu_, tops_, wt_):
         """``rho E/100`` of layer ``k`` from its rows' mean intensity ``ii`` under the window's
-        top ``wt_``."""
-        a, b = segs[k]
-        zz = z[a:b]
-        unshadowed = ii[a:b] * np.exp(wt_ + 2 * cum_shadow(zz, k, mu_, tops_))
+        top ``wt_`` (a floor layer's: ``ii`` its censored mean, over its inner rows)."""
+        if segs[k] is None:
+            zz = floor[k]["z"]
+            ii = np.full(zz.size, ii)
+        else:
+            a, b = segs[k]
+            zz, ii = z[a:b], ii[a:b]
+        unshadowed = ii * np.exp(wt_ + 2 * cum_shadow(zz, k, mu_, tops_))
         return float(np.mean(unshadowed)) / (consts["a2_y"] * psf_area)
 
     def chain(wt0, mu_, tops_, intensity):
@@ -160,16 +168,22 @@ def window_and_brightness(
         rho_e_se[0] = math.hypot(_jackknife(np.log(mu_jk[:, 0])), math.sqrt(wt_var_offsets))
         rho_e_se[0] *= rho_e[0]
         mu_se[0] = consts["A2"] * rho_e_se[0]
+    rho_e_bound = np.full(n_layers, np.nan)
+    for k in floor:  # no slope: from the brightness below, where a window is placed
+        rho_e[k], rho_e_se[k] = np.nan, np.nan
     for k in range(n_layers):
         if slope_ok[k] or not np.isfinite(wt) or (k == 0 and cut_top is not None):
             continue
-        rho_e[k] = brightness(k, fitted["intensity"], mu, tops, wt)
-        reps = [brightness(k, fitted["intensity_jk"][j], mu_jk[j], tops_jk[j], wt_jk[j])
-                for j in range(blocks)]  # fmt: skip
+        ii, ii_jk = (fitted["intensity"], fitted["intensity_jk"]) if k not in floor else (
+            floor[k]["theta"], floor[k]["theta_jk"])  # fmt: skip
+        rho_e[k] = brightness(k, ii, mu, tops, wt)
+        reps = [brightness(k, ii_jk[j], mu_jk[j], tops_jk[j], wt_jk[j]) for j in range(blocks)]
         log_se = _jackknife(np.log(np.array(reps)))
         rho_e_se[k] = math.sqrt(log_se**2 + wt_var_offsets) * rho_e[k]
+        if k in floor and np.isfinite(floor[k]["bound"]):  # not identified: its upper bound
+            rho_e_bound[k] = brightness(k, floor[k]["bound"], mu, tops, wt)
     return {"wt": wt, "wt_se": wt_se, "wt_jk": wt_jk, "rho_e": rho_e, "rho_e_se": rho_e_se,
-            "mu": mu, "mu_se": mu_se, "mu_jk": mu_jk}  # fmt: skip
+            "mu": mu, "mu_se": mu_se, "mu_jk": mu_jk, "rho_e_bound": rho_e_bound}  # fmt: skip
 
 
 def window_weights(estimates, replicates, offsets_se) -> np.ndarray:
