@@ -16,6 +16,8 @@ from speckle.studies.phantom._density import _CLIP  # private: the window's clip
 from speckle.studies.phantom._floor import (  # private: the floor layers' rules
     BOUND_LEVEL,
     DARK_DROP,
+    LINE_SCATTER,
+    RISE_STEP,
     all_clipped_bound,
     censored_mean,
     dark_gaps,
@@ -53,16 +55,17 @@ def test_all_clipped_bound_is_its_definition():
 
 def test_dark_gaps_need_the_psf_steps():
     """A gap whose last row above it drops more than DARK_DROP below the line of the rows
-    before, and whose first row below it as far below the line of the rows after, is a layer
-    under the floor; a layer fading into the gap is not, nor a dim layer whose rows come back
-    above the floor (no step up: 2025 patient 3); below the last run the gap reaches the
-    box's bottom rows."""
+    before, and whose first row below it lies below the line of the rows after, is a layer
+    under the floor (RISE_STEP: the step up may be smaller); a layer fading into the gap is
+    not, nor a dim layer whose rows come back above the floor (no step up: 2025 patient 3),
+    nor a gap after rows that are not one line (a transition among them); below the last run
+    the gap reaches the box's bottom rows."""
     m = -0.01 * np.arange(100.0)
     runs = [(3, 40), (55, 97)]
     assert dark_gaps(m, runs, 100, gap=2) == []
     both = m.copy()
     both[37:40] -= [0.5, 1.0, DARK_DROP + 0.1]
-    both[55:58] -= [DARK_DROP + 0.1, 1.0, 0.5]
+    both[55:58] -= [RISE_STEP + 0.1, 0.5, 0.2]
     assert dark_gaps(both, runs, 100, gap=2) == [(40, 55)]
     assert dark_gaps(both, runs[:1], 100, gap=2) == [(40, 97)]
     entered = both.copy()
@@ -71,6 +74,9 @@ def test_dark_gaps_need_the_psf_steps():
     faint = both.copy()
     faint[39] = m[39] - (DARK_DROP - 0.1)
     assert dark_gaps(faint, runs, 100, gap=2) == []
+    transition = both.copy()  # a boundary's step among the rows of the line: no comparison
+    transition[30:34] -= LINE_SCATTER + 0.5
+    assert dark_gaps(transition, runs, 100, gap=2) == []
 
 
 def test_segmentation_cuts_at_a_floor_layer():

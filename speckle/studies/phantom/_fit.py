@@ -715,8 +715,9 @@ def _fit_levels(
             "rho_e_se": var("re", rho_e_se, "volume_density", "standard error of rho_e"),
             "rho_e_bound": var("re", win["rho_e_bound"], "volume_density",
                                "upper bound of rho_e where a floor layer's is not identified"),
-            "floor": var("f", is_floor, "label", "layer under the window's floor (its rho_e "
-                         "from its clipped pixels: _floor.py)"),
+            "floor": (("layer",), np.asarray(is_floor, bool),
+                      attrs("label", "layer under the window's floor (rho_e from its clipped "
+                            "pixels: _floor.py)")),
             "log_variance": var("v", v_own, "dimensionless",
                                 "var ln I of the layer (shadowing spread removed)"),
             "log_variance_se": var("v", dens["v_se"], "dimensionless",

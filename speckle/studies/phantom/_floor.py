@@ -63,7 +63,9 @@ __all__ = [
     "BOUND_LEVEL",
     "DARK_DROP",
     "LINE_ROWS",
+    "LINE_SCATTER",
     "MAX_CLIPPED",
+    "RISE_STEP",
     "SPARSE_CLIPPED",
     "TAIL_ROWS",
     "all_clipped_bound",
@@ -86,6 +88,16 @@ SPARSE_CLIPPED = 0.05
 DARK_DROP = 1.5
 #: Rows of the line that the last row above a floor gap is compared with.
 LINE_ROWS = 10
+#: Step (nepers) of the first row below a floor gap under the line of the rows after it that
+#: marks the boundary out of a layer under the floor (2025 configuration, 40 dB darker layers:
+#: -1.48 to -3.4; a dim layer whose rows come back above the floor, 2025 patient 3: -0.12).
+RISE_STEP = DARK_DROP / 2
+#: Largest residual (nepers) of those rows about their line for the comparison to be made:
+#: rows that hold a boundary's transition are not one layer's line (reduced box, a middle
+#: layer 1e-3 times as bright whose first 4 rows are above the floor: residual 2.95 through
+#: the step, which put its last row 2.1 neper low; one layer's rows: 0.51 at most in the
+#: reduced box, whose 7 lines per block make the row means noisy).
+LINE_SCATTER = 2 * DARK_DROP / 3
 #: Rows (pixels) from a floor layer's fitted boundaries within which its brightness is not
 #: taken: the bright neighbour's PSF tail (2025 configuration, a 40 dB darker layer: the rows
 #: 3 and 4 pixels from a boundary 1.5 and 1.2 times the inner rows' censored mean, from 5 on
@@ -146,15 +158,18 @@ def dark_gaps(
     under the floor below the run ending at ``lo`` (``hi`` the next run's first row, or
     ``n_pixels - gap - 1`` below the last run), where row ``lo - 1``'s mean ``ln I`` (``m``,
     every row) lies more than :data:`DARK_DROP` below the line of the :data:`LINE_ROWS` rows
-    ending ``gap + 1`` rows above it, and row ``hi``'s as far below the line of the rows from
-    ``gap + 1`` rows below it (at least 4 rows in each line's run): the PSF's steps of a
-    layer's two boundaries (a dim layer whose rows come back above the floor below the gap
-    has no step up there)."""
+    ending ``gap + 1`` rows above it, and row ``hi``'s more than :data:`RISE_STEP` below the
+    line of the rows from ``gap + 1`` rows below it (at least 4 rows in each line's run, none
+    farther than :data:`LINE_SCATTER` from it): the PSF's steps of a layer's two boundaries
+    (a dim layer whose rows come back above the floor below the gap has no step up there)."""
 
-    def step(q, row):  # row's mean ln I minus the line of rows q there (NaN: too few rows)
+    def step(q, row):  # row's mean ln I minus the line of rows q there (NaN: too few rows,
+        # or rows that are not one layer's line: a boundary's transition among them)
         if q.size < 4:
             return math.nan
         slope, icpt = np.polyfit(q, m[q], 1)
+        if np.max(np.abs(m[q] - (slope * q + icpt))) > LINE_SCATTER:
+            return math.nan
         return m[row] - (slope * row + icpt)
 
     out = []
@@ -167,7 +182,7 @@ def dark_gaps(
             continue
         if after is not None:  # and leaving it into a brighter layer: the step up
             q = np.arange(hi + gap + 1, min(after[1], hi + gap + 1 + LINE_ROWS))
-            if not step(q, hi) < -DARK_DROP:
+            if not step(q, hi) < -RISE_STEP:
                 continue
         out.append((int(b), int(hi)))
     return out
