@@ -192,8 +192,8 @@ class PhantomFit:
         speckle's rate, or from the intensity kurtosis where the floor leaves no rows for it,
         ``-gamma`` where neither shows sparse speckle); ``floor`` (a layer under the window's
         floor: ``rho_e`` from its clipped and unclipped pixels, no density,
-        :mod:`~speckle.studies.phantom._floor`) and ``rho_e_bound`` (its upper bound where
-        every pixel is clipped, else NaN). Attributes: ``window_top`` (dB re
+        :mod:`~speckle.studies.phantom._floor`) and ``rho_e_bound`` (its upper bound where its
+        ``rho_e`` is not identified, else NaN). Attributes: ``window_top`` (dB re
         ``|A| = 1``, the 51 dB window's top) and ``window_top_se``, ``criterion``, ``bic``
         (per ``K``), ``p_values`` (``criterion="test"``: of the tests of ``K + 1`` against
         ``K`` layers made, from ``K = 1``), ``rows``.

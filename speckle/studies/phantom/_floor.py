@@ -26,28 +26,35 @@ the floor has none), each line one layer's (:data:`LINE_SCATTER`), is a layer un
 the rows above and below.
 
 **Its brightness.** Its pixels are censored, not lost: a pixel at level 0 has ``I < c`` (the
-window's clip). Fully developed speckle is exponential in ``I`` with mean ``theta``, so the
-pixels of the gap's inner rows (at least :data:`TAIL_ROWS` pixels from its fitted boundaries:
-beyond the bright neighbours' PSF tails) give the censored likelihood
+window's clip). Fully developed speckle is exponential in ``I``; a row ``r`` of the gap holds
+the layer's own mean ``theta`` plus its bright neighbours' PSF tails ``a_r`` (the transition
+model of their fitted lines: two independent fully developed fields sum to an exponential of
+the summed mean), so its pixels give the censored likelihood
 
-    L(theta) = n_c ln(1 - exp(-c/theta)) - n_u ln theta - sum_u I_i/theta,
+    L(theta) = sum_r [n_cr ln(1 - exp(-c/(theta + a_r))) - n_ur ln(theta + a_r)
+                      - sum_u I_i/(theta + a_r)],
 
-``n_c`` clipped pixels, ``n_u`` unclipped of intensities ``I_i`` (:func:`censored_mean`, its SE
-by the fit's jackknife over lateral blocks). ``theta`` is then the layer's mean intensity
-under the window, from which :func:`~speckle.studies.phantom._window.window_and_brightness`
-takes ``rho E/100`` as for any layer without a measurable slope (its shadow on the layers
-below is ``A2 rho E/100`` times its thickness: from the first pass's brightness). Where every
-inner pixel is clipped, or the layer has no inner rows, ``rho E`` is not identified and
-``rho_e_bound`` gives its upper bound: 95 % one-sided from all its pixels clipped
-(:func:`all_clipped_bound`), or where some are not (the thin layer's rows hold its
-neighbours' tails, which only add intensity) the censored mean of all its rows plus 2 SE.
+``n_cr`` clipped pixels, ``n_ur`` unclipped of intensities ``I_i`` (:func:`censored_mean`, its
+SE by the fit's jackknife over lateral blocks), over the rows whose tails are at most
+:data:`TAIL_SHARE` of ``theta`` (without the tails, a 40 dB darker layer's rows 3 and 4 pixels
+from a boundary gave 1.5 and 1.2 times the inner rows' censored mean at the 2025
+configuration; with them, a layer of 8 pixels is identified). ``theta`` is then the layer's
+mean intensity under the window, from which
+:func:`~speckle.studies.phantom._window.window_and_brightness` takes ``rho E/100`` as for any
+layer without a measurable slope (its shadow on the layers below is ``A2 rho E/100`` times its
+thickness: from the first pass's brightness). Where every pixel of those rows is clipped,
+``rho E`` is not identified and
+``rho_e_bound`` gives its upper bound: the smaller of 95 % one-sided from its rows whose
+every pixel is clipped (:func:`all_clipped_bound`) and the censored mean of all its rows, its
+neighbours' tails kept (they only add intensity), plus 2 SE.
 
 **Its boundaries.** Each from the rows on its bright side (the transition model of
 :mod:`speckle.studies.phantom._shapes` with the floor layer's mean ``ln I`` on the other side:
 :func:`floor_boundary`).
 
-Not done: the floor layer's attenuation (its slope is not seen; ``A2 rho E/100``, the scanner's
-relation, is taken), its density (the censored speckle cannot tell sparse from dim), shapes
+Not done: a layer of about 4 pixels (every row's tails above its own mean: a bound only), the
+floor layer's attenuation (its slope is not seen; ``A2 rho E/100``, the scanner's relation, is
+taken), its density (the censored speckle cannot tell sparse from dim), shapes
 (a fit with a floor layer is flat) and inclusions in a floor layer.
 """
 
@@ -71,6 +78,7 @@ __all__ = [
     "RISE_STEP",
     "SPARSE_CLIPPED",
     "TAIL_ROWS",
+    "TAIL_SHARE",
     "all_clipped_bound",
     "censored_mean",
     "dark_gaps",
@@ -102,11 +110,14 @@ RISE_STEP = DARK_DROP / 2
 #: the step, which put its last row 2.1 neper low; one layer's rows: 0.51 at most in the
 #: reduced box, whose 7 lines per block make the row means noisy).
 LINE_SCATTER = 2 * DARK_DROP / 3
-#: Rows (pixels) from a floor layer's fitted boundaries within which its brightness is not
-#: taken: the bright neighbour's PSF tail (2025 configuration, a 40 dB darker layer: the rows
-#: 3 and 4 pixels from a boundary 1.5 and 1.2 times the inner rows' censored mean, from 5 on
-#: within their scatter).
+#: Rows (pixels) from the box's bottom within which a floor layer below the last fitted one
+#: gives no brightness: they see the surface through the periodic PSF (not in the tails).
 TAIL_ROWS = 5
+#: Largest share of a floor layer's own mean intensity that its neighbours' PSF tails may add
+#: to a row whose pixels its brightness takes (the tails subtracted).
+TAIL_SHARE = 1.0
+#: ``ln <I>`` that stands for a layer under the floor in the tails' transition model.
+_NO_LEVEL = -60.0
 #: One-sided level of the upper bound of an entirely clipped layer's brightness.
 BOUND_LEVEL = 0.05
 _NEPER_DB = 10.0 / math.log(10.0)  # dB per neper of intensity
@@ -192,23 +203,28 @@ def dark_gaps(
     return out
 
 
-def censored_mean(intensity: np.ndarray, clipped: np.ndarray) -> float:
+def censored_mean(intensity: np.ndarray, clipped: np.ndarray, tail=None) -> float:
     """Maximum-likelihood mean of exponential intensities (fully developed speckle) left-censored
-    at the window's clip ``c = exp(_CLIP)`` (``I/I_max``): ``intensity`` any shape (clipped
-    entries ignored), ``clipped`` where a pixel is at level 0. NaN where every pixel is
-    clipped (the likelihood grows as ``theta -> 0``)."""
+    at the window's clip ``c = exp(_CLIP)`` (``I/I_max``): ``intensity`` ``(rows, lines)``
+    (clipped entries ignored), ``clipped`` where a pixel is at level 0, ``tail`` (optional,
+    per row) a known mean intensity added to each row's (the bright neighbours' PSF tails: the
+    sum of two independent fully developed fields is exponential with the summed mean). NaN
+    where every pixel is clipped (the likelihood grows as ``theta -> 0``)."""
     c = math.exp(_CLIP)
-    n_c = int(np.count_nonzero(clipped))
-    values = intensity[~clipped]
-    n_u, total = values.size, float(values.sum())
-    if n_u == 0:
+    intensity, clipped = np.atleast_2d(intensity), np.atleast_2d(clipped)
+    n_c = np.count_nonzero(clipped, axis=1).astype(float)
+    n_u = clipped.shape[1] - n_c
+    total = np.where(clipped, 0.0, intensity).sum(axis=1)
+    if not n_u.any():
         return math.nan
-    if n_c == 0:
-        return total / n_u
+    if tail is None and not n_c.any():
+        return float(total.sum() / n_u.sum())
+    extra = np.zeros(n_c.size) if tail is None else np.asarray(tail, float)
 
     def minus_log_l(u):  # u = ln(theta/c)
-        theta = c * math.exp(u)
-        return -(n_c * math.log(-math.expm1(-c / theta)) - n_u * math.log(theta) - total / theta)
+        mean = c * math.exp(u) + extra
+        return -float(np.sum(n_c * np.log(-np.expm1(-c / mean)) - n_u * np.log(mean)
+                             - total / mean))  # fmt: skip
 
     res = optimize.minimize_scalar(minus_log_l, bounds=(-12.0, 12.0), method="bounded",
                                    options={"xatol": 1e-6})  # fmt: skip
@@ -225,31 +241,37 @@ def all_clipped_bound(n_cells: float) -> float:
 
 def floor_brightness(
     intensity: np.ndarray, clipped: np.ndarray, inner: np.ndarray, keep: list[np.ndarray],
-    *, cells: float,
+    *, cells: float, tail=None,
 ) -> dict[str, object]:  # fmt: skip
     """The floor layer's mean intensity from its gap's pixels ``(rows, lines)``: ``theta`` and
-    its replicates over the jackknife's line sets ``keep`` (:func:`censored_mean`) from the
-    ``inner`` rows (a boolean mask: NaN where none, or every pixel of the fit or a replicate
-    clipped); ``bound`` (NaN where ``theta`` is identified): the censored mean of all its rows
-    plus 2 SE (the neighbours' PSF tails only add intensity), or :func:`all_clipped_bound` of
-    ``cells`` cells per row where every pixel is clipped."""
+    its replicates over the jackknife's line sets ``keep`` (:func:`censored_mean`, the rows'
+    known ``tail`` intensity subtracted) from the ``inner`` rows (a boolean mask: NaN where
+    none, or every pixel of the fit or a replicate clipped); ``bound`` (NaN where ``theta`` is
+    identified): the smaller of two upper bounds, the censored mean of all its rows with the
+    tails kept (they only add intensity) plus 2 SE, and :func:`all_clipped_bound` of ``cells``
+    cells per row over its rows whose every pixel is clipped."""
+    tail = np.zeros(intensity.shape[0]) if tail is None else np.asarray(tail, float)
 
-    def with_jk(sel):
-        est = censored_mean(intensity[sel], clipped[sel])
-        jk = np.array([censored_mean(intensity[sel][:, k], clipped[sel][:, k]) for k in keep])
+    def with_jk(sel, t):
+        i, cl = intensity[sel], clipped[sel]
+        est = censored_mean(i, cl, t)
+        jk = np.array([censored_mean(i[:, k], cl[:, k], t) for k in keep])
         return est, jk
 
     theta, theta_jk = math.nan, np.full(len(keep), math.nan)
     if inner.any():
-        theta, theta_jk = with_jk(inner)
+        theta, theta_jk = with_jk(inner, tail[inner])
     bound = math.nan
     if not (np.isfinite(theta) and np.all(np.isfinite(theta_jk))):
         theta, theta_jk = math.nan, np.full(len(keep), math.nan)
-        est, jk = with_jk(slice(None))
+        bounds = []
+        est, jk = with_jk(slice(None), None)
         if np.isfinite(est) and np.all(np.isfinite(jk)):
-            bound = est + 2 * _jackknife(jk)
-        else:
-            bound = all_clipped_bound(intensity.shape[0] * cells)
+            bounds.append(est + 2 * _jackknife(jk))
+        dark = int(np.count_nonzero(clipped.all(axis=1)))
+        if dark:
+            bounds.append(all_clipped_bound(dark * cells))
+        bound = min(bounds, default=math.nan)
     return {"theta": theta, "theta_jk": theta_jk, "bound": bound}
 
 
@@ -304,19 +326,34 @@ def floor_layers(
     and floor in depth order, on the fit and each jackknife replicate (``tops``, ``tops_jk``),
     and the floor layers' brightness (``floor``: ``{layer: {"z", "theta", "theta_jk",
     "bound"}}``, :func:`floor_brightness` of their pixels' ``intensity`` and ``clipped``,
-    ``(n_pixels, lines)``, over the gap's rows at least :data:`TAIL_ROWS` pixels from its
-    fitted boundaries, ``z`` their depths in µm). A floor layer's boundaries come from the rows
-    on its bright sides (every row's mean ``ln I`` ``m_all`` and its replicates ``m_all_jk``:
-    :func:`floor_boundary`, its level first from all its rows, then from the inner ones), the
-    others as fitted (``est``: the row layers' lines and tops, ``rep`` per replicate)."""
+    ``(n_pixels, lines)``, over the gap's rows whose neighbours' PSF tails are at most
+    :data:`TAIL_SHARE` of it, ``z`` their depths in µm). A floor layer's boundaries come from
+    the rows on its bright sides (every row's mean ``ln I`` ``m_all`` and its replicates
+    ``m_all_jk``: :func:`floor_boundary`, its level first from all its rows, then from the
+    rows its brightness takes), the others as fitted (``est``: the row layers' lines and tops,
+    ``rep`` per replicate)."""
     after = floor_positions(segs, cuts, len(dark) > len(cuts))  # the last below the last run
     gaps = dict(zip(after, dark, strict=True))
     c_dark = -np.euler_gamma  # fully developed speckle's E ln(I/<I>)
     n_pixels = intensity.shape[0]
 
-    def brightness(k, inner):
+    def brightness(k, inner, tail=None):
         lo, hi = gaps[k]
-        return floor_brightness(intensity[lo:hi], clipped[lo:hi], inner, keep, cells=cells)
+        return floor_brightness(intensity[lo:hi], clipped[lo:hi], inner, keep, cells=cells,
+                                tail=tail)  # fmt: skip
+
+    def tails(k, tops_):
+        """The mean intensity of floor layer ``k``'s gap rows from its bright neighbours' PSF
+        tails: the transition model of their fitted lines (``ln <I> = line - offset``)."""
+        z, f = np.arange(*gaps[k]) * p, full[k]
+        (sa, ia), ca = est[0][k], offsets[k]
+        if f + 1 < tops_.size:  # a row layer below it
+            (sb, ib), cb = est[0][k + 1], offsets[k + 1]
+            ln = model.log_mean_layers(z, [tops_[f], tops_[f + 1]], [sa, 0.0, sb],
+                                       [ia - ca, _NO_LEVEL, ib - cb], p)  # fmt: skip
+        else:
+            ln = model.log_mean_layers(z, [tops_[f]], [sa, 0.0], [ia - ca, _NO_LEVEL], p)
+        return np.exp(ln)
 
     def tops_of(mm, fits, tops, bright, j=None):
         def level(f):  # the floor layer's mean ln I (its bound where not identified)
@@ -348,14 +385,17 @@ def floor_layers(
 
     full = {k: k + 1 + i for i, k in enumerate(after)}  # a floor layer's index among all
     # the boundaries with each floor layer's level from all its rows, then its brightness
-    # from the rows beyond its neighbours' PSF tails, then the boundaries again
+    # over the rows whose neighbours' PSF tails (subtracted) are at most TAIL_SHARE of it,
+    # then the boundaries again
     tops, _ = all_tops({k: brightness(k, np.ones(hi - lo, bool)) for k, (lo, hi) in gaps.items()})
     floor, bright = {}, {}
     for k, (lo, hi) in gaps.items():
-        z = np.arange(lo, hi) * p
-        below = tops[full[k] + 1] if full[k] + 1 < tops.size else n_pixels * p  # periodic PSF
-        inner = (z >= tops[full[k]] + TAIL_ROWS * p) & (z <= below - TAIL_ROWS * p)
-        bright[k] = brightness(k, inner)
+        z, tail = np.arange(lo, hi) * p, tails(k, tops)
+        # below the last layer, the rows that see the surface through the periodic PSF: out
+        rows = z <= n_pixels * p - TAIL_ROWS * p if full[k] + 1 == tops.size else z >= 0
+        first = censored_mean(intensity[lo:hi][rows], clipped[lo:hi][rows], tail[rows])
+        inner = rows & (tail <= TAIL_SHARE * first) if np.isfinite(first) else rows
+        bright[k] = brightness(k, inner, tail)
         floor[full[k]] = {"z": z[inner] if inner.any() else z, **bright[k]}
     tops, tops_jk = all_tops(bright)
     return {"after": after, "tops": tops, "tops_jk": tops_jk, "floor": floor}
