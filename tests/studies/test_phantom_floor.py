@@ -178,6 +178,25 @@ def test_an_entirely_clipped_floor_layer_has_a_bound():
 
 
 @pytest.mark.slow
+def test_two_layers_under_the_floor():
+    """Two middle layers 1e-4 times as bright, 16 pixels each, around a bright one of 12
+    pixels: five layers, the second and fourth floor layers, every boundary within a pixel.
+    (Around a bright layer of 7 pixels, whose rows hold both transitions, neither gap has a
+    clean line on that side: no floor layer, as before; docs/explanation/phantom_fit.md.)"""
+    cfg = speckle.synthoct_config("reduced")
+    h, p = cfg.depth_range, cfg.pixel_size
+    tops = np.array([0.0, h / 4, h / 4 + 16 * p, h / 4 + 28 * p, h / 4 + 44 * p])
+    coef = np.column_stack([tops[1:], np.zeros((4, 2))])
+    rng = np.random.default_rng(np.random.SeedSequence([0, 0, 0]))
+    energy = np.array([0.2, 2e-5, 0.2, 2e-5, 0.2])
+    table, _ = patient_table(cfg, coef, np.ones(5), energy, None, rng)
+    layers = speckle.fit_phantom(np.asarray(speckle.synthoct_scan(table, cfg, nthreads=1)),
+                                 cfg).layers  # fmt: skip
+    assert layers.floor.values.tolist() == [False, True, False, True, False]
+    assert np.all(np.abs(layers.top.values - tops) < p)
+
+
+@pytest.mark.slow
 def test_a_bottom_layer_under_the_floor_is_fitted():
     """Two flat layers, the lower one 1e-4 times as bright, from half the box's depth: two
     layers, the lower one a floor layer, its boundary within a pixel, both ``rho E`` within

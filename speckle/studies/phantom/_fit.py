@@ -519,10 +519,16 @@ def _fit_levels(
     n_cut = sum(hi < cfg.n_pixels - GAP - 1 for _, hi in dark)
     if len(dark) + n_cut + 1 > max_layers:
         dark = []
-    runs = [(a + GAP * any(a == hi for _, hi in dark), b - GAP * any(b == lo for lo, _ in dark))
-            for a, b in runs]  # fmt: skip
-    rows = np.concatenate([np.arange(a, b) for a, b in runs] or [np.arange(0)])
-    cuts = tuple(int(np.searchsorted(rows, hi + GAP)) for _, hi in dark if hi + GAP in rows)
+    starts, ends = {hi for _, hi in dark}, {lo for lo, _ in dark}
+
+    def trim(a, b):  # a thin layer between floor layers keeps its transitions
+        a2, b2 = a + GAP * (a in starts), b - GAP * (b in ends)
+        return (a2, b2) if b2 - a2 >= MIN_ROWS else (a, b)
+
+    trimmed = [trim(a, b) for a, b in runs]
+    rows = np.concatenate([np.arange(a, b) for a, b in trimmed] or [np.arange(0)])
+    cuts = tuple(int(np.searchsorted(rows, t[0]))
+                 for r, t in zip(runs, trimmed, strict=True) if r[0] in starts)  # fmt: skip
     if rows.size < MIN_ROWS + 1:
         raise ValueError(
             f"scan has {rows.size} rows above the floor (<= {MAX_CLIPPED:.0%} clipped); "
