@@ -107,8 +107,8 @@ RISE_STEP = DARK_DROP / 2
 #: Largest residual (nepers) of those rows about their line for the comparison to be made:
 #: rows that hold a boundary's transition are not one layer's line (reduced box, a middle
 #: layer 1e-3 times as bright whose first 4 rows are above the floor: residual 2.95 through
-#: the step, which put its last row 2.1 neper low; one layer's rows: 0.51 at most in the
-#: reduced box, whose 7 lines per block make the row means noisy).
+#: the step, which put its last row 2.1 neper low; one layer's rows: 0.51 in the reduced
+#: box's seed 10, whose 7 lines per block make the row means noisy).
 LINE_SCATTER = 2 * DARK_DROP / 3
 #: Rows (pixels) from the box's bottom within which a floor layer below the last fitted one
 #: gives no brightness: they see the surface through the periodic PSF (not in the tails).
