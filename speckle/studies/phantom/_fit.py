@@ -513,9 +513,10 @@ def _fit_levels(
     runs = [(a, b) for a, b in zip(edges[::2], edges[1::2], strict=True)
             if b - a >= RUN_ROWS or a == GAP + 1]  # fmt: skip
     li_all = _log_intensity(lev)
+    m_all = li_all.mean(axis=1)  # every row's mean ln I (the floor gaps' steps)
     # boundaries into layers under the floor (_floor.py): their transition rows left out, the
     # segmentation cut there (when max_layers allows the layers)
-    dark = dark_gaps(li_all.mean(axis=1), runs, cfg.n_pixels, gap=GAP)
+    dark = dark_gaps(m_all, runs, cfg.n_pixels, gap=GAP)
     n_cut = sum(hi < cfg.n_pixels - GAP - 1 for _, hi in dark)
     if len(dark) + n_cut + 1 > max_layers:
         dark = []
@@ -534,7 +535,7 @@ def _fit_levels(
             f"scan has {rows.size} rows above the floor (<= {MAX_CLIPPED:.0%} clipped); "
             f"the fit needs at least {MIN_ROWS + 1}"
         )
-    li = _log_intensity(lev[rows])  # (rows, lines)
+    li = li_all[rows]  # (rows, lines)
     z = rows * p
     group = np.array_split(np.arange(li.shape[1]), blocks)
     keep = [np.setdiff1d(np.arange(li.shape[1]), g) for g in group]
@@ -640,7 +641,7 @@ def _fit_levels(
     segs_w, floor = segs, {}
     if dark:  # layers under the floor between (or below) the row layers: _floor.py
         m_all_jk = np.stack([li_all[:, k].mean(axis=1) for k in keep])
-        fl = floor_layers(dark, segs, cuts, li_all.mean(axis=1), m_all_jk, _intensity(lev),
+        fl = floor_layers(dark, segs, cuts, m_all, m_all_jk, _intensity(lev),
                           lev == 0, (fits, tops), rep, offsets, keep, model, p, gap=GAP,
                           cells=lev.shape[1] / lines_per_block(KURTOSIS_BLOCK_RADII, cfg),
                           mixing=mixing)  # fmt: skip

@@ -297,8 +297,7 @@ def floor_boundary(mm, z, line, dark, offsets, model, p, *, below: bool, mixing=
 def with_floor_layers(values, after: list[int], fill=np.nan, axis: int = -1) -> np.ndarray:
     """``values`` of the fitted row layers with a ``fill`` entry inserted after each row layer
     in ``after`` (a floor layer's position; ``len(values)`` for one below the last)."""
-    values = np.asarray(values)
-    out = values
+    out = np.asarray(values)
     for shift, k in enumerate(sorted(after)):
         out = np.insert(out, k + 1 + shift, fill, axis=axis)
     return out
